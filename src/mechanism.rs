@@ -1,0 +1,548 @@
+//! The validated mechanism model every analysis works from.
+//!
+//! Bodies are stored sorted by id (numbers first, numerically; then names), so analyses and
+//! reports do not depend on the order of declarations in the file. Joints keep file order.
+
+use crate::joint::JointType;
+use serde::{Deserialize, Serialize};
+use std::cmp::Ordering;
+use std::fmt;
+
+/// The motion space: B = 6 (spatial) or 3 (planar, spherical).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Space {
+    /// Spatial motion, B = 6.
+    #[default]
+    Spatial,
+    /// Planar motion, B = 3.
+    Planar,
+    /// Spherical motion about a fixed point, B = 3.
+    Spherical,
+}
+
+impl Space {
+    /// DOF of a free body in this space.
+    pub fn b(self) -> u32 {
+        match self {
+            Space::Spatial => 6,
+            Space::Planar | Space::Spherical => 3,
+        }
+    }
+
+    /// The SG type suffix: `3D` for spatial, `2D` otherwise.
+    pub fn suffix(self) -> &'static str {
+        match self {
+            Space::Spatial => "3D",
+            Space::Planar | Space::Spherical => "2D",
+        }
+    }
+
+    /// Lower-case name as written in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Space::Spatial => "spatial",
+            Space::Planar => "planar",
+            Space::Spherical => "spherical",
+        }
+    }
+}
+
+/// A body id as written in the file: an integer or a string.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum BodyId {
+    /// An integer id (`1`, `13`).
+    Int(i64),
+    /// A string id (`"crank"`).
+    Name(String),
+}
+
+impl Ord for BodyId {
+    fn cmp(&self, other: &Self) -> Ordering {
+        match (self, other) {
+            (BodyId::Int(a), BodyId::Int(b)) => a.cmp(b),
+            (BodyId::Int(_), BodyId::Name(_)) => Ordering::Less,
+            (BodyId::Name(_), BodyId::Int(_)) => Ordering::Greater,
+            (BodyId::Name(a), BodyId::Name(b)) => a.cmp(b),
+        }
+    }
+}
+
+impl PartialOrd for BodyId {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl fmt::Display for BodyId {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            BodyId::Int(i) => write!(f, "{i}"),
+            BodyId::Name(s) => f.write_str(s),
+        }
+    }
+}
+
+impl BodyId {
+    /// Parse a body reference written on the command line: an integer if it is one.
+    pub fn from_text(text: &str) -> BodyId {
+        match text.parse::<i64>() {
+            Ok(i) => BodyId::Int(i),
+            Err(_) => BodyId::Name(text.to_string()),
+        }
+    }
+}
+
+/// A body of the mechanism.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Body {
+    /// Its id.
+    pub id: BodyId,
+    /// Optional display label.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+}
+
+/// Optional joint geometry in the reference configuration. Planar points are stored with z = 0.
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Geometry {
+    /// A point of the joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// Joint axis (R, P, H, C, ER, first axis of U).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// Second axis of a universal joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis2: Option<[f64; 3]>,
+    /// Plane normal of a planar joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+    /// Helical lead per radian.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pitch: Option<f64>,
+}
+
+impl Geometry {
+    /// Whether no geometry field is set.
+    pub fn is_empty(&self) -> bool {
+        self == &Geometry::default()
+    }
+}
+
+/// A joint (kinematic pair). `bodies` are indices into [`Mechanism::bodies`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Joint {
+    /// Unique id (default `"<a>-<b>"`).
+    pub id: String,
+    /// Pair kind.
+    pub kind: JointType,
+    /// Indices of the joined bodies (>= 2; more = multiple joint, hub first).
+    pub bodies: Vec<usize>,
+    /// Driven DOF on this joint (0..=grade).
+    pub driven: u32,
+    /// Optional geometry.
+    pub geometry: Geometry,
+}
+
+impl Joint {
+    /// Number of binary pairs this joint counts as (n - 1 for n bodies).
+    pub fn pairs(&self) -> u32 {
+        (self.bodies.len() as u32).saturating_sub(1)
+    }
+
+    /// Grade k of each binary pair.
+    pub fn grade(&self) -> u32 {
+        self.kind.grade() as u32
+    }
+}
+
+/// Expectations written in the file's `[expect]` table, compared by `mbsa check`.
+/// Every field is optional; only the ones present are checked.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Expect {
+    /// Chebyshev-Gruebler-Kutzbach mobility count.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mobility: Option<i64>,
+    /// Total driven inputs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inputs: Option<u64>,
+    /// Number of structural groups.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub groups: Option<u64>,
+    /// Number of solve levels.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub levels: Option<u64>,
+    /// Whether the mechanism is kinematically determined.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub determined: Option<bool>,
+    /// Generic DOF by the pebble game (frame fixed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub generic_dof: Option<i64>,
+    /// True (instantaneous) mobility, frame fixed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub true_mobility: Option<i64>,
+    /// Isolated DOF.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub isolated: Option<u64>,
+    /// Redundant constraints (overconstraint N).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub redundant: Option<u64>,
+    /// Number of rigid parts (clusters with more than one body, or containing the frame).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rigid_parts: Option<u64>,
+}
+
+/// A validated mechanism.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Mechanism {
+    /// Display name.
+    pub name: String,
+    /// Free text.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub description: Option<String>,
+    /// Motion space.
+    pub space: Space,
+    /// Index of the frame in `bodies`.
+    pub frame: usize,
+    /// Bodies sorted by id.
+    pub bodies: Vec<Body>,
+    /// Joints in file order.
+    pub joints: Vec<Joint>,
+    /// Expectations for `mbsa check`.
+    pub expect: Expect,
+}
+
+impl Mechanism {
+    /// B: DOF of a free body.
+    pub fn b(&self) -> u32 {
+        self.space.b()
+    }
+
+    /// The id of body `i`.
+    pub fn body_id(&self, i: usize) -> &BodyId {
+        &self.bodies[i].id
+    }
+
+    /// Index of a body by id.
+    pub fn body_index(&self, id: &BodyId) -> Option<usize> {
+        self.bodies.binary_search_by(|b| b.id.cmp(id)).ok()
+    }
+
+    /// Number of movable bodies (all but the frame).
+    pub fn movable(&self) -> usize {
+        self.bodies.len().saturating_sub(1)
+    }
+
+    /// Total driven DOF.
+    pub fn inputs(&self) -> u64 {
+        self.joints.iter().map(|j| j.driven as u64).sum()
+    }
+
+    /// `a-b` label of a joint's bodies (all of them for a multiple joint).
+    pub fn joint_bodies_label(&self, j: &Joint) -> String {
+        j.bodies
+            .iter()
+            .map(|&b| self.body_id(b).to_string())
+            .collect::<Vec<_>>()
+            .join("-")
+    }
+
+    /// Replace every joint's driven DOF by the placement `spec`.
+    pub fn apply_inputs(&mut self, spec: &InputSpec) -> Result<(), InputSpecError> {
+        let resolved = spec.resolve(self)?;
+        for j in &mut self.joints {
+            j.driven = 0;
+        }
+        for (j, n) in resolved {
+            self.joints[j].driven += n;
+        }
+        for j in &self.joints {
+            if j.driven > j.grade() * j.pairs() {
+                return Err(InputSpecError::AboveGrade {
+                    joint: j.id.clone(),
+                    driven: j.driven,
+                    grade: j.grade() * j.pairs(),
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A joint described by body ids, for building mechanisms in code (tests, generators).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointSpec {
+    /// Id; `None` gives the default `"<a>-<b>"` (suffixed `#2`, `#3`... if repeated).
+    pub id: Option<String>,
+    /// Pair kind.
+    pub kind: JointType,
+    /// Joined bodies.
+    pub bodies: Vec<BodyId>,
+    /// Driven DOF.
+    pub driven: u32,
+    /// Geometry.
+    pub geometry: Geometry,
+}
+
+impl JointSpec {
+    /// A binary joint between integer bodies, no geometry.
+    pub fn new(kind: JointType, a: i64, b: i64, driven: u32) -> JointSpec {
+        JointSpec {
+            id: None,
+            kind,
+            bodies: vec![BodyId::Int(a), BodyId::Int(b)],
+            driven,
+            geometry: Geometry::default(),
+        }
+    }
+}
+
+impl Mechanism {
+    /// Build a mechanism from joints given by body ids. Bodies are the frame, the declared
+    /// `extra_bodies` and every body a joint names. No validation beyond that: callers that
+    /// take user input validate first (the reader does).
+    pub fn from_parts(
+        name: impl Into<String>,
+        space: Space,
+        frame: BodyId,
+        extra_bodies: Vec<Body>,
+        joints: Vec<JointSpec>,
+    ) -> Mechanism {
+        let mut bodies: Vec<Body> = extra_bodies;
+        let mut seen: std::collections::BTreeSet<BodyId> =
+            bodies.iter().map(|b| b.id.clone()).collect();
+        let mut push = |id: &BodyId, bodies: &mut Vec<Body>| {
+            if seen.insert(id.clone()) {
+                bodies.push(Body {
+                    id: id.clone(),
+                    label: None,
+                });
+            }
+        };
+        push(&frame, &mut bodies);
+        for j in &joints {
+            for b in &j.bodies {
+                push(b, &mut bodies);
+            }
+        }
+        bodies.sort_by(|a, b| a.id.cmp(&b.id));
+        let index = |id: &BodyId| {
+            bodies
+                .binary_search_by(|b| b.id.cmp(id))
+                .expect("every joint body was inserted above")
+        };
+        let frame = index(&frame);
+        let mut used = std::collections::HashMap::<String, usize>::new();
+        let joints = joints
+            .into_iter()
+            .map(|j| {
+                let base = j.id.unwrap_or_else(|| {
+                    j.bodies
+                        .iter()
+                        .map(|b| b.to_string())
+                        .collect::<Vec<_>>()
+                        .join("-")
+                });
+                let n = used.entry(base.clone()).or_insert(0);
+                *n += 1;
+                let id = if *n == 1 { base } else { format!("{base}#{n}") };
+                Joint {
+                    id,
+                    kind: j.kind,
+                    bodies: j.bodies.iter().map(index).collect(),
+                    driven: j.driven,
+                    geometry: j.geometry,
+                }
+            })
+            .collect();
+        Mechanism {
+            name: name.into(),
+            description: None,
+            space,
+            frame,
+            bodies,
+            joints,
+            expect: Expect::default(),
+        }
+    }
+}
+
+/// One entry of an `--inputs` spec: a joint id or a body pair `a-b`, with a DOF count.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct InputRef {
+    /// The reference as written (`A`, `1-13`).
+    pub text: String,
+    /// Driven DOF (`:n`, default 1).
+    pub count: u32,
+}
+
+/// A placement of driven inputs: `1-2,1-13,13-15` or `A,K:2`.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct InputSpec {
+    /// The entries in order.
+    pub refs: Vec<InputRef>,
+}
+
+/// Errors in an `--inputs` spec.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum InputSpecError {
+    /// Bad syntax.
+    #[error("invalid input spec `{text}`: {reason}")]
+    Syntax {
+        /// The offending entry.
+        text: String,
+        /// Why.
+        reason: String,
+    },
+    /// The reference matches no joint.
+    #[error("input `{text}` matches no joint{}", hint.as_ref().map(|h| format!(" (did you mean `{h}`?)")).unwrap_or_default())]
+    NoMatch {
+        /// The reference.
+        text: String,
+        /// Nearest joint id or pair.
+        hint: Option<String>,
+    },
+    /// A body pair matches several joints.
+    #[error("input `{text}` matches several joints: {}; name one by its id", joints.join(", "))]
+    Ambiguous {
+        /// The reference.
+        text: String,
+        /// Ids of the matching joints.
+        joints: Vec<String>,
+    },
+    /// More driven DOF than the joint allows.
+    #[error("joint `{joint}` would have {driven} driven DOF but allows at most {grade}")]
+    AboveGrade {
+        /// Joint id.
+        joint: String,
+        /// Requested driven DOF.
+        driven: u32,
+        /// Its grade.
+        grade: u32,
+    },
+}
+
+impl InputSpec {
+    /// Parse `ref[:n],ref[:n],...`. An empty string is the empty placement.
+    pub fn parse(text: &str) -> Result<InputSpec, InputSpecError> {
+        let mut refs = Vec::new();
+        for part in text.split(',').map(str::trim) {
+            if part.is_empty() {
+                if text.trim().is_empty() {
+                    continue;
+                }
+                return Err(InputSpecError::Syntax {
+                    text: text.to_string(),
+                    reason: "empty entry between commas".into(),
+                });
+            }
+            let (name, count) = match part.rsplit_once(':') {
+                Some((name, n)) => {
+                    let count = n.trim().parse::<u32>().map_err(|_| InputSpecError::Syntax {
+                        text: part.to_string(),
+                        reason: format!("`{n}` is not a non-negative whole number of DOF"),
+                    })?;
+                    (name.trim(), count)
+                }
+                None => (part, 1),
+            };
+            if name.is_empty() {
+                return Err(InputSpecError::Syntax {
+                    text: part.to_string(),
+                    reason: "missing joint id or body pair before `:`".into(),
+                });
+            }
+            refs.push(InputRef {
+                text: name.to_string(),
+                count,
+            });
+        }
+        Ok(InputSpec { refs })
+    }
+
+    /// Resolve every entry to a joint index. A joint id wins over a body pair.
+    pub fn resolve(&self, m: &Mechanism) -> Result<Vec<(usize, u32)>, InputSpecError> {
+        self.refs
+            .iter()
+            .map(|r| resolve_ref(m, &r.text).map(|j| (j, r.count)))
+            .collect()
+    }
+}
+
+/// Find the joint a reference names: its id, or the body pair `a-b` (either order).
+pub fn resolve_ref(m: &Mechanism, text: &str) -> Result<usize, InputSpecError> {
+    if let Some(j) = m.joints.iter().position(|j| j.id == text) {
+        return Ok(j);
+    }
+    let mut matches = Vec::new();
+    if let Some(pair) = split_pair(m, text) {
+        for (ji, j) in m.joints.iter().enumerate() {
+            if j.bodies.contains(&pair.0) && j.bodies.contains(&pair.1) {
+                matches.push(ji);
+            }
+        }
+    }
+    match matches.len() {
+        1 => Ok(matches[0]),
+        0 => {
+            let hint = m
+                .joints
+                .iter()
+                .flat_map(|j| [j.id.clone(), m.joint_bodies_label(j)])
+                .map(|cand| (strsim::jaro_winkler(text, &cand), cand))
+                .filter(|(s, _)| *s >= 0.75)
+                .max_by(|a, b| a.0.total_cmp(&b.0).then_with(|| b.1.cmp(&a.1)))
+                .map(|(_, c)| c);
+            Err(InputSpecError::NoMatch {
+                text: text.to_string(),
+                hint,
+            })
+        }
+        _ => Err(InputSpecError::Ambiguous {
+            text: text.to_string(),
+            joints: matches.iter().map(|&j| m.joints[j].id.clone()).collect(),
+        }),
+    }
+}
+
+/// Split `a-b` into two known body indices, trying every `-` (ids may contain dashes).
+fn split_pair(m: &Mechanism, text: &str) -> Option<(usize, usize)> {
+    text.match_indices('-').find_map(|(i, _)| {
+        let a = m.body_index(&BodyId::from_text(&text[..i]))?;
+        let b = m.body_index(&BodyId::from_text(&text[i + 1..]))?;
+        Some((a, b))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn body_ids_sort_numbers_first() {
+        let mut ids = vec![
+            BodyId::Name("b".into()),
+            BodyId::Int(10),
+            BodyId::Int(2),
+            BodyId::Name("a".into()),
+        ];
+        ids.sort();
+        let shown: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
+        assert_eq!(shown, ["2", "10", "a", "b"]);
+    }
+
+    #[test]
+    fn parses_input_specs() {
+        let s = InputSpec::parse("1-2, A:2 ,13-15").unwrap();
+        assert_eq!(s.refs.len(), 3);
+        assert_eq!(s.refs[1].text, "A");
+        assert_eq!(s.refs[1].count, 2);
+        assert!(InputSpec::parse("").unwrap().refs.is_empty());
+        assert!(InputSpec::parse("A,,B").is_err());
+        assert!(InputSpec::parse("A:x").is_err());
+        assert!(InputSpec::parse(":2").is_err());
+    }
+}
