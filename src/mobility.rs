@@ -1,0 +1,1 @@
+//! The Chebyshev-Gruebler-Kutzbach mobility count and the connectivity facts around it.

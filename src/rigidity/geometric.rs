@@ -1,0 +1,1 @@
+//! Geometric rigidity: true mobility, redundant constraints, isolated DOF and rigid clusters from the constraint Jacobian.

@@ -1,0 +1,4 @@
+//! Rigid subsystems: generic rigidity by counting (pebble game) and geometric rigidity (twist/wrench rank analysis).
+
+pub mod geometric;
+pub mod pebble;

@@ -1,0 +1,1 @@
+//! Generic rigidity by counting: the (B, B) pebble game on the body-bar multigraph.

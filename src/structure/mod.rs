@@ -1,0 +1,1 @@
+//! Structural analysis: the decomposition of a mechanism into ordered structural groups.
