@@ -7,12 +7,16 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod examples;
+pub mod expect;
 pub mod format;
+pub mod generate;
 pub mod joint;
 pub mod mechanism;
 pub mod mobility;
 pub mod motion;
 pub mod report;
+pub mod rng;
 pub mod rigidity;
 pub mod structure;
 

@@ -1,0 +1,393 @@
+//! Generated mechanisms for benchmarks and tests, reproducible from a seed.
+//!
+//! - [`assur`]: the planar Assur-group linkages of `docs/benchmarks.md` (the paper's Table 16
+//!   family), exactly as specified there (SplitMix64, templates, port rule).
+//! - [`stewart_stack`]: N Stewart platforms stacked, each on six UPS legs (spatial).
+//! - [`random`]: random count-determined mechanisms with mixed joint types, built group by
+//!   group so that the expected number of structural groups is known.
+
+use crate::joint::JointType;
+use crate::mechanism::{BodyId, Geometry, JointSpec, Mechanism, Space};
+use crate::rng::SplitMix64;
+use std::fmt::Write;
+
+/// Which joint carries the single input of an Assur linkage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Variant {
+    /// The crank (1, 2) is driven.
+    A,
+    /// The joint between the two last bodies (N − 1, N) is driven instead.
+    B,
+}
+
+/// Internal pairs and ports of the class-k template (local body indices).
+fn template(class: u32) -> (&'static [(usize, usize)], &'static [usize]) {
+    match class {
+        1 => (&[(0, 1)], &[0, 1]),
+        2 => (&[(0, 3), (1, 3), (2, 3)], &[0, 1, 2]),
+        _ => (
+            &[(0, 1), (1, 2), (2, 3), (3, 4), (4, 5), (5, 0)],
+            &[0, 2, 4],
+        ),
+    }
+}
+
+/// Errors in generator parameters.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum GenerateError {
+    /// A parameter out of range.
+    #[error("{0}")]
+    Range(String),
+}
+
+/// The planar Assur linkage `assur(class, groups, seed, variant)`: a driven crank plus
+/// `groups` Assur groups of class 1 (dyad), 2 (triad) or 3 (three-loop hexagon), attached at
+/// random to earlier bodies. N = 2 + 2·class·groups bodies, every pair revolute.
+pub fn assur(
+    class: u32,
+    groups: u64,
+    seed: u64,
+    variant: Variant,
+) -> Result<Mechanism, GenerateError> {
+    if !(1..=3).contains(&class) {
+        return Err(GenerateError::Range(format!(
+            "Assur class must be 1, 2 or 3, not {class}"
+        )));
+    }
+    if groups == 0 || groups > 10_000_000 {
+        return Err(GenerateError::Range(format!(
+            "the number of groups must be between 1 and 10^7, not {groups}"
+        )));
+    }
+    let (internal, ports) = template(class);
+    let size = 2 * class as u64;
+    let n_bodies = 2 + size * groups;
+    let mut rng = SplitMix64::new(seed);
+    let mut pairs: Vec<(u64, u64)> = vec![(1, 2)];
+    for g in 1..=groups {
+        let s = 3 + size * (g - 1);
+        for &(a, b) in internal {
+            pairs.push((s + a as u64, s + b as u64));
+        }
+        let targets: Vec<u64> = if g == 1 {
+            (0..ports.len()).map(|i| if i == 0 { 2 } else { 1 }).collect()
+        } else {
+            loop {
+                let t: Vec<u64> = ports.iter().map(|_| 1 + rng.below(s - 1)).collect();
+                if t.iter().any(|&x| x != t[0]) {
+                    break t;
+                }
+            }
+        };
+        for (&port, &target) in ports.iter().zip(&targets) {
+            pairs.push((target, s + port as u64));
+        }
+    }
+    let driven_pair = match variant {
+        Variant::A => (1, 2),
+        Variant::B => (n_bodies - 1, n_bodies),
+    };
+    let joints = pairs
+        .iter()
+        .map(|&(a, b)| {
+            let driven = u32::from((a, b) == driven_pair);
+            JointSpec::new(JointType::R, a as i64, b as i64, driven)
+        })
+        .collect();
+    let v = match variant {
+        Variant::A => "A",
+        Variant::B => "B",
+    };
+    let roman = ["I", "II", "III"][class as usize - 1];
+    let mut m = Mechanism::from_parts(
+        format!("ASSUR {roman}-{groups}{v} (seed {seed})"),
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    );
+    m.description = Some(format!(
+        "Generated: crank plus {groups} Assur group(s) of class {class}, variant {v}, seed {seed} (docs/benchmarks.md)"
+    ));
+    Ok(m)
+}
+
+/// `stages` Stewart platforms stacked: platform s stands on platform s − 1 (the frame for
+/// s = 1) through six U-P-S legs with the prismatic joints driven. Each stage is one
+/// structural group of 13 bodies (the paper's Stewart case, repeated).
+pub fn stewart_stack(stages: u64) -> Result<Mechanism, GenerateError> {
+    if stages == 0 || stages > 1_000_000 {
+        return Err(GenerateError::Range(format!(
+            "the number of stages must be between 1 and 10^6, not {stages}"
+        )));
+    }
+    let mut joints = Vec::new();
+    let mut lower = 1i64;
+    let mut next = 2i64;
+    for _ in 0..stages {
+        let platform = next + 12;
+        for _ in 0..6 {
+            let (a, b) = (next, next + 1);
+            joints.push(JointSpec::new(JointType::U, lower, a, 0));
+            joints.push(JointSpec::new(JointType::P, a, b, 1));
+            joints.push(JointSpec::new(JointType::S, b, platform, 0));
+            next += 2;
+        }
+        lower = platform;
+        next = platform + 1;
+    }
+    let mut m = Mechanism::from_parts(
+        format!("Stewart stack x{stages}"),
+        Space::Spatial,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    );
+    m.description = Some(format!(
+        "Generated: {stages} Stewart platform(s) stacked on U-P-S legs, prismatic joints driven"
+    ));
+    Ok(m)
+}
+
+/// A random count-determined mechanism of `bodies` bodies (frame included) with mixed joint
+/// types, built group by group: each new group of 1 or 2 bodies gets joints to earlier bodies
+/// (and one internal joint) whose equations add up to exactly B per body, with driven inputs
+/// filling the rest, and no body of a 2-body group determined on its own. The returned count
+/// is the number of structural groups this construction makes by counting.
+pub fn random(bodies: u64, planar: bool, seed: u64) -> Result<(Mechanism, usize), GenerateError> {
+    if !(2..=10_000_000).contains(&bodies) {
+        return Err(GenerateError::Range(format!(
+            "the number of bodies must be between 2 and 10^7, not {bodies}"
+        )));
+    }
+    let (space, b) = if planar {
+        (Space::Planar, 3u32)
+    } else {
+        (Space::Spatial, 6u32)
+    };
+    // Pools of joint kinds by the number of equations c = B − k they bring.
+    let by_c = |c: u32| -> &'static [JointType] {
+        use JointType::*;
+        match (planar, c) {
+            (true, 1) => &[L, EO, RP],
+            (true, 2) => &[R, R, R, P],
+            (false, 1) => &[SP, SPSP],
+            (false, 2) => &[SC, PC],
+            (false, 3) => &[S, S, PL],
+            (false, 4) => &[U, C, C],
+            (false, 5) => &[R, R, P, H],
+            _ => &[],
+        }
+    };
+    let mut rng = SplitMix64::new(seed);
+    let mut joints: Vec<JointSpec> = Vec::new();
+    let mut n = 1u64; // bodies so far (the frame is body 1)
+    let mut groups = 0usize;
+    let pick = |rng: &mut SplitMix64, pool: &'static [JointType]| pool[rng.below(pool.len() as u64) as usize];
+    let earlier = |rng: &mut SplitMix64, n: u64| -> i64 {
+        // Favour recent bodies so that chains get deep, but reach back to the frame too.
+        if rng.below(4) == 0 {
+            1 + rng.below(n) as i64
+        } else {
+            (n - rng.below(n.min(8))) as i64
+        }
+    };
+    // Add joints from `body` to earlier bodies bringing exactly `need` equations.
+    let attach = |rng: &mut SplitMix64, joints: &mut Vec<JointSpec>, body: i64, mut need: u32, n: u64| {
+        while need > 0 {
+            let c = 1 + rng.below(u64::from(need.min(b))) as u32;
+            let (kind, driven) = if c == b {
+                // A whole body's worth: a driven grade-1 joint (B − 1 + 1 equations).
+                (pick(rng, by_c(b - 1)), 1)
+            } else if c >= 2 && rng.below(3) == 0 {
+                // Sometimes a looser joint with a driven DOF.
+                let k = pick(rng, by_c(c - 1));
+                (k, 1)
+            } else {
+                (pick(rng, by_c(c)), 0)
+            };
+            let target = earlier(rng, n);
+            joints.push(JointSpec::new(kind, target, body, driven));
+            need -= c;
+        }
+    };
+    while n < bodies {
+        let size = if bodies - n >= 2 && rng.below(2) == 0 { 2 } else { 1 };
+        let first = n as i64 + 1;
+        if size == 1 {
+            attach(&mut rng, &mut joints, first, b, n);
+        } else {
+            let second = first + 1;
+            // Internal joint with c_int equations; externals split so neither body reaches B alone.
+            let c_int = 2 + rng.below(u64::from(b - 2)) as u32; // 2..=B−1 keeps lo <= B − 1
+            joints.push(JointSpec::new(pick(&mut rng, by_c(c_int)), first, second, 0));
+            let rest = 2 * b - c_int; // in [B + 1, 2B − 2]
+            let lo = rest - (b - 1); // each side at most B − 1
+            let e1 = lo + rng.below(u64::from(b - 1 - lo + 1)) as u32;
+            let e2 = rest - e1;
+            attach(&mut rng, &mut joints, first, e1, n);
+            attach(&mut rng, &mut joints, second, e2, n);
+        }
+        n += size;
+        groups += 1;
+    }
+    let mut m = Mechanism::from_parts(
+        format!(
+            "random {} mechanism, {bodies} bodies (seed {seed})",
+            if planar { "planar" } else { "spatial" }
+        ),
+        space,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    );
+    m.description = Some(format!(
+        "Generated: random count-determined mechanism with mixed joint types, {groups} structural groups by construction"
+    ));
+    Ok((m, groups))
+}
+
+fn toml_string(s: &str) -> String {
+    toml::Value::String(s.to_string()).to_string()
+}
+
+fn toml_body(id: &BodyId) -> String {
+    match id {
+        BodyId::Int(i) => i.to_string(),
+        BodyId::Name(s) => toml_string(s),
+    }
+}
+
+fn toml_vec(v: &[f64; 3], planar: bool) -> String {
+    let n = if planar { 2 } else { 3 };
+    let parts: Vec<String> = v[..n].iter().map(|x| format!("{x:?}")).collect();
+    format!("[{}]", parts.join(", "))
+}
+
+/// Write a mechanism as a format-v1 TOML file (joints only; bodies declared when labelled).
+pub fn to_toml(m: &Mechanism) -> String {
+    let mut out = String::new();
+    if let Some(d) = &m.description {
+        for line in d.lines() {
+            let _ = writeln!(out, "# {line}");
+        }
+    }
+    let _ = writeln!(out, "name = {}", toml_string(&m.name));
+    if let Some(d) = &m.description {
+        let _ = writeln!(out, "description = {}", toml_string(d));
+    }
+    let _ = writeln!(out, "space = \"{}\"", m.space.name());
+    let _ = writeln!(out, "frame = {}", toml_body(m.body_id(m.frame)));
+    if m.bodies.iter().any(|b| b.label.is_some()) {
+        for body in &m.bodies {
+            let _ = write!(out, "\n[[body]]\nid = {}\n", toml_body(&body.id));
+            if let Some(l) = &body.label {
+                let _ = writeln!(out, "label = {}", toml_string(l));
+            }
+        }
+    }
+    let planar = m.space == Space::Planar;
+    for j in &m.joints {
+        let bodies: Vec<String> = j.bodies.iter().map(|&i| toml_body(m.body_id(i))).collect();
+        let default_id = m.joint_bodies_label(j);
+        let _ = write!(out, "\n[[joint]]\n");
+        if j.id != default_id {
+            let _ = writeln!(out, "id = {}", toml_string(&j.id));
+        }
+        let _ = writeln!(out, "type = \"{}\"", j.kind.code());
+        let _ = writeln!(out, "bodies = [{}]", bodies.join(", "));
+        if j.driven > 0 {
+            let _ = writeln!(out, "driven = {}", j.driven);
+        }
+        let Geometry {
+            origin,
+            axis,
+            axis2,
+            normal,
+            pitch,
+        } = &j.geometry;
+        if let Some(v) = origin {
+            let _ = writeln!(out, "origin = {}", toml_vec(v, planar));
+        }
+        for (key, v) in [("axis", axis), ("axis2", axis2), ("normal", normal)] {
+            if let Some(v) = v {
+                let _ = writeln!(out, "{key} = {}", toml_vec(v, false));
+            }
+        }
+        if let Some(p) = pitch {
+            let _ = writeln!(out, "pitch = {p:?}");
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mobility::mobility;
+
+    #[test]
+    fn assur_body_counts_follow_the_spec() {
+        for (class, groups, bodies) in [(1, 2, 6), (1, 8, 18), (2, 4, 18), (3, 4, 26)] {
+            let m = assur(class, groups, 364, Variant::A).unwrap();
+            assert_eq!(m.bodies.len() as u64, bodies);
+            let r = mobility(&m);
+            assert_eq!(r.mobility.count, 1, "class {class} groups {groups}");
+            assert_eq!(r.mobility.inputs, 1);
+            assert!(r.disconnected.is_empty());
+        }
+    }
+
+    #[test]
+    fn assur_variant_b_moves_the_input_to_the_last_pair() {
+        let m = assur(2, 4, 364, Variant::B).unwrap();
+        let driven: Vec<&str> = m
+            .joints
+            .iter()
+            .filter(|j| j.driven > 0)
+            .map(|j| j.id.as_str())
+            .collect();
+        assert_eq!(driven, ["17-18"]);
+    }
+
+    #[test]
+    fn assur_first_group_ports_hit_crank_then_frame() {
+        let m = assur(2, 1, 0, Variant::A).unwrap();
+        let ids: Vec<&str> = m.joints.iter().map(|j| j.id.as_str()).collect();
+        assert_eq!(ids, ["1-2", "3-6", "4-6", "5-6", "2-3", "1-4", "1-5"]);
+    }
+
+    #[test]
+    fn random_mechanisms_are_count_determined() {
+        for seed in 0..200 {
+            for planar in [false, true] {
+                let (m, groups) = random(2 + seed % 17, planar, seed).unwrap();
+                let r = mobility(&m);
+                assert_eq!(r.mobility.count, r.mobility.inputs as i64, "seed {seed}");
+                assert!(r.disconnected.is_empty());
+                assert!(groups >= 1);
+                for j in &m.joints {
+                    assert!(j.driven <= j.grade());
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn stewart_stack_counts() {
+        let m = stewart_stack(3).unwrap();
+        assert_eq!(m.bodies.len(), 1 + 3 * 13);
+        let r = mobility(&m);
+        assert_eq!(r.mobility.count, 18);
+        assert_eq!(r.mobility.inputs, 18);
+    }
+
+    #[test]
+    fn toml_writer_escapes_and_omits_default_ids() {
+        let m = assur(1, 1, 1, Variant::A).unwrap();
+        let text = to_toml(&m);
+        assert!(text.contains("space = \"planar\""));
+        assert!(text.contains("[[joint]]\ntype = \"R\"\nbodies = [1, 2]\ndriven = 1\n"));
+        assert!(!text.contains("id = "));
+    }
+}

@@ -1,0 +1,80 @@
+//! The mobility report as a table for people.
+
+use crate::mobility::{MobilityReport, Verdict};
+use std::fmt::Write;
+
+/// Render the mobility report.
+pub fn table(r: &MobilityReport) -> String {
+    let mut t = super::new_table();
+    t.set_header(vec!["quantity", "value", "meaning"]);
+    let rows: Vec<[String; 3]> = vec![
+        [
+            "space".into(),
+            format!("{} (B = {})", r.space, r.b),
+            "DOF of a free body".into(),
+        ],
+        [
+            "bodies".into(),
+            format!("{} ({} movable)", r.bodies, r.movable),
+            "the frame included".into(),
+        ],
+        [
+            "joints".into(),
+            format!("{} ({} pairs)", r.joints, r.pairs),
+            "a multiple joint of n bodies is n - 1 pairs".into(),
+        ],
+        [
+            "constraints".into(),
+            r.constraints.to_string(),
+            "sum over pairs of (B - grade)".into(),
+        ],
+        [
+            "loops".into(),
+            r.loops.to_string(),
+            "independent loops: pairs - bodies + components".into(),
+        ],
+        [
+            "mobility".into(),
+            r.mobility.count.to_string(),
+            format!("B·Nm - constraints = {}·{} - {}", r.b, r.movable, r.constraints),
+        ],
+        [
+            "inputs".into(),
+            r.mobility.inputs.to_string(),
+            "driven DOF".into(),
+        ],
+    ];
+    for row in rows {
+        t.add_row(row.to_vec());
+    }
+    let mut out = String::new();
+    let _ = writeln!(out, "{}: mobility {}", r.name, r.mobility.count);
+    let _ = writeln!(out, "{t}");
+    let verdict = match r.mobility.verdict {
+        Verdict::Equal => format!(
+            "inputs = count ({}): the mechanism can be kinematically determined (`mbsa analyze` checks where the inputs are)",
+            r.mobility.count
+        ),
+        Verdict::Fewer => format!(
+            "fewer inputs ({}) than the count ({}): {} DOF not driven",
+            r.mobility.inputs,
+            r.mobility.count,
+            r.mobility.count - r.mobility.inputs as i64
+        ),
+        Verdict::More => format!(
+            "more inputs ({}) than the count ({}): the inputs over-determine the mechanism",
+            r.mobility.inputs, r.mobility.count
+        ),
+    };
+    let _ = writeln!(out, "verdict: {verdict}");
+    if !r.disconnected.is_empty() {
+        let _ = writeln!(
+            out,
+            "warning: {} bod{} not linked to the frame: {}",
+            r.disconnected.len(),
+            if r.disconnected.len() == 1 { "y" } else { "ies" },
+            r.disconnected.join(", ")
+        );
+    }
+    out
+}
