@@ -15,11 +15,24 @@ pub fn names() -> impl Iterator<Item = &'static str> {
     EXAMPLES.iter().map(|(n, _, _)| *n)
 }
 
-/// The first line of a bundled file's header comment, without the `#`.
-pub fn summary(text: &str) -> &str {
-    text.lines()
+/// One line about a bundled file: its `name`, then the first line of its header comment when
+/// that is a sentence about the mechanism (not a source reference).
+pub fn summary(text: &str) -> String {
+    let value = |key: &str| {
+        text.lines()
+            .find_map(|l| l.trim().strip_prefix(key)?.trim_start().strip_prefix('='))
+            .map(|v| v.trim().trim_matches('"').to_string())
+    };
+    let name = value("name").unwrap_or_default();
+    let first = text
+        .lines()
         .map(str::trim)
         .find(|l| l.starts_with('#') && l.trim_start_matches('#').trim().len() > 1)
         .map(|l| l.trim_start_matches('#').trim())
-        .unwrap_or("")
+        .unwrap_or("");
+    if first.is_empty() || first.starts_with("Source") || !first.ends_with('.') {
+        name
+    } else {
+        first.to_string()
+    }
 }

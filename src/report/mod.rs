@@ -3,13 +3,19 @@
 
 pub mod mobility;
 
-use comfy_table::{Table, presets};
+use comfy_table::{LineStyle, Table, TableStyle};
+
+/// Rules above, below and under the header only: compact and readable in a terminal or a file.
+const STYLE: TableStyle = TableStyle::new()
+    .top_border(LineStyle::none().fill('─').junction('─'))
+    .header_separator(LineStyle::none().fill('─').junction('─'))
+    .bottom_border(LineStyle::none().fill('─').junction('─'));
 
 /// A table with the project's plain style: UTF-8 rules, no colour, no terminal detection, so
 /// the same result renders to the same bytes everywhere.
 pub fn new_table() -> Table {
     let mut t = Table::new();
-    t.load_style(presets::UTF8_HORIZONTAL_ONLY)
+    t.load_style(STYLE)
         .set_content_arrangement(comfy_table::ContentArrangement::Disabled);
     t
 }
@@ -22,4 +28,23 @@ pub fn json<T: serde::Serialize>(value: &T) -> String {
     });
     s.push('\n');
     s
+}
+
+/// The joint catalogue as a table (`mbsa joints`).
+pub fn joints_table() -> String {
+    let mut t = new_table();
+    t.set_header(vec!["code", "long names", "grade k", "removes (3D)", "planar", "spherical", "geometry"]);
+    for i in crate::joint::CATALOGUE.iter() {
+        let yes = |b: bool| if b { "yes" } else { "-" };
+        t.add_row(vec![
+            i.code.to_string(),
+            i.names.join(", "),
+            i.grade.to_string(),
+            (6 - i.grade).to_string(),
+            yes(i.planar).to_string(),
+            yes(i.spherical).to_string(),
+            if i.geometry.is_empty() { "count only".to_string() } else { i.geometry.join(", ") },
+        ]);
+    }
+    format!("{t}\nCodes and names are matched case-insensitively. A joint of grade k removes B - k DOF\n(B = 6 spatial, 3 planar or spherical); a multiple joint of n bodies counts as n - 1 pairs.\n")
 }

@@ -1,0 +1,65 @@
+//! `mbsa check`: validate files and compare their `[expect]` tables.
+
+use super::{Failure, emit, input};
+use std::fmt::Write;
+
+/// Check every file; exit 2 if any cannot be read, else 1 if any expectation fails.
+pub fn run(files: &[String], input_format: Option<input::InputFormat>) -> Result<(), Failure> {
+    let mut names: Vec<String> = Vec::new();
+    for f in files {
+        if f == "@all" {
+            names.extend(mbsa::examples::names().map(|n| format!("@{n}")));
+        } else {
+            names.push(f.clone());
+        }
+    }
+    let (mut failed, mut broken) = (0usize, Vec::new());
+    for name in &names {
+        let m = match input::load_path(name, input_format) {
+            Ok(m) => m,
+            Err(Failure::Input(msg)) => {
+                broken.push(msg);
+                continue;
+            }
+            Err(Failure::Check) => unreachable!("loading never fails a check"),
+        };
+        let outcomes = mbsa::expect::evaluate(&m);
+        let mut text = String::new();
+        let bad = outcomes.iter().filter(|o| !o.ok).count();
+        if bad == 0 {
+            let summary: Vec<String> = outcomes
+                .iter()
+                .map(|o| format!("{} {}", o.key, o.actual))
+                .collect();
+            let summary = if summary.is_empty() {
+                "valid (no [expect] table)".to_string()
+            } else {
+                summary.join(", ")
+            };
+            let _ = writeln!(text, "ok      {name}: {summary}");
+        } else {
+            failed += 1;
+            let _ = writeln!(text, "FAILED  {name}:");
+            for o in &outcomes {
+                let mark = if o.ok { "ok" } else { "MISMATCH" };
+                let _ = writeln!(
+                    text,
+                    "        {mark:<8} {}: expected {}, got {}",
+                    o.key, o.expected, o.actual
+                );
+            }
+        }
+        emit(&text)?;
+    }
+    if !broken.is_empty() {
+        return Err(Failure::Input(broken.join("\n")));
+    }
+    if failed > 0 {
+        emit(&format!(
+            "{failed} of {} file(s) failed their expectations\n",
+            names.len()
+        ))?;
+        return Err(Failure::Check);
+    }
+    Ok(())
+}

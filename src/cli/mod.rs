@@ -1,0 +1,172 @@
+//! Command-line interface: argument parsing, input loading, output and exit codes.
+//!
+//! Exit codes: 0 success, 1 a check failed, 2 usage or input error.
+
+mod check;
+mod input;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use std::io::{IsTerminal, Write};
+use std::process::ExitCode;
+
+pub use input::{FileArg, load};
+
+/// Structural analysis of multibody systems: mobility, structural groups, input placements
+/// and rigid subsystems of mechanisms written as TOML, YAML or JSON files.
+#[derive(Parser, Debug)]
+#[command(name = "mbsa", version, about, long_about = None, propagate_version = true)]
+#[command(after_help = "Examples:\n  mbsa examples\n  mbsa mobility @rotor\n  mbsa check mechanisms/*.toml\n\nFILE is a path, `-` for standard input, or `@name` for a bundled example.")]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Mobility count (Chebyshev-Gruebler-Kutzbach) and connectivity.
+    ///
+    /// Computes f = B·Nm − Σ(B − k) over the binary pairs (a multiple joint of n bodies counts
+    /// n − 1 pairs), compares it with the driven inputs, counts independent loops and lists
+    /// bodies not linked to the frame.
+    #[command(after_help = "Example:\n  mbsa mobility @rotor\n  mbsa mobility my-linkage.toml --format json")]
+    Mobility {
+        #[command(flatten)]
+        file: FileArg,
+        /// Replace the file's driven inputs: joint ids or body pairs, `:n` for n DOF (e.g. `1-2,1-13,A:2`).
+        #[arg(long, value_name = "SPEC")]
+        inputs: Option<String>,
+        /// Output format.
+        #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
+        format: OutputFormat,
+    },
+    /// Validate mechanism files and compare their `[expect]` tables with the analyses.
+    ///
+    /// Exit code 0 when every file is valid and meets its expectations, 1 when an expectation
+    /// fails (expected and actual values are printed), 2 when a file cannot be read.
+    #[command(after_help = "Examples:\n  mbsa check @rotor\n  mbsa check mechanisms/*.toml")]
+    Check {
+        /// Files to check (paths, `-`, or `@name`; `@all` checks every bundled example).
+        #[arg(required = true, value_name = "FILE")]
+        files: Vec<String>,
+        /// Format of standard input (default: sniffed).
+        #[arg(long, value_enum)]
+        input_format: Option<input::InputFormat>,
+    },
+    /// List the bundled example mechanisms (use them as `@name`).
+    #[command(after_help = "Example:\n  mbsa examples\n  mbsa mobility @stewart")]
+    Examples,
+    /// List the joint catalogue: codes, long names, grades, where each is valid.
+    #[command(after_help = "Example:\n  mbsa joints")]
+    Joints,
+    /// Print the JSON Schema of the mechanism file format (for editor completion).
+    ///
+    /// Save it and point your editor at it: in TOML with a `#:schema ./mbsa.schema.json` first
+    /// line (taplo, Even Better TOML); in YAML with `# yaml-language-server: $schema=./mbsa.schema.json`.
+    #[command(after_help = "Example:\n  mbsa schema > mbsa.schema.json")]
+    Schema,
+}
+
+/// Output format of the reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum OutputFormat {
+    /// A table for people.
+    Table,
+    /// JSON (documented keys, stable order).
+    Json,
+}
+
+/// Why a command did not succeed.
+pub enum Failure {
+    /// An input or usage error, already rendered (exit code 2).
+    Input(String),
+    /// A check failed (exit code 1); the report was already written.
+    Check,
+}
+
+/// Parse arguments, run, map the result to an exit code.
+pub fn main() -> ExitCode {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Check) => ExitCode::from(1),
+        Err(Failure::Input(msg)) => {
+            let mut err = std::io::stderr().lock();
+            let _ = err.write_all(msg.as_bytes());
+            if !msg.ends_with('\n') {
+                let _ = err.write_all(b"\n");
+            }
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<(), Failure> {
+    match cli.command {
+        Command::Mobility {
+            file,
+            inputs,
+            format,
+        } => {
+            let m = load_with_inputs(&file, inputs.as_deref())?;
+            let r = mbsa::mobility::mobility(&m);
+            emit(&match format {
+                OutputFormat::Table => mbsa::report::mobility::table(&r),
+                OutputFormat::Json => mbsa::report::json(&r),
+            })
+        }
+        Command::Check {
+            files,
+            input_format,
+        } => check::run(&files, input_format),
+        Command::Examples => {
+            let width = mbsa::examples::names().map(str::len).max().unwrap_or(0) + 1;
+            let mut text = String::new();
+            for (name, _, toml) in mbsa::examples::EXAMPLES {
+                let summary = mbsa::examples::summary(toml);
+                text.push_str(&format!("{:<width$}  {summary}\n", format!("@{name}")));
+            }
+            text.push_str("\nUse one as FILE, e.g. `mbsa analyze @rotor`.\n");
+            emit(&text)
+        }
+        Command::Joints => emit(&mbsa::report::joints_table()),
+        Command::Schema => emit(&mbsa::report::json(&mbsa::format::schema())),
+    }
+}
+
+/// Load FILE and apply an `--inputs` spec if given.
+pub fn load_with_inputs(file: &FileArg, inputs: Option<&str>) -> Result<mbsa::Mechanism, Failure> {
+    let mut m = load(file)?;
+    if let Some(spec) = inputs {
+        apply_inputs(&mut m, spec)?;
+    }
+    Ok(m)
+}
+
+/// Apply an `--inputs` spec, rendering its errors.
+pub fn apply_inputs(m: &mut mbsa::Mechanism, spec: &str) -> Result<(), Failure> {
+    mbsa::InputSpec::parse(spec)
+        .and_then(|s| m.apply_inputs(&s))
+        .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain("--inputs", &e)))
+}
+
+/// Write to standard output. A closed pipe (`| head`) ends the program quietly.
+pub fn emit(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|_| out.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        Err(e) => Err(Failure::Input(format!("error: cannot write output: {e}"))),
+    }
+}
+
+/// Whether diagnostics on standard error may use colour.
+pub fn color_stderr() -> bool {
+    std::env::var_os("NO_COLOR").is_none() && std::io::stderr().is_terminal()
+}

@@ -1,0 +1,998 @@
+//! From the spanned tree to a validated [`Mechanism`]: every check of format v1, each error
+//! located at the key or value it is about.
+
+use super::error::{ErrorKind, Label, LoadError};
+use super::tree::{Entry, Node, Value};
+use crate::joint::{CATALOGUE, JointType};
+use crate::mechanism::{Body, BodyId, Expect, Geometry, JointSpec, Mechanism, Space};
+use std::collections::{BTreeMap, BTreeSet};
+use std::ops::Range;
+
+const TOP_KEYS: &[&str] = &[
+    "name",
+    "description",
+    "space",
+    "frame",
+    "body",
+    "bodies",
+    "joint",
+    "joints",
+    "point",
+    "points",
+    "bar",
+    "bars",
+    "expect",
+    "$schema",
+];
+const JOINT_KEYS: &[&str] = &[
+    "id", "type", "bodies", "driven", "origin", "axis", "axis2", "normal", "pitch",
+];
+const BODY_KEYS: &[&str] = &["id", "label"];
+const POINT_KEYS: &[&str] = &["id", "at"];
+const BAR_KEYS: &[&str] = &["id", "points"];
+
+fn label(span: &Range<usize>, text: impl Into<String>) -> Label {
+    Label {
+        span: span.clone(),
+        text: text.into(),
+    }
+}
+
+fn err(
+    kind: ErrorKind,
+    message: impl Into<String>,
+    span: &Range<usize>,
+    text: impl Into<String>,
+    help: Option<String>,
+) -> LoadError {
+    LoadError::new(kind, message, vec![label(span, text)], help)
+}
+
+/// The candidate closest to `word`, if close enough to be a plausible typo.
+fn nearest<'c>(word: &str, candidates: impl IntoIterator<Item = &'c str>) -> Option<&'c str> {
+    candidates
+        .into_iter()
+        .map(|c| {
+            (
+                strsim::jaro_winkler(&word.to_lowercase(), &c.to_lowercase()),
+                c,
+            )
+        })
+        .filter(|(s, _)| *s >= 0.75)
+        .max_by(|a, b| a.0.total_cmp(&b.0).then_with(|| b.1.cmp(a.1)))
+        .map(|(_, c)| c)
+}
+
+fn wrong_type(node: &Node, expected: &str, what: &str) -> LoadError {
+    err(
+        ErrorKind::WrongType,
+        format!("{what} must be {expected}, not {}", node.value.type_name()),
+        &node.span,
+        format!("{} here", node.value.type_name()),
+        None,
+    )
+}
+
+fn out_of_range(node: &Node, what: &str) -> LoadError {
+    err(
+        ErrorKind::NumberOutOfRange,
+        format!("{what} is too large a number"),
+        &node.span,
+        "out of range",
+        Some("integers must fit in 64 bits".into()),
+    )
+}
+
+fn as_map<'n>(node: &'n Node, what: &str) -> Result<&'n [Entry], LoadError> {
+    match &node.value {
+        Value::Map(es) => Ok(es),
+        _ => Err(wrong_type(node, "a table", what)),
+    }
+}
+
+fn as_seq<'n>(node: &'n Node, what: &str) -> Result<&'n [Node], LoadError> {
+    match &node.value {
+        Value::Seq(xs) => Ok(xs),
+        _ => Err(wrong_type(node, "an array", what)),
+    }
+}
+
+fn as_str<'n>(node: &'n Node, what: &str) -> Result<&'n str, LoadError> {
+    match &node.value {
+        Value::Str(s) => Ok(s),
+        _ => Err(wrong_type(node, "a string", what)),
+    }
+}
+
+fn as_int(node: &Node, what: &str) -> Result<i64, LoadError> {
+    match &node.value {
+        Value::Int(i) => Ok(*i),
+        Value::BigInt(_) => Err(out_of_range(node, what)),
+        _ => Err(wrong_type(node, "an integer", what)),
+    }
+}
+
+/// A finite number (integers accepted).
+fn as_number(node: &Node, what: &str) -> Result<f64, LoadError> {
+    let x = match &node.value {
+        Value::Int(i) => *i as f64,
+        Value::Float(f) => *f,
+        Value::BigInt(_) => return Err(out_of_range(node, what)),
+        _ => return Err(wrong_type(node, "a number", what)),
+    };
+    if !x.is_finite() {
+        return Err(err(
+            ErrorKind::NonFinite,
+            format!("{what} must be a finite number, not {x}"),
+            &node.span,
+            "not finite",
+            Some("geometry takes ordinary numbers; NaN and infinity have no position".into()),
+        ));
+    }
+    Ok(x)
+}
+
+/// A body (or point, or bar) id: an integer or a non-empty string. A string that is a plain
+/// integer (`"12"`) is the integer, so that `--inputs 1-12` finds it.
+fn as_id(node: &Node, what: &str) -> Result<BodyId, LoadError> {
+    match &node.value {
+        Value::Int(i) => Ok(BodyId::Int(*i)),
+        Value::Str(s) if s.trim().is_empty() => Err(err(
+            ErrorKind::EmptyId,
+            format!("{what} is empty"),
+            &node.span,
+            "empty id",
+            Some("ids are integers or non-empty names".into()),
+        )),
+        Value::Str(s) => Ok(match s.parse::<i64>() {
+            Ok(i) if i.to_string() == *s => BodyId::Int(i),
+            _ => BodyId::Name(s.clone()),
+        }),
+        Value::BigInt(_) => Err(out_of_range(node, what)),
+        _ => Err(wrong_type(node, "an integer or a string", what)),
+    }
+}
+
+/// Reject keys outside `allowed`, suggesting the nearest one.
+fn check_keys(entries: &[Entry], allowed: &[&str], context: &str) -> Result<(), LoadError> {
+    for e in entries {
+        if !allowed.contains(&e.key.as_str()) {
+            let listed: Vec<&str> = allowed
+                .iter()
+                .copied()
+                .filter(|k| *k != "$schema")
+                .collect();
+            let help = match nearest(&e.key, listed.iter().copied()) {
+                Some(k) => format!("did you mean `{k}`? {context} keys: {}", listed.join(", ")),
+                None => format!("{context} keys: {}", listed.join(", ")),
+            };
+            return Err(err(
+                ErrorKind::UnknownKey,
+                format!("unknown {context} key `{}`", e.key),
+                &e.key_span,
+                "unknown key",
+                Some(help),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn get<'n>(entries: &'n [Entry], key: &str) -> Option<&'n Entry> {
+    entries.iter().find(|e| e.key == key)
+}
+
+/// The entry under `a` or its alias `b` (not both).
+fn get_alias<'n>(entries: &'n [Entry], a: &str, b: &str) -> Result<Option<&'n Entry>, LoadError> {
+    match (get(entries, a), get(entries, b)) {
+        (Some(x), Some(y)) => {
+            let (first, second) = if x.key_span.start <= y.key_span.start {
+                (x, y)
+            } else {
+                (y, x)
+            };
+            Err(LoadError::new(
+                ErrorKind::BothAliases,
+                format!("both `{a}` and `{b}` given"),
+                vec![
+                    label(&second.key_span, "second list"),
+                    label(&first.key_span, "first list"),
+                ],
+                Some(format!(
+                    "`{b}` is another spelling of `{a}`: use one of them"
+                )),
+            ))
+        }
+        (x, y) => Ok(x.or(y)),
+    }
+}
+
+fn required<'n>(
+    entries: &'n [Entry],
+    key: &str,
+    owner: &Node,
+    what: &str,
+) -> Result<&'n Entry, LoadError> {
+    get(entries, key).ok_or_else(|| {
+        // Point at the table's first key: the table's own span may be its whole body.
+        let at = entries
+            .first()
+            .map_or(owner.span.start..owner.span.start, |e| e.key_span.clone());
+        err(
+            ErrorKind::MissingField,
+            format!("{what} has no `{key}`"),
+            &at,
+            format!("in this {what}"),
+            Some(match key {
+                "type" => "add `type`, a joint code such as R, P, S or a long name".to_string(),
+                "bodies" => "add `bodies`, the ids of the bodies it joins, e.g. [1, 2]".to_string(),
+                "points" => "add `points`, the ids of its two end points, e.g. [1, 2]".to_string(),
+                _ => format!("add `{key}`"),
+            }),
+        )
+    })
+}
+
+/// Read the whole document.
+pub(crate) fn build(root: &Node, default_name: &str) -> Result<Mechanism, LoadError> {
+    let top = as_map(root, "the top level")?;
+    if top.is_empty() {
+        return Err(empty(root));
+    }
+    check_keys(top, TOP_KEYS, "top-level")?;
+    let name = match get(top, "name") {
+        Some(e) => as_str(&e.value, "`name`")?.to_string(),
+        None => default_name.to_string(),
+    };
+    let description = match get(top, "description") {
+        Some(e) => Some(as_str(&e.value, "`description`")?.to_string()),
+        None => None,
+    };
+    if let Some(e) = get(top, "$schema") {
+        as_str(&e.value, "`$schema`")?;
+    }
+    let space = match get(top, "space") {
+        Some(e) => parse_space(&e.value)?,
+        None => Space::Spatial,
+    };
+    let joints = get_alias(top, "joint", "joints")?;
+    let bodies = get_alias(top, "body", "bodies")?;
+    let points = get_alias(top, "point", "points")?;
+    let bars = get_alias(top, "bar", "bars")?;
+    let classic = joints.or(bodies);
+    let framework = points.or(bars);
+    if let (Some(c), Some(f)) = (classic, framework) {
+        return Err(LoadError::new(
+            ErrorKind::MixedFramework,
+            "joints and a bar-joint framework in one file",
+            vec![
+                label(&f.key_span, "framework"),
+                label(&c.key_span, "joint-and-body description"),
+            ],
+            Some("describe the mechanism either with `joint`/`body` or with `point`/`bar`".into()),
+        ));
+    }
+    let frame_entry = get(top, "frame").ok_or_else(|| {
+        let at = top[0].key_span.clone();
+        err(
+            ErrorKind::MissingFrame,
+            "no `frame`: the fixed body is required",
+            &at,
+            "the top level has no `frame`",
+            Some(
+                "add `frame = <body id>` (TOML) or `frame: <body id>` (YAML), e.g. frame = 1"
+                    .into(),
+            ),
+        )
+    })?;
+    let frame = as_id(&frame_entry.value, "`frame`")?;
+
+    let mut m = if framework.is_some() {
+        build_framework(
+            top,
+            root,
+            &name,
+            space,
+            frame,
+            &frame_entry.value,
+            points,
+            bars,
+        )?
+    } else {
+        build_joints(
+            root,
+            &name,
+            space,
+            frame,
+            &frame_entry.value,
+            joints,
+            bodies,
+        )?
+    };
+    m.description = description;
+    if let Some(e) = get(top, "expect") {
+        m.expect = parse_expect(&e.value)?;
+    }
+    Ok(m)
+}
+
+fn empty(root: &Node) -> LoadError {
+    err(
+        ErrorKind::Empty,
+        "the file is empty",
+        &(root.span.start..root.span.start),
+        "nothing here",
+        Some("a mechanism needs at least `frame` and one joint; see docs/format.md".into()),
+    )
+}
+
+/// A root that is absent (YAML stream without a document).
+pub(crate) fn empty_document() -> LoadError {
+    empty(&Node {
+        span: 0..0,
+        value: Value::Null,
+    })
+}
+
+fn parse_space(node: &Node) -> Result<Space, LoadError> {
+    let s = as_str(node, "`space`")?;
+    match s.trim().to_ascii_lowercase().as_str() {
+        "spatial" => Ok(Space::Spatial),
+        "planar" => Ok(Space::Planar),
+        "spherical" => Ok(Space::Spherical),
+        _ => {
+            let names = ["spatial", "planar", "spherical"];
+            let help = match nearest(s, names) {
+                Some(n) => {
+                    format!("did you mean `{n}`? space is one of spatial, planar, spherical")
+                }
+                None => "space is one of spatial (B = 6), planar (B = 3), spherical (B = 3)".into(),
+            };
+            Err(err(
+                ErrorKind::InvalidSpace,
+                format!("invalid space `{s}`"),
+                &node.span,
+                "not a space",
+                Some(help),
+            ))
+        }
+    }
+}
+
+fn no_joints(at: &Range<usize>, label_text: &str) -> LoadError {
+    err(
+        ErrorKind::NoJoints,
+        "the mechanism has no joints",
+        at,
+        label_text,
+        Some(
+            "add at least one joint: [[joint]] with `type` and `bodies` (or points and bars)"
+                .into(),
+        ),
+    )
+}
+
+/// Declared bodies: id -> (label, id span).
+type Declared = BTreeMap<BodyId, (Option<String>, Range<usize>)>;
+
+fn parse_bodies(entry: &Entry) -> Result<Declared, LoadError> {
+    let mut declared = Declared::new();
+    for b in as_seq(&entry.value, "the body list")? {
+        let es = as_map(b, "a body")?;
+        check_keys(es, BODY_KEYS, "body")?;
+        let id_entry = required(es, "id", b, "body")?;
+        let id = as_id(&id_entry.value, "a body id")?;
+        let label_text = match get(es, "label") {
+            Some(e) => Some(as_str(&e.value, "a body label")?.to_string()),
+            None => None,
+        };
+        if let Some((_, first)) = declared.get(&id) {
+            return Err(LoadError::new(
+                ErrorKind::DuplicateBodyId,
+                format!("body `{id}` is declared twice"),
+                vec![
+                    label(&id_entry.value.span, "declared again here"),
+                    label(first, "first declared here"),
+                ],
+                Some("body ids must be unique".into()),
+            ));
+        }
+        declared.insert(id, (label_text, id_entry.value.span.clone()));
+    }
+    Ok(declared)
+}
+
+fn undeclared<'a>(
+    id: &BodyId,
+    span: &Range<usize>,
+    known: impl Iterator<Item = &'a BodyId>,
+    what: &str,
+    list: &str,
+) -> LoadError {
+    let names: Vec<String> = known.map(|b| b.to_string()).collect();
+    let text = id.to_string();
+    let help = match nearest(&text, names.iter().map(String::as_str)) {
+        Some(n) => format!("did you mean `{n}`? {list}: {}", names.join(", ")),
+        None => format!("{list}: {}", names.join(", ")),
+    };
+    err(
+        ErrorKind::UndeclaredBody,
+        format!("{what} `{id}` is not declared"),
+        span,
+        "not declared",
+        Some(help),
+    )
+}
+
+fn joint_grade_help(space: Space) -> String {
+    let ok: Vec<&str> = CATALOGUE
+        .iter()
+        .filter(|i| i.kind.valid_in(space))
+        .map(|i| i.code)
+        .collect();
+    format!(
+        "a {} mechanism accepts {}; use `space = \"spatial\"` for the others",
+        space.name(),
+        ok.join(", ")
+    )
+}
+
+fn build_joints(
+    root: &Node,
+    name: &str,
+    space: Space,
+    frame: BodyId,
+    frame_node: &Node,
+    joints: Option<&Entry>,
+    bodies: Option<&Entry>,
+) -> Result<Mechanism, LoadError> {
+    let declared = bodies.map(parse_bodies).transpose()?;
+    if let Some(d) = &declared
+        && !d.contains_key(&frame)
+    {
+        return Err(undeclared(
+            &frame,
+            &frame_node.span,
+            d.keys(),
+            "frame",
+            "declared bodies",
+        ));
+    }
+    let Some(joints) = joints else {
+        let at = root.span.start..root.span.start;
+        return Err(no_joints(&at, "no `joint` list in this file"));
+    };
+    let list = as_seq(&joints.value, "the joint list")?;
+    if list.is_empty() {
+        return Err(no_joints(&joints.value.span, "empty list"));
+    }
+    // (spec without final id, explicit id and its span, span of the joint for later errors)
+    let mut specs: Vec<(JointSpec, Option<Range<usize>>, Range<usize>)> = Vec::new();
+    let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
+    for j in list {
+        let es = as_map(j, "a joint")?;
+        check_keys(es, JOINT_KEYS, "joint")?;
+        // Type.
+        let type_entry = required(es, "type", j, "joint")?;
+        let type_text = as_str(&type_entry.value, "a joint `type`")?;
+        let kind = JointType::parse(type_text).ok_or_else(|| {
+            err(
+                ErrorKind::UnknownJointType,
+                format!("unknown joint type `{type_text}`"),
+                &type_entry.value.span,
+                "not a joint type",
+                Some(match JointType::suggest(type_text) {
+                    Some(c) => format!(
+                        "did you mean `{c}` ({})? `mbsa joints` lists every code and name",
+                        c_name(c)
+                    ),
+                    None => "use a code such as R, P, C, U, S or a long name (revolute, ...); `mbsa joints` lists them".into(),
+                }),
+            )
+        })?;
+        if !kind.valid_in(space) {
+            return Err(err(
+                ErrorKind::JointNotValidInSpace,
+                format!(
+                    "joint type {} ({}) cannot be used in a {} mechanism",
+                    kind.code(),
+                    c_name(kind.code()),
+                    space.name()
+                ),
+                &type_entry.value.span,
+                format!("not a {} joint", space.name()),
+                Some(joint_grade_help(space)),
+            ));
+        }
+        // Bodies.
+        let bodies_entry = required(es, "bodies", j, "joint")?;
+        let items = as_seq(&bodies_entry.value, "a joint's `bodies`")?;
+        if items.len() < 2 {
+            return Err(err(
+                ErrorKind::TooFewBodies,
+                format!(
+                    "a joint joins at least two bodies; this one names {}",
+                    items.len()
+                ),
+                &bodies_entry.value.span,
+                "fewer than two bodies",
+                Some("write both bodies, e.g. bodies = [1, 2]".into()),
+            ));
+        }
+        let mut ids: Vec<BodyId> = Vec::with_capacity(items.len());
+        for (i, b) in items.iter().enumerate() {
+            let id = as_id(b, "a body id")?;
+            if let Some(k) = ids.iter().position(|x| *x == id) {
+                return Err(LoadError::new(
+                    ErrorKind::RepeatedBody,
+                    format!("body `{id}` appears twice in one joint"),
+                    vec![
+                        label(&b.span, "again here"),
+                        label(&items[k].span, "first here"),
+                    ],
+                    Some("a joint joins distinct bodies".into()),
+                ));
+            }
+            if let Some(d) = &declared
+                && !d.contains_key(&id)
+            {
+                return Err(undeclared(
+                    &id,
+                    &items[i].span,
+                    d.keys(),
+                    "body",
+                    "declared bodies",
+                ));
+            }
+            ids.push(id);
+        }
+        // Driven DOF.
+        let max = u32::from(kind.grade()) * (ids.len() as u32 - 1);
+        let driven = match get(es, "driven") {
+            None => 0,
+            Some(e) => {
+                let n = match as_int(&e.value, "`driven`") {
+                    Err(er) if er.kind() == ErrorKind::NumberOutOfRange => i64::MAX,
+                    r => r?,
+                };
+                if n < 0 || n > i64::from(max) {
+                    return Err(err(
+                        ErrorKind::DrivenOutOfRange,
+                        format!(
+                            "`driven` must be between 0 and {max} for this {} joint, not {}",
+                            kind.code(),
+                            match &e.value.value {
+                                Value::BigInt(s) => s.clone(),
+                                _ => n.to_string(),
+                            }
+                        ),
+                        &e.value.span,
+                        "out of range",
+                        Some(format!(
+                            "{} has {} DOF{}",
+                            kind.code(),
+                            kind.grade(),
+                            if ids.len() > 2 {
+                                format!(" per pair, {max} for its {} pairs", ids.len() - 1)
+                            } else {
+                                String::new()
+                            }
+                        )),
+                    ));
+                }
+                n as u32
+            }
+        };
+        // Id.
+        let id = match get(es, "id") {
+            None => None,
+            Some(e) => {
+                let id = match &e.value.value {
+                    Value::Int(i) => i.to_string(),
+                    _ => as_str(&e.value, "a joint `id`")?.to_string(),
+                };
+                if id.trim().is_empty() {
+                    return Err(err(
+                        ErrorKind::EmptyId,
+                        "a joint `id` is empty",
+                        &e.value.span,
+                        "empty id",
+                        Some("omit `id` for the default `<a>-<b>`".into()),
+                    ));
+                }
+                if let Some(first) = explicit.get(&id) {
+                    return Err(LoadError::new(
+                        ErrorKind::DuplicateJointId,
+                        format!("two joints have the id `{id}`"),
+                        vec![
+                            label(&e.value.span, "again here"),
+                            label(first, "first here"),
+                        ],
+                        Some(
+                            "joint ids must be unique; `--inputs` and reports name joints by id"
+                                .into(),
+                        ),
+                    ));
+                }
+                explicit.insert(id.clone(), e.value.span.clone());
+                Some(id)
+            }
+        };
+        let geometry = parse_geometry(es, space)?;
+        let id_span = get(es, "id").map(|e| e.value.span.clone());
+        let joint_span = es.first().map_or(j.span.clone(), |e| e.key_span.clone());
+        specs.push((
+            JointSpec {
+                id,
+                kind,
+                bodies: ids,
+                driven,
+                geometry,
+            },
+            id_span,
+            joint_span,
+        ));
+    }
+    if !specs.iter().any(|(s, ..)| s.bodies.contains(&frame)) {
+        return Err(frame_not_in_joint(&frame, frame_node));
+    }
+    // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too).
+    let mut taken: BTreeSet<String> = explicit.keys().cloned().collect();
+    for (s, ..) in &mut specs {
+        if s.id.is_none() {
+            let base = s
+                .bodies
+                .iter()
+                .map(|b| b.to_string())
+                .collect::<Vec<_>>()
+                .join("-");
+            let mut id = base.clone();
+            let mut n = 1;
+            while taken.contains(&id) {
+                n += 1;
+                id = format!("{base}#{n}");
+            }
+            taken.insert(id.clone());
+            s.id = Some(id);
+        }
+    }
+    let extra: Vec<Body> = declared
+        .unwrap_or_default()
+        .into_iter()
+        .map(|(id, (label, _))| Body { id, label })
+        .collect();
+    Ok(Mechanism::from_parts(
+        name,
+        space,
+        frame,
+        extra,
+        specs.into_iter().map(|(s, ..)| s).collect(),
+    ))
+}
+
+fn c_name(code: &str) -> &'static str {
+    CATALOGUE
+        .iter()
+        .find(|i| i.code == code)
+        .and_then(|i| i.names.first().copied())
+        .unwrap_or("")
+}
+
+fn frame_not_in_joint(frame: &BodyId, frame_node: &Node) -> LoadError {
+    err(
+        ErrorKind::FrameNotInJoint,
+        format!("the frame `{frame}` is not joined to anything"),
+        &frame_node.span,
+        "no joint names this body",
+        Some("the frame must appear in the `bodies` of at least one joint".into()),
+    )
+}
+
+/// A coordinate array: 3 numbers, or 2 in a planar mechanism when `planar2` (z = 0).
+fn parse_vector(e: &Entry, space: Space, axis: bool) -> Result<[f64; 3], LoadError> {
+    let items = as_seq(&e.value, &format!("`{}`", e.key))?;
+    let planar = space == Space::Planar;
+    if !(items.len() == 3 || (planar && items.len() == 2)) {
+        let want = if planar {
+            "[x, y] or [x, y, z]"
+        } else {
+            "[x, y, z]"
+        };
+        return Err(err(
+            ErrorKind::GeometryLength,
+            format!(
+                "`{}` must have {} coordinates, not {}",
+                e.key,
+                if planar { "2 or 3" } else { "3" },
+                items.len()
+            ),
+            &e.value.span,
+            format!("{} numbers", items.len()),
+            Some(format!("write `{}` as {want}", e.key)),
+        ));
+    }
+    let mut v = [0.0; 3];
+    for (i, x) in items.iter().enumerate() {
+        v[i] = as_number(x, &format!("a coordinate of `{}`", e.key))?;
+    }
+    if axis && v.iter().map(|x| x * x).sum::<f64>().sqrt() < 1e-12 {
+        return Err(err(
+            ErrorKind::ZeroAxis,
+            format!("`{}` is the zero vector", e.key),
+            &e.value.span,
+            "zero length",
+            Some("an axis or normal needs a direction, e.g. [0, 0, 1]".into()),
+        ));
+    }
+    Ok(v)
+}
+
+fn parse_geometry(es: &[Entry], space: Space) -> Result<Geometry, LoadError> {
+    let mut g = Geometry::default();
+    for e in es {
+        match e.key.as_str() {
+            "origin" => g.origin = Some(parse_vector(e, space, false)?),
+            "axis" => g.axis = Some(parse_vector(e, space, true)?),
+            "axis2" => g.axis2 = Some(parse_vector(e, space, true)?),
+            "normal" => g.normal = Some(parse_vector(e, space, true)?),
+            "pitch" => g.pitch = Some(as_number(&e.value, "`pitch`")?),
+            _ => {}
+        }
+    }
+    Ok(g)
+}
+
+/// `[expect]`: keys and types from [`Expect`] itself, so the two stay in sync.
+fn parse_expect(node: &Node) -> Result<Expect, LoadError> {
+    let es = as_map(node, "`expect`")?;
+    let schema = schemars::schema_for!(Expect);
+    let keys: Vec<&str> = schema
+        .get("properties")
+        .and_then(|p| p.as_object())
+        .map(|p| p.keys().map(String::as_str).collect())
+        .unwrap_or_default();
+    check_keys(es, &keys, "expect")?;
+    let mut object = serde_json::Map::new();
+    for e in es {
+        let v = to_json(&e.value)?;
+        let one = serde_json::Value::Object([(e.key.clone(), v.clone())].into_iter().collect());
+        if let Err(x) = serde_json::from_value::<Expect>(one) {
+            let msg = x.to_string();
+            return Err(err(
+                ErrorKind::WrongType,
+                format!("`expect.{}`: {msg}", e.key),
+                &e.value.span,
+                "wrong type",
+                Some(match e.key.as_str() {
+                    "determined" => "write true or false".to_string(),
+                    "mobility" | "generic_dof" | "true_mobility" => "write an integer".to_string(),
+                    _ => "write a non-negative integer".to_string(),
+                }),
+            ));
+        }
+        object.insert(e.key.clone(), v);
+    }
+    serde_json::from_value(serde_json::Value::Object(object)).map_err(|x| {
+        err(
+            ErrorKind::WrongType,
+            format!("`expect`: {x}"),
+            &node.span,
+            "here",
+            None,
+        )
+    })
+}
+
+fn to_json(node: &Node) -> Result<serde_json::Value, LoadError> {
+    use serde_json::Value as J;
+    Ok(match &node.value {
+        Value::Map(es) => {
+            let mut m = serde_json::Map::new();
+            for e in es {
+                m.insert(e.key.clone(), to_json(&e.value)?);
+            }
+            J::Object(m)
+        }
+        Value::Seq(xs) => J::Array(xs.iter().map(to_json).collect::<Result<_, _>>()?),
+        Value::Str(s) => J::String(s.clone()),
+        Value::Int(i) => J::from(*i),
+        Value::BigInt(_) => return Err(out_of_range(node, "this number")),
+        Value::Float(f) => serde_json::Number::from_f64(*f).map_or(J::Null, J::Number),
+        Value::Bool(b) => J::Bool(*b),
+        Value::Null | Value::DateTime => J::Null,
+    })
+}
+
+// ---------------------------------------------------------------------------------------------
+// Bar-joint frameworks
+
+#[allow(clippy::too_many_arguments)]
+fn build_framework(
+    top: &[Entry],
+    root: &Node,
+    name: &str,
+    space: Space,
+    frame: BodyId,
+    frame_node: &Node,
+    points: Option<&Entry>,
+    bars: Option<&Entry>,
+) -> Result<Mechanism, LoadError> {
+    let _ = top;
+    // Points: id -> (position, id span), in file order.
+    let mut point_ids: Vec<BodyId> = Vec::new();
+    let mut point_info: BTreeMap<BodyId, (Option<[f64; 3]>, Range<usize>)> = BTreeMap::new();
+    if let Some(p) = points {
+        for pt in as_seq(&p.value, "the point list")? {
+            let es = as_map(pt, "a point")?;
+            check_keys(es, POINT_KEYS, "point")?;
+            let id_entry = required(es, "id", pt, "point")?;
+            let id = as_id(&id_entry.value, "a point id")?;
+            if let Some((_, first)) = point_info.get(&id) {
+                return Err(LoadError::new(
+                    ErrorKind::DuplicatePointId,
+                    format!("point `{id}` is declared twice"),
+                    vec![
+                        label(&id_entry.value.span, "declared again here"),
+                        label(first, "first declared here"),
+                    ],
+                    Some("point ids must be unique".into()),
+                ));
+            }
+            let at = match get(es, "at") {
+                Some(e) => Some(parse_vector(e, space, false)?),
+                None => None,
+            };
+            point_ids.push(id.clone());
+            point_info.insert(id, (at, id_entry.value.span.clone()));
+        }
+    }
+    let Some(bars) = bars else {
+        let at = root.span.start..root.span.start;
+        return Err(no_joints(&at, "no `bar` list in this file"));
+    };
+    let list = as_seq(&bars.value, "the bar list")?;
+    if list.is_empty() {
+        return Err(no_joints(&bars.value.span, "empty list"));
+    }
+    // Bars: (explicit id or None, its two points).
+    let mut bar_specs: Vec<(Option<BodyId>, [BodyId; 2])> = Vec::new();
+    let mut explicit: BTreeMap<BodyId, Range<usize>> = BTreeMap::new();
+    for b in list {
+        let es = as_map(b, "a bar")?;
+        check_keys(es, BAR_KEYS, "bar")?;
+        let pe = required(es, "points", b, "bar")?;
+        let items = as_seq(&pe.value, "a bar's `points`")?;
+        if items.len() != 2 {
+            return Err(err(
+                ErrorKind::BarPoints,
+                format!(
+                    "a bar joins exactly two points; this one names {}",
+                    items.len()
+                ),
+                &pe.value.span,
+                format!("{} points", items.len()),
+                Some("write its two end points, e.g. points = [1, 2]".into()),
+            ));
+        }
+        let mut ends = Vec::with_capacity(2);
+        for p in items {
+            let id = as_id(p, "a point id")?;
+            if !point_info.contains_key(&id) {
+                let names: Vec<String> = point_ids.iter().map(|p| p.to_string()).collect();
+                let text = id.to_string();
+                let help = match nearest(&text, names.iter().map(String::as_str)) {
+                    Some(n) => format!("did you mean `{n}`? declared points: {}", names.join(", ")),
+                    None if names.is_empty() => "declare the points with [[point]] id = ...".into(),
+                    None => format!("declared points: {}", names.join(", ")),
+                };
+                return Err(err(
+                    ErrorKind::UnknownPoint,
+                    format!("point `{id}` is not declared"),
+                    &p.span,
+                    "unknown point",
+                    Some(help),
+                ));
+            }
+            ends.push(id);
+        }
+        if ends[0] == ends[1] {
+            return Err(err(
+                ErrorKind::BarPoints,
+                format!("a bar joins point `{}` to itself", ends[0]),
+                &pe.value.span,
+                "the same point twice",
+                Some("a bar joins two distinct points".into()),
+            ));
+        }
+        let id = match get(es, "id") {
+            None => None,
+            Some(e) => {
+                let id = as_id(&e.value, "a bar id")?;
+                if let Some(first) = explicit.get(&id) {
+                    return Err(LoadError::new(
+                        ErrorKind::DuplicateBodyId,
+                        format!("two bars have the id `{id}`"),
+                        vec![
+                            label(&e.value.span, "again here"),
+                            label(first, "first here"),
+                        ],
+                        Some("bar ids must be unique".into()),
+                    ));
+                }
+                explicit.insert(id.clone(), e.value.span.clone());
+                Some(id)
+            }
+        };
+        let [p, q]: [BodyId; 2] = ends
+            .try_into()
+            .expect("exactly two ends were checked above");
+        bar_specs.push((id, [p, q]));
+    }
+    // Default bar ids `p-q`, suffixed when taken.
+    let mut taken: BTreeSet<BodyId> = explicit.keys().cloned().collect();
+    let mut bar_ids: Vec<BodyId> = Vec::with_capacity(bar_specs.len());
+    for (id, [p, q]) in &bar_specs {
+        let id = match id {
+            Some(id) => id.clone(),
+            None => {
+                let base = format!("{p}-{q}");
+                let mut id = BodyId::Name(base.clone());
+                let mut n = 1;
+                while taken.contains(&id) {
+                    n += 1;
+                    id = BodyId::Name(format!("{base}#{n}"));
+                }
+                taken.insert(id.clone());
+                id
+            }
+        };
+        bar_ids.push(id);
+    }
+    if !bar_ids.contains(&frame) {
+        return Err(undeclared(
+            &frame,
+            &frame_node.span,
+            bar_ids.iter(),
+            "frame bar",
+            "bars",
+        ));
+    }
+    // One joint per point where two or more bars meet.
+    let kind = if space == Space::Spatial {
+        JointType::S
+    } else {
+        JointType::R
+    };
+    let mut specs = Vec::new();
+    for pid in &point_ids {
+        let meeting: Vec<BodyId> = bar_specs
+            .iter()
+            .zip(&bar_ids)
+            .filter(|((_, ends), _)| ends.contains(pid))
+            .map(|(_, id)| id.clone())
+            .collect();
+        if meeting.len() < 2 {
+            continue;
+        }
+        let origin = point_info.get(pid).and_then(|(at, _)| *at);
+        specs.push(JointSpec {
+            id: Some(pid.to_string()),
+            kind,
+            bodies: meeting,
+            driven: 0,
+            geometry: Geometry {
+                origin,
+                axis: (space == Space::Planar).then_some([0.0, 0.0, 1.0]),
+                ..Geometry::default()
+            },
+        });
+    }
+    if !specs.iter().any(|s| s.bodies.contains(&frame)) {
+        return Err(frame_not_in_joint(&frame, frame_node));
+    }
+    let extra = bar_ids
+        .into_iter()
+        .map(|id| Body { id, label: None })
+        .collect();
+    Ok(Mechanism::from_parts(name, space, frame, extra, specs))
+}

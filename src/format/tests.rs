@@ -1,0 +1,294 @@
+use super::*;
+use crate::joint::JointType;
+use crate::mechanism::{BodyId, Space};
+
+const TOML_EXAMPLE: &str = r#"name = "Spatial four-bar RSCP"
+space = "spatial"
+frame = 1
+
+[[joint]]
+id = "A"
+type = "R"
+bodies = [1, 2]
+driven = 1
+
+[[joint]]
+id = "B"
+type = "S"
+bodies = [2, 3]
+
+[[joint]]
+id = "C"
+type = "C"
+bodies = [3, 4]
+
+[[joint]]
+id = "D"
+type = "P"
+bodies = [1, 4]
+"#;
+
+const YAML_EXAMPLE: &str = "name: Spatial four-bar RSCP
+frame: 1
+joints:
+  - {id: A, type: R, bodies: [1, 2], driven: 1}
+  - {id: B, type: S, bodies: [2, 3]}
+  - {id: C, type: C, bodies: [3, 4]}
+  - {id: D, type: P, bodies: [1, 4]}
+";
+
+const JSON_EXAMPLE: &str = r#"{
+  "name": "Spatial four-bar RSCP",
+  "frame": 1,
+  "joints": [
+    {"id": "A", "type": "R", "bodies": [1, 2], "driven": 1},
+    {"id": "B", "type": "S", "bodies": [2, 3]},
+    {"id": "C", "type": "C", "bodies": [3, 4]},
+    {"id": "D", "type": "P", "bodies": [1, 4]}
+  ]
+}"#;
+
+#[test]
+fn the_three_examples_give_the_same_mechanism() {
+    let t = load("rscp.toml", TOML_EXAMPLE, Format::Toml).unwrap();
+    let y = load("rscp.yaml", YAML_EXAMPLE, Format::Yaml).unwrap();
+    let j = load("rscp.json", JSON_EXAMPLE, Format::Json).unwrap();
+    assert_eq!(t, y);
+    assert_eq!(t, j);
+    assert_eq!(t.name, "Spatial four-bar RSCP");
+    assert_eq!(t.space, Space::Spatial);
+    assert_eq!(t.bodies.len(), 4);
+    assert_eq!(t.body_id(t.frame), &BodyId::Int(1));
+    let kinds: Vec<JointType> = t.joints.iter().map(|j| j.kind).collect();
+    assert_eq!(
+        kinds,
+        [JointType::R, JointType::S, JointType::C, JointType::P]
+    );
+    assert_eq!(t.inputs(), 1);
+}
+
+#[test]
+fn sniffs_formats() {
+    assert_eq!(Format::sniff(TOML_EXAMPLE), Format::Toml);
+    assert_eq!(Format::sniff(YAML_EXAMPLE), Format::Yaml);
+    assert_eq!(Format::sniff(JSON_EXAMPLE), Format::Json);
+    assert_eq!(Format::sniff("# c\n{frame: 1}"), Format::Yaml);
+    assert_eq!(Format::sniff("frame = 1\n[[joint]\n"), Format::Toml);
+    assert_eq!(Format::sniff("{\"frame\": 1,"), Format::Json);
+    assert_eq!(Format::sniff("# c\n{\n  \"frame\": 1,\n"), Format::Json);
+    assert_eq!(Format::sniff(""), Format::Yaml);
+    assert_eq!(Format::from_path(Path::new("a/b.YML")), Some(Format::Yaml));
+    assert_eq!(Format::from_path(Path::new("b.txt")), None);
+}
+
+#[test]
+fn defaults_and_long_names() {
+    let m = load(
+        "dir/thing.toml",
+        "frame = 1\n[[joint]]\ntype = \"Revolute\"\nbodies = [1, 2]\n[[joint]]\ntype = \"hinge\"\nbodies = [1, 2]\n[[joint]]\ntype = \"pin\"\nbodies = [1, 2]\n",
+        Format::Toml,
+    )
+    .unwrap();
+    assert_eq!(m.name, "thing");
+    let ids: Vec<&str> = m.joints.iter().map(|j| j.id.as_str()).collect();
+    assert_eq!(ids, ["1-2", "1-2#2", "1-2#3"]);
+    assert!(m.joints.iter().all(|j| j.kind == JointType::R));
+}
+
+#[test]
+fn default_ids_avoid_explicit_ones() {
+    let m = load(
+        "x.yaml",
+        "frame: 1\njoints:\n  - {type: R, bodies: [1, 2]}\n  - {id: 1-2, type: R, bodies: [2, 3]}\n",
+        Format::Yaml,
+    )
+    .unwrap();
+    let ids: Vec<&str> = m.joints.iter().map(|j| j.id.as_str()).collect();
+    assert_eq!(ids, ["1-2#2", "1-2"]);
+}
+
+#[test]
+fn string_ids_and_declared_bodies() {
+    let text = r#"
+frame = "ground"
+space = "planar"
+[[body]]
+id = "ground"
+label = "the frame"
+[[body]]
+id = "crank"
+[[body]]
+id = "7"
+[[joint]]
+type = "R"
+bodies = ["ground", "crank"]
+origin = [0, 0.5]
+axis = [0, 0, 1]
+[[joint]]
+type = "R"
+bodies = ["crank", 7]
+"#;
+    let m = load("s.toml", text, Format::Toml).unwrap();
+    assert_eq!(m.bodies.len(), 3);
+    assert_eq!(m.bodies[0].id, BodyId::Int(7));
+    let ground = m.body_index(&BodyId::Name("ground".into())).unwrap();
+    assert_eq!(m.bodies[ground].label.as_deref(), Some("the frame"));
+    assert_eq!(m.joints[0].geometry.origin, Some([0.0, 0.5, 0.0]));
+    assert_eq!(m.joints[1].id, "crank-7");
+}
+
+#[test]
+fn multiple_joints_and_driven_limit() {
+    let ok =
+        "space = \"planar\"\nframe = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2, 3]\ndriven = 2\n";
+    let m = load("m.toml", ok, Format::Toml).unwrap();
+    assert_eq!(m.joints[0].id, "1-2-3");
+    assert_eq!(m.joints[0].driven, 2);
+    let bad = ok.replace("driven = 2", "driven = 3");
+    let e = load("m.toml", &bad, Format::Toml).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::DrivenOutOfRange);
+    assert_eq!(e.line_col(), Some((6, 10)));
+}
+
+#[test]
+fn expect_is_read() {
+    let text = "frame: 1\njoints: [{type: R, bodies: [1, 2], driven: 1}]\nexpect: {mobility: 1, determined: true}\n";
+    let m = load("e.yaml", text, Format::Yaml).unwrap();
+    assert_eq!(m.expect.mobility, Some(1));
+    assert_eq!(m.expect.determined, Some(true));
+    let e = load("e.yaml", &text.replace("mobility", "mobilty"), Format::Yaml).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::UnknownKey);
+    assert!(e.hint().unwrap().contains("`mobility`"));
+    let e = load("e.yaml", &text.replace("true", "3"), Format::Yaml).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::WrongType);
+}
+
+#[test]
+fn frameworks() {
+    let text = r#"
+space = "planar"
+frame = "g"
+[[point]]
+id = "a"
+at = [0, 0]
+[[point]]
+id = "b"
+at = [1, 0]
+[[point]]
+id = "c"
+at = [0, 1]
+[[bar]]
+id = "g"
+points = ["a", "b"]
+[[bar]]
+points = ["b", "c"]
+[[bar]]
+points = ["c", "a"]
+"#;
+    let m = load("tri.toml", text, Format::Toml).unwrap();
+    assert_eq!(m.bodies.len(), 3);
+    let ids: Vec<&str> = m.joints.iter().map(|j| j.id.as_str()).collect();
+    assert_eq!(ids, ["a", "b", "c"]);
+    assert!(m.joints.iter().all(|j| j.kind == JointType::R));
+    assert_eq!(m.joints[1].geometry.origin, Some([1.0, 0.0, 0.0]));
+    assert_eq!(m.joint_bodies_label(&m.joints[1]), "g-b-c");
+    let spatial = load(
+        "tri.toml",
+        &text
+            .replace("planar", "spatial")
+            .replace("[0, 0]", "[0, 0, 0]")
+            .replace("[1, 0]", "[1, 0, 0]")
+            .replace("[0, 1]", "[0, 1, 0]"),
+        Format::Toml,
+    )
+    .unwrap();
+    assert!(spatial.joints.iter().all(|j| j.kind == JointType::S));
+}
+
+#[test]
+fn bundled_examples_load() {
+    for name in crate::examples::names() {
+        let (file, text) = crate::examples::find(name).unwrap();
+        if let Err(e) = load(file, text, Format::Toml) {
+            panic!("{name}: {}", crate::diagnostic::render(&e, false));
+        }
+    }
+}
+
+#[test]
+fn bytes_entry_point() {
+    let e = load_bytes("b.toml", b"frame = 1\n\xff\xfe", Format::Toml).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::NotUtf8);
+    assert_eq!(e.line_col(), Some((2, 1)));
+    let m = load_bytes(
+        "b.yaml",
+        format!("\u{FEFF}{YAML_EXAMPLE}").as_bytes(),
+        Format::Yaml,
+    );
+    assert!(m.is_ok());
+}
+
+#[test]
+fn absurd_numbers_are_clean_errors() {
+    for (text, kind) in [
+        (
+            "frame = 99999999999999999999999\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n",
+            ErrorKind::NumberOutOfRange,
+        ),
+        (
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\ndriven = 1000000000000000000000000000000\n",
+            ErrorKind::DrivenOutOfRange,
+        ),
+        (
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\ndriven = -9223372036854775808\n",
+            ErrorKind::DrivenOutOfRange,
+        ),
+        (
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\norigin = [1e400, 0, 0]\n",
+            ErrorKind::NonFinite,
+        ),
+        (
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\norigin = [-nan, 0, 0]\n",
+            ErrorKind::NonFinite,
+        ),
+    ] {
+        match load("n.toml", text, Format::Toml) {
+            Err(e) => assert_eq!(e.kind(), kind, "{text}: {e}"),
+            Ok(m) => panic!("{text} loaded: {m:?}"),
+        }
+    }
+}
+
+#[test]
+fn deep_nesting_is_refused() {
+    let deep = format!("frame: 1\nx: {}{}\n", "[".repeat(200), "]".repeat(200));
+    let e = load("d.yaml", &deep, Format::Yaml).unwrap_err();
+    assert!(
+        matches!(e.kind(), ErrorKind::TooDeep | ErrorKind::Syntax),
+        "{e}"
+    );
+    let deep = format!("{{\"frame\": {}{}}}", "[".repeat(100), "]".repeat(100));
+    let e = load("d.json", &deep, Format::Json).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::TooDeep);
+    let deep = format!("frame = 1\nx = {}{}\n", "[".repeat(100), "]".repeat(100));
+    let e = load("d.toml", &deep, Format::Toml).unwrap_err();
+    assert!(
+        matches!(e.kind(), ErrorKind::TooDeep | ErrorKind::Syntax),
+        "{e}"
+    );
+}
+
+#[test]
+fn schema_lists_the_keys() {
+    let s = schema();
+    let props = s["properties"].as_object().unwrap();
+    for k in [
+        "name", "frame", "joint", "joints", "body", "expect", "point", "bar", "space",
+    ] {
+        assert!(props.contains_key(k), "{k}");
+    }
+    let text = serde_json::to_string(&s).unwrap();
+    assert!(text.contains("\"revolute\""));
+    assert!(text.contains("generic_dof"));
+    assert!(text.contains("2020-12"));
+}

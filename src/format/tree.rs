@@ -1,0 +1,781 @@
+//! One spanned value tree for the three input formats, so that the model conversion can point
+//! every error at the exact key or value.
+
+use super::error::{ErrorKind, Label, LoadError, floor_boundary, offset_of};
+use std::ops::Range;
+
+/// Deepest nesting accepted (the format itself needs 4 levels).
+pub(crate) const MAX_DEPTH: usize = 64;
+
+/// A value with the byte span it was read from.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Node {
+    pub span: Range<usize>,
+    pub value: Value,
+}
+
+/// A key with its span and value.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct Entry {
+    pub key: String,
+    pub key_span: Range<usize>,
+    pub value: Node,
+}
+
+/// The values of the three formats, unified.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) enum Value {
+    /// Table / mapping / object, in source order.
+    Map(Vec<Entry>),
+    /// Array / sequence.
+    Seq(Vec<Node>),
+    Str(String),
+    Int(i64),
+    /// An integer that does not fit in 64 bits, as written.
+    BigInt(String),
+    Float(f64),
+    Bool(bool),
+    Null,
+    /// A TOML date-time (never valid in this format).
+    DateTime,
+}
+
+impl Value {
+    /// The type name used in messages.
+    pub fn type_name(&self) -> &'static str {
+        match self {
+            Value::Map(_) => "a table",
+            Value::Seq(_) => "an array",
+            Value::Str(_) => "a string",
+            Value::Int(_) | Value::BigInt(_) => "an integer",
+            Value::Float(_) => "a float",
+            Value::Bool(_) => "a boolean",
+            Value::Null => "null",
+            Value::DateTime => "a date-time",
+        }
+    }
+}
+
+fn syntax(what: &str, message: impl Into<String>, at: Range<usize>, label: &str) -> LoadError {
+    LoadError::new(
+        ErrorKind::Syntax,
+        format!("malformed {what}: {}", message.into()),
+        vec![Label {
+            span: at,
+            text: label.to_string(),
+        }],
+        None,
+    )
+}
+
+fn too_deep(at: Range<usize>) -> LoadError {
+    LoadError::new(
+        ErrorKind::TooDeep,
+        format!("values nested deeper than {MAX_DEPTH} levels"),
+        vec![Label {
+            span: at,
+            text: "too deep here".into(),
+        }],
+        Some(
+            "a mechanism file needs at most 4 levels (top level, joint list, joint, array)".into(),
+        ),
+    )
+}
+
+fn duplicate_key(key: &str, first: Range<usize>, again: Range<usize>) -> LoadError {
+    LoadError::new(
+        ErrorKind::DuplicateKey,
+        format!("duplicate key `{key}`"),
+        vec![
+            Label {
+                span: again,
+                text: "given again here".into(),
+            },
+            Label {
+                span: first,
+                text: "first given here".into(),
+            },
+        ],
+        Some("each key may appear once per table; remove one of them".into()),
+    )
+}
+
+/// Push an entry, rejecting duplicate keys (YAML and JSON parsers allow them; TOML does not).
+fn push_entry(entries: &mut Vec<Entry>, entry: Entry) -> Result<(), LoadError> {
+    if let Some(prev) = entries.iter().find(|e| e.key == entry.key) {
+        return Err(duplicate_key(
+            &entry.key,
+            prev.key_span.clone(),
+            entry.key_span.clone(),
+        ));
+    }
+    entries.push(entry);
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// TOML
+
+/// Parse TOML into a tree.
+pub(crate) fn parse_toml(text: &str) -> Result<Node, LoadError> {
+    let table = toml::de::DeTable::parse(text).map_err(|e| {
+        let span = e.span().unwrap_or(0..0);
+        let msg = e.message().trim().to_string();
+        syntax("TOML", msg, span, "here")
+    })?;
+    let span = table.span();
+    toml_table(table.get_ref(), span, 1)
+}
+
+fn toml_table(
+    table: &toml::de::DeTable<'_>,
+    span: Range<usize>,
+    depth: usize,
+) -> Result<Node, LoadError> {
+    if depth > MAX_DEPTH {
+        return Err(too_deep(span));
+    }
+    let mut entries = Vec::with_capacity(table.len());
+    for (k, v) in table.iter() {
+        entries.push(Entry {
+            key: k.get_ref().to_string(),
+            key_span: k.span(),
+            value: toml_value(v.get_ref(), v.span(), depth + 1)?,
+        });
+    }
+    // The toml map is sorted by key; the source order reads better in error sequences.
+    entries.sort_by_key(|e| e.key_span.start);
+    Ok(Node {
+        span,
+        value: Value::Map(entries),
+    })
+}
+
+fn toml_value(
+    v: &toml::de::DeValue<'_>,
+    span: Range<usize>,
+    depth: usize,
+) -> Result<Node, LoadError> {
+    use toml::de::DeValue;
+    if depth > MAX_DEPTH {
+        return Err(too_deep(span));
+    }
+    let value = match v {
+        DeValue::String(s) => Value::Str(s.to_string()),
+        DeValue::Integer(i) => match i64::from_str_radix(i.as_str(), i.radix()) {
+            Ok(n) => Value::Int(n),
+            Err(_) => Value::BigInt(i.to_string()),
+        },
+        DeValue::Float(f) => Value::Float(parse_float_lenient(f.as_str())),
+        DeValue::Boolean(b) => Value::Bool(*b),
+        DeValue::Datetime(_) => Value::DateTime,
+        DeValue::Array(a) => {
+            let mut items = Vec::with_capacity(a.len());
+            for item in a.iter() {
+                items.push(toml_value(item.get_ref(), item.span(), depth + 1)?);
+            }
+            Value::Seq(items)
+        }
+        DeValue::Table(t) => return toml_table(t, span, depth),
+    };
+    Ok(Node { span, value })
+}
+
+/// A TOML float literal (already validated by the parser) as f64; `nan`/`inf` with signs.
+fn parse_float_lenient(s: &str) -> f64 {
+    let t = s.replace('_', "");
+    if let Ok(f) = t.parse::<f64>() {
+        return f;
+    }
+    if t.contains("nan") {
+        f64::NAN
+    } else if t.starts_with('-') {
+        f64::NEG_INFINITY
+    } else {
+        f64::INFINITY
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// YAML
+
+/// Maps saphyr's character indices to byte offsets (checkpoints every 64 chars).
+struct CharIndex<'a> {
+    text: &'a str,
+    ascii: bool,
+    checkpoints: Vec<usize>,
+}
+
+impl<'a> CharIndex<'a> {
+    fn new(text: &'a str) -> CharIndex<'a> {
+        let ascii = text.is_ascii();
+        let checkpoints = if ascii {
+            Vec::new()
+        } else {
+            text.char_indices().step_by(64).map(|(b, _)| b).collect()
+        };
+        CharIndex {
+            text,
+            ascii,
+            checkpoints,
+        }
+    }
+
+    fn byte(&self, char_index: usize) -> usize {
+        if self.ascii {
+            return char_index.min(self.text.len());
+        }
+        let Some(&start) = self.checkpoints.get(char_index / 64) else {
+            return self.text.len();
+        };
+        self.text[start..]
+            .char_indices()
+            .nth(char_index % 64)
+            .map_or(self.text.len(), |(b, _)| start + b)
+    }
+
+    fn span(&self, s: &saphyr_parser::Span) -> Range<usize> {
+        let a = self.byte(s.start.index());
+        let b = self.byte(s.end.index()).max(a);
+        a..b
+    }
+}
+
+struct YamlReader<'a> {
+    parser: saphyr_parser::Parser<'a, saphyr_parser::StrInput<'a>>,
+    index: CharIndex<'a>,
+}
+
+type YamlEvent<'a> = (saphyr_parser::Event<'a>, Range<usize>);
+
+impl<'a> YamlReader<'a> {
+    fn next(&mut self) -> Result<YamlEvent<'a>, LoadError> {
+        match self.parser.next_event() {
+            Some(Ok((ev, span))) => Ok((ev, self.index.span(&span))),
+            Some(Err(e)) => {
+                let at = self.index.byte(e.marker().index());
+                Err(syntax("YAML", e.info(), at..at, "here"))
+            }
+            None => {
+                let end = self.index.text.len();
+                Err(syntax("YAML", "unexpected end of input", end..end, "here"))
+            }
+        }
+    }
+
+    fn node(&mut self, ev: YamlEvent<'a>, depth: usize) -> Result<Node, LoadError> {
+        use saphyr_parser::{Event, ScalarStyle};
+        let (ev, span) = ev;
+        if depth > MAX_DEPTH {
+            return Err(too_deep(span));
+        }
+        match ev {
+            Event::Scalar(text, style, _anchor, tag) => {
+                let value = match (&tag, style) {
+                    (Some(t), _) if t.handle == "tag:yaml.org,2002:" || t.handle == "!!" => {
+                        match t.suffix.as_str() {
+                            "str" => Value::Str(text.to_string()),
+                            "int" | "float" | "bool" | "null" => resolve_plain(&text),
+                            _ => return Err(unsupported_tag(t, span)),
+                        }
+                    }
+                    (Some(t), _) => return Err(unsupported_tag(t, span)),
+                    (None, ScalarStyle::Plain) => resolve_plain(&text),
+                    (None, _) => Value::Str(text.to_string()),
+                };
+                Ok(Node { span, value })
+            }
+            Event::SequenceStart(_, tag) => {
+                if let Some(t) = tag
+                    && t.suffix != "seq"
+                {
+                    return Err(unsupported_tag(&t, span));
+                }
+                let mut items = Vec::new();
+                loop {
+                    let next = self.next()?;
+                    if let Event::SequenceEnd = next.0 {
+                        let end = next.1.end.max(span.start);
+                        return Ok(Node {
+                            span: span.start..end,
+                            value: Value::Seq(items),
+                        });
+                    }
+                    items.push(self.node(next, depth + 1)?);
+                }
+            }
+            Event::MappingStart(_, tag) => {
+                if let Some(t) = tag
+                    && t.suffix != "map"
+                {
+                    return Err(unsupported_tag(&t, span));
+                }
+                let mut entries = Vec::new();
+                loop {
+                    let next = self.next()?;
+                    let key_span = next.1.clone();
+                    let key = match next.0 {
+                        Event::MappingEnd => {
+                            let end = next.1.end.max(span.start);
+                            return Ok(Node {
+                                span: span.start..end,
+                                value: Value::Map(entries),
+                            });
+                        }
+                        Event::Scalar(k, ..) => k.to_string(),
+                        Event::Alias(_) => return Err(alias(key_span)),
+                        _ => {
+                            return Err(LoadError::new(
+                                ErrorKind::Unsupported,
+                                "a mapping or sequence used as a key",
+                                vec![Label {
+                                    span: key_span,
+                                    text: "complex key".into(),
+                                }],
+                                Some("keys are plain names like `frame` or `bodies`".into()),
+                            ));
+                        }
+                    };
+                    let value_ev = self.next()?;
+                    let value = self.node(value_ev, depth + 1)?;
+                    push_entry(
+                        &mut entries,
+                        Entry {
+                            key,
+                            key_span,
+                            value,
+                        },
+                    )?;
+                }
+            }
+            Event::Alias(_) => Err(alias(span)),
+            _ => Err(syntax("YAML", "unexpected event", span, "here")),
+        }
+    }
+}
+
+fn alias(span: Range<usize>) -> LoadError {
+    LoadError::new(
+        ErrorKind::Unsupported,
+        "YAML aliases (`*name`) are not supported",
+        vec![Label {
+            span,
+            text: "alias".into(),
+        }],
+        Some("write the value out in full".into()),
+    )
+}
+
+fn unsupported_tag(t: &saphyr_parser::Tag, span: Range<usize>) -> LoadError {
+    LoadError::new(
+        ErrorKind::Unsupported,
+        format!("unsupported YAML tag `{}{}`", t.handle, t.suffix),
+        vec![Label {
+            span,
+            text: "tagged value".into(),
+        }],
+        Some("remove the tag; only the core tags (!!str, !!int, ...) are accepted".into()),
+    )
+}
+
+/// Resolve a plain YAML scalar by the YAML 1.2 core schema.
+fn resolve_plain(s: &str) -> Value {
+    match s {
+        "" | "~" | "null" | "Null" | "NULL" => return Value::Null,
+        "true" | "True" | "TRUE" => return Value::Bool(true),
+        "false" | "False" | "FALSE" => return Value::Bool(false),
+        ".nan" | ".NaN" | ".NAN" => return Value::Float(f64::NAN),
+        _ => {}
+    }
+    let (sign, body) = match s.as_bytes()[0] {
+        b'-' => (-1.0, &s[1..]),
+        b'+' => (1.0, &s[1..]),
+        _ => (1.0, s),
+    };
+    if matches!(body, ".inf" | ".Inf" | ".INF") {
+        return Value::Float(sign * f64::INFINITY);
+    }
+    let digits = |t: &str, radix: u32| !t.is_empty() && t.chars().all(|c| c.is_digit(radix));
+    if let Some(h) = s.strip_prefix("0x")
+        && digits(h, 16)
+    {
+        return int_or_big(i64::from_str_radix(h, 16).ok(), s);
+    }
+    if let Some(o) = s.strip_prefix("0o")
+        && digits(o, 8)
+    {
+        return int_or_big(i64::from_str_radix(o, 8).ok(), s);
+    }
+    if digits(body, 10) {
+        return int_or_big(s.parse::<i64>().ok(), s);
+    }
+    if is_yaml_float(body)
+        && let Ok(f) = s.parse::<f64>()
+    {
+        return Value::Float(f);
+    }
+    Value::Str(s.to_string())
+}
+
+fn int_or_big(n: Option<i64>, s: &str) -> Value {
+    n.map_or_else(|| Value::BigInt(s.to_string()), Value::Int)
+}
+
+/// `(\.[0-9]+|[0-9]+(\.[0-9]*)?)([eE][-+]?[0-9]+)?` (sign already stripped).
+fn is_yaml_float(t: &str) -> bool {
+    let (mantissa, exp) = match t.find(['e', 'E']) {
+        Some(i) => (&t[..i], Some(&t[i + 1..])),
+        None => (t, None),
+    };
+    let ok_mantissa = match mantissa.split_once('.') {
+        Some((a, b)) => {
+            a.chars().all(|c| c.is_ascii_digit())
+                && b.chars().all(|c| c.is_ascii_digit())
+                && (!a.is_empty() || !b.is_empty())
+        }
+        None => !mantissa.is_empty() && mantissa.chars().all(|c| c.is_ascii_digit()),
+    };
+    let ok_exp = exp.is_none_or(|e| {
+        let e = e.strip_prefix(['-', '+']).unwrap_or(e);
+        !e.is_empty() && e.chars().all(|c| c.is_ascii_digit())
+    });
+    ok_mantissa && ok_exp
+}
+
+/// Parse YAML (one document) into a tree; `None` for a stream without a document.
+pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node>, LoadError> {
+    use saphyr_parser::Event;
+    let mut r = YamlReader {
+        parser: saphyr_parser::Parser::new_from_str(text),
+        index: CharIndex::new(text),
+    };
+    let mut root = None;
+    loop {
+        let (ev, span) = r.next()?;
+        match ev {
+            Event::StreamStart | Event::DocumentEnd | Event::Nothing => {}
+            Event::StreamEnd => return Ok(root),
+            Event::DocumentStart(_) => {
+                if root.is_some() {
+                    return Err(LoadError::new(
+                        ErrorKind::Unsupported,
+                        "several YAML documents in one file",
+                        vec![Label {
+                            span,
+                            text: "second document starts here".into(),
+                        }],
+                        Some("put one mechanism per file".into()),
+                    ));
+                }
+                let first = r.next()?;
+                root = Some(r.node(first, 1)?);
+            }
+            _ => return Err(syntax("YAML", "unexpected event", span, "here")),
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON
+
+/// Parse JSON into a tree: syntax checked by serde_json (good messages), tree built by a small
+/// spanned parser.
+pub(crate) fn parse_json(text: &str) -> Result<Node, LoadError> {
+    if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(text) {
+        let at = offset_of(text, e.line(), e.column());
+        let msg = e.to_string();
+        // serde_json appends " at line L column C": the rendered location says it already.
+        let msg = msg
+            .rfind(" at line ")
+            .map_or(msg.as_str(), |i| &msg[..i])
+            .to_string();
+        return Err(syntax("JSON", msg, at..at, "here"));
+    }
+    let mut p = JsonParser {
+        text,
+        bytes: text.as_bytes(),
+        pos: 0,
+    };
+    p.ws();
+    let node = p.value(1)?;
+    p.ws();
+    if p.pos != p.bytes.len() {
+        return Err(p.error("trailing characters"));
+    }
+    Ok(node)
+}
+
+struct JsonParser<'a> {
+    text: &'a str,
+    bytes: &'a [u8],
+    pos: usize,
+}
+
+impl JsonParser<'_> {
+    fn error(&self, msg: &str) -> LoadError {
+        let at = floor_boundary(self.text, self.pos.min(self.text.len()));
+        syntax("JSON", msg, at..at, "here")
+    }
+
+    fn ws(&mut self) {
+        while self
+            .bytes
+            .get(self.pos)
+            .is_some_and(|b| matches!(b, b' ' | b'\t' | b'\n' | b'\r'))
+        {
+            self.pos += 1;
+        }
+    }
+
+    fn eat(&mut self, b: u8) -> Result<(), LoadError> {
+        if self.bytes.get(self.pos) == Some(&b) {
+            self.pos += 1;
+            Ok(())
+        } else {
+            Err(self.error(&format!("expected `{}`", b as char)))
+        }
+    }
+
+    fn value(&mut self, depth: usize) -> Result<Node, LoadError> {
+        let start = self.pos;
+        if depth > MAX_DEPTH {
+            return Err(too_deep(start..start + 1));
+        }
+        let value =
+            match self.bytes.get(self.pos) {
+                Some(b'{') => {
+                    self.pos += 1;
+                    let mut entries = Vec::new();
+                    self.ws();
+                    if self.bytes.get(self.pos) == Some(&b'}') {
+                        self.pos += 1;
+                    } else {
+                        loop {
+                            self.ws();
+                            let key_start = self.pos;
+                            let key = self.string()?;
+                            let key_span = key_start..self.pos;
+                            self.ws();
+                            self.eat(b':')?;
+                            self.ws();
+                            let value = self.value(depth + 1)?;
+                            push_entry(
+                                &mut entries,
+                                Entry {
+                                    key,
+                                    key_span,
+                                    value,
+                                },
+                            )?;
+                            self.ws();
+                            match self.bytes.get(self.pos) {
+                                Some(b',') => self.pos += 1,
+                                Some(b'}') => {
+                                    self.pos += 1;
+                                    break;
+                                }
+                                _ => return Err(self.error("expected `,` or `}`")),
+                            }
+                        }
+                    }
+                    Value::Map(entries)
+                }
+                Some(b'[') => {
+                    self.pos += 1;
+                    let mut items = Vec::new();
+                    self.ws();
+                    if self.bytes.get(self.pos) == Some(&b']') {
+                        self.pos += 1;
+                    } else {
+                        loop {
+                            self.ws();
+                            items.push(self.value(depth + 1)?);
+                            self.ws();
+                            match self.bytes.get(self.pos) {
+                                Some(b',') => self.pos += 1,
+                                Some(b']') => {
+                                    self.pos += 1;
+                                    break;
+                                }
+                                _ => return Err(self.error("expected `,` or `]`")),
+                            }
+                        }
+                    }
+                    Value::Seq(items)
+                }
+                Some(b'"') => Value::Str(self.string()?),
+                Some(b't') if self.bytes[self.pos..].starts_with(b"true") => {
+                    self.pos += 4;
+                    Value::Bool(true)
+                }
+                Some(b'f') if self.bytes[self.pos..].starts_with(b"false") => {
+                    self.pos += 5;
+                    Value::Bool(false)
+                }
+                Some(b'n') if self.bytes[self.pos..].starts_with(b"null") => {
+                    self.pos += 4;
+                    Value::Null
+                }
+                Some(b'-' | b'0'..=b'9') => {
+                    while self.bytes.get(self.pos).is_some_and(|b| {
+                        matches!(b, b'-' | b'+' | b'.' | b'e' | b'E' | b'0'..=b'9')
+                    }) {
+                        self.pos += 1;
+                    }
+                    let s = &self.text[start..self.pos];
+                    if s.contains(['.', 'e', 'E']) {
+                        match s.parse::<f64>() {
+                            Ok(f) => Value::Float(f),
+                            Err(_) => return Err(self.error("invalid number")),
+                        }
+                    } else {
+                        int_or_big(s.parse::<i64>().ok(), s)
+                    }
+                }
+                _ => return Err(self.error("expected a value")),
+            };
+        Ok(Node {
+            span: start..self.pos,
+            value,
+        })
+    }
+
+    fn hex4(&mut self) -> Result<u32, LoadError> {
+        let h = self
+            .text
+            .get(self.pos..self.pos + 4)
+            .and_then(|h| u32::from_str_radix(h, 16).ok())
+            .ok_or_else(|| self.error("invalid \\u escape"))?;
+        self.pos += 4;
+        Ok(h)
+    }
+
+    fn string(&mut self) -> Result<String, LoadError> {
+        self.eat(b'"')?;
+        let mut out = String::new();
+        loop {
+            let run = self.pos;
+            while self
+                .bytes
+                .get(self.pos)
+                .is_some_and(|&b| b != b'"' && b != b'\\')
+            {
+                self.pos += 1;
+            }
+            out.push_str(
+                self.text
+                    .get(run..self.pos)
+                    .ok_or_else(|| self.error("invalid string"))?,
+            );
+            match self.bytes.get(self.pos) {
+                Some(b'"') => {
+                    self.pos += 1;
+                    return Ok(out);
+                }
+                Some(b'\\') => {
+                    self.pos += 1;
+                    let c = self.bytes.get(self.pos).copied();
+                    self.pos += 1;
+                    match c {
+                        Some(b'"') => out.push('"'),
+                        Some(b'\\') => out.push('\\'),
+                        Some(b'/') => out.push('/'),
+                        Some(b'b') => out.push('\u{8}'),
+                        Some(b'f') => out.push('\u{c}'),
+                        Some(b'n') => out.push('\n'),
+                        Some(b'r') => out.push('\r'),
+                        Some(b't') => out.push('\t'),
+                        Some(b'u') => {
+                            let hi = self.hex4()?;
+                            let code = if (0xD800..0xDC00).contains(&hi)
+                                && self.bytes[self.pos..].starts_with(b"\\u")
+                            {
+                                self.pos += 2;
+                                let lo = self.hex4()?;
+                                0x10000 + ((hi - 0xD800) << 10) + lo.wrapping_sub(0xDC00)
+                            } else {
+                                hi
+                            };
+                            out.push(char::from_u32(code).unwrap_or('\u{FFFD}'));
+                        }
+                        _ => return Err(self.error("invalid escape")),
+                    }
+                }
+                _ => return Err(self.error("unterminated string")),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn strip(n: &Node) -> String {
+        match &n.value {
+            Value::Map(es) => format!(
+                "{{{}}}",
+                es.iter()
+                    .map(|e| format!("{}:{}", e.key, strip(&e.value)))
+                    .collect::<Vec<_>>()
+                    .join(",")
+            ),
+            Value::Seq(xs) => format!("[{}]", xs.iter().map(strip).collect::<Vec<_>>().join(",")),
+            v => format!("{v:?}"),
+        }
+    }
+
+    #[test]
+    fn three_formats_give_the_same_tree() {
+        let t = parse_toml("a = 1\nb = [\"x\", 2.5, true]\n[c]\nd = -3\n").unwrap();
+        let y = parse_yaml("a: 1\nb: [x, 2.5, true]\nc: {d: -3}\n")
+            .unwrap()
+            .unwrap();
+        let j = parse_json(r#"{"a": 1, "b": ["x", 2.5, true], "c": {"d": -3}}"#).unwrap();
+        assert_eq!(strip(&t), strip(&y));
+        assert_eq!(strip(&t), strip(&j));
+    }
+
+    #[test]
+    fn spans_point_at_values() {
+        let text = "x: 1\nname: \"é\"\nvalue: abc\n";
+        let y = parse_yaml(text).unwrap().unwrap();
+        let Value::Map(es) = &y.value else { panic!() };
+        assert_eq!(&text[es[2].key_span.clone()], "value");
+        assert_eq!(&text[es[2].value.span.clone()], "abc");
+        let j = r#"{"a": [1, "b"]}"#;
+        let n = parse_json(j).unwrap();
+        let Value::Map(es) = &n.value else { panic!() };
+        assert_eq!(&j[es[0].key_span.clone()], "\"a\"");
+        assert_eq!(&j[es[0].value.span.clone()], "[1, \"b\"]");
+    }
+
+    #[test]
+    fn yaml_core_schema() {
+        assert_eq!(resolve_plain("~"), Value::Null);
+        assert_eq!(resolve_plain("0x1F"), Value::Int(31));
+        assert_eq!(resolve_plain("-12"), Value::Int(-12));
+        assert_eq!(resolve_plain("1e3"), Value::Float(1000.0));
+        assert_eq!(resolve_plain(".5"), Value::Float(0.5));
+        assert_eq!(resolve_plain("-.inf"), Value::Float(f64::NEG_INFINITY));
+        assert!(matches!(resolve_plain(".nan"), Value::Float(f) if f.is_nan()));
+        assert_eq!(resolve_plain("1-2"), Value::Str("1-2".into()));
+        assert_eq!(resolve_plain("e3"), Value::Str("e3".into()));
+        assert!(matches!(
+            resolve_plain("100000000000000000000000"),
+            Value::BigInt(_)
+        ));
+    }
+
+    #[test]
+    fn json_escapes() {
+        let n = parse_json(r#"["a\u00e9\ud83d\ude00\n"]"#).unwrap();
+        assert_eq!(
+            n.value,
+            Value::Seq(vec![Node {
+                span: 1..24,
+                value: Value::Str("aé😀\n".into())
+            }])
+        );
+    }
+}
