@@ -1,1 +1,740 @@
-//! The joint-motion model: the relative twists each joint allows and the constraint rows it imposes, at given or random geometry.
+//! The joint-motion model: the relative twists each joint allows and the constraint rows it
+//! imposes, at given (file) or random (generic) geometry.
+//!
+//! # Conventions
+//! - Spatial (B = 6): a twist is `t = (ω; v_O)`, with `v_O` the velocity of the body point that
+//!   is at the world origin. A revolute about unit `u` through `p` allows `(u; p × u)`, a slide
+//!   along `u` allows `(0; u)`, a helix of pitch `h` allows `(u; p × u + h u)`.
+//! - Planar (B = 3): `t = (ω_z; v_x, v_y)`, `v` again the velocity of the point at the origin;
+//!   a revolute at `p` allows `(1; p_y, −p_x)`.
+//! - Spherical (B = 3): `t = ω` (every axis passes through the fixed centre, the origin).
+//! - A constraint row `r` acts on a twist by the plain dot product `r · t`. Rows are wrenches
+//!   written `(m_O; f)` (moment about the origin first) so that the plain dot product with
+//!   `(ω; v_O)` is the reciprocal (virtual power) product. `rows · twists = 0` always, and the
+//!   rows are an orthonormal basis of the annihilator of `twists`.
+//!
+//! # Driven DOF
+//! The allowed twists are listed in the driven-DOF order of `format.md` (translations before
+//! rotations; C slide then turn; PL the two in-plane slides then the turn; U `axis` then
+//! `axis2`; S turns about world x, y, z through the centre; F/FP translations then
+//! rotations) and the first `driven` of them are removed: a driven DOF is fixed.
+//!
+//! # Joints without a standard geometry
+//! - ER (slotted spherical) is defined here as a ball at `origin` whose rotation about `axis`
+//!   is blocked: it allows the two rotations through `origin` about the axes perpendicular to
+//!   `axis` (in the order of [`perpendicular_pair`]), and no translation.
+//! - Count-only kinds (CPEP, L, EO, EPI, CTEP, RP, RD, CR, CTRP, SC, PC, CBIP, SP, SPSP) get the
+//!   generic realization of a contact joint: `B − k` pure forces (lines). The first line passes
+//!   through `origin` along `axis` when they are given; the other points and directions are
+//!   pseudo-random, drawn from a generator seeded by the geometry's bits, so the same geometry
+//!   always gives the same model. Such a joint has the right number of constraints in general
+//!   position: enough for rank and mobility questions, not a model of a particular contact.
+//! - FP in a spatial mechanism is treated like PL (normal `normal`, default z).
+//!
+//! # Multiple joints
+//! A joint joining n > 2 bodies is n − 1 binary pairs hub→other (hub = first listed body), each
+//! with the same model; pair equation `rows · (t_other − t_hub) = 0`; the frame's twist is 0.
+
+use crate::joint::JointType;
+use crate::mechanism::{Geometry, Mechanism, Space};
+use nalgebra::{DMatrix, DVector, Vector3};
+
+pub use crate::rng::SplitMix64;
+
+/// The motion model of one joint (of one binary pair of it).
+#[derive(Clone, Debug, PartialEq)]
+pub struct JointModel {
+    /// Constraint rows, `(B − k + driven) × B`: an orthonormal basis of the annihilator of
+    /// `twists` (see the module conventions).
+    pub rows: DMatrix<f64>,
+    /// Allowed relative twists once the driven DOF are fixed, `B × (k − driven)`, columns in
+    /// driven-DOF order (the driven ones removed).
+    pub twists: DMatrix<f64>,
+}
+
+/// Why a joint model cannot be built.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum MotionError {
+    /// A geometry field this joint kind needs is missing.
+    #[error("a {kind} joint needs `{field}` for geometric analysis")]
+    MissingField {
+        /// Joint kind code.
+        kind: &'static str,
+        /// The missing field.
+        field: &'static str,
+    },
+    /// A direction is zero (or not finite).
+    #[error("`{field}` of a {kind} joint is zero or not finite")]
+    ZeroVector {
+        /// Joint kind code.
+        kind: &'static str,
+        /// The field.
+        field: &'static str,
+    },
+    /// The geometry makes the joint's twists dependent (e.g. a U with parallel axes).
+    #[error("a {kind} joint has degenerate geometry: {reason}")]
+    Degenerate {
+        /// Joint kind code.
+        kind: &'static str,
+        /// Why.
+        reason: &'static str,
+    },
+    /// The kind cannot be modelled in this motion space.
+    #[error("a {kind} joint cannot be modelled in a {space} mechanism")]
+    InvalidInSpace {
+        /// Joint kind code.
+        kind: &'static str,
+        /// The space name.
+        space: &'static str,
+    },
+    /// More driven DOF than the joint's grade.
+    #[error("a {kind} joint has {driven} driven DOF but grade {grade}")]
+    DrivenAboveGrade {
+        /// Joint kind code.
+        kind: &'static str,
+        /// Driven DOF.
+        driven: u32,
+        /// Grade.
+        grade: u32,
+    },
+    /// An error located at a joint of a mechanism.
+    #[error("joint `{joint}`: {source}")]
+    InJoint {
+        /// Joint id.
+        joint: String,
+        /// The error.
+        #[source]
+        source: Box<MotionError>,
+    },
+}
+
+/// Whether a kind has no geometric model of its own (count only) and gets the generic contact
+/// realization.
+pub fn is_contact(kind: JointType) -> bool {
+    use JointType::*;
+    matches!(
+        kind,
+        CPEP | L | EO | EPI | CTEP | RP | RD | CR | CTRP | SC | PC | CBIP | SP | SPSP
+    )
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+
+fn unit(kind: JointType, field: &'static str, a: [f64; 3]) -> Result<Vector3<f64>, MotionError> {
+    let v = v3(a);
+    let n = v.norm();
+    if !n.is_finite() || n <= 1e-300 {
+        return Err(MotionError::ZeroVector {
+            kind: kind.code(),
+            field,
+        });
+    }
+    Ok(v / n)
+}
+
+fn need<T: Copy>(kind: JointType, field: &'static str, value: Option<T>) -> Result<T, MotionError> {
+    value.ok_or(MotionError::MissingField {
+        kind: kind.code(),
+        field,
+    })
+}
+
+/// Two unit vectors perpendicular to unit `u` and to each other, chosen deterministically:
+/// `e1 = normalize(u × a)` with `a` the world axis least aligned with `u`, `e2 = u × e1`.
+pub fn perpendicular_pair(u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let a = if u.x.abs() <= u.y.abs() && u.x.abs() <= u.z.abs() {
+        Vector3::x()
+    } else if u.y.abs() <= u.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let e1 = u.cross(&a).normalize();
+    let e2 = u.cross(&e1);
+    (e1, e2)
+}
+
+fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vec<f64> {
+    let m = p.cross(u);
+    vec![u.x, u.y, u.z, m.x, m.y, m.z]
+}
+
+fn spatial_trans(u: &Vector3<f64>) -> Vec<f64> {
+    vec![0.0, 0.0, 0.0, u.x, u.y, u.z]
+}
+
+fn columns(b: usize, cols: &[Vec<f64>]) -> DMatrix<f64> {
+    DMatrix::from_fn(b, cols.len(), |i, j| cols[j][i])
+}
+
+/// Orthonormal basis (as rows) of the orthogonal complement of the column space of `a`
+/// (`b × d`, full column rank): greedy Gram-Schmidt on the unit vectors, always taking the one
+/// with the largest residual, so no threshold is involved.
+fn complement_rows(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let b = a.nrows();
+    let q = orthonormal_columns(a);
+    let mut basis: Vec<DVector<f64>> = q.column_iter().map(|c| c.into_owned()).collect();
+    let mut out: Vec<DVector<f64>> = Vec::new();
+    while basis.len() < b {
+        let mut best: Option<DVector<f64>> = None;
+        for i in 0..b {
+            let mut v = DVector::zeros(b);
+            v[i] = 1.0;
+            for _ in 0..2 {
+                for q in &basis {
+                    let d = q.dot(&v);
+                    v -= q * d;
+                }
+            }
+            if best.as_ref().is_none_or(|w| v.norm() > w.norm()) {
+                best = Some(v);
+            }
+        }
+        let v = best
+            .expect("b > basis.len() >= 0 so the loop ran")
+            .normalize();
+        basis.push(v.clone());
+        out.push(v);
+    }
+    let mut rows = DMatrix::zeros(out.len(), b);
+    for (i, v) in out.iter().enumerate() {
+        rows.set_row(i, &v.transpose());
+    }
+    rows
+}
+
+/// Orthonormalize the columns of `a` (modified Gram-Schmidt, twice); columns that vanish are
+/// dropped.
+fn orthonormal_columns(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let scale = a.norm().max(1e-300);
+    let mut out: Vec<DVector<f64>> = Vec::new();
+    for c in a.column_iter() {
+        let mut v = c.into_owned();
+        for _ in 0..2 {
+            for q in &out {
+                let d = q.dot(&v);
+                v -= q * d;
+            }
+        }
+        if v.norm() > 1e-10 * scale {
+            out.push(v.normalize());
+        }
+    }
+    if out.is_empty() {
+        DMatrix::zeros(a.nrows(), 0)
+    } else {
+        DMatrix::from_columns(&out)
+    }
+}
+
+fn mix_seed(g: &Geometry) -> u64 {
+    let mut h: u64 = 0x5EED_C0A7_AC70_0001;
+    let mut eat = |x: f64| {
+        h = (h ^ x.to_bits())
+            .wrapping_mul(0x100_0000_01B3)
+            .rotate_left(17);
+    };
+    for a in [g.origin, g.axis, g.axis2, g.normal].into_iter().flatten() {
+        a.iter().for_each(|&x| eat(x));
+    }
+    if let Some(p) = g.pitch {
+        eat(p);
+    }
+    h
+}
+
+fn random_unit(rng: &mut SplitMix64) -> Vector3<f64> {
+    loop {
+        let v = Vector3::new(rng.next_signed(), rng.next_signed(), rng.next_signed());
+        let n = v.norm();
+        if n > 0.1 && n <= 1.0 {
+            return v / n;
+        }
+    }
+}
+
+/// The generic contact model: `B − k` lines.
+fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> DMatrix<f64> {
+    let b = space.b() as usize;
+    let k = (kind.grade() as usize).min(b);
+    let mut rng = SplitMix64::new(mix_seed(g));
+    let base = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
+    let mut rows: Vec<Vec<f64>> = Vec::new();
+    for i in 0..b - k {
+        let (q, mut d) = if i == 0 {
+            (
+                base,
+                g.axis.map(v3).unwrap_or_else(|| random_unit(&mut rng)),
+            )
+        } else {
+            (
+                base + Vector3::new(rng.next_signed(), rng.next_signed(), rng.next_signed()),
+                random_unit(&mut rng),
+            )
+        };
+        if d.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
+            d = random_unit(&mut rng);
+        }
+        let row = match space {
+            Space::Spatial => {
+                let m = q.cross(&d);
+                vec![m.x, m.y, m.z, d.x, d.y, d.z]
+            }
+            Space::Planar => {
+                let d2 = if d.x.abs() + d.y.abs() < 1e-9 {
+                    Vector3::new(1.0, 0.0, 0.0)
+                } else {
+                    d
+                };
+                vec![q.x * d2.y - q.y * d2.x, d2.x, d2.y]
+            }
+            Space::Spherical => {
+                let m = q.cross(&d);
+                if m.norm() > 1e-9 {
+                    vec![m.x, m.y, m.z]
+                } else {
+                    let r = random_unit(&mut rng);
+                    vec![r.x, r.y, r.z]
+                }
+            }
+        };
+        rows.push(row);
+    }
+    let r = columns(b, &rows);
+    // Orthonormal rows spanning the same lines; random lines are independent in practice, and
+    // a dependent draw only yields fewer rows (never a panic).
+    orthonormal_columns(&r).transpose()
+}
+
+/// All allowed twists of `kind` in driven-DOF order (before removing driven ones).
+fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f64>>, MotionError> {
+    use JointType::*;
+    let code = kind.code();
+    let origin = |g: &Geometry| need(kind, "origin", g.origin).map(v3);
+    let axis = |g: &Geometry| need(kind, "axis", g.axis).and_then(|a| unit(kind, "axis", a));
+    match space {
+        Space::Spatial => Ok(match kind {
+            R => vec![spatial_rot(&axis(g)?, &origin(g)?)],
+            P => vec![spatial_trans(&axis(g)?)],
+            H => {
+                let (u, p) = (axis(g)?, origin(g)?);
+                let h = need(kind, "pitch", g.pitch)?;
+                if !h.is_finite() {
+                    return Err(MotionError::ZeroVector {
+                        kind: code,
+                        field: "pitch",
+                    });
+                }
+                let m = p.cross(&u) + u * h;
+                vec![vec![u.x, u.y, u.z, m.x, m.y, m.z]]
+            }
+            C => {
+                let (u, p) = (axis(g)?, origin(g)?);
+                vec![spatial_trans(&u), spatial_rot(&u, &p)]
+            }
+            ER => {
+                let (u, p) = (axis(g)?, origin(g)?);
+                let (e1, e2) = perpendicular_pair(&u);
+                vec![spatial_rot(&e1, &p), spatial_rot(&e2, &p)]
+            }
+            U => {
+                let (u, p) = (axis(g)?, origin(g)?);
+                let u2 = unit(kind, "axis2", need(kind, "axis2", g.axis2)?)?;
+                vec![spatial_rot(&u, &p), spatial_rot(&u2, &p)]
+            }
+            S => {
+                let p = origin(g)?;
+                [Vector3::x(), Vector3::y(), Vector3::z()]
+                    .iter()
+                    .map(|e| spatial_rot(e, &p))
+                    .collect()
+            }
+            PL | FP => {
+                let n = match (kind, g.normal) {
+                    (_, Some(n)) => unit(kind, "normal", n)?,
+                    (FP, None) => Vector3::z(),
+                    _ => need(kind, "normal", g.normal).map(v3)?,
+                };
+                let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
+                let (e1, e2) = perpendicular_pair(&n);
+                vec![spatial_trans(&e1), spatial_trans(&e2), spatial_rot(&n, &p)]
+            }
+            F => {
+                let mut out = Vec::new();
+                for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
+                    out.push(spatial_trans(&e));
+                }
+                for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
+                    out.push(spatial_rot(&e, &Vector3::zeros()));
+                }
+                out
+            }
+            _ => Vec::new(),
+        }),
+        Space::Planar => Ok(match kind {
+            R => {
+                let p = origin(g)?;
+                vec![vec![1.0, p.y, -p.x]]
+            }
+            P => {
+                let a = need(kind, "axis", g.axis)?;
+                let u = unit(kind, "axis", [a[0], a[1], 0.0])?;
+                vec![vec![0.0, u.x, u.y]]
+            }
+            FP => {
+                let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
+                vec![
+                    vec![0.0, 1.0, 0.0],
+                    vec![0.0, 0.0, 1.0],
+                    vec![1.0, p.y, -p.x],
+                ]
+            }
+            k if is_contact(k) => Vec::new(),
+            _ => {
+                return Err(MotionError::InvalidInSpace {
+                    kind: code,
+                    space: "planar",
+                });
+            }
+        }),
+        Space::Spherical => Ok(match kind {
+            R => {
+                let u = axis(g)?;
+                vec![vec![u.x, u.y, u.z]]
+            }
+            FP => vec![
+                vec![1.0, 0.0, 0.0],
+                vec![0.0, 1.0, 0.0],
+                vec![0.0, 0.0, 1.0],
+            ],
+            k if is_contact(k) => Vec::new(),
+            _ => {
+                return Err(MotionError::InvalidInSpace {
+                    kind: code,
+                    space: "spherical",
+                });
+            }
+        }),
+    }
+}
+
+/// The motion model of a joint of `kind` at geometry `g` with `driven` DOF fixed.
+pub fn joint_model(
+    kind: JointType,
+    g: &Geometry,
+    space: Space,
+    driven: u32,
+) -> Result<JointModel, MotionError> {
+    let b = space.b() as usize;
+    let grade = kind.grade() as u32;
+    if grade as usize > b {
+        return Err(MotionError::InvalidInSpace {
+            kind: kind.code(),
+            space: space.name(),
+        });
+    }
+    if driven > grade {
+        return Err(MotionError::DrivenAboveGrade {
+            kind: kind.code(),
+            driven,
+            grade,
+        });
+    }
+    if is_contact(kind) {
+        let rows = contact_rows(kind, g, space);
+        if rows.nrows() != b - grade as usize {
+            return Err(MotionError::Degenerate {
+                kind: kind.code(),
+                reason: "the contact lines are dependent",
+            });
+        }
+        let all = complement_rows(&rows.transpose()).transpose();
+        let twists = all
+            .columns(driven as usize, all.ncols() - driven as usize)
+            .into_owned();
+        let rows = complement_rows(&twists);
+        return Ok(JointModel { rows, twists });
+    }
+    let full = full_twists(kind, g, space)?;
+    let all = columns(b, &full);
+    if orthonormal_columns(&all).ncols() != all.ncols() {
+        return Err(MotionError::Degenerate {
+            kind: kind.code(),
+            reason: "its motion directions are dependent (parallel axes?)",
+        });
+    }
+    let twists = all
+        .columns(driven as usize, all.ncols() - driven as usize)
+        .into_owned();
+    let rows = complement_rows(&twists);
+    Ok(JointModel { rows, twists })
+}
+
+/// Random generic geometry for a joint of `kind`: every field set (origin, unit axis, unit
+/// axis2, unit normal, pitch), coordinates uniform in [−1, 1). Planar: z = 0 and axes in the
+/// plane (an R axis is z). Spherical: the origin is the centre (0, 0, 0).
+pub fn random_geometry(kind: JointType, space: Space, rng: &mut SplitMix64) -> Geometry {
+    let mut origin = [rng.next_signed(), rng.next_signed(), rng.next_signed()];
+    let mut axis: [f64; 3] = random_unit(rng).into();
+    let axis2: [f64; 3] = random_unit(rng).into();
+    let normal: [f64; 3] = random_unit(rng).into();
+    let pitch = rng.next_signed();
+    match space {
+        Space::Spatial => {}
+        Space::Planar => {
+            origin[2] = 0.0;
+            if kind == JointType::R {
+                axis = [0.0, 0.0, 1.0];
+            } else {
+                let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt().max(1e-12);
+                axis = [axis[0] / n, axis[1] / n, 0.0];
+                if axis == [0.0, 0.0, 0.0] {
+                    axis = [1.0, 0.0, 0.0];
+                }
+            }
+        }
+        Space::Spherical => origin = [0.0, 0.0, 0.0],
+    }
+    Geometry {
+        origin: Some(origin),
+        axis: Some(axis),
+        axis2: Some(axis2),
+        normal: Some(normal),
+        pitch: Some(pitch),
+    }
+}
+
+/// The seed of joint `index`'s generator in a realization seeded `seed`: a SplitMix64 step of
+/// both, so a joint's geometry does not depend on the other joints.
+pub fn joint_seed(seed: u64, index: usize) -> u64 {
+    SplitMix64::new(seed ^ (index as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
+}
+
+/// A model that cannot fail: the generic contact model with the joint's grade (capped at B)
+/// and driven DOF (capped at the grade). Used by [`realize`] for joints no model fits.
+fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> JointModel {
+    let b = space.b() as usize;
+    let k = (kind.grade() as usize).min(b);
+    let mut rng = SplitMix64::new(seed);
+    let rows: Vec<Vec<f64>> = (0..b - k)
+        .map(|_| (0..b).map(|_| rng.next_signed()).collect())
+        .collect();
+    let rows = orthonormal_columns(&columns(b, &rows)).transpose();
+    let all = complement_rows(&rows.transpose()).transpose();
+    let d = (driven as usize).min(all.ncols());
+    let twists = all.columns(d, all.ncols() - d).into_owned();
+    let rows = complement_rows(&twists);
+    JointModel { rows, twists }
+}
+
+/// One model per joint at random generic geometry (the file geometry is ignored), seeded per
+/// (seed, joint index). A joint no model fits (a kind invalid in the space, driven above the
+/// grade: the reader rejects both) gets a generic model of its grade.
+pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
+    m.joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let s = joint_seed(seed, i);
+            let mut rng = SplitMix64::new(s);
+            let g = random_geometry(j.kind, m.space, &mut rng);
+            joint_model(j.kind, &g, m.space, j.driven)
+                .unwrap_or_else(|_| fallback_model(j.kind, m.space, j.driven, s))
+        })
+        .collect()
+}
+
+/// One model per joint at the file geometry. Count-only kinds without geometry get the generic
+/// contact model seeded by the joint index. Errors name the joint.
+pub fn configure(m: &Mechanism) -> Result<Vec<JointModel>, MotionError> {
+    m.joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            let g = if is_contact(j.kind) && j.geometry.is_empty() {
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+            } else {
+                j.geometry.clone()
+            };
+            joint_model(j.kind, &g, m.space, j.driven).map_err(|e| MotionError::InJoint {
+                joint: j.id.clone(),
+                source: Box::new(e),
+            })
+        })
+        .collect()
+}
+
+/// Whether every joint has the geometry fields its kind needs (count-only kinds need none).
+pub fn has_geometry(m: &Mechanism) -> bool {
+    m.joints.iter().all(|j| {
+        j.kind.info().geometry.iter().all(|f| match *f {
+            "origin" => j.geometry.origin.is_some() || m.space == Space::Spherical,
+            "axis" => {
+                j.geometry.axis.is_some() || (m.space == Space::Planar && j.kind == JointType::R)
+            }
+            "axis2" => j.geometry.axis2.is_some(),
+            "normal" => j.geometry.normal.is_some(),
+            "pitch" => j.geometry.pitch.is_some(),
+            _ => true,
+        })
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanism::{BodyId, JointSpec};
+
+    fn check(m: &JointModel, b: usize, dim: usize) {
+        assert_eq!(m.twists.nrows(), b);
+        assert_eq!(m.rows.ncols(), b);
+        assert_eq!(m.twists.ncols(), dim);
+        assert_eq!(m.rows.nrows(), b - dim);
+        let p = &m.rows * &m.twists;
+        assert!(p.norm() < 1e-12, "rows · twists = {p}");
+        let full = m.twists.clone().insert_columns(dim, 0, 0.0);
+        let stacked = DMatrix::from_fn(b, b, |i, j| {
+            if j < dim {
+                full[(i, j)]
+            } else {
+                m.rows[(j - dim, i)]
+            }
+        });
+        assert_eq!(stacked.rank(1e-9), b);
+    }
+
+    #[test]
+    fn splitmix_vector() {
+        let mut r = SplitMix64::new(0);
+        assert_eq!(r.next_u64(), 0xe220a8397b1dcdaf);
+        assert_eq!(r.next_u64(), 0x6e789e6aa1b965f4);
+    }
+
+    #[test]
+    fn every_kind_has_consistent_rows_and_twists() {
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                let mut rng = SplitMix64::new(kind as u64 + 11);
+                let g = random_geometry(kind, space, &mut rng);
+                for driven in 0..=kind.grade() as u32 {
+                    match joint_model(kind, &g, space, driven) {
+                        Ok(m) => check(&m, b, kind.grade() as usize - driven as usize),
+                        Err(MotionError::InvalidInSpace { .. }) => {
+                            assert!(space != Space::Spatial, "{kind:?} spatial");
+                        }
+                        Err(e) => panic!("{kind:?} {space:?}: {e}"),
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn planar_revolute_twist() {
+        let g = Geometry {
+            origin: Some([2.0, 3.0, 0.0]),
+            ..Geometry::default()
+        };
+        let m = joint_model(JointType::R, &g, Space::Planar, 0).unwrap();
+        assert_eq!(m.twists.column(0).as_slice(), &[1.0, 3.0, -2.0]);
+        // The velocity of the pin point itself is zero: v_p = v_O + ω ẑ × p.
+        let (w, vx, vy) = (1.0, 3.0, -2.0);
+        assert_eq!((vx - w * 3.0, vy + w * 2.0), (0.0, 0.0));
+    }
+
+    #[test]
+    fn spatial_revolute_and_driven_order() {
+        let g = Geometry {
+            origin: Some([1.0, 0.0, 0.0]),
+            axis: Some([0.0, 0.0, 2.0]),
+            ..Geometry::default()
+        };
+        let r = joint_model(JointType::R, &g, Space::Spatial, 0).unwrap();
+        assert_eq!(
+            r.twists.column(0).as_slice(),
+            &[0.0, 0.0, 1.0, 0.0, -1.0, 0.0]
+        );
+        // C with the slide driven keeps only the turn.
+        let c = joint_model(JointType::C, &g, Space::Spatial, 1).unwrap();
+        assert_eq!(c.twists.column(0).as_slice(), r.twists.column(0).as_slice());
+        check(&c, 6, 1);
+    }
+
+    #[test]
+    fn missing_fields_are_named() {
+        let e = joint_model(JointType::U, &Geometry::default(), Space::Spatial, 0).unwrap_err();
+        assert!(matches!(e, MotionError::MissingField { field: "axis", .. }));
+        let g = Geometry {
+            origin: Some([0.0; 3]),
+            axis: Some([1.0, 0.0, 0.0]),
+            ..Geometry::default()
+        };
+        let e = joint_model(JointType::U, &g, Space::Spatial, 0).unwrap_err();
+        assert!(matches!(
+            e,
+            MotionError::MissingField { field: "axis2", .. }
+        ));
+        let m = Mechanism::from_parts(
+            "t",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![JointSpec::new(JointType::S, 1, 2, 0)],
+        );
+        let e = configure(&m).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "joint `1-2`: a S joint needs `origin` for geometric analysis"
+        );
+    }
+
+    #[test]
+    fn ss_bar_has_one_isolated_spin() {
+        let s = |p: [f64; 3]| {
+            let g = Geometry {
+                origin: Some(p),
+                ..Geometry::default()
+            };
+            joint_model(JointType::S, &g, Space::Spatial, 0).unwrap()
+        };
+        let (a, b) = (s([0.1, 0.2, 0.3]), s([1.0, -0.5, 0.7]));
+        let stacked = DMatrix::from_fn(6, 6, |i, j| {
+            if i < 3 {
+                a.rows[(i, j)]
+            } else {
+                b.rows[(i - 3, j)]
+            }
+        });
+        let nullity = 6 - stacked.rank(1e-9);
+        assert_eq!(nullity, 1);
+        // The spin: rotation about the line through both centres.
+        let u = Vector3::new(0.9, -0.7, 0.4).normalize();
+        let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)));
+        assert!((&stacked * t).norm() < 1e-12);
+    }
+
+    #[test]
+    fn realize_is_per_joint() {
+        let j = |a, b| JointSpec::new(JointType::R, a, b, 0);
+        let m1 = Mechanism::from_parts(
+            "a",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![j(1, 2), j(2, 3)],
+        );
+        let m2 = Mechanism::from_parts(
+            "b",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![j(1, 2), j(2, 3), j(3, 1)],
+        );
+        let (r1, r2) = (realize(&m1, 5), realize(&m2, 5));
+        assert_eq!(r1[..], r2[..2]);
+        assert_ne!(r1[0], r1[1]);
+    }
+}

@@ -1,1 +1,1449 @@
-//! Geometric rigidity: true mobility, redundant constraints, isolated DOF and rigid clusters from the constraint Jacobian.
+//! Geometric rigidity: true mobility, redundant constraints, isolated DOF and rigid clusters
+//! from the constraint Jacobian in twist form (see [`crate::motion`] for the conventions).
+//!
+//! # Method
+//! 1. Every binary pair (a multiple joint is n − 1 pairs hub→other) contributes the rows of its
+//!    [`JointModel`] acting on `t_other − t_hub`; the frame's twist is 0.
+//! 2. Fully isolated DOF of body b: the null space of the rows of b's pairs acting on `t_b`
+//!    alone (neighbours fixed). These motions are set aside by restricting each body's twist
+//!    to the orthogonal complement of its isolated space (the null space of the Jacobian is
+//!    the direct sum of both parts, so nothing is lost).
+//! 3. The reduced Jacobian is never formed densely: its rank, null space and left null space
+//!    come from a block-sparse QR elimination, body by body in a greedy minimum-front order
+//!    (multifrontal QR): the rows touching a body are merged, a Householder QR with column
+//!    pivoting on that body's columns decides its rank, the remaining rows become a new row
+//!    block on its neighbours. A pivot is kept when it exceeds `tol · σ_max` with
+//!    `tol = 1e-9 · max(rows, cols)` and `σ_max` from a power iteration; the smallest kept and
+//!    the largest dropped pivot give the gap, and a decision within a factor 1e3 of the
+//!    threshold is reported as ill-conditioned. The left null space (self-stresses) comes from
+//!    the same elimination on the transpose, with the pairs as unknowns.
+//! 4. Rigid clusters: bodies whose twists agree for every motion of the reduced null space.
+//!    Structurally isolated DOF: for each cluster of two or more bodies without the frame, the
+//!    rigid motions allowed by its boundary joints (the rest fixed), counted modulo its bodies'
+//!    fully isolated motions.
+//! 5. Loops: a minimum cycle basis (Horton's algorithm) of the body graph in which a multiple
+//!    joint is a node; spatiality = rank of the loop's joint twists (driven DOF included);
+//!    overconstraint = B − spatiality (= the loop's rows minus the rank of its own system).
+//!
+//! Results hold for the configuration analysed (instantaneous, first order).
+
+use crate::mechanism::{Mechanism, Space};
+use crate::motion::{self, JointModel, MotionError, SplitMix64};
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+use std::cmp::Reverse;
+use std::collections::{BTreeMap, BTreeSet, BinaryHeap};
+
+/// Where the joint geometry comes from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum GeometrySource {
+    /// The file's `origin`/`axis`/... fields (an error names the joint lacking one).
+    File,
+    /// A random generic realization of the joint types, seeded.
+    Random {
+        /// The seed.
+        seed: u64,
+    },
+    /// The file geometry if every joint has its fields, else a random realization (seed 0).
+    #[default]
+    Auto,
+}
+
+/// Options of [`analyze`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct GeometricOptions {
+    /// Geometry source.
+    pub geometry: GeometrySource,
+    /// Tell finite from instantaneous mobility (not implemented yet: reported as skipped).
+    pub check_finite: bool,
+}
+
+/// A joint with a weight (participation in the redundant constraints).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointWeight {
+    /// Joint id.
+    pub joint: String,
+    /// Participation, the largest normalised to 1.
+    pub weight: f64,
+}
+
+/// A joint with a number of DOF.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct JointCount {
+    /// Joint id.
+    pub joint: String,
+    /// DOF.
+    pub dof: usize,
+}
+
+/// The axis of a one-dimensional motion.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Axis {
+    /// `rotation`, `translation` or `screw`.
+    pub kind: String,
+    /// A point of the axis (the one nearest the origin); none for a translation.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point: Option<[f64; 3]>,
+    /// Unit direction.
+    pub direction: [f64; 3],
+    /// Pitch (screw only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pitch: Option<f64>,
+}
+
+/// Isolated motions of one body or one rigid cluster.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct IsolatedMotion {
+    /// `fully` (one body) or `structurally` (a rigid cluster).
+    pub kind: String,
+    /// The bodies moving (ids).
+    pub bodies: Vec<String>,
+    /// The joints allowing it (the body's joints, or the cluster's boundary joints).
+    pub joints: Vec<String>,
+    /// Number of independent isolated motions.
+    pub dof: usize,
+    /// Their axis when there is exactly one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<Axis>,
+}
+
+/// A rigid cluster.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct RigidCluster {
+    /// Body ids in body order.
+    pub bodies: Vec<String>,
+    /// Whether it contains the frame.
+    pub frame: bool,
+}
+
+/// One loop of the minimum cycle basis.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct LoopInfo {
+    /// Joints around the loop.
+    pub joints: Vec<String>,
+    /// Bodies around the loop.
+    pub bodies: Vec<String>,
+    /// Rank of the loop's joint twists (6 general spatial, 3 planar or spherical).
+    pub spatiality: usize,
+    /// Redundant constraints of the loop alone (B − spatiality).
+    pub overconstraint: usize,
+}
+
+/// Numerical facts about the rank decisions.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Numeric {
+    /// Relative tolerance used (times σ_max).
+    pub tolerance: f64,
+    /// Estimate of the largest singular value.
+    pub sigma_max: f64,
+    /// Smallest pivot kept, relative to σ_max.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub smallest_kept: Option<f64>,
+    /// Largest pivot dropped, relative to σ_max.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub largest_dropped: Option<f64>,
+    /// Warning when a decision lies within a factor 1e3 of the threshold.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub warning: Option<String>,
+}
+
+/// The result of [`analyze`].
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct GeometricReport {
+    /// Mechanism name.
+    pub name: String,
+    /// Motion space.
+    pub space: Space,
+    /// B.
+    pub b: u32,
+    /// The frame's id.
+    pub frame: String,
+    /// Geometry used: `file` or `random (seed N)`.
+    pub geometry: String,
+    /// Why this geometry (for `Auto`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry_note: Option<String>,
+    /// Number of bodies (frame included).
+    pub bodies: usize,
+    /// Constraint rows.
+    pub rows: usize,
+    /// Unknowns (B per movable body).
+    pub columns: usize,
+    /// Rank of the constraint Jacobian.
+    pub rank: usize,
+    /// Chebyshev-Gruebler-Kutzbach count with the driven DOF fixed.
+    pub count: i64,
+    /// True instantaneous mobility (nullity, frame fixed, driven DOF fixed).
+    pub mobility: usize,
+    /// Redundant constraints N = rows − rank.
+    pub redundant: usize,
+    /// Joints taking part in the redundant constraints, by weight.
+    pub redundant_joints: Vec<JointWeight>,
+    /// Locked joint DOF (zero in every motion), total.
+    pub locked: usize,
+    /// Locked DOF per joint (joints with none omitted).
+    pub locked_joints: Vec<JointCount>,
+    /// Isolated DOF, fully + structurally.
+    pub isolated: usize,
+    /// Fully isolated DOF.
+    pub fully_isolated: usize,
+    /// Structurally isolated DOF.
+    pub structurally_isolated: usize,
+    /// The isolated motions.
+    pub isolated_motions: Vec<IsolatedMotion>,
+    /// mobility − isolated.
+    pub proper_mobility: i64,
+    /// Rigid clusters with two or more bodies or the frame (singletons omitted).
+    pub rigid: Vec<RigidCluster>,
+    /// Minimum cycle basis.
+    pub loops: Vec<LoopInfo>,
+    /// Why loops are missing, if they are.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub loops_note: Option<String>,
+    /// Finite-mobility check status.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finite_note: Option<String>,
+    /// Rank-decision facts.
+    pub numeric: Numeric,
+}
+
+/// A binary pair: joint index, hub body, other body.
+#[derive(Clone, Copy, Debug)]
+struct Pair {
+    joint: usize,
+    hub: usize,
+    other: usize,
+}
+
+fn pairs_of(m: &Mechanism) -> Vec<Pair> {
+    let mut out = Vec::new();
+    for (ji, j) in m.joints.iter().enumerate() {
+        if let Some((&hub, rest)) = j.bodies.split_first() {
+            for &o in rest {
+                out.push(Pair {
+                    joint: ji,
+                    hub,
+                    other: o,
+                });
+            }
+        }
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Small dense helpers.
+
+/// Null space basis (orthonormal columns) of a small matrix `a` (r × c): right singular
+/// vectors with σ ≤ rel · σ_max (absolute `abs` when σ_max is 0).
+fn small_null(a: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
+    let c = a.ncols();
+    if c == 0 {
+        return DMatrix::zeros(0, 0);
+    }
+    let padded = if a.nrows() < c {
+        a.clone().insert_rows(a.nrows(), c - a.nrows(), 0.0)
+    } else {
+        a.clone()
+    };
+    let svd = padded.svd(false, true);
+    let vt = svd.v_t.expect("v_t was requested");
+    let smax = svd.singular_values.max();
+    let thr = rel * smax.max(f64::MIN_POSITIVE);
+    let cols: Vec<DVector<f64>> = svd
+        .singular_values
+        .iter()
+        .enumerate()
+        .filter(|(_, s)| **s <= thr || smax == 0.0)
+        .map(|(i, _)| vt.row(i).transpose())
+        .collect();
+    if cols.is_empty() {
+        DMatrix::zeros(c, 0)
+    } else {
+        DMatrix::from_columns(&cols)
+    }
+}
+
+/// Numerical rank with an absolute threshold.
+fn small_rank(a: &DMatrix<f64>, abs: f64) -> usize {
+    if a.nrows() == 0 || a.ncols() == 0 {
+        return 0;
+    }
+    a.clone()
+        .svd(false, false)
+        .singular_values
+        .iter()
+        .filter(|s| **s > abs)
+        .count()
+}
+
+/// Orthonormal complement (columns) of orthonormal columns `q` in R^b.
+fn complement(q: &DMatrix<f64>, b: usize) -> DMatrix<f64> {
+    if q.ncols() == 0 {
+        return DMatrix::identity(b, b);
+    }
+    small_null(&q.transpose(), 1e-9)
+}
+
+/// Modified Gram-Schmidt on dense vectors; near-zero ones dropped.
+fn orthonormalize(vs: Vec<DVector<f64>>) -> Vec<DVector<f64>> {
+    let mut out: Vec<DVector<f64>> = Vec::new();
+    for mut v in vs {
+        let n0 = v.norm();
+        for _ in 0..2 {
+            for q in &out {
+                let d = q.dot(&v);
+                v.axpy(-d, q, 1.0);
+            }
+        }
+        if v.norm() > 1e-8 * n0.max(1e-300) {
+            let n = v.norm();
+            out.push(v / n);
+        }
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------------
+// Block-sparse elimination (multifrontal QR).
+
+/// A row block over some groups of unknowns: `mat` has the groups' columns side by side, in
+/// the order of `groups`.
+#[derive(Clone, Debug)]
+struct Block {
+    groups: Vec<usize>,
+    mat: DMatrix<f64>,
+}
+
+#[derive(Clone, Debug)]
+struct Record {
+    group: usize,
+    /// Local column of the group for each pivot (then the free columns), in R's order.
+    perm: Vec<usize>,
+    rank: usize,
+    others: Vec<usize>,
+    r: DMatrix<f64>,
+}
+
+struct Elimination {
+    offsets: Vec<usize>,
+    sizes: Vec<usize>,
+    records: Vec<Record>,
+    rank: usize,
+    kept_min: f64,
+    dropped_max: f64,
+}
+
+impl Elimination {
+    /// Rank-revealing elimination of the blocks over groups of the given sizes.
+    fn run(sizes: &[usize], blocks: Vec<Block>, abs_tol: f64) -> Elimination {
+        let n = sizes.len();
+        let mut offsets = Vec::with_capacity(n);
+        let mut acc = 0;
+        for &s in sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        let mut store: Vec<Option<Block>> = Vec::new();
+        let mut of_group: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n];
+        let add =
+            |b: Block, store: &mut Vec<Option<Block>>, of_group: &mut Vec<BTreeSet<usize>>| {
+                let id = store.len();
+                for &g in &b.groups {
+                    of_group[g].insert(id);
+                }
+                store.push(Some(b));
+            };
+        for b in blocks {
+            if !b.groups.is_empty() && b.mat.nrows() > 0 {
+                add(b, &mut store, &mut of_group);
+            }
+        }
+        let score = |g: usize, store: &Vec<Option<Block>>, of_group: &Vec<BTreeSet<usize>>| {
+            let mut u = BTreeSet::new();
+            for &bi in &of_group[g] {
+                if let Some(b) = &store[bi] {
+                    u.extend(b.groups.iter().copied());
+                }
+            }
+            u.iter().map(|&h| sizes[h]).sum::<usize>()
+        };
+        let mut heap = BinaryHeap::new();
+        let mut version = vec![0usize; n];
+        for g in 0..n {
+            heap.push(Reverse((score(g, &store, &of_group), g, 0usize)));
+        }
+        let mut done = vec![false; n];
+        let mut records = Vec::new();
+        let mut rank = 0;
+        let mut kept_min = f64::INFINITY;
+        let mut dropped_max: f64 = 0.0;
+        while let Some(Reverse((_, g, ver))) = heap.pop() {
+            if done[g] || ver != version[g] {
+                continue;
+            }
+            done[g] = true;
+            let ids: Vec<usize> = of_group[g].iter().copied().collect();
+            let mut members: Vec<Block> = Vec::new();
+            for id in ids {
+                if let Some(b) = store[id].take() {
+                    for &h in &b.groups {
+                        of_group[h].remove(&id);
+                    }
+                    members.push(b);
+                }
+            }
+            let others: Vec<usize> = members
+                .iter()
+                .flat_map(|b| b.groups.iter().copied())
+                .filter(|&h| h != g)
+                .collect::<BTreeSet<_>>()
+                .into_iter()
+                .collect();
+            let sg = sizes[g];
+            // Column offsets in the front: g first, then the others.
+            let mut col_of = BTreeMap::new();
+            col_of.insert(g, 0usize);
+            let mut width = sg;
+            for &h in &others {
+                col_of.insert(h, width);
+                width += sizes[h];
+            }
+            let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
+            let mut front = DMatrix::zeros(nrows, width);
+            let mut r0 = 0;
+            for b in &members {
+                let mut c0 = 0;
+                for &h in &b.groups {
+                    let s = sizes[h];
+                    let dst = col_of[&h];
+                    front
+                        .view_mut((r0, dst), (b.mat.nrows(), s))
+                        .copy_from(&b.mat.view((0, c0), (b.mat.nrows(), s)));
+                    c0 += s;
+                }
+                r0 += b.mat.nrows();
+            }
+            let mut perm: Vec<usize> = (0..sg).collect();
+            let mut r = 0;
+            while r < sg && r < nrows {
+                // Column pivoting among the group's remaining columns.
+                let (best, bn) = (r..sg)
+                    .map(|j| (j, front.view((r, j), (nrows - r, 1)).norm()))
+                    .fold((r, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
+                if bn <= abs_tol {
+                    dropped_max = dropped_max.max(bn);
+                    break;
+                }
+                kept_min = kept_min.min(bn);
+                if best != r {
+                    front.swap_columns(best, r);
+                    perm.swap(best, r);
+                }
+                householder(&mut front, r, r);
+                r += 1;
+            }
+            rank += r;
+            let rmat = front.rows(0, r).into_owned();
+            if nrows > r && !others.is_empty() {
+                let mut rest = front.view((r, sg), (nrows - r, width - sg)).into_owned();
+                if rest.nrows() > rest.ncols() {
+                    // Compress: an orthogonal transformation keeps the row space.
+                    let k = rest.ncols();
+                    for c in 0..k {
+                        householder(&mut rest, c, c);
+                    }
+                    rest = rest.rows(0, k).into_owned();
+                }
+                add(
+                    Block {
+                        groups: others.clone(),
+                        mat: rest,
+                    },
+                    &mut store,
+                    &mut of_group,
+                );
+            } else if nrows > r {
+                // Rows left with no unknowns: their residual norm is a dropped decision.
+                let rest = front.view((r, 0), (nrows - r, width)).norm();
+                dropped_max = dropped_max.max(rest.min(abs_tol));
+            }
+            for &h in &others {
+                if !done[h] {
+                    version[h] += 1;
+                    heap.push(Reverse((score(h, &store, &of_group), h, version[h])));
+                }
+            }
+            records.push(Record {
+                group: g,
+                perm,
+                rank: r,
+                others,
+                r: rmat,
+            });
+        }
+        Elimination {
+            offsets,
+            sizes: sizes.to_vec(),
+            records,
+            rank,
+            kept_min,
+            dropped_max,
+        }
+    }
+
+    /// A basis of the null space (dense vectors over all unknowns), one per free column.
+    fn null_space(&self) -> Vec<DVector<f64>> {
+        let total: usize = self.sizes.iter().sum();
+        let mut out = Vec::new();
+        for (ri, rec) in self.records.iter().enumerate() {
+            for fpos in rec.rank..rec.perm.len() {
+                let mut x = DVector::zeros(total);
+                x[self.offsets[rec.group] + rec.perm[fpos]] = 1.0;
+                for hi in (0..=ri).rev() {
+                    let h = &self.records[hi];
+                    if h.rank == 0 {
+                        continue;
+                    }
+                    let sg = self.sizes[h.group];
+                    // rhs = −R_others · x_others − R_free · x_free
+                    let mut rhs = DVector::zeros(h.rank);
+                    let mut any = false;
+                    let mut c = sg;
+                    for &o in &h.others {
+                        let s = self.sizes[o];
+                        let xo = x.rows(self.offsets[o], s);
+                        if xo.iter().any(|v| *v != 0.0) {
+                            any = true;
+                            rhs -= h.r.view((0, c), (h.rank, s)) * xo;
+                        }
+                        c += s;
+                    }
+                    if hi == ri {
+                        any = true;
+                        for q in h.rank..sg {
+                            let v = x[self.offsets[h.group] + h.perm[q]];
+                            if v != 0.0 {
+                                rhs -= h.r.column(q) * v;
+                            }
+                        }
+                    }
+                    if !any {
+                        continue;
+                    }
+                    // Back substitution on the upper-triangular pivot part.
+                    let mut y = DVector::zeros(h.rank);
+                    for i in (0..h.rank).rev() {
+                        let mut s = rhs[i];
+                        for k in i + 1..h.rank {
+                            s -= h.r[(i, k)] * y[k];
+                        }
+                        y[i] = s / h.r[(i, i)];
+                    }
+                    for i in 0..h.rank {
+                        x[self.offsets[h.group] + h.perm[i]] = y[i];
+                    }
+                }
+                out.push(x);
+            }
+        }
+        out
+    }
+}
+
+/// Apply the Householder reflection that zeroes column `c` below row `r` to rows r.. of `m`.
+fn householder(m: &mut DMatrix<f64>, r: usize, c: usize) {
+    let nr = m.nrows();
+    if r >= nr {
+        return;
+    }
+    let mut v: DVector<f64> = m.view((r, c), (nr - r, 1)).column(0).into_owned();
+    let alpha = v.norm();
+    if alpha == 0.0 {
+        return;
+    }
+    let a = if v[0] > 0.0 { -alpha } else { alpha };
+    v[0] -= a;
+    let vn2 = v.norm_squared();
+    if vn2 == 0.0 {
+        return;
+    }
+    let nc = m.ncols();
+    let mut sub = m.view_mut((r, c), (nr - r, nc - c));
+    // sub -= 2 v (vᵀ sub) / (vᵀ v)
+    let w = sub.tr_mul(&v) * (2.0 / vn2);
+    sub.ger(-1.0, &v, &w, 1.0);
+    m[(r, c)] = a;
+    for i in r + 1..nr {
+        m[(i, c)] = 0.0;
+    }
+}
+
+/// σ_max of the block matrix by power iteration on JᵀJ.
+fn sigma_max(sizes: &[usize], offsets: &[usize], blocks: &[Block]) -> f64 {
+    let total: usize = sizes.iter().sum();
+    if total == 0 || blocks.is_empty() {
+        return 0.0;
+    }
+    let mut rng = SplitMix64::new(0x51_67_4D_41);
+    let mut x = DVector::from_fn(total, |_, _| rng.next_signed() + 1.5);
+    let mut est = 0.0;
+    for _ in 0..40 {
+        let n = x.norm();
+        if n == 0.0 {
+            return 0.0;
+        }
+        x /= n;
+        let mut y = DVector::zeros(total);
+        for b in blocks {
+            let mut gathered = DVector::zeros(b.mat.ncols());
+            let mut c = 0;
+            for &g in &b.groups {
+                gathered
+                    .rows_mut(c, sizes[g])
+                    .copy_from(&x.rows(offsets[g], sizes[g]));
+                c += sizes[g];
+            }
+            let jb = &b.mat * gathered;
+            let back = b.mat.tr_mul(&jb);
+            let mut c = 0;
+            for &g in &b.groups {
+                let mut dst = y.rows_mut(offsets[g], sizes[g]);
+                dst += back.rows(c, sizes[g]);
+                c += sizes[g];
+            }
+        }
+        let e = y.norm().sqrt();
+        x = y;
+        if (e - est).abs() <= 1e-6 * e {
+            est = e;
+            break;
+        }
+        est = e;
+    }
+    // Power iteration converges from below; a small margin keeps the threshold conservative.
+    est * 1.0
+}
+
+// ---------------------------------------------------------------------------------------------
+
+fn axis_of(space: Space, t: &[f64]) -> Option<Axis> {
+    let round = |x: f64| {
+        if x.abs() < 1e-12 {
+            0.0
+        } else {
+            (x * 1e9).round() / 1e9
+        }
+    };
+    let canon = |d: [f64; 3]| {
+        let first = d.iter().find(|x| x.abs() > 1e-9).copied().unwrap_or(1.0);
+        let s = if first < 0.0 { -1.0 } else { 1.0 };
+        [round(d[0] * s), round(d[1] * s), round(d[2] * s)]
+    };
+    match space {
+        Space::Spatial => {
+            let w = nalgebra::Vector3::new(t[0], t[1], t[2]);
+            let v = nalgebra::Vector3::new(t[3], t[4], t[5]);
+            let scale = w.norm().max(v.norm());
+            if scale == 0.0 {
+                return None;
+            }
+            if w.norm() <= 1e-9 * scale {
+                let d = v / v.norm();
+                return Some(Axis {
+                    kind: "translation".into(),
+                    point: None,
+                    direction: canon([d.x, d.y, d.z]),
+                    pitch: None,
+                });
+            }
+            let w2 = w.norm_squared();
+            let p = w.cross(&v) / w2;
+            let h = w.dot(&v) / w2;
+            let d = w / w.norm();
+            let screw = h.abs() > 1e-9;
+            Some(Axis {
+                kind: if screw { "screw" } else { "rotation" }.into(),
+                point: Some([round(p.x), round(p.y), round(p.z)]),
+                direction: canon([d.x, d.y, d.z]),
+                pitch: screw.then(|| round(h)),
+            })
+        }
+        Space::Planar => {
+            let (w, vx, vy) = (t[0], t[1], t[2]);
+            let scale = w.abs().max(vx.hypot(vy));
+            if scale == 0.0 {
+                return None;
+            }
+            if w.abs() <= 1e-9 * scale {
+                let n = vx.hypot(vy);
+                return Some(Axis {
+                    kind: "translation".into(),
+                    point: None,
+                    direction: canon([vx / n, vy / n, 0.0]),
+                    pitch: None,
+                });
+            }
+            Some(Axis {
+                kind: "rotation".into(),
+                point: Some([round(-vy / w), round(vx / w), 0.0]),
+                direction: [0.0, 0.0, 1.0],
+                pitch: None,
+            })
+        }
+        Space::Spherical => {
+            let n = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+            if n == 0.0 {
+                return None;
+            }
+            Some(Axis {
+                kind: "rotation".into(),
+                point: Some([0.0, 0.0, 0.0]),
+                direction: canon([t[0] / n, t[1] / n, t[2] / n]),
+                pitch: None,
+            })
+        }
+    }
+}
+
+/// Minimum cycle basis by Horton's algorithm on an undirected multigraph (`edges` as node
+/// pairs). Returns each cycle as a sorted list of edge indices. `None` when the candidate set
+/// would be too large.
+fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<Vec<Vec<usize>>> {
+    // Cycle space dimension per connected component.
+    let mut uf: Vec<usize> = (0..nodes).collect();
+    fn find(uf: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while uf[r] != r {
+            r = uf[r];
+        }
+        let mut y = x;
+        while uf[y] != r {
+            let n = uf[y];
+            uf[y] = r;
+            y = n;
+        }
+        r
+    }
+    let mut comps = nodes;
+    for &(a, b) in edges {
+        let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
+        if ra != rb {
+            uf[ra] = rb;
+            comps -= 1;
+        }
+    }
+    let dim = edges.len() + comps - nodes;
+    if dim == 0 {
+        return Some(Vec::new());
+    }
+    if dim > 400 || nodes.saturating_mul(edges.len()) > 400_000 {
+        return None;
+    }
+    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nodes];
+    for (ei, &(a, b)) in edges.iter().enumerate() {
+        adj[a].push((b, ei));
+        adj[b].push((a, ei));
+    }
+    let words = edges.len().div_ceil(64);
+    let mut cands: Vec<(usize, Vec<u64>)> = Vec::new();
+    for v in 0..nodes {
+        // BFS tree from v.
+        let mut parent: Vec<Option<(usize, usize)>> = vec![None; nodes];
+        let mut depth = vec![usize::MAX; nodes];
+        let mut first = vec![usize::MAX; nodes];
+        depth[v] = 0;
+        let mut queue = std::collections::VecDeque::from([v]);
+        while let Some(x) = queue.pop_front() {
+            for &(y, e) in &adj[x] {
+                if depth[y] == usize::MAX {
+                    depth[y] = depth[x] + 1;
+                    parent[y] = Some((x, e));
+                    first[y] = if x == v { y } else { first[x] };
+                    queue.push_back(y);
+                }
+            }
+        }
+        for (ei, &(a, b)) in edges.iter().enumerate() {
+            if depth[a] == usize::MAX || depth[b] == usize::MAX {
+                continue;
+            }
+            if parent[a].is_some_and(|p| p.1 == ei) || parent[b].is_some_and(|p| p.1 == ei) {
+                continue;
+            }
+            // The two tree paths must meet only at v.
+            if a != v && b != v && first[a] == first[b] {
+                continue;
+            }
+            let mut bits = vec![0u64; words];
+            bits[ei / 64] ^= 1 << (ei % 64);
+            for start in [a, b] {
+                let mut x = start;
+                while let Some((p, e)) = parent[x] {
+                    bits[e / 64] ^= 1 << (e % 64);
+                    x = p;
+                }
+            }
+            let len = depth[a] + depth[b] + 1;
+            cands.push((len, bits));
+        }
+    }
+    cands.sort();
+    cands.dedup();
+    let mut basis: Vec<(usize, Vec<u64>)> = Vec::new(); // (pivot bit, reduced vector)
+    let mut out = Vec::new();
+    for (_, bits) in cands {
+        let mut r = bits.clone();
+        for (p, bv) in &basis {
+            if r[p / 64] >> (p % 64) & 1 == 1 {
+                for (x, y) in r.iter_mut().zip(bv) {
+                    *x ^= y;
+                }
+            }
+        }
+        let pivot = (0..edges.len()).find(|&i| r[i / 64] >> (i % 64) & 1 == 1);
+        if let Some(p) = pivot {
+            // Keep the basis reduced on earlier pivots as well.
+            for (_, bv) in basis.iter_mut() {
+                if bv[p / 64] >> (p % 64) & 1 == 1 {
+                    for (x, y) in bv.iter_mut().zip(&r) {
+                        *x ^= y;
+                    }
+                }
+            }
+            basis.push((p, r));
+            out.push(
+                (0..edges.len())
+                    .filter(|&i| bits[i / 64] >> (i % 64) & 1 == 1)
+                    .collect(),
+            );
+            if out.len() == dim {
+                break;
+            }
+        }
+    }
+    Some(out)
+}
+
+/// Order a cycle's edges into a walk; returns the node sequence.
+fn walk(cycle: &[usize], edges: &[(usize, usize)]) -> Vec<usize> {
+    let mut left: Vec<usize> = cycle.to_vec();
+    let Some(e0) = left.first().copied() else {
+        return Vec::new();
+    };
+    left.remove(0);
+    let (start, mut cur) = edges[e0];
+    let mut nodes = vec![start];
+    while cur != start || nodes.len() == 1 {
+        nodes.push(cur);
+        let Some(pos) = left
+            .iter()
+            .position(|&e| edges[e].0 == cur || edges[e].1 == cur)
+        else {
+            break;
+        };
+        let e = left.remove(pos);
+        cur = if edges[e].0 == cur {
+            edges[e].1
+        } else {
+            edges[e].0
+        };
+        if left.is_empty() {
+            break;
+        }
+    }
+    nodes
+}
+
+/// The geometric rigidity analysis of `m`.
+pub fn analyze(m: &Mechanism, opts: &GeometricOptions) -> Result<GeometricReport, MotionError> {
+    let (models, geometry, geometry_note) = match opts.geometry {
+        GeometrySource::File => (motion::configure(m)?, "file".to_string(), None),
+        GeometrySource::Random { seed } => (
+            motion::realize(m, seed),
+            format!("random (seed {seed})"),
+            None,
+        ),
+        GeometrySource::Auto => {
+            if motion::has_geometry(m) {
+                match motion::configure(m) {
+                    Ok(ms) => (
+                        ms,
+                        "file".to_string(),
+                        Some("every joint has its geometry fields".to_string()),
+                    ),
+                    Err(e) => (
+                        motion::realize(m, 0),
+                        "random (seed 0)".to_string(),
+                        Some(format!(
+                            "file geometry unusable ({e}); random realization used"
+                        )),
+                    ),
+                }
+            } else {
+                (
+                    motion::realize(m, 0),
+                    "random (seed 0)".to_string(),
+                    Some(
+                        "some joints lack geometry; random realization of the joint types used"
+                            .into(),
+                    ),
+                )
+            }
+        }
+    };
+    // Full (undriven) twists for loop spatiality, at the same geometry.
+    let mut free = m.clone();
+    for j in &mut free.joints {
+        j.driven = 0;
+    }
+    let full_models = match opts.geometry {
+        GeometrySource::Random { seed } => motion::realize(&free, seed),
+        _ if geometry == "file" => motion::configure(&free).unwrap_or_default(),
+        _ => motion::realize(&free, 0),
+    };
+    let full_twists: Vec<DMatrix<f64>> = full_models.into_iter().map(|jm| jm.twists).collect();
+    Ok(analyze_models(
+        m,
+        &models,
+        &full_twists,
+        geometry,
+        geometry_note,
+        opts.check_finite,
+    ))
+}
+
+fn analyze_models(
+    m: &Mechanism,
+    models: &[JointModel],
+    full_twists: &[DMatrix<f64>],
+    geometry: String,
+    geometry_note: Option<String>,
+    check_finite: bool,
+) -> GeometricReport {
+    let b = m.b() as usize;
+    let nb = m.bodies.len();
+    let frame = m.frame;
+    let pairs = pairs_of(m);
+    let id = |i: usize| m.body_id(i).to_string();
+    let rows_total: usize = pairs.iter().map(|p| models[p.joint].rows.nrows()).sum();
+    let count: i64 = (b * m.movable()) as i64
+        - pairs
+            .iter()
+            .map(|p| models[p.joint].rows.nrows() as i64)
+            .sum::<i64>();
+
+    // Pairs incident to each body.
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nb];
+    for (pi, p) in pairs.iter().enumerate() {
+        incident[p.hub].push(pi);
+        incident[p.other].push(pi);
+    }
+
+    // 2. Fully isolated motions per body.
+    let local_rel = 1e-9 * b as f64 * 10.0;
+    let mut iso: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
+    let mut comp: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
+    for body in 0..nb {
+        let rows: usize = incident[body]
+            .iter()
+            .map(|&pi| models[pairs[pi].joint].rows.nrows())
+            .sum();
+        let mut a = DMatrix::zeros(rows, b);
+        let mut r0 = 0;
+        for &pi in &incident[body] {
+            let r = &models[pairs[pi].joint].rows;
+            a.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
+            r0 += r.nrows();
+        }
+        iso[body] = if rows == 0 {
+            DMatrix::identity(b, b)
+        } else {
+            small_null(&a, local_rel)
+        };
+        comp[body] = complement(&iso[body], b);
+    }
+    // The frame's own isolated motions (its spin relative to the rest) appear, frame fixed, as
+    // every other body moving by the same twist; they are counted as fully isolated of the
+    // frame and set aside like the others.
+    let frame_iso = iso[frame].clone();
+
+    // 3. Reduced Jacobian blocks; groups = movable bodies with a non-empty complement.
+    let mut group_of: Vec<Option<usize>> = vec![None; nb];
+    let mut gbody = Vec::new();
+    let mut sizes = Vec::new();
+    for body in 0..nb {
+        if body != frame && comp[body].ncols() > 0 {
+            group_of[body] = Some(sizes.len());
+            gbody.push(body);
+            sizes.push(comp[body].ncols());
+        }
+    }
+    let mut offsets = Vec::new();
+    let mut acc = 0;
+    for &s in &sizes {
+        offsets.push(acc);
+        acc += s;
+    }
+    let reduced_cols = acc;
+    // The block of pair p on body `body` (sign: + other, − hub).
+    let pair_block = |pi: usize, body: usize| -> DMatrix<f64> {
+        let p = pairs[pi];
+        let r = &models[p.joint].rows;
+        let x = r * &comp[body];
+        if body == p.hub { -x } else { x }
+    };
+    let mut blocks = Vec::new();
+    for (pi, &p) in pairs.iter().enumerate() {
+        let mut bodies: Vec<usize> = [p.hub, p.other]
+            .into_iter()
+            .filter(|&x| group_of[x].is_some())
+            .collect();
+        bodies.sort_by_key(|&x| group_of[x]);
+        let r = models[p.joint].rows.nrows();
+        if bodies.is_empty() || r == 0 {
+            continue;
+        }
+        let width: usize = bodies.iter().map(|&x| comp[x].ncols()).sum();
+        let mut mat = DMatrix::zeros(r, width);
+        let mut c = 0;
+        for &x in &bodies {
+            let blk = pair_block(pi, x);
+            mat.view_mut((0, c), (r, blk.ncols())).copy_from(&blk);
+            c += blk.ncols();
+        }
+        blocks.push(Block {
+            groups: bodies
+                .iter()
+                .map(|&x| group_of[x].expect("filtered"))
+                .collect(),
+            mat,
+        });
+    }
+    let smax = sigma_max(&sizes, &offsets, &blocks);
+    let tol = 1e-9 * (rows_total.max(b * m.movable())).max(1) as f64;
+    let abs_tol = tol * smax.max(f64::MIN_POSITIVE);
+    let elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+    let rank = elim.rank;
+    let fully_bodies: usize = (0..nb)
+        .filter(|&x| x != frame)
+        .map(|x| iso[x].ncols())
+        .sum();
+    let mobility = fully_bodies + (reduced_cols - rank);
+    let redundant = rows_total - rank;
+
+    // Null basis of the reduced system, orthonormalized. The frame's isolated motions are in
+    // it (every other body moving by −s); they are set aside by comparing bodies modulo
+    // their own isolated motions, the frame's included.
+    let frame_motions: Vec<DVector<f64>> = frame_iso
+        .column_iter()
+        .map(|s| {
+            let mut z = DVector::zeros(reduced_cols);
+            for (g, &body) in gbody.iter().enumerate() {
+                z.rows_mut(offsets[g], sizes[g])
+                    .copy_from(&(comp[body].transpose() * s));
+            }
+            z
+        })
+        .collect();
+    let frame_set = orthonormalize(frame_motions);
+    let frame_fully = frame_set.len();
+    let fully = fully_bodies + frame_fully;
+    let null_red: Vec<DVector<f64>> = orthonormalize(elim.null_space());
+    let body_twist = |body: usize, x: &DVector<f64>| -> DVector<f64> {
+        match group_of[body] {
+            Some(g) => &comp[body] * x.rows(offsets[g], sizes[g]),
+            None => DVector::zeros(b),
+        }
+    };
+    // Twists of each body over the reduced null basis (B × d).
+    let d = null_red.len();
+    let tw: Vec<DMatrix<f64>> = (0..nb)
+        .map(|body| {
+            let mut t = DMatrix::zeros(b, d);
+            for (k, x) in null_red.iter().enumerate() {
+                t.set_column(k, &body_twist(body, x));
+            }
+            t
+        })
+        .collect();
+    let zero_tol = 1e-7;
+
+    // Left null space (self-stresses) by the same elimination on the transpose.
+    let mut redundant_joints = Vec::new();
+    if redundant > 0 {
+        let psizes: Vec<usize> = pairs.iter().map(|p| models[p.joint].rows.nrows()).collect();
+        let mut poff = Vec::new();
+        let mut acc = 0;
+        for &s in &psizes {
+            poff.push(acc);
+            acc += s;
+        }
+        let mut tblocks = Vec::new();
+        for &body in &gbody {
+            let s = comp[body].ncols();
+            let ps: Vec<usize> = incident[body].clone();
+            let width: usize = ps.iter().map(|&pi| psizes[pi]).sum();
+            let mut mat = DMatrix::zeros(s, width);
+            let mut c = 0;
+            for &pi in &ps {
+                let blk = pair_block(pi, body).transpose();
+                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+                c += blk.ncols();
+            }
+            tblocks.push(Block { groups: ps, mat });
+        }
+        let telim = Elimination::run(&psizes, tblocks, abs_tol);
+        let stresses = orthonormalize(telim.null_space());
+        let mut w: BTreeMap<usize, f64> = BTreeMap::new();
+        for y in &stresses {
+            for (pi, p) in pairs.iter().enumerate() {
+                let s = y.rows(poff[pi], psizes[pi]).norm_squared();
+                *w.entry(p.joint).or_insert(0.0) += s;
+            }
+        }
+        let wmax = w.values().cloned().fold(0.0, f64::max);
+        if wmax > 0.0 {
+            let mut list: Vec<(usize, f64)> = w
+                .into_iter()
+                .map(|(j, v)| (j, (v / wmax).sqrt()))
+                .filter(|(_, v)| *v > 1e-6)
+                .collect();
+            list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+            redundant_joints = list
+                .into_iter()
+                .map(|(j, v)| JointWeight {
+                    joint: m.joints[j].id.clone(),
+                    weight: (v * 1e6).round() / 1e6,
+                })
+                .collect();
+        }
+    }
+
+    // Locked DOF per joint: allowed dimension minus the rank used over all motions.
+    let mut locked_by_joint: BTreeMap<usize, usize> = BTreeMap::new();
+    for p in &pairs {
+        let mut cols: Vec<DVector<f64>> = Vec::new();
+        for k in 0..d {
+            cols.push(tw[p.other].column(k) - tw[p.hub].column(k));
+        }
+        for body in [p.hub, p.other] {
+            for c in iso[body].column_iter() {
+                cols.push(c.into_owned());
+            }
+        }
+        let used = if cols.is_empty() {
+            0
+        } else {
+            small_rank(&DMatrix::from_columns(&cols), zero_tol)
+        };
+        let allowed = models[p.joint].twists.ncols();
+        *locked_by_joint.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
+    }
+    let locked: usize = locked_by_joint.values().sum();
+    let locked_joints = locked_by_joint
+        .into_iter()
+        .filter(|(_, v)| *v > 0)
+        .map(|(j, v)| JointCount {
+            joint: m.joints[j].id.clone(),
+            dof: v,
+        })
+        .collect();
+
+    // 4. Rigid clusters over the reduced null space.
+    let mut uf: Vec<usize> = (0..nb).collect();
+    fn find(uf: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while uf[r] != r {
+            r = uf[r];
+        }
+        uf[x] = r;
+        r
+    }
+    // Same rigid motion modulo the two bodies' own isolated motions.
+    let same = |x: usize, y: usize| {
+        let diff = &tw[x] - &tw[y];
+        let cols: Vec<DVector<f64>> = iso[x]
+            .column_iter()
+            .chain(iso[y].column_iter())
+            .map(|c| c.into_owned())
+            .collect();
+        let q = orthonormalize(cols);
+        let mut res = diff;
+        for qv in &q {
+            let proj = qv * (qv.transpose() * &res);
+            res -= proj;
+        }
+        res.norm() <= zero_tol
+    };
+    for p in &pairs {
+        if same(p.hub, p.other) {
+            let (a, c) = (find(&mut uf, p.hub), find(&mut uf, p.other));
+            uf[a.max(c)] = a.min(c);
+        }
+    }
+    let mut reps: Vec<usize> = (0..nb).filter(|&x| find(&mut uf, x) == x).collect();
+    reps.sort();
+    for i in 0..reps.len() {
+        for j in 0..i {
+            let (a, c) = (reps[j], reps[i]);
+            if find(&mut uf, c) == c && find(&mut uf, a) == a && same(a, c) {
+                uf[c] = a;
+            }
+        }
+    }
+    let mut clusters: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for x in 0..nb {
+        let r = find(&mut uf, x);
+        clusters.entry(r).or_default().push(x);
+    }
+    let rigid: Vec<RigidCluster> = clusters
+        .values()
+        .filter(|c| c.len() > 1 || c.contains(&frame))
+        .map(|c| RigidCluster {
+            bodies: c.iter().map(|&x| id(x)).collect(),
+            frame: c.contains(&frame),
+        })
+        .collect();
+
+    // Isolated motions: fully (per body) and structurally (per cluster).
+    let joint_ids = |ps: &mut dyn Iterator<Item = usize>| -> Vec<String> {
+        let set: BTreeSet<usize> = ps.map(|pi| pairs[pi].joint).collect();
+        set.into_iter().map(|j| m.joints[j].id.clone()).collect()
+    };
+    let mut isolated_motions = Vec::new();
+    if frame_fully > 0 {
+        isolated_motions.push(IsolatedMotion {
+            kind: "fully".into(),
+            bodies: vec![id(frame)],
+            joints: joint_ids(&mut incident[frame].iter().copied()),
+            dof: frame_fully,
+            axis: if frame_fully == 1 {
+                axis_of(m.space, frame_iso.column(0).as_slice())
+            } else {
+                None
+            },
+        });
+    }
+    for body in 0..nb {
+        let k = iso[body].ncols();
+        if body == frame || k == 0 {
+            continue;
+        }
+        isolated_motions.push(IsolatedMotion {
+            kind: "fully".into(),
+            bodies: vec![id(body)],
+            joints: joint_ids(&mut incident[body].iter().copied()),
+            dof: k,
+            axis: if k == 1 {
+                axis_of(m.space, iso[body].column(0).as_slice())
+            } else {
+                None
+            },
+        });
+    }
+    let mut structurally = 0;
+    for c in clusters.values() {
+        if c.len() < 2 || c.contains(&frame) {
+            continue;
+        }
+        let inside: BTreeSet<usize> = c.iter().copied().collect();
+        let boundary: Vec<usize> = (0..pairs.len())
+            .filter(|&pi| inside.contains(&pairs[pi].hub) != inside.contains(&pairs[pi].other))
+            .collect();
+        let rows: usize = boundary
+            .iter()
+            .map(|&pi| models[pairs[pi].joint].rows.nrows())
+            .sum();
+        let mut a = DMatrix::zeros(rows, b);
+        let mut r0 = 0;
+        for &pi in &boundary {
+            let r = &models[pairs[pi].joint].rows;
+            a.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
+            r0 += r.nrows();
+        }
+        let t = if rows == 0 {
+            DMatrix::identity(b, b)
+        } else {
+            small_null(&a, local_rel)
+        };
+        if t.ncols() == 0 {
+            continue;
+        }
+        // Modulo the bodies' own isolated motions.
+        let mut stacked = DMatrix::zeros(b * c.len(), t.ncols());
+        for (i, &body) in c.iter().enumerate() {
+            let pc = &comp[body] * comp[body].transpose() * &t;
+            stacked.view_mut((i * b, 0), (b, t.ncols())).copy_from(&pc);
+        }
+        let k = small_rank(&stacked, zero_tol);
+        if k == 0 {
+            continue;
+        }
+        structurally += k;
+        isolated_motions.push(IsolatedMotion {
+            kind: "structurally".into(),
+            bodies: c.iter().map(|&x| id(x)).collect(),
+            joints: joint_ids(&mut boundary.iter().copied()),
+            dof: k,
+            axis: if k == 1 && t.ncols() == 1 {
+                axis_of(m.space, t.column(0).as_slice())
+            } else {
+                None
+            },
+        });
+    }
+    let isolated = fully + structurally;
+
+    // 5. Loops.
+    let mut gnodes = nb;
+    let mut gedges: Vec<(usize, usize)> = Vec::new();
+    let mut edge_joint: Vec<usize> = Vec::new();
+    let mut node_joint: BTreeMap<usize, usize> = BTreeMap::new();
+    for (ji, j) in m.joints.iter().enumerate() {
+        if j.bodies.len() == 2 {
+            gedges.push((j.bodies[0], j.bodies[1]));
+            edge_joint.push(ji);
+        } else if j.bodies.len() > 2 {
+            let node = gnodes;
+            gnodes += 1;
+            node_joint.insert(node, ji);
+            for &x in &j.bodies {
+                gedges.push((x, node));
+                edge_joint.push(ji);
+            }
+        }
+    }
+    let (loops, loops_note) = match min_cycle_basis(gnodes, &gedges) {
+        None => (
+            Vec::new(),
+            Some(format!(
+                "loop basis not listed: {} independent loops, too many to enumerate",
+                gedges.len() + 1 - gnodes.min(gedges.len() + 1)
+            )),
+        ),
+        Some(cycles) => {
+            let mut out = Vec::new();
+            for cyc in cycles {
+                let seq = walk(&cyc, &gedges);
+                let mut joints: Vec<usize> = Vec::new();
+                for &e in &cyc {
+                    if !joints.contains(&edge_joint[e]) {
+                        joints.push(edge_joint[e]);
+                    }
+                }
+                // Order joints along the walk.
+                let mut ordered: Vec<usize> = Vec::new();
+                for w in seq.windows(2).chain(std::iter::once(
+                    &[*seq.last().unwrap_or(&0), *seq.first().unwrap_or(&0)][..],
+                )) {
+                    if let Some(&e) = cyc.iter().find(|&&e| {
+                        (gedges[e].0 == w[0] && gedges[e].1 == w[1])
+                            || (gedges[e].1 == w[0] && gedges[e].0 == w[1])
+                    }) && !ordered.contains(&edge_joint[e])
+                    {
+                        ordered.push(edge_joint[e]);
+                    }
+                }
+                for j in joints {
+                    if !ordered.contains(&j) {
+                        ordered.push(j);
+                    }
+                }
+                let cols: Vec<DVector<f64>> = ordered
+                    .iter()
+                    .flat_map(|&j| {
+                        full_twists
+                            .get(j)
+                            .map(|t| t.column_iter().map(|c| c.into_owned()).collect::<Vec<_>>())
+                            .unwrap_or_default()
+                    })
+                    .collect();
+                let spatiality = if cols.is_empty() {
+                    0
+                } else {
+                    let mut a = DMatrix::from_columns(&cols);
+                    for mut c in a.column_iter_mut() {
+                        let n = c.norm();
+                        if n > 0.0 {
+                            c /= n;
+                        }
+                    }
+                    small_rank(&a, 1e-8 * cols.len() as f64)
+                };
+                out.push(LoopInfo {
+                    joints: ordered.iter().map(|&j| m.joints[j].id.clone()).collect(),
+                    bodies: seq.iter().filter(|&&x| x < nb).map(|&x| id(x)).collect(),
+                    spatiality,
+                    overconstraint: b.saturating_sub(spatiality),
+                });
+            }
+            (out, None)
+        }
+    };
+    let _ = node_joint;
+
+    // Numeric facts.
+    let rel = |x: f64| if smax > 0.0 { x / smax } else { x };
+    let smallest_kept = elim.kept_min.is_finite().then(|| rel(elim.kept_min));
+    let largest_dropped = (elim.dropped_max > 0.0).then(|| rel(elim.dropped_max));
+    let mut warning = None;
+    if smallest_kept.is_some_and(|k| k < tol * 1e3)
+        || largest_dropped.is_some_and(|x| x > tol / 1e3)
+    {
+        warning = Some(format!(
+            "ill-conditioned: a rank decision lies within a factor 1e3 of the threshold {:.1e} \
+             (smallest kept {:.1e}, largest dropped {:.1e}); the configuration may be near a \
+             singularity",
+            tol,
+            smallest_kept.unwrap_or(f64::NAN),
+            largest_dropped.unwrap_or(0.0)
+        ));
+    }
+    let sig = |x: f64| {
+        if x == 0.0 {
+            0.0
+        } else {
+            let e = x.abs().log10().floor();
+            let f = 10f64.powf(e - 2.0);
+            (x / f).round() * f
+        }
+    };
+
+    GeometricReport {
+        name: m.name.clone(),
+        space: m.space,
+        b: m.b(),
+        frame: id(frame),
+        geometry,
+        geometry_note,
+        bodies: nb,
+        rows: rows_total,
+        columns: b * m.movable(),
+        rank,
+        count,
+        mobility,
+        redundant,
+        redundant_joints,
+        locked,
+        locked_joints,
+        isolated,
+        fully_isolated: fully,
+        structurally_isolated: structurally,
+        isolated_motions,
+        proper_mobility: mobility as i64 - isolated as i64,
+        rigid,
+        loops,
+        loops_note,
+        finite_note: check_finite.then(|| {
+            "finite-mobility check not implemented: results are instantaneous".to_string()
+        }),
+        numeric: Numeric {
+            tolerance: tol,
+            sigma_max: sig(smax),
+            smallest_kept: smallest_kept.map(sig),
+            largest_dropped: largest_dropped.map(sig),
+            warning,
+        },
+    }
+}
