@@ -2,6 +2,7 @@
 //! library types only; nothing here analyses.
 
 pub mod mobility;
+pub mod rigid_pebble;
 pub mod rigid_geometric;
 
 use comfy_table::{LineStyle, Table, TableStyle};
