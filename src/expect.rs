@@ -39,5 +39,54 @@ pub fn evaluate(m: &Mechanism) -> Vec<Outcome> {
             out.push(outcome("inputs", x, r.mobility.inputs));
         }
     }
+    if e.groups.is_some() || e.levels.is_some() || e.determined.is_some() {
+        let a = crate::structure::analyze(
+            m,
+            &crate::structure::Options::default(),
+            &crate::structure::Library::builtin(),
+        );
+        if let Some(x) = e.groups {
+            out.push(outcome("groups", x, a.groups.len() as u64));
+        }
+        if let Some(x) = e.levels {
+            out.push(outcome("levels", x, a.levels as u64));
+        }
+        if let Some(x) = e.determined {
+            let determined = a.status == crate::structure::Status::Determined;
+            out.push(outcome("determined", x, determined));
+        }
+    }
+    if let Some(x) = e.generic_dof {
+        let r = crate::rigidity::pebble::analyze(m, &Default::default());
+        out.push(outcome("generic_dof", x, r.dof));
+    }
+    if e.true_mobility.is_some()
+        || e.isolated.is_some()
+        || e.redundant.is_some()
+        || e.rigid_parts.is_some()
+    {
+        match crate::rigidity::geometric::analyze(m, &Default::default()) {
+            Ok(r) => {
+                if let Some(x) = e.true_mobility {
+                    out.push(outcome("true_mobility", x, r.mobility as i64));
+                }
+                if let Some(x) = e.isolated {
+                    out.push(outcome("isolated", x, r.isolated as u64));
+                }
+                if let Some(x) = e.redundant {
+                    out.push(outcome("redundant", x, r.redundant as u64));
+                }
+                if let Some(x) = e.rigid_parts {
+                    out.push(outcome("rigid_parts", x, r.rigid.len() as u64));
+                }
+            }
+            Err(err) => out.push(Outcome {
+                key: "geometry",
+                expected: "a geometric analysis".into(),
+                actual: err.to_string(),
+                ok: false,
+            }),
+        }
+    }
     out
 }

@@ -1,9 +1,11 @@
 //! Rendering of analysis results as tables, JSON and Graphviz DOT. Works from the serializable
 //! library types only; nothing here analyses.
 
+pub mod dot;
 pub mod mobility;
 pub mod rigid_pebble;
 pub mod rigid_geometric;
+pub mod structure;
 
 use comfy_table::{LineStyle, Table, TableStyle};
 

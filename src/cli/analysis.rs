@@ -1,0 +1,206 @@
+//! `mbsa analyze`, `mbsa dot` and `mbsa rigid`: the analyses over one FILE.
+
+use super::{Failure, FileArg, OutputFormat, emit, load_with_inputs};
+use clap::{Args, ValueEnum};
+use mbsa::report::dot::View;
+use mbsa::rigidity::{geometric, pebble};
+use mbsa::structure::{self, Library, Method};
+
+/// Options of the structural analysis shared by `analyze`, `dot` and `transform`.
+#[derive(Args, Debug, Clone)]
+pub struct StructureArgs {
+    /// Replace the file's driven inputs: joint ids or body pairs, `:n` for n DOF (e.g. `1-2,1-13,13-15`).
+    #[arg(long, value_name = "SPEC")]
+    pub inputs: Option<String>,
+    /// Pure counting, as the paper does: skip the rank check at random joint geometry.
+    #[arg(long)]
+    pub count_only: bool,
+    /// Decomposition algorithm: `flow` (polynomial) or `exhaustive` (the paper's search; exponential, for reference).
+    #[arg(long, value_enum, default_value_t = MethodArg::Flow)]
+    pub method: MethodArg,
+    /// Library of solvable group types: a TOML file `types = ["1R3D", ...]` (default: the built-in library).
+    #[arg(long, value_name = "FILE")]
+    pub library: Option<String>,
+    /// Seed of the random joint geometry used by the rank check.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// `--method` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MethodArg {
+    /// Max flow + strongly connected components.
+    Flow,
+    /// The paper's smallest-first search (exponential).
+    Exhaustive,
+}
+
+impl StructureArgs {
+    /// The library options resolve to.
+    pub fn library(&self) -> Result<Library, Failure> {
+        match &self.library {
+            None => Ok(Library::builtin()),
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|e| {
+                    Failure::Input(format!("error: cannot read library `{path}`: {e}"))
+                })?;
+                Library::from_toml(&text)
+                    .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(path, &e)))
+            }
+        }
+    }
+
+    /// The analysis options.
+    pub fn options(&self) -> structure::Options {
+        structure::Options {
+            count_only: self.count_only,
+            method: match self.method {
+                MethodArg::Flow => Method::Flow,
+                MethodArg::Exhaustive => Method::Exhaustive,
+            },
+            seed: self.seed,
+        }
+    }
+}
+
+/// `mbsa analyze`.
+pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Result<(), Failure> {
+    let m = load_with_inputs(file, args.inputs.as_deref())?;
+    let lib = args.library()?;
+    let a = structure::analyze(&m, &args.options(), &lib);
+    emit(&match format {
+        OutputFormat::Table => mbsa::report::structure::table(&a),
+        OutputFormat::Json => mbsa::report::json(&a),
+    })
+}
+
+/// `--view` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ViewArg {
+    /// The structural diagram: one node per structural group, one row per level.
+    Diagram,
+    /// The structural graph: bodies clustered by group, edges in the direction DOF pass.
+    Structure,
+    /// The topological graph: bodies and joints.
+    Topology,
+}
+
+/// `mbsa dot`.
+pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Failure> {
+    let m = load_with_inputs(file, args.inputs.as_deref())?;
+    let lib = args.library()?;
+    let a = structure::analyze(&m, &args.options(), &lib);
+    let view = match view {
+        ViewArg::Diagram => View::Diagram,
+        ViewArg::Structure => View::Structure,
+        ViewArg::Topology => View::Topology,
+    };
+    emit(&mbsa::report::dot::render(view, &m, &a))
+}
+
+/// Which rigidity analyses `mbsa rigid` runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum RigidMethod {
+    /// Counting (pebble game) and geometry (constraint Jacobian rank).
+    Both,
+    /// Counting only: generic rigidity from the topology (pebble game).
+    Counting,
+    /// Geometry only: true mobility, redundant constraints, isolated DOF.
+    Geometric,
+}
+
+/// Options of `mbsa rigid`.
+#[derive(Args, Debug, Clone)]
+pub struct RigidArgs {
+    /// Which analyses to run.
+    #[arg(long, value_enum, default_value_t = RigidMethod::Both)]
+    pub method: RigidMethod,
+    /// Count driven inputs as constraints (default: analyse the chain alone).
+    #[arg(long)]
+    pub with_inputs: bool,
+    /// Geometry for the geometric analysis: `auto` (the file's when every joint has it, else
+    /// random), `file`, or `random` (a seeded generic realization of the joint types).
+    #[arg(long, value_enum, default_value_t = GeometryArg::Auto)]
+    pub geometry: GeometryArg,
+    /// Seed of the random realization.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Replace the file's driven inputs (with `--with-inputs`).
+    #[arg(long, value_name = "SPEC")]
+    pub inputs: Option<String>,
+}
+
+/// `--geometry` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GeometryArg {
+    /// The file's geometry when every joint has its fields, else a random realization.
+    Auto,
+    /// The file's geometry (an error names a joint lacking a field).
+    File,
+    /// A random generic realization of the joint types.
+    Random,
+}
+
+/// Both rigidity reports, for `--format json` with `--method both`.
+#[derive(serde::Serialize)]
+struct Both<'a> {
+    counting: &'a pebble::PebbleReport,
+    geometric: &'a geometric::GeometricReport,
+}
+
+/// `mbsa rigid`.
+pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(), Failure> {
+    let mut m = load_with_inputs(file, args.inputs.as_deref())?;
+    if !args.with_inputs {
+        for j in &mut m.joints {
+            j.driven = 0;
+        }
+    }
+    let counting = matches!(args.method, RigidMethod::Both | RigidMethod::Counting).then(|| {
+        pebble::analyze(
+            &m,
+            &pebble::PebbleOptions {
+                with_inputs: args.with_inputs,
+            },
+        )
+    });
+    let geometric = if matches!(args.method, RigidMethod::Both | RigidMethod::Geometric) {
+        let source = match args.geometry {
+            GeometryArg::Auto if args.seed == 0 => geometric::GeometrySource::Auto,
+            GeometryArg::Auto | GeometryArg::Random => {
+                geometric::GeometrySource::Random { seed: args.seed }
+            }
+            GeometryArg::File => geometric::GeometrySource::File,
+        };
+        let opts = geometric::GeometricOptions {
+            geometry: source,
+            check_finite: false,
+        };
+        Some(
+            geometric::analyze(&m, &opts)
+                .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e)))?,
+        )
+    } else {
+        None
+    };
+    let text = match (format, &counting, &geometric) {
+        (OutputFormat::Json, Some(c), Some(g)) => mbsa::report::json(&Both {
+            counting: c,
+            geometric: g,
+        }),
+        (OutputFormat::Json, Some(c), None) => mbsa::report::json(c),
+        (OutputFormat::Json, None, Some(g)) => mbsa::report::json(g),
+        (OutputFormat::Table, c, g) => {
+            let mut parts = Vec::new();
+            if let Some(c) = c {
+                parts.push(format!("Counting (pebble game, topology only)\n\n{}", mbsa::report::rigid_pebble::table(c)));
+            }
+            if let Some(g) = g {
+                parts.push(format!("Geometry (constraint Jacobian)\n\n{}", mbsa::report::rigid_geometric::table(g)));
+            }
+            parts.join("\n")
+        }
+        (OutputFormat::Json, None, None) => String::new(),
+    };
+    emit(&text)
+}

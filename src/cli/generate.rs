@@ -1,0 +1,86 @@
+//! `mbsa generate`: reproducible mechanism files for benchmarks and tests.
+
+use super::{Failure, emit};
+use clap::{Subcommand, ValueEnum};
+use mbsa::generate::{self, Variant};
+
+/// Generator families.
+#[derive(Subcommand, Debug)]
+pub enum Family {
+    /// Planar Assur-group linkage (the paper's Table 16 family, docs/benchmarks.md).
+    ///
+    /// A driven crank plus N groups of class 1 (dyad), 2 (triad) or 3 (hexagon) attached at
+    /// random to earlier bodies; 2 + 2·class·N bodies. Seed 364 gives Table 16's counts.
+    #[command(after_help = "Example:\n  mbsa generate assur --class 3 --groups 4 --variant B --seed 364 > iii-4b.toml")]
+    Assur {
+        /// Assur class: 1, 2 or 3.
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3))]
+        class: u32,
+        /// Number of groups.
+        #[arg(long)]
+        groups: u64,
+        /// A: the crank is driven; B: the joint between the two last bodies is driven.
+        #[arg(long, value_enum, ignore_case = true, default_value_t = VariantArg::A)]
+        variant: VariantArg,
+        /// Random seed (SplitMix64).
+        #[arg(long, default_value_t = 364)]
+        seed: u64,
+    },
+    /// Random count-determined mechanism with mixed joint types.
+    #[command(after_help = "Example:\n  mbsa generate random --bodies 100000 --planar --seed 1 > big.toml")]
+    Random {
+        /// Number of bodies, the frame included.
+        #[arg(long)]
+        bodies: u64,
+        /// Planar (B = 3) instead of spatial.
+        #[arg(long)]
+        planar: bool,
+        /// Random seed (SplitMix64).
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+    },
+    /// Stewart platforms stacked on U-P-S legs (spatial; 13 bodies per stage, one group each).
+    #[command(after_help = "Example:\n  mbsa generate stewart --stages 1000 > tower.toml")]
+    Stewart {
+        /// Number of stacked platforms.
+        #[arg(long)]
+        stages: u64,
+    },
+}
+
+/// `--variant` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum VariantArg {
+    /// Crank driven.
+    #[value(name = "A")]
+    A,
+    /// Last pair driven.
+    #[value(name = "B")]
+    B,
+}
+
+/// Run a generator and print the TOML file.
+pub fn run(family: &Family) -> Result<(), Failure> {
+    let m = match *family {
+        Family::Assur {
+            class,
+            groups,
+            variant,
+            seed,
+        } => {
+            let v = match variant {
+                VariantArg::A => Variant::A,
+                VariantArg::B => Variant::B,
+            };
+            generate::assur(class, groups, seed, v)
+        }
+        Family::Random {
+            bodies,
+            planar,
+            seed,
+        } => generate::random(bodies, planar, seed).map(|(m, _)| m),
+        Family::Stewart { stages } => generate::stewart_stack(stages),
+    }
+    .map_err(|e| Failure::Input(format!("error: {e}")))?;
+    emit(&generate::to_toml(&m))
+}

@@ -1,0 +1,300 @@
+//! Graphviz DOT views of a mechanism and its kinematic structure.
+//!
+//! Every id and label goes through [`quote`], so names with spaces, quotes, backslashes or
+//! non-ASCII characters stay valid DOT. Output order follows the model's stable order.
+
+use crate::mechanism::Mechanism;
+use crate::structure::Analysis;
+use std::collections::{BTreeMap, BTreeSet};
+use std::fmt::Write;
+
+/// The views `mbsa dot` can draw.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum View {
+    /// The paper's structural diagram: one node per structural group, one row per level.
+    #[default]
+    Diagram,
+    /// The structural graph: bodies clustered by group, edges in the direction DOF pass.
+    Structure,
+    /// The topological graph: bodies and joints.
+    Topology,
+}
+
+/// Fill colours that mark parts the analysis could not determine (shared by every view).
+const OVER_COLOUR: &str = "#f4a6a6";
+const UNDER_COLOUR: &str = "#f9d68a";
+const UNCOVERED_COLOUR: &str = "#fff3c4";
+
+/// Draw `view` of `m` with its analysis `a`.
+pub fn render(view: View, m: &Mechanism, a: &Analysis) -> String {
+    match view {
+        View::Diagram => diagram(a),
+        View::Structure => structure(m, a),
+        View::Topology => topology(m),
+    }
+}
+
+/// Node name of group `i`.
+fn sg_node(i: usize) -> String {
+    format!("g{i}")
+}
+
+/// Bodies of the over- and under-determined parts, if any.
+fn troubled(a: &Analysis) -> (BTreeSet<&str>, BTreeSet<&str>) {
+    let mut over = BTreeSet::new();
+    let mut under = BTreeSet::new();
+    if let Some(d) = &a.diagnosis {
+        if let Some(o) = &d.overdetermined {
+            over.extend(o.bodies.iter().map(String::as_str));
+        }
+        if let Some(u) = &d.underdetermined {
+            under.extend(u.bodies.iter().map(String::as_str));
+        }
+    }
+    (over, under)
+}
+
+fn legend(out: &mut String, a: &Analysis, over: bool, under: bool) {
+    let mut rows = Vec::new();
+    if over {
+        rows.push(format!("<tr><td bgcolor=\"{OVER_COLOUR}\">  </td><td align=\"left\">over-determined part</td></tr>"));
+    }
+    if under {
+        rows.push(format!("<tr><td bgcolor=\"{UNDER_COLOUR}\">  </td><td align=\"left\">under-determined part</td></tr>"));
+    }
+    if a.groups.iter().any(|g| !g.in_library) {
+        rows.push(format!("<tr><td bgcolor=\"{UNCOVERED_COLOUR}\">  </td><td align=\"left\">type not in library ({})</td></tr>", html(&a.library)));
+    }
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        out,
+        "  legend [shape=plaintext, label=<<table border=\"0\" cellborder=\"1\" cellspacing=\"0\" cellpadding=\"3\">{}</table>>];",
+        rows.join("")
+    );
+}
+
+/// Escape text for a Graphviz HTML-like label.
+fn html(s: &str) -> String {
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// The structural diagram (paper Fig. 8g, 13b): the frame as node 0, one node per group with
+/// its name, bodies, (Nm, nc) = (bodies, driven inputs) and type, arrows from the groups it
+/// depends on, and one `rank=same` row per level.
+pub fn diagram(a: &Analysis) -> String {
+    let mut out = String::new();
+    header(&mut out, &format!("{}: structural diagram", a.name), "TB");
+    let _ = writeln!(out, "  frame [label=\"0\\nframe\", shape=doublecircle, style=filled, fillcolor=\"#dddddd\"];");
+    let mut by_level: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for (i, g) in a.groups.iter().enumerate() {
+        by_level.entry(g.level).or_default().push(i);
+        let label = format!(
+            "{} {{{}}}\n({}, {})\n{}",
+            g.name,
+            g.bodies.join(","),
+            g.nm,
+            g.inputs,
+            g.kind
+        );
+        let fill = if g.in_library { "white" } else { UNCOVERED_COLOUR };
+        let _ = writeln!(out, "  {} [label={}, shape=ellipse, style=filled, fillcolor={}];", sg_node(i), quote(&label), quote(fill));
+    }
+    let (over, under) = troubled(a);
+    for (name, bodies, colour) in [("over-determined", &over, OVER_COLOUR), ("under-determined", &under, UNDER_COLOUR)] {
+        if !bodies.is_empty() {
+            let list: Vec<&str> = bodies.iter().copied().collect();
+            let label = format!("{name}\n{{{}}}", list.join(","));
+            let _ = writeln!(out, "  {} [label={}, shape=box, style=\"filled,dashed\", fillcolor={}];", quote(name), quote(&label), quote(colour));
+        }
+    }
+    for (i, g) in a.groups.iter().enumerate() {
+        if g.depends_on.is_empty() {
+            let _ = writeln!(out, "  frame -> {};", sg_node(i));
+        }
+        for &d in &g.depends_on {
+            let _ = writeln!(out, "  {} -> {};", sg_node(d), sg_node(i));
+        }
+    }
+    let _ = writeln!(out, "  {{ rank=same; frame; }}");
+    for (level, groups) in &by_level {
+        let nodes: Vec<String> = groups.iter().map(|&i| sg_node(i)).collect();
+        let _ = writeln!(out, "  {{ rank=same; {}; }}  // level {level}", nodes.join("; "));
+    }
+    legend(&mut out, a, !over.is_empty(), !under.is_empty());
+    out.push_str("}\n");
+    out
+}
+
+/// The structural graph (paper Fig. 13b, 14a): bodies inside one cluster per group, edges
+/// directed from the side solved first to the side that receives the DOF (undirected inside
+/// a group), driven joints bold, levels from top to bottom.
+pub fn structure(m: &Mechanism, a: &Analysis) -> String {
+    let mut out = String::new();
+    header(&mut out, &format!("{}: structural graph", m.name), "TB");
+    let (over, under) = troubled(a);
+    // Body id -> group index; the frame and unsolved bodies have none.
+    let mut group_of: BTreeMap<&str, usize> = BTreeMap::new();
+    for (i, g) in a.groups.iter().enumerate() {
+        for b in &g.bodies {
+            group_of.insert(b.as_str(), i);
+        }
+    }
+    let ids: Vec<String> = m.bodies.iter().map(|b| b.id.to_string()).collect();
+    let body_attrs = |i: usize| -> String {
+        let id = ids[i].as_str();
+        let fill = if i == m.frame {
+            "#dddddd"
+        } else if over.contains(id) {
+            OVER_COLOUR
+        } else if under.contains(id) {
+            UNDER_COLOUR
+        } else {
+            "white"
+        };
+        let shape = if i == m.frame { "box" } else { "circle" };
+        format!("label={}, shape={shape}, style=filled, fillcolor={}", quote(id), quote(fill))
+    };
+    let _ = writeln!(out, "  {} [{}];", body_node(m.frame), body_attrs(m.frame));
+    for (gi, g) in a.groups.iter().enumerate() {
+        let _ = writeln!(out, "  subgraph cluster_{gi} {{");
+        let _ = writeln!(out, "    label={}; style=dashed;", quote(&format!("{} (level {}) {}", g.name, g.level, g.kind)));
+        for (i, id) in ids.iter().enumerate() {
+            if group_of.get(id.as_str()) == Some(&gi) {
+                let _ = writeln!(out, "    {} [{}];", body_node(i), body_attrs(i));
+            }
+        }
+        out.push_str("  }\n");
+    }
+    for (i, id) in ids.iter().enumerate() {
+        if i != m.frame && !group_of.contains_key(id.as_str()) {
+            let _ = writeln!(out, "  {} [{}];", body_node(i), body_attrs(i));
+        }
+    }
+    // Solve order of a body: 0 for the frame, group level otherwise, unsolved last.
+    let order = |i: usize| -> (usize, usize) {
+        if i == m.frame {
+            return (0, 0);
+        }
+        match group_of.get(ids[i].as_str()) {
+            Some(&g) => (a.groups[g].level, g + 1),
+            None => (usize::MAX, usize::MAX),
+        }
+    };
+    for j in &m.joints {
+        let hub = j.bodies[0];
+        for &other in &j.bodies[1..] {
+            let (x, y) = if order(hub) <= order(other) { (hub, other) } else { (other, hub) };
+            let same = order(x).1 == order(y).1;
+            let mut attrs = vec![format!("label={}", quote(&format!("{} {}", j.id, j.kind.code())))];
+            if same {
+                attrs.push("dir=none".into());
+            }
+            if j.driven > 0 {
+                attrs.push(format!("style=bold, penwidth=2.5, xlabel={}", quote(&format!("driven {}", j.driven))));
+            }
+            let _ = writeln!(out, "  {} -> {} [{}];", body_node(x), body_node(y), attrs.join(", "));
+        }
+    }
+    legend(&mut out, a, !over.is_empty(), !under.is_empty());
+    out.push_str("}\n");
+    out
+}
+
+/// A DOT string literal: `"..."` with `"` and `\` escaped and newlines as `\n`.
+pub fn quote(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => {}
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// Graph header shared by all views.
+pub(crate) fn header(out: &mut String, name: &str, rankdir: &str) {
+    let _ = writeln!(out, "digraph {} {{", quote(name));
+    let _ = writeln!(out, "  graph [rankdir={rankdir}, newrank=true, fontname=\"Helvetica\", label={}, labelloc=t];", quote(name));
+    let _ = writeln!(out, "  node [fontname=\"Helvetica\", fontsize=11];");
+    let _ = writeln!(out, "  edge [fontname=\"Helvetica\", fontsize=9];");
+}
+
+/// Node name of body `i` (stable, independent of the id's spelling).
+pub(crate) fn body_node(i: usize) -> String {
+    format!("b{i}")
+}
+
+/// The topological graph: bodies as nodes (the frame as a grey box), one edge per binary
+/// pair labelled with the joint id and type, driven joints bold with their driven DOF, and a
+/// small hub node for each multiple joint.
+pub fn topology(m: &Mechanism) -> String {
+    let mut out = String::new();
+    header(&mut out, &format!("{}: topology", m.name), "TB");
+    let _ = writeln!(out, "  edge [dir=none];");
+    for (i, b) in m.bodies.iter().enumerate() {
+        let label = match &b.label {
+            Some(l) => format!("{}\n{}", b.id, l),
+            None => b.id.to_string(),
+        };
+        if i == m.frame {
+            let _ = writeln!(
+                out,
+                "  {} [label={}, shape=box, style=filled, fillcolor=\"#dddddd\"];",
+                body_node(i),
+                quote(&format!("{label}\n(frame)"))
+            );
+        } else {
+            let _ = writeln!(out, "  {} [label={}, shape=ellipse];", body_node(i), quote(&label));
+        }
+    }
+    for (ji, j) in m.joints.iter().enumerate() {
+        let mut label = format!("{} {}", j.id, j.kind.code());
+        if j.driven > 0 {
+            label.push_str(&format!("\ndriven {}", j.driven));
+        }
+        let style = if j.driven > 0 { ", style=bold, penwidth=2.5" } else { "" };
+        if j.bodies.len() == 2 {
+            let _ = writeln!(
+                out,
+                "  {} -> {} [label={}{style}];",
+                body_node(j.bodies[0]),
+                body_node(j.bodies[1]),
+                quote(&label)
+            );
+        } else {
+            let hub = format!("j{ji}");
+            let _ = writeln!(
+                out,
+                "  {hub} [label={}, shape=circle, width=0.15, fixedsize=false, fontsize=8];",
+                quote(&label)
+            );
+            for &b in &j.bodies {
+                let _ = writeln!(out, "  {hub} -> {} [{}];", body_node(b), style.trim_start_matches(", "));
+            }
+        }
+    }
+    out.push_str("}\n");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn quotes_everything_dangerous() {
+        assert_eq!(quote("a b"), "\"a b\"");
+        assert_eq!(quote("say \"hi\""), "\"say \\\"hi\\\"\"");
+        assert_eq!(quote("back\\slash"), "\"back\\\\slash\"");
+        assert_eq!(quote("two\nlines"), "\"two\\nlines\"");
+        assert_eq!(quote("rotor ü"), "\"rotor ü\"");
+    }
+}

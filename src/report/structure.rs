@@ -1,0 +1,101 @@
+//! The structural analysis as tables for people, in the layout of the paper's Table 8 (groups)
+//! and Table 9 (types against the library), followed by the findings.
+
+use crate::structure::{Analysis, Status};
+use std::fmt::Write;
+
+fn dash(s: &str) -> String {
+    if s.is_empty() {
+        "-".into()
+    } else {
+        s.to_string()
+    }
+}
+
+/// Render the analysis.
+pub fn table(a: &Analysis) -> String {
+    let mut out = String::new();
+    let status = match a.status {
+        Status::Determined => "determined",
+        Status::Overdetermined => "over-determined",
+        Status::Underdetermined => "under-determined",
+        Status::Mixed => "not determined (over- and under-determined parts)",
+    };
+    let _ = writeln!(
+        out,
+        "{}: {} structural group(s) on {} level(s); mobility {}, inputs {}; {}{}",
+        a.name,
+        a.groups.len(),
+        a.levels,
+        a.mobility.count,
+        a.mobility.inputs,
+        status,
+        if a.count_only { " (count only)" } else { "" }
+    );
+    if !a.groups.is_empty() {
+        let mut t = super::new_table();
+        t.set_header(vec![
+            "SG", "bodies", "Nm", "inputs", "level", "type", "from", "internal", "to",
+        ]);
+        for g in &a.groups {
+            t.add_row(vec![
+                g.name.clone(),
+                g.bodies.join(","),
+                g.nm.to_string(),
+                g.inputs.to_string(),
+                g.level.to_string(),
+                g.kind.clone(),
+                dash(&g.from),
+                dash(&g.internal),
+                dash(&g.to),
+            ]);
+        }
+        let _ = writeln!(out, "{t}");
+        let mut t = super::new_table();
+        t.set_header(vec![
+            "SG type".to_string(),
+            "SGs".to_string(),
+            format!("in library ({})", a.library),
+        ]);
+        for ty in &a.types {
+            t.add_row(vec![
+                ty.kind.clone(),
+                ty.count.to_string(),
+                if ty.in_library { "yes" } else { "no" }.to_string(),
+            ]);
+        }
+        let _ = writeln!(out, "{t}");
+    }
+    if !a.isolated.is_empty() {
+        let list: Vec<String> = a
+            .isolated
+            .iter()
+            .map(|i| format!("{} ({})", i.body, i.dimension))
+            .collect();
+        let _ = writeln!(
+            out,
+            "isolated freedoms (no input can drive them, left out): {}",
+            list.join(", ")
+        );
+    }
+    if let Some(d) = &a.diagnosis {
+        if !d.unsolved.is_empty() {
+            let _ = writeln!(out, "bodies left unsolved: {}", d.unsolved.join(", "));
+        }
+        for n in &d.notes {
+            let _ = writeln!(out, "- {n}");
+        }
+    } else {
+        for r in &a.redundant {
+            let _ = writeln!(
+                out,
+                "- group {{{}}}: joints {} carry {} redundant equation(s); {}",
+                r.bodies.join(", "),
+                r.joints.join(", "),
+                r.count,
+                r.freedom
+            );
+        }
+    }
+    out
+}

@@ -1,0 +1,399 @@
+//! The count decomposition: maximum flow from joint equations to body unknowns, the
+//! Dulmage–Mendelsohn split of the residual graph, and the strongly connected components of
+//! the well-determined part (the structural groups) with their levels.
+
+use super::flow::{INF, Network};
+use crate::mechanism::Mechanism;
+
+/// The equation nodes: one per binary pair (a multiple joint of n bodies gives n − 1 pairs,
+/// hub first), each carrying `B − k` constraint equations plus its share of the driven DOF.
+#[derive(Clone, Debug)]
+pub(crate) struct Equations {
+    /// Joint index of each pair.
+    pub joint: Vec<usize>,
+    /// Hub body index.
+    pub hub: Vec<usize>,
+    /// Other body index.
+    pub other: Vec<usize>,
+    /// Number of equations (after any lowering by the rank check).
+    pub cap: Vec<u32>,
+    /// Driven DOF carried by this pair.
+    pub driven: Vec<u32>,
+}
+
+impl Equations {
+    /// The pairs of `m`. A multiple joint's driven DOF fill its pairs in order, at most `k` each.
+    pub fn of(m: &Mechanism) -> Equations {
+        let b = m.b();
+        let mut e = Equations {
+            joint: Vec::new(),
+            hub: Vec::new(),
+            other: Vec::new(),
+            cap: Vec::new(),
+            driven: Vec::new(),
+        };
+        for (ji, j) in m.joints.iter().enumerate() {
+            let k = j.grade();
+            let mut left = j.driven;
+            let Some((&hub, others)) = j.bodies.split_first() else {
+                continue;
+            };
+            let n = others.len();
+            for (p, &o) in others.iter().enumerate() {
+                // The last pair takes whatever is left so no driven DOF is lost.
+                let share = if p + 1 == n { left } else { left.min(k) };
+                left -= share;
+                e.joint.push(ji);
+                e.hub.push(hub);
+                e.other.push(o);
+                e.cap.push(b.saturating_sub(k) + share);
+                e.driven.push(share);
+            }
+        }
+        e
+    }
+
+    /// Number of pairs.
+    pub fn len(&self) -> usize {
+        self.joint.len()
+    }
+
+    /// The two bodies of pair `e`.
+    pub fn bodies(&self, e: usize) -> [usize; 2] {
+        [self.hub[e], self.other[e]]
+    }
+}
+
+/// Where a body or equation ended up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Part {
+    /// The fixed frame (bodies only).
+    Frame,
+    /// The over-determined part.
+    Over,
+    /// A well-determined structural group (index in canonical order).
+    Group(usize),
+    /// The under-determined part.
+    Under,
+}
+
+/// A structural group before rendering.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) struct RawGroup {
+    /// Body indices, ascending.
+    pub bodies: Vec<usize>,
+    /// Solve level (1 = depends on the frame only).
+    pub level: usize,
+    /// Groups it depends on (canonical indices, ascending).
+    pub deps: Vec<usize>,
+}
+
+/// The result of the count decomposition.
+#[derive(Clone, Debug)]
+pub(crate) struct Decomposition {
+    /// Part of each body.
+    pub body_part: Vec<Part>,
+    /// Part of each equation node.
+    pub eq_part: Vec<Part>,
+    /// Groups in canonical order.
+    pub groups: Vec<RawGroup>,
+    /// Unsaturated equations per node (`cap − flow`).
+    pub eq_excess: Vec<u32>,
+    /// Missing DOF per body (`u_b − flow`).
+    pub body_missing: Vec<u32>,
+}
+
+/// Decompose `m` with equation counts `eqs.cap` and body unknown counts `u` (per body index).
+pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposition {
+    let ne = eqs.len();
+    let nb = m.bodies.len();
+    let (src, sink) = (0usize, 1usize);
+    let eq_node = |e: usize| 2 + e;
+    let body_node = |b: usize| 2 + ne + b;
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * ne + nb);
+    for e in 0..ne {
+        edges.push((src as u32, eq_node(e) as u32, eqs.cap[e]));
+        let [h, o] = eqs.bodies(e);
+        if h != m.frame {
+            edges.push((eq_node(e) as u32, body_node(h) as u32, INF));
+        }
+        if o != m.frame && o != h {
+            edges.push((eq_node(e) as u32, body_node(o) as u32, INF));
+        }
+    }
+    for (b, &ub) in u.iter().enumerate().take(nb) {
+        if b != m.frame {
+            edges.push((body_node(b) as u32, sink as u32, ub));
+        }
+    }
+    let mut net = Network::new(2 + ne + nb, &edges);
+    net.max_flow(src, sink);
+
+    // Read the flow back.
+    let mut flow = vec![[0u32; 2]; ne];
+    let mut eq_excess = vec![0u32; ne];
+    for (e, f) in flow.iter_mut().enumerate() {
+        let [h, o] = eqs.bodies(e);
+        for a in net.edges(eq_node(e)) {
+            let v = net.head(a);
+            if v == src {
+                // Reverse of source edge: its residual is the flow in.
+                eq_excess[e] = eqs.cap[e] - net.residual(a).min(eqs.cap[e]);
+            } else if v == body_node(h) && h != m.frame {
+                f[0] = net.reverse_residual(a);
+            } else if v == body_node(o) {
+                f[1] = net.reverse_residual(a);
+            }
+        }
+    }
+    let mut body_missing = vec![0u32; nb];
+    for (b, miss) in body_missing.iter_mut().enumerate() {
+        if b == m.frame {
+            continue;
+        }
+        for a in net.edges(body_node(b)) {
+            if net.head(a) == sink {
+                *miss = net.residual(a);
+            }
+        }
+    }
+
+    // Dulmage–Mendelsohn: reachable from the source = over-determined, reaching the sink =
+    // under-determined, the rest is perfectly matched within itself.
+    let from_src = net.reachable_from(src);
+    let to_sink = net.reaching(sink);
+    let classify = |node: usize| {
+        if from_src[node] {
+            Part::Over
+        } else if to_sink[node] {
+            Part::Under
+        } else {
+            Part::Group(usize::MAX)
+        }
+    };
+    let mut body_part: Vec<Part> = (0..nb).map(|b| classify(body_node(b))).collect();
+    body_part[m.frame] = Part::Frame;
+    let mut eq_part: Vec<Part> = (0..ne).map(|e| classify(eq_node(e))).collect();
+    drop(net);
+
+    // Dependency graph among well-determined bodies: b depends on a when an equation that
+    // flows into b also touches a.
+    let well = |b: usize, parts: &[Part]| matches!(parts[b], Part::Group(_));
+    let mut deg = vec![0usize; nb + 1];
+    let mut dep_edges: Vec<(usize, usize)> = Vec::new();
+    for e in 0..ne {
+        if !matches!(eq_part[e], Part::Group(_)) {
+            continue;
+        }
+        let bs = eqs.bodies(e);
+        for (i, &x) in bs.iter().enumerate() {
+            if flow[e][i] == 0 || !well(x, &body_part) {
+                continue;
+            }
+            let y = bs[1 - i];
+            if y != x && well(y, &body_part) {
+                dep_edges.push((x, y));
+                deg[x + 1] += 1;
+            }
+        }
+    }
+    for i in 0..nb {
+        deg[i + 1] += deg[i];
+    }
+    let mut fill = deg.clone();
+    let mut adj = vec![0u32; dep_edges.len()];
+    for &(x, y) in &dep_edges {
+        adj[fill[x]] = y as u32;
+        fill[x] += 1;
+    }
+    let active: Vec<bool> = (0..nb).map(|b| well(b, &body_part)).collect();
+    let sccs = tarjan(&deg, &adj, &active);
+
+    // Tarjan emits dependencies first, so levels can be assigned in emission order.
+    let mut comp = vec![usize::MAX; nb];
+    for (c, s) in sccs.iter().enumerate() {
+        for &b in s {
+            comp[b] = c;
+        }
+    }
+    let mut level = vec![1usize; sccs.len()];
+    let mut cdeps: Vec<Vec<usize>> = vec![Vec::new(); sccs.len()];
+    for (c, s) in sccs.iter().enumerate() {
+        let mut lv = 1;
+        for &b in s {
+            for &y in &adj[deg[b]..deg[b + 1]] {
+                let d = comp[y as usize];
+                if d != c {
+                    lv = lv.max(level[d] + 1);
+                    cdeps[c].push(d);
+                }
+            }
+        }
+        level[c] = lv;
+    }
+    let groups = canonical(sccs, level, cdeps);
+    for (g, grp) in groups.iter().enumerate() {
+        for &b in &grp.bodies {
+            body_part[b] = Part::Group(g);
+        }
+    }
+    for e in 0..ne {
+        if matches!(eq_part[e], Part::Group(_)) {
+            let bs = eqs.bodies(e);
+            let receiving = if flow[e][0] > 0 {
+                Some(bs[0])
+            } else if flow[e][1] > 0 {
+                Some(bs[1])
+            } else {
+                None
+            };
+            eq_part[e] = match receiving.map(|b| body_part[b]) {
+                Some(Part::Group(g)) => Part::Group(g),
+                // No flow (a pair with zero equations): it belongs to the later of its groups.
+                _ => {
+                    let g = bs
+                        .iter()
+                        .filter_map(|&b| match body_part[b] {
+                            Part::Group(g) => Some(g),
+                            _ => None,
+                        })
+                        .max();
+                    match g {
+                        Some(g) => Part::Group(g),
+                        None if bs.iter().any(|&b| body_part[b] == Part::Over) => Part::Over,
+                        None => Part::Frame,
+                    }
+                }
+            };
+        }
+    }
+    Decomposition {
+        body_part,
+        eq_part,
+        groups,
+        eq_excess,
+        body_missing,
+    }
+}
+
+/// Sort components into canonical order (level, size, smallest body) and renumber dependencies.
+pub(crate) fn canonical(
+    comps: Vec<Vec<usize>>,
+    level: Vec<usize>,
+    deps: Vec<Vec<usize>>,
+) -> Vec<RawGroup> {
+    let mut order: Vec<usize> = (0..comps.len()).collect();
+    let mut comps: Vec<Vec<usize>> = comps
+        .into_iter()
+        .map(|mut c| {
+            c.sort_unstable();
+            c
+        })
+        .collect();
+    order.sort_by_key(|&c| (level[c], comps[c].len(), comps[c].first().copied()));
+    let mut rank = vec![0usize; comps.len()];
+    for (r, &c) in order.iter().enumerate() {
+        rank[c] = r;
+    }
+    order
+        .iter()
+        .map(|&c| {
+            let mut d: Vec<usize> = deps[c].iter().map(|&x| rank[x]).collect();
+            d.sort_unstable();
+            d.dedup();
+            RawGroup {
+                bodies: std::mem::take(&mut comps[c]),
+                level: level[c],
+                deps: d,
+            }
+        })
+        .collect()
+}
+
+/// Iterative Tarjan SCC over the nodes with `active` set, CSR adjacency `adj[start[v]..start[v+1]]`.
+/// Components come out in reverse topological order (a component after everything it reaches).
+pub(crate) fn tarjan(start: &[usize], adj: &[u32], active: &[bool]) -> Vec<Vec<usize>> {
+    let n = active.len();
+    const UNSEEN: usize = usize::MAX;
+    let mut index = vec![UNSEEN; n];
+    let mut low = vec![0usize; n];
+    let mut on_stack = vec![false; n];
+    let mut stack: Vec<usize> = Vec::new();
+    let mut call: Vec<(usize, usize)> = Vec::new();
+    let mut next = 0usize;
+    let mut out = Vec::new();
+    for root in 0..n {
+        if !active[root] || index[root] != UNSEEN {
+            continue;
+        }
+        index[root] = next;
+        low[root] = next;
+        next += 1;
+        stack.push(root);
+        on_stack[root] = true;
+        call.push((root, start[root]));
+        while let Some(top) = call.last_mut() {
+            let v = top.0;
+            if top.1 < start[v + 1] {
+                let w = adj[top.1] as usize;
+                top.1 += 1;
+                if !active[w] {
+                    continue;
+                }
+                if index[w] == UNSEEN {
+                    index[w] = next;
+                    low[w] = next;
+                    next += 1;
+                    stack.push(w);
+                    on_stack[w] = true;
+                    call.push((w, start[w]));
+                } else if on_stack[w] {
+                    low[v] = low[v].min(index[w]);
+                }
+            } else {
+                call.pop();
+                if let Some(&(p, _)) = call.last() {
+                    low[p] = low[p].min(low[v]);
+                }
+                if low[v] == index[v] {
+                    let mut comp = Vec::new();
+                    loop {
+                        let w = stack.pop().expect("v is still on the stack");
+                        on_stack[w] = false;
+                        comp.push(w);
+                        if w == v {
+                            break;
+                        }
+                    }
+                    out.push(comp);
+                }
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tarjan_finds_cycles_dependencies_first() {
+        // 0 -> 1 -> 2 -> 1, 3 isolated.
+        let start = [0, 1, 2, 3, 3];
+        let adj = [1u32, 2, 1];
+        let sccs = tarjan(&start, &adj, &[true; 4]);
+        let mut sorted: Vec<Vec<usize>> = sccs
+            .iter()
+            .map(|c| {
+                let mut c = c.clone();
+                c.sort();
+                c
+            })
+            .collect();
+        assert_eq!(sorted[0], vec![1, 2]);
+        assert_eq!(sorted[1], vec![0]);
+        sorted.sort();
+        assert_eq!(sorted, vec![vec![0], vec![1, 2], vec![3]]);
+    }
+}
