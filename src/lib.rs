@@ -20,6 +20,7 @@ pub mod report;
 pub mod rng;
 pub mod rigidity;
 pub mod structure;
+pub mod transform;
 
 pub use joint::JointType;
 pub use mechanism::{Body, BodyId, Geometry, InputSpec, Joint, JointSpec, Mechanism, Space};

@@ -523,7 +523,7 @@ mod tests {
 
     #[test]
     fn body_ids_sort_numbers_first() {
-        let mut ids = vec![
+        let mut ids = [
             BodyId::Name("b".into()),
             BodyId::Int(10),
             BodyId::Int(2),

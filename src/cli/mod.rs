@@ -6,6 +6,7 @@ mod analysis;
 mod check;
 mod generate;
 mod input;
+mod transform;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use std::io::{IsTerminal, Write};
@@ -77,6 +78,23 @@ enum Command {
         /// Output format.
         #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
         format: OutputFormat,
+    },
+    /// Structural transformations: every placement of the driven inputs that determines the mechanism, ranked.
+    ///
+    /// Enumerates the placements of f driven DOF over the joints' DOF (f = the mobility count
+    /// less isolated spins) that make the mechanism kinematically determined, as bases of a
+    /// matroid (incremental matching, pruning as soon as a partial placement over-determines
+    /// a part), checks each with the structural analysis (placements the rank check rejects are
+    /// excluded and counted), groups placements with the same partition into families and
+    /// ranks them. `--inputs SPEC` instead compares one placement with the file's own.
+    #[command(after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl")]
+    Transform {
+        #[command(flatten)]
+        file: FileArg,
+        #[command(flatten)]
+        structure: analysis::StructureArgs,
+        #[command(flatten)]
+        transform: transform::TransformArgs,
     },
     /// Write a generated mechanism file (benchmark families) to standard output.
     #[command(subcommand)]
@@ -182,6 +200,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             rigid,
             format,
         } => analysis::rigid(&file, &rigid, format),
+        Command::Transform {
+            file,
+            structure,
+            transform,
+        } => transform::run(&file, &structure, &transform),
         Command::Generate(family) => generate::run(&family),
         Command::Mobility {
             file,

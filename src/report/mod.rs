@@ -6,6 +6,7 @@ pub mod mobility;
 pub mod rigid_pebble;
 pub mod rigid_geometric;
 pub mod structure;
+pub mod transform;
 
 use comfy_table::{LineStyle, Table, TableStyle};
 

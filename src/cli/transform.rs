@@ -1,0 +1,136 @@
+//! `mbsa transform`: where else could the driven inputs go?
+
+use super::analysis::StructureArgs;
+use super::{Failure, FileArg, emit, load_with_inputs};
+use clap::{Args, ValueEnum};
+use mbsa::transform::{self, Criterion, Progress, TransformOptions};
+use std::io::IsTerminal;
+
+/// Options of `mbsa transform`.
+#[derive(Args, Debug, Clone)]
+pub struct TransformArgs {
+    /// Ranking criteria, most important first: groups (more), library (more covered),
+    /// max-size (smaller largest group), levels (fewer).
+    #[arg(long, value_name = "LIST", default_value = "groups,library,max-size,levels")]
+    pub rank: String,
+    /// How many families of placements the table shows.
+    #[arg(long, default_value_t = 10)]
+    pub top: usize,
+    /// Only joints of these types may be driven (codes or names, e.g. `R,P`).
+    #[arg(long, value_name = "TYPES")]
+    pub on: Option<String>,
+    /// Only joints to the frame may be driven.
+    #[arg(long)]
+    pub grounded: bool,
+    /// Inputs that must stay (same syntax as --inputs).
+    #[arg(long, value_name = "SPEC")]
+    pub keep: Option<String>,
+    /// Joints that may not be driven (same syntax as --inputs; counts are ignored).
+    #[arg(long, value_name = "SPEC")]
+    pub exclude: Option<String>,
+    /// How many binary expansions of multiple joints to explore.
+    #[arg(long, default_value_t = 64)]
+    pub max_expansions: usize,
+    /// Examine at most this many count-valid placements (the output says when it cut the search).
+    #[arg(long)]
+    pub limit: Option<usize>,
+    /// Output format: a ranked table, JSON with every placement, or JSON lines streamed one placement per line.
+    #[arg(long, value_enum, default_value_t = TransformFormat::Table)]
+    pub format: TransformFormat,
+}
+
+/// `--format` values of `transform`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TransformFormat {
+    /// Ranked table for people.
+    Table,
+    /// One JSON object with every placement and its scores.
+    Json,
+    /// One JSON object per line, streamed; the summary comes last.
+    Jsonl,
+}
+
+fn spec(text: &Option<String>, flag: &str) -> Result<Option<mbsa::InputSpec>, Failure> {
+    text.as_deref()
+        .map(mbsa::InputSpec::parse)
+        .transpose()
+        .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(flag, &e)))
+}
+
+/// Run `mbsa transform`.
+pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> Result<(), Failure> {
+    // The file's own inputs stay in the model: `--inputs` is compared against them.
+    let m = load_with_inputs(file, None)?;
+    let lib = structure.library()?;
+    let bad = |flag: &str, e: &dyn std::error::Error| Failure::Input(mbsa::diagnostic::render_plain(flag, e));
+    let opts = TransformOptions {
+        rank: Criterion::parse_list(&args.rank).map_err(|e| bad("--rank", &e))?,
+        top: args.top,
+        on: args
+            .on
+            .as_deref()
+            .map(TransformOptions::parse_on)
+            .transpose()
+            .map_err(|e| bad("--on", &e))?,
+        grounded: args.grounded,
+        keep: spec(&args.keep, "--keep")?,
+        exclude: spec(&args.exclude, "--exclude")?,
+        inputs: spec(&structure.inputs, "--inputs")?,
+        max_expansions: args.max_expansions,
+        limit: args.limit,
+        analysis: structure.options(),
+    };
+    if let Some(given) = &opts.inputs {
+        let c = transform::compare(&m, given, &opts, &lib).map_err(|e| bad("--inputs", &e))?;
+        return emit(&match args.format {
+            TransformFormat::Table => mbsa::report::transform::comparison(&c),
+            TransformFormat::Json | TransformFormat::Jsonl => mbsa::report::json(&c),
+        });
+    }
+    // A progress bar only for people: a terminal on stderr and the table format.
+    let bar = (args.format == TransformFormat::Table && std::io::stderr().is_terminal()).then(|| {
+        let bar = indicatif::ProgressBar::new(0);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{spinner} analysing placements {pos}/{len} ({percent}%), {msg} determined, eta {eta}",
+            )
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar
+    });
+    let report = |p: Progress| {
+        if let Some(bar) = &bar {
+            bar.set_length(p.total as u64);
+            bar.set_position(p.examined as u64);
+            bar.set_message(p.determined.to_string());
+        }
+    };
+    let progress: Option<transform::ProgressFn<'_>> = bar.as_ref().map(|_| &report as _);
+    match args.format {
+        TransformFormat::Jsonl => {
+            let mut failed = None;
+            let summary = transform::enumerate(&m, &opts, &lib, None, &mut |p| {
+                if failed.is_none()
+                    && let Err(e) = emit(&mbsa::report::transform::jsonl(&p))
+                {
+                    failed = Some(e);
+                }
+            })
+            .map_err(|e| bad("transform", &e))?;
+            if let Some(e) = failed {
+                return Err(e);
+            }
+            emit(&mbsa::report::transform::jsonl(&summary))
+        }
+        TransformFormat::Json | TransformFormat::Table => {
+            let t = transform::transform(&m, &opts, &lib, progress).map_err(|e| bad("transform", &e))?;
+            if let Some(bar) = &bar {
+                bar.finish_and_clear();
+            }
+            emit(&match args.format {
+                TransformFormat::Table => mbsa::report::transform::table(&t, args.top),
+                _ => mbsa::report::json(&t),
+            })
+        }
+    }
+}

@@ -1,0 +1,305 @@
+//! Structural transformations as tables: the ranked families of determined placements, and
+//! one given placement beside the file's own; JSON lines for streaming.
+
+use crate::structure::Status;
+use crate::transform::{Comparison, Evaluation, Input, Placement, Summary, Transform};
+use std::fmt::Write;
+
+/// How many member placements a family row lists before `+n more`.
+const MEMBERS_SHOWN: usize = 3;
+
+/// `1-13` when the id is the body pair, `A (1-2)` otherwise; `:n` for n driven DOF.
+fn input_label(i: &Input) -> String {
+    let base = if i.joint == i.pair {
+        i.joint.clone()
+    } else {
+        format!("{} ({})", i.joint, i.pair)
+    };
+    if i.driven == 1 {
+        base
+    } else {
+        format!("{base}:{}", i.driven)
+    }
+}
+
+fn inputs_label(inputs: &[Input]) -> String {
+    if inputs.is_empty() {
+        return "(none)".into();
+    }
+    inputs
+        .iter()
+        .map(input_label)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `2×1P1U1S3D, 1×1R3D`: each type with its count, uncovered types marked `*`.
+fn types_label(types: &[crate::structure::TypeCount]) -> String {
+    types
+        .iter()
+        .map(|t| {
+            format!(
+                "{}×{}{}",
+                t.count,
+                t.kind,
+                if t.in_library { "" } else { "*" }
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+fn coverage(covered: usize, groups: usize) -> String {
+    format!("{covered}/{groups}")
+}
+
+/// The counts and notes above the table.
+pub fn summary(s: &Summary) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "{}: {} input(s) to place (mobility {}{}); {} count-valid placement(s) examined, {} \
+         excluded by the rank check, {} determined",
+        s.name,
+        s.f,
+        s.count,
+        if s.isolated > 0 {
+            format!(", minus {} isolated", s.isolated)
+        } else {
+            String::new()
+        },
+        s.count_valid,
+        s.excluded_by_rank,
+        s.determined
+    );
+    for n in &s.notes {
+        let _ = writeln!(out, "note: {n}");
+    }
+    out
+}
+
+/// The top `top` families of placements (placements with the same partition into groups
+/// share a row; the row shows its best member's scores).
+pub fn table(t: &Transform, top: usize) -> String {
+    let mut out = summary(&t.summary);
+    let crit: Vec<&str> = t.criteria.iter().map(|c| c.name()).collect();
+    let _ = writeln!(
+        out,
+        "{} placement(s) in {} famil{} with distinct groups; ranked by {}{}",
+        t.placements.len(),
+        t.families.len(),
+        if t.families.len() == 1 { "y" } else { "ies" },
+        crit.join(", "),
+        match t.original_rank {
+            Some(r) => format!("; the file's own inputs rank {r}"),
+            None => String::new(),
+        }
+    );
+    if t.families.is_empty() {
+        return out;
+    }
+    let expansions = t.placements.iter().any(|p| p.expansion.is_some());
+    let mut tbl = super::new_table();
+    let mut header = vec!["rank", "inputs"];
+    if expansions {
+        header.push("expansion");
+    }
+    header.extend([
+        "groups",
+        "largest",
+        "levels",
+        "library",
+        "types (* not in library)",
+    ]);
+    tbl.set_header(header);
+    for fam in t.families.iter().take(top) {
+        let members: Vec<&Placement> = fam
+            .placements
+            .iter()
+            .filter_map(|&r| t.placements.get(r - 1))
+            .collect();
+        let Some(best) = members.first() else {
+            continue;
+        };
+        let mut lines: Vec<String> = members
+            .iter()
+            .take(MEMBERS_SHOWN)
+            .map(|p| inputs_label(&p.inputs))
+            .collect();
+        if members.len() > MEMBERS_SHOWN {
+            lines.push(format!(
+                "(+{} more with the same groups)",
+                members.len() - MEMBERS_SHOWN
+            ));
+        }
+        let ranks = if members.len() == 1 {
+            best.rank.unwrap_or(0).to_string()
+        } else {
+            format!("{} ({} placements)", best.rank.unwrap_or(0), members.len())
+        };
+        let mut row = vec![ranks, lines.join("\n")];
+        if expansions {
+            row.push(best.expansion.clone().unwrap_or_default());
+        }
+        row.extend([
+            best.scores.groups.to_string(),
+            best.scores.largest.to_string(),
+            best.scores.levels.to_string(),
+            coverage(best.scores.covered, best.scores.groups),
+            types_label(&best.types),
+        ]);
+        tbl.add_row(row);
+    }
+    let _ = writeln!(out, "{tbl}");
+    if t.families.len() > top {
+        let _ = writeln!(
+            out,
+            "{} more famil{} not shown (raise --top, or use --format json)",
+            t.families.len() - top,
+            if t.families.len() - top == 1 {
+                "y"
+            } else {
+                "ies"
+            }
+        );
+    }
+    out
+}
+
+fn status_label(s: Status) -> &'static str {
+    match s {
+        Status::Determined => "determined",
+        Status::Overdetermined => "over-determined",
+        Status::Underdetermined => "under-determined",
+        Status::Mixed => "not determined",
+    }
+}
+
+fn groups_label(e: &Evaluation) -> String {
+    let mut by_level: Vec<String> = Vec::new();
+    let mut level = 0;
+    for g in &e.groups {
+        if g.level != level {
+            level = g.level;
+            by_level.push(format!("L{level}:"));
+        }
+        if let Some(last) = by_level.last_mut() {
+            let _ = write!(
+                last,
+                " {{{}}} {}{}",
+                g.bodies.join(","),
+                g.kind,
+                if g.in_library { "" } else { "*" }
+            );
+        }
+    }
+    by_level.join("\n")
+}
+
+/// One given placement beside the file's own.
+pub fn comparison(c: &Comparison) -> String {
+    let mut out = String::new();
+    let _ = writeln!(out, "{}: the file's inputs against the given ones", c.name);
+    let mut t = super::new_table();
+    t.set_header(vec!["", "file", "given", "change"]);
+    let signed = |d: i64| {
+        if d == 0 {
+            "=".to_string()
+        } else {
+            format!("{d:+}")
+        }
+    };
+    let (f, g, ch) = (&c.file, &c.given, &c.changes);
+    t.add_row(vec![
+        "inputs".to_string(),
+        inputs_label(&f.inputs),
+        inputs_label(&g.inputs),
+        String::new(),
+    ]);
+    t.add_row(vec![
+        "status".to_string(),
+        status_label(f.status).to_string(),
+        status_label(g.status).to_string(),
+        String::new(),
+    ]);
+    t.add_row(vec![
+        "groups".to_string(),
+        f.scores.groups.to_string(),
+        g.scores.groups.to_string(),
+        signed(ch.groups),
+    ]);
+    t.add_row(vec![
+        "largest group".to_string(),
+        f.scores.largest.to_string(),
+        g.scores.largest.to_string(),
+        signed(ch.largest),
+    ]);
+    t.add_row(vec![
+        "levels".to_string(),
+        f.scores.levels.to_string(),
+        g.scores.levels.to_string(),
+        signed(ch.levels),
+    ]);
+    t.add_row(vec![
+        "library coverage".to_string(),
+        coverage(f.scores.covered, f.scores.groups),
+        coverage(g.scores.covered, g.scores.groups),
+        signed(ch.covered),
+    ]);
+    t.add_row(vec![
+        "types (* not in library)".to_string(),
+        types_label(&f.types).replace(", ", "\n"),
+        types_label(&g.types).replace(", ", "\n"),
+        String::new(),
+    ]);
+    t.add_row(vec![
+        "groups by level".to_string(),
+        groups_label(f),
+        groups_label(g),
+        String::new(),
+    ]);
+    let _ = writeln!(out, "{t}");
+    let crit: Vec<&str> = c.criteria.iter().map(|x| x.name()).collect();
+    if ch.same_partition {
+        let _ = writeln!(out, "same partition into groups");
+    } else {
+        let list = |gs: &[crate::transform::GroupBrief]| {
+            gs.iter()
+                .map(|g| format!("{{{}}}", g.bodies.join(",")))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let _ = writeln!(
+            out,
+            "{} group(s) in common; only with the file's inputs: {}; only with the given: {}",
+            ch.common,
+            if ch.only_file.is_empty() {
+                "-".into()
+            } else {
+                list(&ch.only_file)
+            },
+            if ch.only_given.is_empty() {
+                "-".into()
+            } else {
+                list(&ch.only_given)
+            },
+        );
+    }
+    let _ = writeln!(
+        out,
+        "verdict ({}): the given placement is {}",
+        crit.join(", "),
+        ch.verdict
+    );
+    out
+}
+
+/// One value as a single JSON line with a trailing newline, for `--format jsonl`.
+pub fn jsonl<T: serde::Serialize>(value: &T) -> String {
+    let mut s = serde_json::to_string(value).unwrap_or_else(|e| {
+        // Serializing our own types cannot fail (no maps with non-string keys, no I/O).
+        format!("{{\"error\": {:?}}}", e.to_string())
+    });
+    s.push('\n');
+    s
+}

@@ -1,0 +1,214 @@
+//! Restrictions, limits, streaming and multiple-joint expansions of `mbsa transform`.
+
+use mbsa::format::{Format, load};
+use mbsa::structure::Library;
+use mbsa::transform::{
+    Placement, Progress, TransformError, TransformOptions, enumerate, transform,
+};
+use mbsa::{BodyId, InputSpec, JointSpec, JointType, Mechanism, Space};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+fn rotor() -> Mechanism {
+    let (file, text) = mbsa::examples::find("rotor").expect("bundled example");
+    load(file, text, Format::Toml).expect("bundled example loads")
+}
+
+/// Count-only keeps these tests fast; restrictions do not depend on the rank check.
+fn opts() -> TransformOptions {
+    let mut o = TransformOptions::default();
+    o.analysis.count_only = true;
+    o
+}
+
+fn specs(ps: &[Placement]) -> Vec<String> {
+    let mut v: Vec<String> = ps.iter().map(|p| p.spec()).collect();
+    v.sort();
+    v
+}
+
+/// A restriction is exactly a filter on the unrestricted placements.
+fn check_filter(restricted: &TransformOptions, keep: impl Fn(&Placement) -> bool) -> usize {
+    let m = rotor();
+    let lib = Library::builtin();
+    let all = transform(&m, &opts(), &lib, None).unwrap();
+    let some = transform(&m, restricted, &lib, None).unwrap();
+    let expected: Vec<Placement> = all.placements.iter().filter(|p| keep(p)).cloned().collect();
+    assert!(!expected.is_empty());
+    assert!(expected.len() < all.placements.len());
+    assert_eq!(specs(&some.placements), specs(&expected));
+    assert!(!some.summary.notes.is_empty());
+    expected.len()
+}
+
+fn kind_of(m: &Mechanism, joint: &str) -> JointType {
+    m.joints.iter().find(|j| j.id == joint).unwrap().kind
+}
+
+#[test]
+fn on_restricts_joint_types() {
+    let m = rotor();
+    let mut o = opts();
+    o.on = Some(TransformOptions::parse_on("R,P").unwrap());
+    check_filter(&o, |p| {
+        p.inputs
+            .iter()
+            .all(|i| matches!(kind_of(&m, &i.joint), JointType::R | JointType::P))
+    });
+}
+
+#[test]
+fn grounded_restricts_to_frame_joints() {
+    let mut o = opts();
+    o.grounded = true;
+    check_filter(&o, |p| p.inputs.iter().all(|i| i.pair.starts_with("1-")));
+}
+
+#[test]
+fn keep_holds_inputs() {
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15,1-13").unwrap());
+    let n = check_filter(&o, |p| {
+        p.inputs.iter().any(|i| i.joint == "13-15") && p.inputs.iter().any(|i| i.joint == "1-13")
+    });
+    assert!(n >= 1);
+}
+
+#[test]
+fn exclude_forbids_joints() {
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("13-15,11-14").unwrap());
+    check_filter(&o, |p| {
+        p.inputs
+            .iter()
+            .all(|i| i.joint != "13-15" && i.joint != "11-14")
+    });
+}
+
+#[test]
+fn bad_restrictions_are_errors() {
+    let m = rotor();
+    let lib = Library::builtin();
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15").unwrap());
+    o.exclude = Some(InputSpec::parse("13-15").unwrap());
+    assert!(matches!(
+        transform(&m, &o, &lib, None),
+        Err(TransformError::KeepExcluded { .. })
+    ));
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15:2").unwrap());
+    assert!(matches!(
+        transform(&m, &o, &lib, None),
+        Err(TransformError::Spec(_))
+    ));
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("99-100").unwrap());
+    assert!(transform(&m, &o, &lib, None).is_err());
+}
+
+#[test]
+fn limit_cuts_the_search_with_a_note() {
+    let m = rotor();
+    let mut o = opts();
+    o.limit = Some(10);
+    let t = transform(&m, &o, &Library::builtin(), None).unwrap();
+    assert!(t.summary.truncated);
+    assert_eq!(t.summary.count_valid, 10);
+    assert!(t.summary.notes.iter().any(|n| n.contains("--limit 10")));
+    let text = mbsa::report::transform::table(&t, 3);
+    assert!(text.contains("--limit 10"));
+}
+
+#[test]
+fn streaming_matches_ranking_and_reports_progress() {
+    let m = rotor();
+    let lib = Library::builtin();
+    let calls = AtomicUsize::new(0);
+    let last = AtomicUsize::new(0);
+    let progress = |p: Progress| {
+        calls.fetch_add(1, Ordering::Relaxed);
+        assert!(p.examined <= p.total);
+        last.store(p.examined, Ordering::Relaxed);
+    };
+    let mut lines = Vec::new();
+    let s = enumerate(&m, &opts(), &lib, Some(&progress), &mut |p| {
+        lines.push(mbsa::report::transform::jsonl(&p));
+    })
+    .unwrap();
+    assert_eq!(lines.len(), s.determined);
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.ends_with('\n') && !l[..l.len() - 1].contains('\n'))
+    );
+    assert!(calls.load(Ordering::Relaxed) >= 1);
+    assert_eq!(last.load(Ordering::Relaxed), s.count_valid);
+    let t = transform(&m, &opts(), &lib, None).unwrap();
+    assert_eq!(t.placements.len(), lines.len());
+    let json: serde_json::Value = serde_json::from_str(&mbsa::report::json(&t)).unwrap();
+    assert_eq!(json["placements"].as_array().unwrap().len(), s.determined);
+}
+
+/// Planar: bodies 2 and 3 pinned to the frame and joined with 4 by one ternary pin.
+fn ternary() -> Mechanism {
+    let mut j = JointSpec::new(JointType::R, 2, 3, 0);
+    j.id = Some("C".into());
+    j.bodies.push(BodyId::Int(4));
+    Mechanism::from_parts(
+        "ternary",
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        vec![
+            JointSpec::new(JointType::R, 1, 2, 0),
+            JointSpec::new(JointType::R, 1, 3, 0),
+            j,
+        ],
+    )
+}
+
+#[test]
+fn multiple_joints_are_expanded_into_spanning_trees() {
+    let m = ternary();
+    let lib = Library::builtin();
+    let t = transform(&m, &TransformOptions::default(), &lib, None).unwrap();
+    assert_eq!(t.summary.f, 1);
+    assert_eq!(t.summary.expansions, 3);
+    assert_eq!(t.summary.expansions_total, 3);
+    let got: Vec<(String, String)> = t
+        .placements
+        .iter()
+        .map(|p| (p.spec(), p.expansion.clone().unwrap()))
+        .collect();
+    // Star on 2 (the default): a triangle 1-2-3 and body 4 on pair 2-4, driven there; star
+    // on 3: likewise with 3-4; star on 4: a four-bar 1-2-4-3, driven at any of its joints
+    // (one group of three bodies, so ranked last).
+    let s = |a: &str, b: &str| (a.to_string(), b.to_string());
+    assert_eq!(
+        got,
+        vec![
+            s("C[2-4]", "C: 2-3, 2-4"),
+            s("C[3-4]", "C: 2-3, 3-4"),
+            s("1-2", "C: 2-4, 3-4"),
+            s("1-3", "C: 2-4, 3-4"),
+            s("C[2-4]", "C: 2-4, 3-4"),
+            s("C[3-4]", "C: 2-4, 3-4"),
+        ]
+    );
+    let o = TransformOptions {
+        max_expansions: 1,
+        ..TransformOptions::default()
+    };
+    let t = transform(&m, &o, &lib, None).unwrap();
+    assert_eq!(t.placements.len(), 1);
+    assert!(
+        t.summary
+            .notes
+            .iter()
+            .any(|n| n.contains("--max-expansions"))
+    );
+    let text = mbsa::report::transform::table(&t, 10);
+    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+        insta::assert_snapshot!("transform_ternary_table", text);
+    });
+}
