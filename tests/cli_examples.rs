@@ -156,3 +156,35 @@ fn generated_mechanisms_round_trip_through_the_reader() {
         assert_eq!(mbsa::generate::to_toml(&m), toml, "{args:?}: writer and reader agree");
     }
 }
+
+#[test]
+fn a_hundred_groups_render_without_graphviz_warnings() {
+    let (code, toml, err) = mbsa(&["generate", "assur", "--class", "1", "--groups", "100"]);
+    assert_eq!(code, 0, "{err}");
+    let path = std::env::temp_dir().join(format!("mbsa-dot-100-{}.toml", std::process::id()));
+    std::fs::write(&path, toml).expect("temp file");
+    let p = path.to_string_lossy().into_owned();
+    let (_, summary, _) = mbsa(&["analyze", &p]);
+    assert!(summary.contains("101 structural group(s)"), "{summary}");
+    for view in ["diagram", "structure", "topology"] {
+        let (code, dot, err) = mbsa(&["dot", &p, "--view", view]);
+        assert_eq!(code, 0, "{view}: {err}");
+        let mut child = std::process::Command::new("dot")
+            .arg("-Tsvg")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("Graphviz `dot` runs (install graphviz)");
+        child
+            .stdin
+            .take()
+            .expect("stdin is piped")
+            .write_all(dot.as_bytes())
+            .expect("dot reads its input");
+        let out = child.wait_with_output().expect("dot finishes");
+        let warnings = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.success() && warnings.trim().is_empty(), "{view}: {warnings}");
+    }
+    let _ = std::fs::remove_file(path);
+}
