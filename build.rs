@@ -9,12 +9,17 @@ fn main() {
         .unwrap_or_default();
     files.retain(|p| p.extension().is_some_and(|e| e == "toml"));
     files.sort();
-    let mut out = String::from("/// Bundled mechanisms: (name, file name, TOML text), sorted by name.\npub static EXAMPLES: &[(&str, &str, &str)] = &[\n");
+    let mut out = String::from(
+        "/// Bundled mechanisms: (name, file name, TOML text), sorted by name.\npub static EXAMPLES: &[(&str, &str, &str)] = &[\n",
+    );
     for p in &files {
         println!("cargo:rerun-if-changed={}", p.display());
         let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
         let file = p.file_name().and_then(|s| s.to_str()).unwrap_or_default();
-        out.push_str(&format!("    ({stem:?}, {file:?}, include_str!({:?})),\n", p.display().to_string()));
+        out.push_str(&format!(
+            "    ({stem:?}, {file:?}, include_str!({:?})),\n",
+            p.display().to_string()
+        ));
     }
     out.push_str("];\n");
     let dest = Path::new(&env::var("OUT_DIR").expect("cargo sets OUT_DIR")).join("examples.rs");

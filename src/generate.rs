@@ -70,7 +70,9 @@ pub fn assur(
             pairs.push((s + a as u64, s + b as u64));
         }
         let targets: Vec<u64> = if g == 1 {
-            (0..ports.len()).map(|i| if i == 0 { 2 } else { 1 }).collect()
+            (0..ports.len())
+                .map(|i| if i == 0 { 2 } else { 1 })
+                .collect()
         } else {
             loop {
                 let t: Vec<u64> = ports.iter().map(|_| 1 + rng.below(s - 1)).collect();
@@ -183,7 +185,9 @@ pub fn random(bodies: u64, planar: bool, seed: u64) -> Result<(Mechanism, usize)
     let mut joints: Vec<JointSpec> = Vec::new();
     let mut n = 1u64; // bodies so far (the frame is body 1)
     let mut groups = 0usize;
-    let pick = |rng: &mut SplitMix64, pool: &'static [JointType]| pool[rng.below(pool.len() as u64) as usize];
+    let pick = |rng: &mut SplitMix64, pool: &'static [JointType]| {
+        pool[rng.below(pool.len() as u64) as usize]
+    };
     let earlier = |rng: &mut SplitMix64, n: u64| -> i64 {
         // Favour recent bodies so that chains get deep, but reach back to the frame too.
         if rng.below(4) == 0 {
@@ -193,26 +197,31 @@ pub fn random(bodies: u64, planar: bool, seed: u64) -> Result<(Mechanism, usize)
         }
     };
     // Add joints from `body` to earlier bodies bringing exactly `need` equations.
-    let attach = |rng: &mut SplitMix64, joints: &mut Vec<JointSpec>, body: i64, mut need: u32, n: u64| {
-        while need > 0 {
-            let c = 1 + rng.below(u64::from(need.min(b))) as u32;
-            let (kind, driven) = if c == b {
-                // A whole body's worth: a driven grade-1 joint (B − 1 + 1 equations).
-                (pick(rng, by_c(b - 1)), 1)
-            } else if c >= 2 && rng.below(3) == 0 {
-                // Sometimes a looser joint with a driven DOF.
-                let k = pick(rng, by_c(c - 1));
-                (k, 1)
-            } else {
-                (pick(rng, by_c(c)), 0)
-            };
-            let target = earlier(rng, n);
-            joints.push(JointSpec::new(kind, target, body, driven));
-            need -= c;
-        }
-    };
+    let attach =
+        |rng: &mut SplitMix64, joints: &mut Vec<JointSpec>, body: i64, mut need: u32, n: u64| {
+            while need > 0 {
+                let c = 1 + rng.below(u64::from(need.min(b))) as u32;
+                let (kind, driven) = if c == b {
+                    // A whole body's worth: a driven grade-1 joint (B − 1 + 1 equations).
+                    (pick(rng, by_c(b - 1)), 1)
+                } else if c >= 2 && rng.below(3) == 0 {
+                    // Sometimes a looser joint with a driven DOF.
+                    let k = pick(rng, by_c(c - 1));
+                    (k, 1)
+                } else {
+                    (pick(rng, by_c(c)), 0)
+                };
+                let target = earlier(rng, n);
+                joints.push(JointSpec::new(kind, target, body, driven));
+                need -= c;
+            }
+        };
     while n < bodies {
-        let size = if bodies - n >= 2 && rng.below(2) == 0 { 2 } else { 1 };
+        let size = if bodies - n >= 2 && rng.below(2) == 0 {
+            2
+        } else {
+            1
+        };
         let first = n as i64 + 1;
         if size == 1 {
             attach(&mut rng, &mut joints, first, b, n);
@@ -220,7 +229,12 @@ pub fn random(bodies: u64, planar: bool, seed: u64) -> Result<(Mechanism, usize)
             let second = first + 1;
             // Internal joint with c_int equations; externals split so neither body reaches B alone.
             let c_int = 2 + rng.below(u64::from(b - 2)) as u32; // 2..=B−1 keeps lo <= B − 1
-            joints.push(JointSpec::new(pick(&mut rng, by_c(c_int)), first, second, 0));
+            joints.push(JointSpec::new(
+                pick(&mut rng, by_c(c_int)),
+                first,
+                second,
+                0,
+            ));
             let rest = 2 * b - c_int; // in [B + 1, 2B − 2]
             let lo = rest - (b - 1); // each side at most B − 1
             let e1 = lo + rng.below(u64::from(b - 1 - lo + 1)) as u32;

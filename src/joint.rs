@@ -103,6 +103,7 @@ const fn info(
 /// plane (R, P), the planar higher pairs (cam, gears, rolling) and the free planar body. In a
 /// spherical mechanism every revolute axis passes through the centre, so R, the higher pairs
 /// of spherical motion (cam, bevel gears, rolling) and FP (the free body of B = 3) make sense.
+#[rustfmt::skip]
 pub const CATALOGUE: [JointInfo; 24] = [
     info(R, "R", &["revolute", "hinge", "pin"], 1, true, true, &["origin", "axis"]),
     info(P, "P", &["prismatic", "slider"], 1, true, false, &["axis"]),
@@ -226,7 +227,9 @@ mod tests {
         let grades: Vec<u8> = CATALOGUE.iter().map(|i| i.grade).collect();
         assert_eq!(
             grades,
-            [1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3, 3, 3, 3, 4, 4, 4, 5, 5, 6]
+            [
+                1, 1, 1, 1, 2, 2, 2, 2, 2, 2, 2, 2, 2, 3, 3, 3, 3, 3, 4, 4, 4, 5, 5, 6
+            ]
         );
     }
 

@@ -17,8 +17,8 @@ pub mod mechanism;
 pub mod mobility;
 pub mod motion;
 pub mod report;
-pub mod rng;
 pub mod rigidity;
+pub mod rng;
 pub mod structure;
 pub mod transform;
 

@@ -441,10 +441,13 @@ impl InputSpec {
             }
             let (name, count) = match part.rsplit_once(':') {
                 Some((name, n)) => {
-                    let count = n.trim().parse::<u32>().map_err(|_| InputSpecError::Syntax {
-                        text: part.to_string(),
-                        reason: format!("`{n}` is not a non-negative whole number of DOF"),
-                    })?;
+                    let count = n
+                        .trim()
+                        .parse::<u32>()
+                        .map_err(|_| InputSpecError::Syntax {
+                            text: part.to_string(),
+                            reason: format!("`{n}` is not a non-negative whole number of DOF"),
+                        })?;
                     (name.trim(), count)
                 }
                 None => (part, 1),

@@ -32,7 +32,10 @@ fn snapshot(name: &str, value: &str) {
 fn every_bundled_mechanism_meets_its_expectations() {
     let (code, out, err) = mbsa(&["check", "@all"]);
     assert_eq!(code, 0, "{out}{err}");
-    assert_eq!(out.lines().filter(|l| l.starts_with("ok")).count(), names().len());
+    assert_eq!(
+        out.lines().filter(|l| l.starts_with("ok")).count(),
+        names().len()
+    );
 }
 
 #[test]
@@ -144,16 +147,31 @@ fn dot_is_deterministic_and_marks_undetermined_parts() {
 #[test]
 fn generated_mechanisms_round_trip_through_the_reader() {
     for args in [
-        vec!["generate", "assur", "--class", "3", "--groups", "4", "--variant", "B"],
+        vec![
+            "generate",
+            "assur",
+            "--class",
+            "3",
+            "--groups",
+            "4",
+            "--variant",
+            "B",
+        ],
         vec!["generate", "random", "--bodies", "40", "--seed", "3"],
-        vec!["generate", "random", "--bodies", "40", "--planar", "--seed", "3"],
+        vec![
+            "generate", "random", "--bodies", "40", "--planar", "--seed", "3",
+        ],
         vec!["generate", "stewart", "--stages", "2"],
     ] {
         let (code, toml, err) = mbsa(&args);
         assert_eq!(code, 0, "{args:?}: {err}");
         let m = mbsa::format::load("gen.toml", &toml, mbsa::format::Format::Toml)
             .unwrap_or_else(|e| panic!("{args:?}: {e}"));
-        assert_eq!(mbsa::generate::to_toml(&m), toml, "{args:?}: writer and reader agree");
+        assert_eq!(
+            mbsa::generate::to_toml(&m),
+            toml,
+            "{args:?}: writer and reader agree"
+        );
     }
 }
 
@@ -184,7 +202,10 @@ fn a_hundred_groups_render_without_graphviz_warnings() {
             .expect("dot reads its input");
         let out = child.wait_with_output().expect("dot finishes");
         let warnings = String::from_utf8_lossy(&out.stderr);
-        assert!(out.status.success() && warnings.trim().is_empty(), "{view}: {warnings}");
+        assert!(
+            out.status.success() && warnings.trim().is_empty(),
+            "{view}: {warnings}"
+        );
     }
     let _ = std::fs::remove_file(path);
 }

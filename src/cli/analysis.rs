@@ -193,10 +193,16 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
         (OutputFormat::Table, c, g) => {
             let mut parts = Vec::new();
             if let Some(c) = c {
-                parts.push(format!("Counting (pebble game, topology only)\n\n{}", mbsa::report::rigid_pebble::table(c)));
+                parts.push(format!(
+                    "Counting (pebble game, topology only)\n\n{}",
+                    mbsa::report::rigid_pebble::table(c)
+                ));
             }
             if let Some(g) = g {
-                parts.push(format!("Geometry (constraint Jacobian)\n\n{}", mbsa::report::rigid_geometric::table(g)));
+                parts.push(format!(
+                    "Geometry (constraint Jacobian)\n\n{}",
+                    mbsa::report::rigid_geometric::table(g)
+                ));
             }
             parts.join("\n")
         }

@@ -11,7 +11,9 @@ pub enum Family {
     ///
     /// A driven crank plus N groups of class 1 (dyad), 2 (triad) or 3 (hexagon) attached at
     /// random to earlier bodies; 2 + 2·class·N bodies. Seed 364 gives Table 16's counts.
-    #[command(after_help = "Example:\n  mbsa generate assur --class 3 --groups 4 --variant B --seed 364 > iii-4b.toml")]
+    #[command(
+        after_help = "Example:\n  mbsa generate assur --class 3 --groups 4 --variant B --seed 364 > iii-4b.toml"
+    )]
     Assur {
         /// Assur class: 1, 2 or 3.
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..=3))]
@@ -27,7 +29,9 @@ pub enum Family {
         seed: u64,
     },
     /// Random count-determined mechanism with mixed joint types.
-    #[command(after_help = "Example:\n  mbsa generate random --bodies 100000 --planar --seed 1 > big.toml")]
+    #[command(
+        after_help = "Example:\n  mbsa generate random --bodies 100000 --planar --seed 1 > big.toml"
+    )]
     Random {
         /// Number of bodies, the frame included.
         #[arg(long)]

@@ -44,7 +44,10 @@ pub fn load(arg: &FileArg) -> Result<mbsa::Mechanism, Failure> {
 }
 
 /// Read and parse `file` (path, `-` or `@name`).
-pub fn load_path(file: &str, input_format: Option<InputFormat>) -> Result<mbsa::Mechanism, Failure> {
+pub fn load_path(
+    file: &str,
+    input_format: Option<InputFormat>,
+) -> Result<mbsa::Mechanism, Failure> {
     let (name, bytes, format) = read(file, input_format)?;
     // Sniff on the valid UTF-8 prefix; load_bytes reports any bad byte at its location.
     let format = format.unwrap_or_else(|| {

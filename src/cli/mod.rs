@@ -18,7 +18,9 @@ pub use input::{FileArg, load};
 /// and rigid subsystems of mechanisms written as TOML, YAML or JSON files.
 #[derive(Parser, Debug)]
 #[command(name = "mbsa", version, about, long_about = None, propagate_version = true)]
-#[command(after_help = "Examples:\n  mbsa examples\n  mbsa mobility @rotor\n  mbsa check mechanisms/*.toml\n\nFILE is a path, `-` for standard input, or `@name` for a bundled example.")]
+#[command(
+    after_help = "Examples:\n  mbsa examples\n  mbsa mobility @rotor\n  mbsa check mechanisms/*.toml\n\nFILE is a path, `-` for standard input, or `@name` for a bundled example."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -35,7 +37,9 @@ enum Command {
     /// A rank check at random joint geometry catches what counting misses (isolated spins,
     /// redundant equations); when the inputs do not determine the mechanism, it says which
     /// part is over- or under-determined and where an input would help.
-    #[command(after_help = "Examples:\n  mbsa analyze @rotor\n  mbsa analyze @rotor --inputs 1-2,1-13,13-15\n  mbsa analyze @micro-manipulator --count-only\n  mbsa analyze my-robot.yaml --format json")]
+    #[command(
+        after_help = "Examples:\n  mbsa analyze @rotor\n  mbsa analyze @rotor --inputs 1-2,1-13,13-15\n  mbsa analyze @micro-manipulator --count-only\n  mbsa analyze my-robot.yaml --format json"
+    )]
     Analyze {
         #[command(flatten)]
         file: FileArg,
@@ -51,7 +55,9 @@ enum Command {
     /// level), `structure` (bodies clustered by group, edges in the direction DOF pass, driven
     /// joints bold) and `topology` (bodies and joints). Parts the analysis cannot determine are
     /// coloured, with a legend.
-    #[command(after_help = "Examples:\n  mbsa dot @rotor | dot -Tsvg > rotor.svg\n  mbsa dot @rotor --view structure | dot -Tpng > rotor.png")]
+    #[command(
+        after_help = "Examples:\n  mbsa dot @rotor | dot -Tsvg > rotor.svg\n  mbsa dot @rotor --view structure | dot -Tpng > rotor.png"
+    )]
     Dot {
         #[command(flatten)]
         file: FileArg,
@@ -69,7 +75,9 @@ enum Command {
     /// realization of the joint types when the file has none) gives the true instantaneous
     /// mobility, the redundant constraints and the joints involved, isolated freedoms (a bar
     /// spinning between two spherical joints) and the rigid clusters.
-    #[command(after_help = "Examples:\n  mbsa rigid @rig-double-banana\n  mbsa rigid @rig-stacked-four-bars --method counting\n  mbsa rigid frame.toml --geometry random --seed 7 --format json")]
+    #[command(
+        after_help = "Examples:\n  mbsa rigid @rig-double-banana\n  mbsa rigid @rig-stacked-four-bars --method counting\n  mbsa rigid frame.toml --geometry random --seed 7 --format json"
+    )]
     Rigid {
         #[command(flatten)]
         file: FileArg,
@@ -87,7 +95,9 @@ enum Command {
     /// a part), checks each with the structural analysis (placements the rank check rejects are
     /// excluded and counted), groups placements with the same partition into families and
     /// ranks them. `--inputs SPEC` instead compares one placement with the file's own.
-    #[command(after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl")]
+    #[command(
+        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl"
+    )]
     Transform {
         #[command(flatten)]
         file: FileArg,
@@ -104,7 +114,9 @@ enum Command {
     /// Computes f = B·Nm − Σ(B − k) over the binary pairs (a multiple joint of n bodies counts
     /// n − 1 pairs), compares it with the driven inputs, counts independent loops and lists
     /// bodies not linked to the frame.
-    #[command(after_help = "Example:\n  mbsa mobility @rotor\n  mbsa mobility my-linkage.toml --format json")]
+    #[command(
+        after_help = "Example:\n  mbsa mobility @rotor\n  mbsa mobility my-linkage.toml --format json"
+    )]
     Mobility {
         #[command(flatten)]
         file: FileArg,

@@ -11,7 +11,11 @@ use std::io::IsTerminal;
 pub struct TransformArgs {
     /// Ranking criteria, most important first: groups (more), library (more covered),
     /// max-size (smaller largest group), levels (fewer).
-    #[arg(long, value_name = "LIST", default_value = "groups,library,max-size,levels")]
+    #[arg(
+        long,
+        value_name = "LIST",
+        default_value = "groups,library,max-size,levels"
+    )]
     pub rank: String,
     /// How many families of placements the table shows.
     #[arg(long, default_value_t = 10)]
@@ -62,7 +66,9 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
     // The file's own inputs stay in the model: `--inputs` is compared against them.
     let m = load_with_inputs(file, None)?;
     let lib = structure.library()?;
-    let bad = |flag: &str, e: &dyn std::error::Error| Failure::Input(mbsa::diagnostic::render_plain(flag, e));
+    let bad = |flag: &str, e: &dyn std::error::Error| {
+        Failure::Input(mbsa::diagnostic::render_plain(flag, e))
+    };
     let opts = TransformOptions {
         rank: Criterion::parse_list(&args.rank).map_err(|e| bad("--rank", &e))?,
         top: args.top,
@@ -123,7 +129,8 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
             emit(&mbsa::report::transform::jsonl(&summary))
         }
         TransformFormat::Json | TransformFormat::Table => {
-            let t = transform::transform(&m, &opts, &lib, progress).map_err(|e| bad("transform", &e))?;
+            let t = transform::transform(&m, &opts, &lib, progress)
+                .map_err(|e| bad("transform", &e))?;
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
             }

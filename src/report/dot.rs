@@ -77,7 +77,10 @@ fn legend(out: &mut String, a: &Analysis, over: bool, under: bool) {
 
 /// Escape text for a Graphviz HTML-like label.
 fn html(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// The structural diagram (paper Fig. 8g, 13b): the frame as node 0, one node per group with
@@ -86,7 +89,10 @@ fn html(s: &str) -> String {
 pub fn diagram(a: &Analysis) -> String {
     let mut out = String::new();
     header(&mut out, &format!("{}: structural diagram", a.name), "TB");
-    let _ = writeln!(out, "  frame [label=\"0\\nframe\", shape=doublecircle, style=filled, fillcolor=\"#dddddd\"];");
+    let _ = writeln!(
+        out,
+        "  frame [label=\"0\\nframe\", shape=doublecircle, style=filled, fillcolor=\"#dddddd\"];"
+    );
     let mut by_level: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (i, g) in a.groups.iter().enumerate() {
         by_level.entry(g.level).or_default().push(i);
@@ -98,15 +104,34 @@ pub fn diagram(a: &Analysis) -> String {
             g.inputs,
             g.kind
         );
-        let fill = if g.in_library { "white" } else { UNCOVERED_COLOUR };
-        let _ = writeln!(out, "  {} [label={}, shape=ellipse, style=filled, fillcolor={}];", sg_node(i), quote(&label), quote(fill));
+        let fill = if g.in_library {
+            "white"
+        } else {
+            UNCOVERED_COLOUR
+        };
+        let _ = writeln!(
+            out,
+            "  {} [label={}, shape=ellipse, style=filled, fillcolor={}];",
+            sg_node(i),
+            quote(&label),
+            quote(fill)
+        );
     }
     let (over, under) = troubled(a);
-    for (name, bodies, colour) in [("over-determined", &over, OVER_COLOUR), ("under-determined", &under, UNDER_COLOUR)] {
+    for (name, bodies, colour) in [
+        ("over-determined", &over, OVER_COLOUR),
+        ("under-determined", &under, UNDER_COLOUR),
+    ] {
         if !bodies.is_empty() {
             let list: Vec<&str> = bodies.iter().copied().collect();
             let label = format!("{name}\n{{{}}}", list.join(","));
-            let _ = writeln!(out, "  {} [label={}, shape=box, style=\"filled,dashed\", fillcolor={}];", quote(name), quote(&label), quote(colour));
+            let _ = writeln!(
+                out,
+                "  {} [label={}, shape=box, style=\"filled,dashed\", fillcolor={}];",
+                quote(name),
+                quote(&label),
+                quote(colour)
+            );
         }
     }
     for (i, g) in a.groups.iter().enumerate() {
@@ -120,7 +145,11 @@ pub fn diagram(a: &Analysis) -> String {
     let _ = writeln!(out, "  {{ rank=same; frame; }}");
     for (level, groups) in &by_level {
         let nodes: Vec<String> = groups.iter().map(|&i| sg_node(i)).collect();
-        let _ = writeln!(out, "  {{ rank=same; {}; }}  // level {level}", nodes.join("; "));
+        let _ = writeln!(
+            out,
+            "  {{ rank=same; {}; }}  // level {level}",
+            nodes.join("; ")
+        );
     }
     legend(&mut out, a, !over.is_empty(), !under.is_empty());
     out.push_str("}\n");
@@ -154,12 +183,20 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
             "white"
         };
         let shape = if i == m.frame { "box" } else { "circle" };
-        format!("label={}, shape={shape}, style=filled, fillcolor={}", quote(id), quote(fill))
+        format!(
+            "label={}, shape={shape}, style=filled, fillcolor={}",
+            quote(id),
+            quote(fill)
+        )
     };
     let _ = writeln!(out, "  {} [{}];", body_node(m.frame), body_attrs(m.frame));
     for (gi, g) in a.groups.iter().enumerate() {
         let _ = writeln!(out, "  subgraph cluster_{gi} {{");
-        let _ = writeln!(out, "    label={}; style=dashed;", quote(&format!("{} (level {}) {}", g.name, g.level, g.kind)));
+        let _ = writeln!(
+            out,
+            "    label={}; style=dashed;",
+            quote(&format!("{} (level {}) {}", g.name, g.level, g.kind))
+        );
         for (i, id) in ids.iter().enumerate() {
             if group_of.get(id.as_str()) == Some(&gi) {
                 let _ = writeln!(out, "    {} [{}];", body_node(i), body_attrs(i));
@@ -185,16 +222,32 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
     for j in &m.joints {
         let hub = j.bodies[0];
         for &other in &j.bodies[1..] {
-            let (x, y) = if order(hub) <= order(other) { (hub, other) } else { (other, hub) };
+            let (x, y) = if order(hub) <= order(other) {
+                (hub, other)
+            } else {
+                (other, hub)
+            };
             let same = order(x).1 == order(y).1;
-            let mut attrs = vec![format!("label={}", quote(&format!("{} {}", j.id, j.kind.code())))];
+            let mut attrs = vec![format!(
+                "label={}",
+                quote(&format!("{} {}", j.id, j.kind.code()))
+            )];
             if same {
                 attrs.push("dir=none".into());
             }
             if j.driven > 0 {
-                attrs.push(format!("style=bold, penwidth=2.5, xlabel={}", quote(&format!("driven {}", j.driven))));
+                attrs.push(format!(
+                    "style=bold, penwidth=2.5, xlabel={}",
+                    quote(&format!("driven {}", j.driven))
+                ));
             }
-            let _ = writeln!(out, "  {} -> {} [{}];", body_node(x), body_node(y), attrs.join(", "));
+            let _ = writeln!(
+                out,
+                "  {} -> {} [{}];",
+                body_node(x),
+                body_node(y),
+                attrs.join(", ")
+            );
         }
     }
     legend(&mut out, a, !over.is_empty(), !under.is_empty());
@@ -222,7 +275,11 @@ pub fn quote(s: &str) -> String {
 /// Graph header shared by all views.
 pub(crate) fn header(out: &mut String, name: &str, rankdir: &str) {
     let _ = writeln!(out, "digraph {} {{", quote(name));
-    let _ = writeln!(out, "  graph [rankdir={rankdir}, newrank=true, fontname=\"Helvetica\", label={}, labelloc=t];", quote(name));
+    let _ = writeln!(
+        out,
+        "  graph [rankdir={rankdir}, newrank=true, fontname=\"Helvetica\", label={}, labelloc=t];",
+        quote(name)
+    );
     let _ = writeln!(out, "  node [fontname=\"Helvetica\", fontsize=11];");
     let _ = writeln!(out, "  edge [fontname=\"Helvetica\", fontsize=9];");
 }
@@ -252,7 +309,12 @@ pub fn topology(m: &Mechanism) -> String {
                 quote(&format!("{label}\n(frame)"))
             );
         } else {
-            let _ = writeln!(out, "  {} [label={}, shape=ellipse];", body_node(i), quote(&label));
+            let _ = writeln!(
+                out,
+                "  {} [label={}, shape=ellipse];",
+                body_node(i),
+                quote(&label)
+            );
         }
     }
     for (ji, j) in m.joints.iter().enumerate() {
@@ -260,7 +322,11 @@ pub fn topology(m: &Mechanism) -> String {
         if j.driven > 0 {
             label.push_str(&format!("\ndriven {}", j.driven));
         }
-        let style = if j.driven > 0 { ", style=bold, penwidth=2.5" } else { "" };
+        let style = if j.driven > 0 {
+            ", style=bold, penwidth=2.5"
+        } else {
+            ""
+        };
         if j.bodies.len() == 2 {
             let _ = writeln!(
                 out,
@@ -277,7 +343,12 @@ pub fn topology(m: &Mechanism) -> String {
                 quote(&label)
             );
             for &b in &j.bodies {
-                let _ = writeln!(out, "  {hub} -> {} [{}];", body_node(b), style.trim_start_matches(", "));
+                let _ = writeln!(
+                    out,
+                    "  {hub} -> {} [{}];",
+                    body_node(b),
+                    style.trim_start_matches(", ")
+                );
             }
         }
     }

@@ -36,7 +36,10 @@ pub fn table(r: &MobilityReport) -> String {
         [
             "mobility".into(),
             r.mobility.count.to_string(),
-            format!("B·Nm - constraints = {}·{} - {}", r.b, r.movable, r.constraints),
+            format!(
+                "B·Nm - constraints = {}·{} - {}",
+                r.b, r.movable, r.constraints
+            ),
         ],
         [
             "inputs".into(),
@@ -72,7 +75,11 @@ pub fn table(r: &MobilityReport) -> String {
             out,
             "warning: {} bod{} not linked to the frame: {}",
             r.disconnected.len(),
-            if r.disconnected.len() == 1 { "y" } else { "ies" },
+            if r.disconnected.len() == 1 {
+                "y"
+            } else {
+                "ies"
+            },
             r.disconnected.join(", ")
         );
     }

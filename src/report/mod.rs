@@ -3,8 +3,8 @@
 
 pub mod dot;
 pub mod mobility;
-pub mod rigid_pebble;
 pub mod rigid_geometric;
+pub mod rigid_pebble;
 pub mod structure;
 pub mod transform;
 
@@ -38,7 +38,15 @@ pub fn json<T: serde::Serialize>(value: &T) -> String {
 /// The joint catalogue as a table (`mbsa joints`).
 pub fn joints_table() -> String {
     let mut t = new_table();
-    t.set_header(vec!["code", "long names", "grade k", "removes (3D)", "planar", "spherical", "geometry"]);
+    t.set_header(vec![
+        "code",
+        "long names",
+        "grade k",
+        "removes (3D)",
+        "planar",
+        "spherical",
+        "geometry",
+    ]);
     for i in crate::joint::CATALOGUE.iter() {
         let yes = |b: bool| if b { "yes" } else { "-" };
         t.add_row(vec![
@@ -48,8 +56,14 @@ pub fn joints_table() -> String {
             (6 - i.grade).to_string(),
             yes(i.planar).to_string(),
             yes(i.spherical).to_string(),
-            if i.geometry.is_empty() { "count only".to_string() } else { i.geometry.join(", ") },
+            if i.geometry.is_empty() {
+                "count only".to_string()
+            } else {
+                i.geometry.join(", ")
+            },
         ]);
     }
-    format!("{t}\nCodes and names are matched case-insensitively. A joint of grade k removes B - k DOF\n(B = 6 spatial, 3 planar or spherical); a multiple joint of n bodies counts as n - 1 pairs.\n")
+    format!(
+        "{t}\nCodes and names are matched case-insensitively. A joint of grade k removes B - k DOF\n(B = 6 spatial, 3 planar or spherical); a multiple joint of n bodies counts as n - 1 pairs.\n"
+    )
 }
