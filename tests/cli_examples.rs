@@ -109,7 +109,7 @@ fn graphviz_accepts(dot: &str) -> Result<(), String> {
 #[test]
 fn every_dot_view_of_every_mechanism_is_valid_graphviz() {
     for name in names() {
-        for view in ["diagram", "structure", "topology"] {
+        for view in ["diagram", "structure", "topology", "rigid"] {
             let (code, dot, err) = mbsa(&["dot", &format!("@{name}"), "--view", view]);
             assert_eq!(code, 0, "{name} {view}: {err}");
             if let Err(e) = graphviz_accepts(&dot) {

@@ -83,17 +83,25 @@ pub enum ViewArg {
     Structure,
     /// The topological graph: bodies and joints.
     Topology,
+    /// Rigid parts (geometric analysis): clusters per rigid part, redundant joints in red.
+    Rigid,
 }
 
 /// `mbsa dot`.
 pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Failure> {
     let m = load_with_inputs(file, args.inputs.as_deref())?;
+    if view == ViewArg::Rigid {
+        let r = geometric::analyze(&m, &geometric::GeometricOptions::default())
+            .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e)))?;
+        return emit(&mbsa::report::dot::rigid(&m, &r));
+    }
     let lib = args.library()?;
     let a = structure::analyze(&m, &args.options(), &lib);
     let view = match view {
         ViewArg::Diagram => View::Diagram,
         ViewArg::Structure => View::Structure,
         ViewArg::Topology => View::Topology,
+        ViewArg::Rigid => View::Rigid,
     };
     emit(&mbsa::report::dot::render(view, &m, &a))
 }

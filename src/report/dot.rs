@@ -4,6 +4,7 @@
 //! non-ASCII characters stay valid DOT. Output order follows the model's stable order.
 
 use crate::mechanism::Mechanism;
+use crate::rigidity::geometric::GeometricReport;
 use crate::structure::Analysis;
 use std::collections::{BTreeMap, BTreeSet};
 use std::fmt::Write;
@@ -18,6 +19,9 @@ pub enum View {
     Structure,
     /// The topological graph: bodies and joints.
     Topology,
+    /// Rigid parts: bodies clustered by rigid cluster (geometric analysis), redundant joints
+    /// highlighted, bodies with isolated freedoms marked.
+    Rigid,
 }
 
 /// Fill colours that mark parts the analysis could not determine (shared by every view).
@@ -25,13 +29,126 @@ const OVER_COLOUR: &str = "#f4a6a6";
 const UNDER_COLOUR: &str = "#f9d68a";
 const UNCOVERED_COLOUR: &str = "#fff3c4";
 
-/// Draw `view` of `m` with its analysis `a`.
+/// Draw `view` of `m` with its structural analysis `a` (the `rigid` view needs the geometric
+/// report instead: use [`rigid`]).
 pub fn render(view: View, m: &Mechanism, a: &Analysis) -> String {
     match view {
         View::Diagram => diagram(a),
         View::Structure => structure(m, a),
-        View::Topology => topology(m),
+        View::Topology | View::Rigid => topology(m),
     }
+}
+
+/// The rigid view: one dashed cluster per rigid part found by the geometric analysis (the
+/// frame's part grey), joints that carry redundant constraints in red with their weight in
+/// the left null space, bodies with isolated freedoms double-circled.
+pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
+    let mut out = String::new();
+    header(&mut out, &format!("{}: rigid parts", m.name), "TB");
+    let _ = writeln!(out, "  edge [dir=none];");
+    let ids: Vec<String> = m.bodies.iter().map(|b| b.id.to_string()).collect();
+    let mut cluster_of: BTreeMap<&str, usize> = BTreeMap::new();
+    for (ci, c) in r.rigid.iter().enumerate() {
+        for b in &c.bodies {
+            cluster_of.insert(b.as_str(), ci);
+        }
+    }
+    let isolated: BTreeSet<&str> = r
+        .isolated_motions
+        .iter()
+        .filter(|i| i.kind == "fully")
+        .flat_map(|i| i.bodies.iter().map(String::as_str))
+        .collect();
+    let node = |i: usize| -> String {
+        let id = ids[i].as_str();
+        let shape = if i == m.frame {
+            "box"
+        } else if isolated.contains(id) {
+            "doublecircle"
+        } else {
+            "circle"
+        };
+        let fill = if i == m.frame { "#dddddd" } else { "white" };
+        format!(
+            "{} [label={}, shape={shape}, style=filled, fillcolor={}];",
+            body_node(i),
+            quote(id),
+            quote(fill)
+        )
+    };
+    for (ci, c) in r.rigid.iter().enumerate() {
+        let _ = writeln!(out, "  subgraph cluster_rigid_{ci} {{");
+        let label = if c.frame {
+            format!("rigid part {} (with the frame)", ci + 1)
+        } else {
+            format!("rigid part {}", ci + 1)
+        };
+        let style = if c.frame {
+            "style=\"dashed,filled\"; fillcolor=\"#f2f2f2\";"
+        } else {
+            "style=dashed;"
+        };
+        let _ = writeln!(out, "    label={}; {style}", quote(&label));
+        for (i, id) in ids.iter().enumerate() {
+            if cluster_of.get(id.as_str()) == Some(&ci) {
+                let _ = writeln!(out, "    {}", node(i));
+            }
+        }
+        out.push_str("  }\n");
+    }
+    for (i, id) in ids.iter().enumerate() {
+        if !cluster_of.contains_key(id.as_str()) {
+            let _ = writeln!(out, "  {}", node(i));
+        }
+    }
+    let redundant: BTreeMap<&str, f64> = r
+        .redundant_joints
+        .iter()
+        .map(|w| (w.joint.as_str(), w.weight))
+        .collect();
+    for (ji, j) in m.joints.iter().enumerate() {
+        let mut label = format!("{} {}", j.id, j.kind.code());
+        let mut attrs = String::new();
+        if let Some(w) = redundant.get(j.id.as_str()) {
+            label.push_str(&format!("\nredundant {w:.2}"));
+            attrs.push_str(", color=\"#c0392b\", fontcolor=\"#c0392b\", penwidth=2.5");
+        }
+        if j.bodies.len() == 2 {
+            let _ = writeln!(
+                out,
+                "  {} -> {} [label={}{attrs}];",
+                body_node(j.bodies[0]),
+                body_node(j.bodies[1]),
+                quote(&label)
+            );
+        } else {
+            let hub = format!("j{ji}");
+            let _ = writeln!(
+                out,
+                "  {hub} [xlabel={}, label=\"\", shape=point, width=0.12, fontsize=8{attrs}];",
+                quote(&label)
+            );
+            for &b in &j.bodies {
+                let _ = writeln!(
+                    out,
+                    "  {hub} -> {} [{}];",
+                    body_node(b),
+                    attrs.trim_start_matches(", ")
+                );
+            }
+        }
+    }
+    let _ = writeln!(
+        out,
+        "  legend [shape=plaintext, label=<<table border=\"0\" cellborder=\"0\" cellspacing=\"0\" cellpadding=\"2\"><tr><td align=\"left\">{}: mobility {} (count {}), {} isolated, {} redundant</td></tr><tr><td align=\"left\"><font color=\"#c0392b\">red</font>: joints in the redundant constraints; double circle: body with an isolated freedom</td></tr></table>>];",
+        html(&r.geometry),
+        r.mobility,
+        r.count,
+        r.isolated,
+        r.redundant
+    );
+    out.push_str("}\n");
+    out
 }
 
 /// Node name of group `i`.
@@ -339,7 +456,7 @@ pub fn topology(m: &Mechanism) -> String {
             let hub = format!("j{ji}");
             let _ = writeln!(
                 out,
-                "  {hub} [label={}, shape=circle, width=0.15, fixedsize=false, fontsize=8];",
+                "  {hub} [xlabel={}, label=\"\", shape=point, width=0.12, fontsize=8];",
                 quote(&label)
             );
             for &b in &j.bodies {
