@@ -63,7 +63,7 @@ def mbsa_components(path):
     if not MBSA.exists():
         return None, None, "no target/release/mbsa"
     t = time.perf_counter()
-    p = subprocess.run([str(MBSA), "rigid", "--format", "json", str(path)],
+    p = subprocess.run([str(MBSA), "rigid", "--method", "counting", "--format", "json", str(path)],
                        capture_output=True, text=True)
     dt = time.perf_counter() - t
     if p.returncode != 0:
