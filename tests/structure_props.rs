@@ -175,7 +175,7 @@ fn global_rank(m: &Mechanism, seed: u64) -> (usize, usize, usize) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 500, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
 
     #[test]
     fn rank_check_matches_global_jacobian(n in 2usize..=12, planar: bool, seed: u64) {
