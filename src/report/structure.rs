@@ -40,14 +40,14 @@ pub fn table(a: &Analysis) -> String {
         for g in &a.groups {
             t.add_row(vec![
                 g.name.clone(),
-                g.bodies.join(","),
+                wrap(&g.bodies.join(","), ','),
                 g.nm.to_string(),
                 g.inputs.to_string(),
                 g.level.to_string(),
                 g.kind.clone(),
-                dash(&g.from),
-                dash(&g.internal),
-                dash(&g.to),
+                wrap(&dash(&g.from), '.'),
+                wrap(&dash(&g.internal), '.'),
+                wrap(&dash(&g.to), '.'),
             ]);
         }
         let _ = writeln!(out, "{t}");
@@ -65,6 +65,19 @@ pub fn table(a: &Analysis) -> String {
             ]);
         }
         let _ = writeln!(out, "{t}");
+    }
+    if !a.unchecked.is_empty() {
+        let sizes: Vec<String> = a
+            .unchecked
+            .iter()
+            .map(|u| format!("{} bodies ({} unknowns)", u.bodies, u.unknowns))
+            .collect();
+        let _ = writeln!(
+            out,
+            "note: the rank check left {} block(s) to the count, too large to factorize densely: {}",
+            a.unchecked.len(),
+            sizes.join(", ")
+        );
     }
     if !a.isolated.is_empty() {
         let list: Vec<String> = a
@@ -96,6 +109,27 @@ pub fn table(a: &Analysis) -> String {
                 r.freedom
             );
         }
+    }
+    out
+}
+
+/// Widest line of a list cell. Tables pad every row to the widest cell, so one giant group
+/// (thousands of pairs) would otherwise make every row of the table as wide as its list.
+const CELL_WIDTH: usize = 48;
+
+/// Break a list (`9&10S.9&13R.` or `3,5,7`) into lines of at most [`CELL_WIDTH`] characters,
+/// after a separator, so that no entry is split.
+fn wrap(text: &str, sep: char) -> String {
+    let mut out = String::with_capacity(text.len() + text.len() / CELL_WIDTH + 1);
+    let mut line = 0;
+    for entry in text.split_inclusive(sep) {
+        let n = entry.chars().count();
+        if line > 0 && line + n > CELL_WIDTH {
+            out.push('\n');
+            line = 0;
+        }
+        out.push_str(entry);
+        line += n;
     }
     out
 }

@@ -22,6 +22,7 @@ use crate::mechanism::Mechanism;
 use count::{Decomposition, Equations, Part, RawGroup};
 use serde::Serialize;
 use std::collections::BTreeMap;
+use std::fmt::Write as _;
 
 /// Which decomposition algorithm to use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize)]
@@ -192,6 +193,17 @@ pub struct Diagnosis {
     pub notes: Vec<String>,
 }
 
+/// A block the rank check left to the count because it is too large to factorize densely.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub struct Unchecked {
+    /// Number of bodies in the block.
+    pub bodies: usize,
+    /// Its unknowns (body DOF less isolated freedoms).
+    pub unknowns: usize,
+    /// Its equations.
+    pub equations: usize,
+}
+
 /// The full structural analysis.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Analysis {
@@ -221,6 +233,10 @@ pub struct Analysis {
     pub isolated: Vec<Isolated>,
     /// Redundant equations (rank check).
     pub redundant: Vec<Redundancy>,
+    /// Blocks too large for the rank check (their verdict is the count's); empty when every
+    /// block was checked.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub unchecked: Vec<Unchecked>,
     /// Present unless the mechanism is determined.
     pub diagnosis: Option<Diagnosis>,
 }
@@ -235,26 +251,31 @@ pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Analysis {
     }
     let mut isolated = Vec::new();
     let mut redundant = Vec::new();
-    let dec = if opts.count_only {
+    let mut unchecked = Vec::new();
+    let mut dec = if opts.count_only {
         count::decompose(m, &eqs, &u)
     } else {
         let r = rank::check(m, opts.seed, &mut eqs, &mut u);
         isolated = r.isolated;
         redundant = r.redundant;
+        unchecked = r.unchecked;
         r.decomposition
     };
     let mut unsolved = Vec::new();
     let groups: Vec<RawGroup> = match opts.method {
-        Method::Flow => dec.groups.clone(),
+        // `build` reads the parts only, so the groups can move out.
+        Method::Flow => std::mem::take(&mut dec.groups),
         Method::Exhaustive => {
             let s = exhaustive::search(m, &eqs, &u);
             unsolved = s.unsolved;
             s.groups
         }
     };
-    build(
+    let mut a = build(
         m, &eqs, &dec, groups, unsolved, isolated, redundant, opts, lib,
-    )
+    );
+    a.unchecked = unchecked;
+    a
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -289,28 +310,50 @@ fn build(
     if let Some(k) = key.get_mut(m.frame) {
         *k = -2;
     }
-    // Pairs touching each body.
-    let mut touching: Vec<Vec<usize>> = vec![Vec::new(); nb];
+    // Pairs touching each body, compressed (`touch[start[x]..start[x + 1]]`), in pair order.
+    let mut start = vec![0usize; nb + 1];
     for e in 0..eqs.len() {
         let [a, c] = eqs.bodies(e);
-        touching[a].push(e);
+        start[a + 1] += 1;
         if c != a {
-            touching[c].push(e);
+            start[c + 1] += 1;
         }
     }
+    for i in 0..nb {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut touch = vec![0usize; start[nb]];
+    for e in 0..eqs.len() {
+        let [a, c] = eqs.bodies(e);
+        touch[fill[a]] = e;
+        fill[a] += 1;
+        if c != a {
+            touch[fill[c]] = e;
+            fill[c] += 1;
+        }
+    }
+    drop(fill);
     let code = |e: usize| m.joints[eqs.joint[e]].kind.code();
     let mut groups = Vec::with_capacity(raw.len());
-    let mut type_order: Vec<String> = Vec::new();
-    let mut type_count: BTreeMap<String, usize> = BTreeMap::new();
+    // Types in order of first appearance, with their counts and library membership.
+    let mut type_order: Vec<(String, usize, bool)> = Vec::new();
+    let mut type_index: BTreeMap<String, usize> = BTreeMap::new();
+    // Per-group scratch, reused so that the loop allocates only what it returns.
+    let mut from: Vec<(usize, usize, usize)> = Vec::new();
+    let mut internal: Vec<(usize, usize, usize)> = Vec::new();
+    let mut to: Vec<(usize, usize, usize)> = Vec::new();
+    let mut kinds: Vec<(JointType, usize)> = Vec::new();
+    let mut kind = String::new();
     for (g, grp) in raw.iter().enumerate() {
         let gk = g as i64;
-        let mut from: Vec<(usize, usize, usize)> = Vec::new();
-        let mut internal: Vec<(usize, usize, usize)> = Vec::new();
-        let mut to: Vec<(usize, usize, usize)> = Vec::new();
-        let mut kinds: BTreeMap<JointType, usize> = BTreeMap::new();
+        from.clear();
+        internal.clear();
+        to.clear();
+        kinds.clear();
         let mut inputs = 0u32;
         for &x in &grp.bodies {
-            for &e in &touching[x] {
+            for &e in &touch[start[x]..start[x + 1]] {
                 let [a, c] = eqs.bodies(e);
                 let y = if a == x { c } else { a };
                 let active = if key[y] == gk {
@@ -328,34 +371,49 @@ fn build(
                     false
                 };
                 if active {
-                    *kinds.entry(m.joints[eqs.joint[e]].kind).or_default() += 1;
+                    let jt = m.joints[eqs.joint[e]].kind;
+                    match kinds.iter_mut().find(|(k, _)| *k == jt) {
+                        Some((_, n)) => *n += 1,
+                        None => kinds.push((jt, 1)),
+                    }
                     inputs += eqs.driven[e];
                 }
             }
         }
         let render = |list: &mut Vec<(usize, usize, usize)>| {
             list.sort_unstable();
-            list.iter()
-                .map(|&(i, j, e)| format!("{}&{}{}.", id(i), id(j), code(e)))
-                .collect::<String>()
+            let mut s = String::with_capacity(list.len() * 8);
+            for &(i, j, e) in list.iter() {
+                // Writing into a String cannot fail.
+                let _ = write!(s, "{}&{}{}.", m.body_id(i), m.body_id(j), code(e));
+            }
+            s
         };
-        let kind: String = kinds
-            .iter()
-            .map(|(k, n)| format!("{n}{}", k.code()))
-            .chain(std::iter::once(m.space.suffix().to_string()))
-            .collect();
-        if !type_count.contains_key(&kind) {
-            type_order.push(kind.clone());
+        // Joint types in catalogue order, as the BTreeMap over `JointType` gave them.
+        kinds.sort_unstable_by_key(|&(k, _)| k);
+        kind.clear();
+        for (k, n) in &kinds {
+            let _ = write!(kind, "{n}{}", k.code());
         }
-        *type_count.entry(kind.clone()).or_default() += 1;
+        kind.push_str(m.space.suffix());
+        let t = match type_index.get(&kind) {
+            Some(&t) => t,
+            None => {
+                let t = type_order.len();
+                type_order.push((kind.clone(), 0, lib.contains(&kind)));
+                type_index.insert(kind.clone(), t);
+                t
+            }
+        };
+        type_order[t].1 += 1;
         groups.push(Group {
             name: format!("SG-{}", roman(g + 1)),
             bodies: grp.bodies.iter().map(|&b| id(b)).collect(),
             nm: grp.bodies.len(),
             level: grp.level,
             inputs,
-            in_library: lib.contains(&kind),
-            kind,
+            in_library: type_order[t].2,
+            kind: type_order[t].0.clone(),
             depends_on: grp.deps.clone(),
             from: render(&mut from),
             internal: render(&mut internal),
@@ -364,10 +422,10 @@ fn build(
     }
     let types = type_order
         .into_iter()
-        .map(|t| TypeCount {
-            count: type_count.get(&t).copied().unwrap_or(0),
-            in_library: lib.contains(&t),
-            kind: t,
+        .map(|(kind, count, in_library)| TypeCount {
+            kind,
+            count,
+            in_library,
         })
         .collect();
 
@@ -398,6 +456,7 @@ fn build(
         library: lib.name.clone(),
         isolated,
         redundant,
+        unchecked: Vec::new(),
         diagnosis: (status != Status::Determined || !diag.unsolved.is_empty()).then_some(diag),
     }
 }

@@ -19,18 +19,26 @@
 //! `unknowns − missing`: the per-block checks decide the whole mechanism.
 
 use super::count::{Decomposition, Equations, Part, decompose};
-use super::{Isolated, Redundancy};
+use super::{Isolated, Redundancy, Unchecked};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use crate::motion;
 use nalgebra::DMatrix;
+use std::collections::HashSet;
 
 /// What the rank check found, with the final decomposition.
 pub(crate) struct RankResult {
     pub decomposition: Decomposition,
     pub isolated: Vec<Isolated>,
     pub redundant: Vec<Redundancy>,
+    pub unchecked: Vec<Unchecked>,
 }
+
+/// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
+/// O(n^3) time and O(n^2) memory: 1,200 unknowns is about a second and 20 MB, while the giant
+/// groups of some generated mechanisms (tens of thousands of unknowns) would need gigabytes
+/// to terabytes. Larger blocks keep the count's verdict and are reported as unchecked.
+pub(crate) const MAX_DENSE_UNKNOWNS: usize = 1200;
 
 /// Relative tolerance on singular values (scaled by the largest one and the size).
 const REL_TOL: f64 = 1e-9;
@@ -40,23 +48,17 @@ const REL_TOL: f64 = 1e-9;
 struct Svd {
     sv: Vec<f64>,
     u: DMatrix<f64>,
-    v_t: DMatrix<f64>,
     tol: f64,
 }
 
 impl Svd {
+    /// Full SVD (singular values and both bases).
     fn of(a: &DMatrix<f64>) -> Svd {
-        let n = a.nrows().max(a.ncols()).max(1);
-        let mut p = DMatrix::<f64>::zeros(n, n);
-        p.view_mut((0, 0), (a.nrows(), a.ncols())).copy_from(a);
-        let svd = p.svd(true, true);
-        let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
-        let max = sv.iter().copied().fold(0.0, f64::max);
-        let tol = (max * n as f64 * REL_TOL).max(1e-300);
+        // V as before, although unused: the deficit path stays exactly the original SVD.
+        let (sv, tol, u, _) = svd_parts(a, true, true);
         Svd {
             sv,
-            u: svd.u.expect("requested U"),
-            v_t: svd.v_t.expect("requested V^T"),
+            u: u.expect("requested U"),
             tol,
         }
     }
@@ -66,11 +68,37 @@ impl Svd {
     }
 }
 
+/// The padded SVD behind [`Svd`]; `compute_u` / `compute_v` only decide which bases are
+/// accumulated: the singular values come out bit for bit the same either way (the rotations
+/// are computed regardless), so rank decisions agree with the full SVD.
+#[allow(clippy::type_complexity)]
+fn svd_parts(
+    a: &DMatrix<f64>,
+    compute_u: bool,
+    compute_v: bool,
+) -> (Vec<f64>, f64, Option<DMatrix<f64>>, Option<DMatrix<f64>>) {
+    let n = a.nrows().max(a.ncols()).max(1);
+    let p = if a.nrows() == n && a.ncols() == n {
+        a.clone()
+    } else {
+        let mut p = DMatrix::<f64>::zeros(n, n);
+        p.view_mut((0, 0), (a.nrows(), a.ncols())).copy_from(a);
+        p
+    };
+    let svd = p.svd(compute_u, compute_v);
+    let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
+    let max = sv.iter().copied().fold(0.0, f64::max);
+    let tol = (max * n as f64 * REL_TOL).max(1e-300);
+    (sv, tol, svd.u, svd.v_t)
+}
+
+/// Numerical rank (same decision as `Svd::of(a).rank()`), without the singular vectors.
 fn rank_of(a: &DMatrix<f64>) -> usize {
     if a.nrows() == 0 || a.ncols() == 0 {
         return 0;
     }
-    Svd::of(a).rank()
+    let (sv, tol, _, _) = svd_parts(a, false, false);
+    sv.iter().filter(|&&s| s > tol).count()
 }
 
 /// Run the check; `eqs.cap` and `u` are lowered in place.
@@ -82,15 +110,31 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         eqs.cap[e] = r.nrows() as u32;
     }
 
-    // Pairs touching each body.
-    let mut touching: Vec<Vec<usize>> = vec![Vec::new(); nb];
+    // Pairs touching each body (compressed: `touch[start[x]..start[x + 1]]`), proper pairs
+    // only (a pair of a body with itself constrains nothing).
+    let mut start = vec![0usize; nb + 1];
     for e in 0..eqs.len() {
         let [h, o] = eqs.bodies(e);
-        touching[h].push(e);
-        if o != h {
-            touching[o].push(e);
+        if h != o {
+            start[h + 1] += 1;
+            start[o + 1] += 1;
         }
     }
+    for i in 0..nb {
+        start[i + 1] += start[i];
+    }
+    let mut fill = start.clone();
+    let mut touch = vec![0usize; start[nb]];
+    for e in 0..eqs.len() {
+        let [h, o] = eqs.bodies(e);
+        if h != o {
+            for x in [h, o] {
+                touch[fill[x]] = e;
+                fill[x] += 1;
+            }
+        }
+    }
+    drop(fill);
 
     // (a) Isolated freedoms and reduced unknowns.
     let mut q: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
@@ -99,34 +143,26 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         if body == m.frame {
             continue;
         }
-        let total: usize = touching[body]
-            .iter()
-            .filter(|&&e| {
-                let [h, o] = eqs.bodies(e);
-                h != o
-            })
-            .map(|&e| rows[e].nrows())
-            .sum();
-        let mut s = DMatrix::<f64>::zeros(total, b);
-        let mut r0 = 0;
-        for &e in &touching[body] {
-            let [h, o] = eqs.bodies(e);
-            if h == o {
-                continue;
-            }
-            s.view_mut((r0, 0), (rows[e].nrows(), b))
-                .copy_from(&rows[e]);
-            r0 += rows[e].nrows();
-        }
+        let mine = &touch[start[body]..start[body + 1]];
+        let total: usize = mine.iter().map(|&e| rows[e].nrows()).sum();
         let basis = if total == 0 {
             DMatrix::zeros(b, 0)
         } else {
-            let svd = Svd::of(&s);
-            let keep: Vec<usize> = (0..svd.sv.len()).filter(|&i| svd.sv[i] > svd.tol).collect();
+            let mut s = DMatrix::<f64>::zeros(total, b);
+            let mut r0 = 0;
+            for &e in mine {
+                s.view_mut((r0, 0), (rows[e].nrows(), b))
+                    .copy_from(&rows[e]);
+                r0 += rows[e].nrows();
+            }
+            // Only V is needed: skipping U leaves V and the singular values unchanged.
+            let (sv, tol, _, v_t) = svd_parts(&s, false, true);
+            let v_t = v_t.expect("requested V^T");
+            let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
             let mut qb = DMatrix::<f64>::zeros(b, keep.len());
             for (c, &i) in keep.iter().enumerate() {
                 for k in 0..b {
-                    qb[(k, c)] = svd.v_t[(i, k)];
+                    qb[(k, c)] = v_t[(i, k)];
                 }
             }
             qb
@@ -141,10 +177,17 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         u[body] = basis.ncols() as u32;
         q[body] = basis;
     }
+    drop(touch);
+    drop(start);
 
     // (b)-(c) Decompose, check every block, lower, repeat.
     let mut redundant = Vec::new();
-    let mut verified = std::collections::HashSet::new();
+    let mut unchecked: Vec<Unchecked> = Vec::new();
+    // Blocks already found sound, keyed by their bodies and their pairs with row counts (a
+    // block's rank depends on nothing else), so a repeat pass only checks what changed.
+    let mut verified: HashSet<Vec<usize>> = HashSet::new();
+    // Column offset of each body in the block being built (`usize::MAX` outside it).
+    let mut col = vec![usize::MAX; nb];
     loop {
         let dec = decompose(m, eqs, u);
         // Blocks in triangular order: over-determined part, groups, under-determined part.
@@ -154,52 +197,81 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         let under: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Under)
             .collect();
-        let mut blocks: Vec<(Vec<usize>, Part)> = Vec::with_capacity(dec.groups.len() + 2);
-        if !over.is_empty() {
-            blocks.push((over, Part::Over));
-        }
-        blocks.extend(
-            dec.groups
-                .iter()
-                .enumerate()
-                .map(|(g, grp)| (grp.bodies.clone(), Part::Group(g))),
-        );
-        if !under.is_empty() {
-            blocks.push((under, Part::Under));
-        }
-        // Pairs of every block in one pass.
-        let mut block_of_part = std::collections::HashMap::new();
-        for (i, (_, part)) in blocks.iter().enumerate() {
-            block_of_part.insert(*part, i);
-        }
-        let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); blocks.len()];
+        let first_group = usize::from(!over.is_empty());
+        let ng = dec.groups.len();
+        let nblocks = first_group + ng + usize::from(!under.is_empty());
+        let block_of = |part: Part| -> Option<usize> {
+            match part {
+                Part::Over if !over.is_empty() => Some(0),
+                Part::Group(g) if g < ng => Some(first_group + g),
+                Part::Under if !under.is_empty() => Some(first_group + ng),
+                _ => None,
+            }
+        };
+        // Pairs of every block in one pass (compressed by block).
+        let mut bstart = vec![0usize; nblocks + 1];
         for (e, r) in rows.iter().enumerate() {
             if r.nrows() == 0 {
                 continue;
             }
-            if let Some(&i) = block_of_part.get(&dec.eq_part[e]) {
-                pairs_of[i].push(e);
+            if let Some(i) = block_of(dec.eq_part[e]) {
+                bstart[i + 1] += 1;
+            }
+        }
+        for i in 0..nblocks {
+            bstart[i + 1] += bstart[i];
+        }
+        let mut bfill = bstart.clone();
+        let mut beqs = vec![0usize; bstart[nblocks]];
+        for (e, r) in rows.iter().enumerate() {
+            if r.nrows() == 0 {
+                continue;
+            }
+            if let Some(i) = block_of(dec.eq_part[e]) {
+                beqs[bfill[i]] = e;
+                bfill[i] += 1;
             }
         }
         let mut changed = false;
-        for ((bodies, part), block_eqs) in blocks.into_iter().zip(pairs_of) {
+        for i in 0..nblocks {
+            let block_eqs = &beqs[bstart[i]..bstart[i + 1]];
             if block_eqs.is_empty() {
                 continue;
             }
-            // A block's rank depends only on its own pairs (with their rows) and bodies.
-            let signature = (
-                bodies.clone(),
-                block_eqs
-                    .iter()
-                    .map(|&e| (e, rows[e].nrows()))
-                    .collect::<Vec<_>>(),
-            );
+            let (bodies, part): (&[usize], Part) = if i < first_group {
+                (&over, Part::Over)
+            } else if i < first_group + ng {
+                (
+                    &dec.groups[i - first_group].bodies,
+                    Part::Group(i - first_group),
+                )
+            } else {
+                (&under, Part::Under)
+            };
+            let mut signature = Vec::with_capacity(bodies.len() + 1 + 2 * block_eqs.len());
+            signature.extend_from_slice(bodies);
+            signature.push(usize::MAX);
+            for &e in block_eqs {
+                signature.push(e);
+                signature.push(rows[e].nrows());
+            }
             if verified.contains(&signature) {
                 continue;
             }
-            let a = block_matrix(&block_eqs, &bodies, eqs, &rows, &q, nb);
-            let svd = Svd::of(&a);
-            let rank = svd.rank();
+            let unknowns: usize = bodies.iter().map(|&x| u[x] as usize).sum();
+            let equations: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+            if unknowns.max(equations) > MAX_DENSE_UNKNOWNS {
+                unchecked.push(Unchecked {
+                    bodies: bodies.len(),
+                    unknowns,
+                    equations,
+                });
+                verified.insert(signature);
+                continue;
+            }
+            let a = block_matrix(block_eqs, bodies, eqs, &rows, &q, &mut col);
+            // Singular values first; the vectors only when a deficit must be explained.
+            let rank = rank_of(&a);
             // The over-determined block is tall: its surplus rows are the count's business
             // unless it also hides a freedom (a column deficit); then every dependent row goes,
             // so that the count sees the freedom.
@@ -212,13 +284,19 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
                 verified.insert(signature);
                 continue;
             }
+            let svd = Svd::of(&a);
+            debug_assert_eq!(
+                svd.rank(),
+                rank,
+                "same singular values with or without vectors"
+            );
             // Weight of each pair in the left null space.
             let null: Vec<usize> = (0..svd.sv.len())
                 .filter(|&i| svd.sv[i] <= svd.tol)
                 .collect();
             let mut named: Vec<(usize, f64)> = Vec::new();
             let mut r0 = 0;
-            for &e in &block_eqs {
+            for &e in block_eqs {
                 let n = rows[e].nrows();
                 let w: f64 = (r0..r0 + n)
                     .map(|r| null.iter().map(|&k| svd.u[(r, k)].powi(2)).sum::<f64>())
@@ -235,7 +313,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             let mut removed = 0;
             for &(e, _) in &order {
                 removed = drop_rows(
-                    e, deficit, &block_eqs, &bodies, eqs, &mut rows, &q, nb, rank,
+                    e, deficit, block_eqs, bodies, eqs, &mut rows, &q, &mut col, rank,
                 );
                 if removed > 0 {
                     lowered = e;
@@ -253,7 +331,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             joints.dedup();
             redundant.push(Redundancy {
                 bodies: bodies.iter().map(|&x| m.body_id(x).to_string()).collect(),
-                freedom: describe(m, &bodies, &joints, removed),
+                freedom: describe(m, bodies, &joints, removed),
                 joints: joints.iter().map(|&j| m.joints[j].id.clone()).collect(),
                 count: removed as u32,
                 lowered: m.joints[eqs.joint[lowered]].id.clone(),
@@ -262,10 +340,14 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             break;
         }
         if !changed {
+            // Only the blocks of the final decomposition matter.
+            unchecked.sort_by_key(|x| (std::cmp::Reverse(x.unknowns), x.bodies, x.equations));
+            unchecked.dedup();
             return RankResult {
                 decomposition: dec,
                 isolated,
                 redundant,
+                unchecked,
             };
         }
     }
@@ -274,33 +356,44 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
 /// Constraint rows of every pair at the seeded random geometry. A pair of a multiple joint
 /// whose driven share differs from the joint's gets the same geometry with its own share.
 fn pair_rows(m: &Mechanism, seed: u64, eqs: &Equations) -> Vec<DMatrix<f64>> {
-    let base = motion::realize(m, seed);
+    let mut base = motion::realize(m, seed);
     (0..eqs.len())
         .map(|e| {
             let ji = eqs.joint[e];
             let j = &m.joints[ji];
+            // A joint's pairs are consecutive: its last pair may take the rows instead of
+            // copying them.
+            let last = e + 1 == eqs.len() || eqs.joint[e + 1] != ji;
+            let own = |base: &mut Vec<motion::JointModel>| {
+                if last {
+                    std::mem::replace(&mut base[ji].rows, DMatrix::zeros(0, 0))
+                } else {
+                    base[ji].rows.clone()
+                }
+            };
             if eqs.driven[e] == j.driven {
-                return base[ji].rows.clone();
+                return own(&mut base);
             }
             let mut rng = motion::SplitMix64::new(motion::joint_seed(seed, ji));
             let g = motion::random_geometry(j.kind, m.space, &mut rng);
-            motion::joint_model(j.kind, &g, m.space, eqs.driven[e])
-                .map(|jm| jm.rows)
-                .unwrap_or_else(|_| base[ji].rows.clone())
+            match motion::joint_model(j.kind, &g, m.space, eqs.driven[e]) {
+                Ok(jm) => jm.rows,
+                Err(_) => own(&mut base),
+            }
         })
         .collect()
 }
 
 /// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`.
+/// `col` is scratch of one entry per body, `usize::MAX` on entry and on return.
 fn block_matrix(
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
     rows: &[DMatrix<f64>],
     q: &[DMatrix<f64>],
-    nb: usize,
+    col: &mut [usize],
 ) -> DMatrix<f64> {
-    let mut col = vec![usize::MAX; nb];
     let mut ncols = 0;
     for &x in bodies {
         col[x] = ncols;
@@ -315,12 +408,20 @@ fn block_matrix(
         if h != o {
             for (x, sign) in [(h, -1.0), (o, 1.0)] {
                 if col[x] != usize::MAX && q[x].ncols() > 0 {
-                    let blk = &rows[e] * &q[x] * sign;
-                    a.view_mut((r0, col[x]), (n, q[x].ncols())).copy_from(&blk);
+                    let blk = &rows[e] * &q[x];
+                    let c0 = col[x];
+                    for c in 0..blk.ncols() {
+                        for r in 0..n {
+                            a[(r0 + r, c0 + c)] = blk[(r, c)] * sign;
+                        }
+                    }
                 }
             }
         }
         r0 += n;
+    }
+    for &x in bodies {
+        col[x] = usize::MAX;
     }
     a
 }
@@ -335,7 +436,7 @@ fn drop_rows(
     eqs: &Equations,
     rows: &mut [DMatrix<f64>],
     q: &[DMatrix<f64>],
-    nb: usize,
+    col: &mut [usize],
     rank: usize,
 ) -> usize {
     let mut removed = 0;
@@ -344,7 +445,7 @@ fn drop_rows(
         r -= 1;
         let saved = rows[e].clone();
         rows[e] = saved.clone().remove_row(r);
-        let a = block_matrix(block_eqs, bodies, eqs, rows, q, nb);
+        let a = block_matrix(block_eqs, bodies, eqs, rows, q, col);
         if rank_of(&a) == rank {
             removed += 1;
         } else {
