@@ -113,30 +113,7 @@ pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
             label.push_str(&format!("\nredundant {w:.2}"));
             attrs.push_str(", color=\"#c0392b\", fontcolor=\"#c0392b\", penwidth=2.5");
         }
-        if j.bodies.len() == 2 {
-            let _ = writeln!(
-                out,
-                "  {} -> {} [label={}{attrs}];",
-                body_node(j.bodies[0]),
-                body_node(j.bodies[1]),
-                quote(&label)
-            );
-        } else {
-            let hub = format!("j{ji}");
-            let _ = writeln!(
-                out,
-                "  {hub} [xlabel={}, label=\"\", shape=point, width=0.12, fontsize=8{attrs}];",
-                quote(&label)
-            );
-            for &b in &j.bodies {
-                let _ = writeln!(
-                    out,
-                    "  {hub} -> {} [{}];",
-                    body_node(b),
-                    attrs.trim_start_matches(", ")
-                );
-            }
-        }
+        draw_joint(&mut out, ji, &j.bodies, &label, &attrs);
     }
     let _ = writeln!(
         out,
@@ -401,6 +378,35 @@ pub(crate) fn header(out: &mut String, name: &str, rankdir: &str) {
     let _ = writeln!(out, "  edge [fontname=\"Helvetica\", fontsize=9];");
 }
 
+/// One joint of the topology-like views: an edge for a binary joint, a small hub node with an
+/// edge to each body for a multiple joint. `attrs` is empty or starts with `, `.
+fn draw_joint(out: &mut String, ji: usize, bodies: &[usize], label: &str, attrs: &str) {
+    if let [a, b] = bodies {
+        let _ = writeln!(
+            out,
+            "  {} -> {} [label={}{attrs}];",
+            body_node(*a),
+            body_node(*b),
+            quote(label)
+        );
+        return;
+    }
+    let hub = format!("j{ji}");
+    let _ = writeln!(
+        out,
+        "  {hub} [xlabel={}, label=\"\", shape=point, width=0.12, fontsize=8{attrs}];",
+        quote(label)
+    );
+    for &b in bodies {
+        let _ = writeln!(
+            out,
+            "  {hub} -> {} [{}];",
+            body_node(b),
+            attrs.trim_start_matches(", ")
+        );
+    }
+}
+
 /// Node name of body `i` (stable, independent of the id's spelling).
 pub(crate) fn body_node(i: usize) -> String {
     format!("b{i}")
@@ -444,30 +450,7 @@ pub fn topology(m: &Mechanism) -> String {
         } else {
             ""
         };
-        if j.bodies.len() == 2 {
-            let _ = writeln!(
-                out,
-                "  {} -> {} [label={}{style}];",
-                body_node(j.bodies[0]),
-                body_node(j.bodies[1]),
-                quote(&label)
-            );
-        } else {
-            let hub = format!("j{ji}");
-            let _ = writeln!(
-                out,
-                "  {hub} [xlabel={}, label=\"\", shape=point, width=0.12, fontsize=8];",
-                quote(&label)
-            );
-            for &b in &j.bodies {
-                let _ = writeln!(
-                    out,
-                    "  {hub} -> {} [{}];",
-                    body_node(b),
-                    style.trim_start_matches(", ")
-                );
-            }
-        }
+        draw_joint(&mut out, ji, &j.bodies, &label, style);
     }
     out.push_str("}\n");
     out
