@@ -1,7 +1,8 @@
 //! The validated mechanism model every analysis works from.
 //!
-//! Bodies are stored sorted by id (numbers first, numerically; then names), so analyses and
-//! reports do not depend on the order of declarations in the file. Joints keep file order.
+//! Bodies are stored sorted by id (numbers first, numerically; then names) and joints sorted by
+//! id in natural order, so analyses and reports do not depend on the order of declarations in
+//! the file.
 
 use crate::joint::JointType;
 use serde::{Deserialize, Serialize};
@@ -195,6 +196,43 @@ pub struct Expect {
     pub rigid_parts: Option<u64>,
 }
 
+/// Compare joint ids in natural order (`1-2` < `1-10` < `13-9`, `A` < `B`): digit runs compare
+/// as numbers, the rest as text.
+pub fn natural_cmp(a: &str, b: &str) -> Ordering {
+    fn chunks(s: &str) -> impl Iterator<Item = (bool, &str)> {
+        let mut rest = s;
+        std::iter::from_fn(move || {
+            let first = rest.chars().next()?;
+            let digit = first.is_ascii_digit();
+            let end = rest
+                .find(|c: char| c.is_ascii_digit() != digit)
+                .unwrap_or(rest.len());
+            let (head, tail) = rest.split_at(end);
+            rest = tail;
+            Some((digit, head))
+        })
+    }
+    let (mut x, mut y) = (chunks(a), chunks(b));
+    loop {
+        match (x.next(), y.next()) {
+            (None, None) => return a.cmp(b),
+            (None, Some(_)) => return Ordering::Less,
+            (Some(_), None) => return Ordering::Greater,
+            (Some((dx, cx)), Some((dy, cy))) => {
+                let o = if dx && dy {
+                    let (tx, ty) = (cx.trim_start_matches('0'), cy.trim_start_matches('0'));
+                    tx.len().cmp(&ty.len()).then_with(|| tx.cmp(ty))
+                } else {
+                    cx.cmp(cy)
+                };
+                if o != Ordering::Equal {
+                    return o;
+                }
+            }
+        }
+    }
+}
+
 /// A validated mechanism.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Mechanism {
@@ -209,7 +247,8 @@ pub struct Mechanism {
     pub frame: usize,
     /// Bodies sorted by id.
     pub bodies: Vec<Body>,
-    /// Joints in file order.
+    /// Joints sorted by id in natural order ([`natural_cmp`]), so that no analysis or report
+    /// depends on the order in which the file lists them.
     pub joints: Vec<Joint>,
     /// Expectations for `mbsa check`.
     pub expect: Expect,
@@ -358,6 +397,8 @@ impl Mechanism {
                 }
             })
             .collect();
+        let mut joints: Vec<Joint> = joints;
+        joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
         Mechanism {
             name: name.into(),
             description: None,
@@ -535,6 +576,16 @@ mod tests {
         ids.sort();
         let shown: Vec<String> = ids.iter().map(|i| i.to_string()).collect();
         assert_eq!(shown, ["2", "10", "a", "b"]);
+    }
+
+    #[test]
+    fn natural_order_of_joint_ids() {
+        let mut ids = ["13-9", "1-10", "1-2", "B", "A", "1-2#2", "x07", "x7a"];
+        ids.sort_by(|a, b| natural_cmp(a, b));
+        assert_eq!(
+            ids,
+            ["1-2", "1-2#2", "1-10", "13-9", "A", "B", "x07", "x7a"]
+        );
     }
 
     #[test]
