@@ -9,6 +9,9 @@ pub const WIDTH: usize = 100;
 /// Render a diagnostic (a [`crate::format::LoadError`], ...) as text. `color` selects ANSI
 /// colours; without it the output is plain Unicode, stable for snapshots and logs.
 pub fn render(diag: &dyn Diagnostic, color: bool) -> String {
+    if let Some(out) = render_long_line(diag) {
+        return out;
+    }
     let theme = if color {
         GraphicalTheme::unicode()
     } else {
@@ -23,6 +26,30 @@ pub fn render(diag: &dyn Diagnostic, color: bool) -> String {
         out = format!("error: {diag}\n");
     }
     out
+}
+
+/// Longest source line shown as a snippet, in bytes. miette panics on columns past 65535
+/// (a format width) and would print the whole line: minified JSON has megabyte lines.
+const MAX_SNIPPET_LINE: usize = 1000;
+
+/// `error: file:line:col: message` (and the hint) when a label sits on a line, or beside a
+/// line (miette shows one line of context), too long for a snippet; `None` otherwise.
+fn render_long_line(diag: &dyn Diagnostic) -> Option<String> {
+    let src = diag.source_code()?;
+    let mut labels = diag.labels()?;
+    let long = labels.find_map(|l| {
+        let shown = src.read_span(l.inner(), 1, 1).ok()?;
+        let widest = shown.data().split(|&b| b == b'\n').map(<[u8]>::len).max();
+        let at = src.read_span(l.inner(), 0, 0).ok()?;
+        (widest.unwrap_or(0) > MAX_SNIPPET_LINE || at.column() > MAX_SNIPPET_LINE).then_some(at)
+    })?;
+    let name = long.name().unwrap_or("<input>");
+    let (line, col) = (long.line() + 1, long.column() + 1);
+    let mut out = format!("error: {name}:{line}:{col}: {diag}\n");
+    if let Some(help) = diag.help() {
+        out.push_str(&format!("  help: {help}\n"));
+    }
+    Some(out)
 }
 
 /// Render an error without a source location (e.g. [`crate::mechanism::InputSpecError`]) as
