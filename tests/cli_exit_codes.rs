@@ -232,3 +232,28 @@ fn a_pipe_closed_mid_stream_ends_quietly() {
         100,
     );
 }
+
+/// Regression: miette panicked on a label past column 65,535 (minified JSON keeps a whole
+/// file on one line). The message must keep its location and the program must not panic.
+#[test]
+fn an_error_far_along_one_long_line_is_located_without_a_panic() {
+    let joints: Vec<String> = (2..3000)
+        .map(|i| format!("{{\"type\":\"R\",\"bodies\":[{},{i}]}}", i - 1))
+        .collect();
+    let text = format!(
+        "{{\"frame\":1,\"joints\":[{},{{\"type\":\"R\",\"bodies\":[1,2],\"drivn\":1}}]}}",
+        joints.join(",")
+    );
+    assert!(text.len() > 70_000);
+    let path = scratch("minified.json", &text);
+    let p = path.to_string_lossy().into_owned();
+    let out = mbsa()
+        .args(["mobility", &p])
+        .output()
+        .expect("the binary runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert!(stderr.contains("minified.json:1:"), "{stderr}");
+    assert!(stderr.contains("drivn"), "{stderr}");
+}
