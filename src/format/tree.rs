@@ -512,6 +512,27 @@ struct JsonParser<'a> {
 }
 
 impl JsonParser<'_> {
+    /// After an element of an object or array: consume `,` (more follow: `false`) or the
+    /// closing bracket (`true`).
+    fn list_end(&mut self, close: u8) -> Result<bool, LoadError> {
+        self.ws();
+        match self.bytes.get(self.pos) {
+            Some(b',') => {
+                self.pos += 1;
+                Ok(false)
+            }
+            Some(&c) if c == close => {
+                self.pos += 1;
+                Ok(true)
+            }
+            _ => Err(self.error(if close == b'}' {
+                "expected `,` or `}`"
+            } else {
+                "expected `,` or `]`"
+            })),
+        }
+    }
+
     fn error(&self, msg: &str) -> LoadError {
         let at = floor_boundary(self.text, self.pos.min(self.text.len()));
         syntax("JSON", msg, at..at, "here")
@@ -567,14 +588,8 @@ impl JsonParser<'_> {
                                     value,
                                 },
                             )?;
-                            self.ws();
-                            match self.bytes.get(self.pos) {
-                                Some(b',') => self.pos += 1,
-                                Some(b'}') => {
-                                    self.pos += 1;
-                                    break;
-                                }
-                                _ => return Err(self.error("expected `,` or `}`")),
+                            if self.list_end(b'}')? {
+                                break;
                             }
                         }
                     }
@@ -590,14 +605,8 @@ impl JsonParser<'_> {
                         loop {
                             self.ws();
                             items.push(self.value(depth + 1)?);
-                            self.ws();
-                            match self.bytes.get(self.pos) {
-                                Some(b',') => self.pos += 1,
-                                Some(b']') => {
-                                    self.pos += 1;
-                                    break;
-                                }
-                                _ => return Err(self.error("expected `,` or `]`")),
+                            if self.list_end(b']')? {
+                                break;
                             }
                         }
                     }

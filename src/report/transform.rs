@@ -222,24 +222,24 @@ pub fn comparison(c: &Comparison) -> String {
         status_label(g.status).to_string(),
         String::new(),
     ]);
-    t.add_row(vec![
-        "groups".to_string(),
-        f.scores.groups.to_string(),
-        g.scores.groups.to_string(),
-        signed(ch.groups),
-    ]);
-    t.add_row(vec![
-        "largest group".to_string(),
-        f.scores.largest.to_string(),
-        g.scores.largest.to_string(),
-        signed(ch.largest),
-    ]);
-    t.add_row(vec![
-        "levels".to_string(),
-        f.scores.levels.to_string(),
-        g.scores.levels.to_string(),
-        signed(ch.levels),
-    ]);
+    let numbers = [
+        ("groups", f.scores.groups, g.scores.groups, ch.groups),
+        (
+            "largest group",
+            f.scores.largest,
+            g.scores.largest,
+            ch.largest,
+        ),
+        ("levels", f.scores.levels, g.scores.levels, ch.levels),
+    ];
+    for (label, file, given, change) in numbers {
+        t.add_row(vec![
+            label.to_string(),
+            file.to_string(),
+            given.to_string(),
+            signed(change),
+        ]);
+    }
     t.add_row(vec![
         "library coverage".to_string(),
         coverage(f.scores.covered, f.scores.groups),
