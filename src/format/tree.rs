@@ -116,21 +116,142 @@ fn push_entry(entries: &mut Vec<Entry>, entry: Entry) -> Result<(), LoadError> {
 // ---------------------------------------------------------------------------------------------
 // TOML
 
+/// Files at least this large are parsed in pieces on all cores ([`parse_toml_chunked`]).
+const CHUNKED_TOML_BYTES: usize = 1 << 20;
+
 /// Parse TOML into a tree.
 pub(crate) fn parse_toml(text: &str) -> Result<Node, LoadError> {
+    if text.len() >= CHUNKED_TOML_BYTES
+        && let Some(root) = parse_toml_chunked(text, 4 * rayon::current_num_threads())
+    {
+        return Ok(root);
+    }
+    parse_toml_serial(text)
+}
+
+fn parse_toml_serial(text: &str) -> Result<Node, LoadError> {
     let table = toml::de::DeTable::parse(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let msg = e.message().trim().to_string();
         syntax("TOML", msg, span, "here")
     })?;
     let span = table.span();
-    toml_table(table.get_ref(), span, 1)
+    toml_table(table.get_ref(), span, 1, 0)
+}
+
+/// The header that starts every joint of a large generated or exported file.
+const JOINT_HEADER: &str = "\n[[joint]]";
+
+/// Parse a large TOML file as about `pieces` documents cut before `[[joint]]` header lines, in
+/// parallel, and join them; `None` (the caller then parses the whole text serially, which also
+/// finds any error) unless the join is exactly the serial tree. Why that holds:
+/// - a cut inside a multi-line string or array leaves the piece before it unterminated, so
+///   that piece fails to parse: if every piece parses, every cut is a real header line;
+/// - every later piece starts with `[[joint]]`, so its `joint` array holds its own joints
+///   (and its `[joint.geometry]` tables belong to them): arrays of tables made by headers
+///   concatenate in order (an inline `joint = [...]` is left to the serial parse);
+/// - any other top-level key in two pieces (a duplicate table, or `[[body]]` arrays split
+///   across pieces) is left to the serial parse;
+/// - spans are shifted by each piece's offset; the joint entry's spans come from the first
+///   header, as in the serial tree.
+fn parse_toml_chunked(text: &str, pieces: usize) -> Option<Node> {
+    use rayon::prelude::*;
+    let mut cuts = vec![0usize];
+    for k in 1..pieces {
+        let mut from = (text.len() * k / pieces).max(cuts[cuts.len() - 1]);
+        while !text.is_char_boundary(from) {
+            from += 1;
+        }
+        let Some(at) = text.get(from..).and_then(|t| t.find(JOINT_HEADER)) else {
+            break;
+        };
+        let cut = from + at + 1;
+        // Only a header alone on its line (a comment may follow).
+        let rest = text[cut + JOINT_HEADER.len() - 1..].trim_start_matches([' ', '\t']);
+        if (rest.is_empty() || rest.starts_with(['\n', '\r', '#'])) && cut > cuts[cuts.len() - 1] {
+            cuts.push(cut);
+        }
+    }
+    if cuts.len() < 2 {
+        return None;
+    }
+    cuts.push(text.len());
+    let trees: Vec<Option<Node>> = cuts
+        .par_windows(2)
+        .map(|w| {
+            let table = toml::de::DeTable::parse(&text[w[0]..w[1]]).ok()?;
+            toml_table(table.get_ref(), shift(table.span(), w[0]), 1, w[0]).ok()
+        })
+        .collect();
+    let mut span = None;
+    let mut top: Vec<Entry> = Vec::new();
+    let mut joint: Option<Entry> = None;
+    for tree in trees {
+        let tree = tree?;
+        span.get_or_insert(tree.span);
+        let Value::Map(entries) = tree.value else {
+            return None;
+        };
+        for e in entries {
+            if e.key == "joint" {
+                // Only arrays of tables made by headers join (not `joint = [...]`).
+                let Value::Seq(items) = e.value.value else {
+                    return None;
+                };
+                let header = |span: &Range<usize>| {
+                    text.get(span.clone()).is_some_and(|t| t.starts_with("[["))
+                };
+                if !header(&e.value.span)
+                    || !items
+                        .iter()
+                        .all(|t| matches!(t.value, Value::Map(_)) && header(&t.span))
+                {
+                    return None;
+                }
+                match &mut joint {
+                    None => {
+                        joint = Some(Entry {
+                            value: Node {
+                                span: e.value.span,
+                                value: Value::Seq(items),
+                            },
+                            ..e
+                        })
+                    }
+                    Some(Entry {
+                        value:
+                            Node {
+                                value: Value::Seq(all),
+                                ..
+                            },
+                        ..
+                    }) => all.extend(items),
+                    Some(_) => return None,
+                }
+            } else if top.iter().any(|t| t.key == e.key) {
+                return None;
+            } else {
+                top.push(e);
+            }
+        }
+    }
+    top.extend(joint);
+    top.sort_by_key(|e| e.key_span.start);
+    Some(Node {
+        span: span?,
+        value: Value::Map(top),
+    })
+}
+
+fn shift(span: Range<usize>, off: usize) -> Range<usize> {
+    span.start + off..span.end + off
 }
 
 fn toml_table(
     table: &toml::de::DeTable<'_>,
     span: Range<usize>,
     depth: usize,
+    off: usize,
 ) -> Result<Node, LoadError> {
     if depth > MAX_DEPTH {
         return Err(too_deep(span));
@@ -139,8 +260,8 @@ fn toml_table(
     for (k, v) in table.iter() {
         entries.push(Entry {
             key: k.get_ref().to_string(),
-            key_span: k.span(),
-            value: toml_value(v.get_ref(), v.span(), depth + 1)?,
+            key_span: shift(k.span(), off),
+            value: toml_value(v.get_ref(), shift(v.span(), off), depth + 1, off)?,
         });
     }
     // The toml map is sorted by key; the source order reads better in error sequences.
@@ -155,6 +276,7 @@ fn toml_value(
     v: &toml::de::DeValue<'_>,
     span: Range<usize>,
     depth: usize,
+    off: usize,
 ) -> Result<Node, LoadError> {
     use toml::de::DeValue;
     if depth > MAX_DEPTH {
@@ -172,11 +294,16 @@ fn toml_value(
         DeValue::Array(a) => {
             let mut items = Vec::with_capacity(a.len());
             for item in a.iter() {
-                items.push(toml_value(item.get_ref(), item.span(), depth + 1)?);
+                items.push(toml_value(
+                    item.get_ref(),
+                    shift(item.span(), off),
+                    depth + 1,
+                    off,
+                )?);
             }
             Value::Seq(items)
         }
-        DeValue::Table(t) => return toml_table(t, span, depth),
+        DeValue::Table(t) => return toml_table(t, span, depth, off),
     };
     Ok(Node { span, value })
 }
@@ -731,6 +858,61 @@ mod tests {
             ),
             Value::Seq(xs) => format!("[{}]", xs.iter().map(strip).collect::<Vec<_>>().join(",")),
             v => format!("{v:?}"),
+        }
+    }
+
+    /// The chunked TOML parse gives exactly the serial tree, or declines.
+    fn chunked_agrees(text: &str, pieces: usize) -> bool {
+        let chunked = parse_toml_chunked(text, pieces);
+        let serial = parse_toml_serial(text).ok();
+        match chunked {
+            Some(c) => {
+                assert_eq!(Some(c), serial, "chunked tree differs for {text:?}");
+                true
+            }
+            None => false,
+        }
+    }
+
+    #[test]
+    fn chunked_toml_equals_the_serial_tree() {
+        let m = crate::generate::random(60, false, 3).unwrap().0;
+        let mut text = crate::generate::to_toml(&m);
+        for pieces in [2, 3, 7, 50, 1000] {
+            assert!(chunked_agrees(&text, pieces), "a generated file is cut");
+        }
+        // Geometry subtables, comments after headers, a table after the joints.
+        text.push_str("\n[[joint]] # last\ntype = \"R\"\nbodies = [1, 2]\n[joint.geometry]\norigin = [0, 0, 1]\naxis = [0, 0, 1]\n\n[expect]\nmobility = 0\n");
+        for pieces in [2, 5, 40] {
+            assert!(chunked_agrees(&text, pieces));
+        }
+    }
+
+    #[test]
+    fn chunked_toml_declines_what_it_cannot_join() {
+        let joint = "[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n";
+        let cases = [
+            // A header inside a multi-line string and inside a multi-line array.
+            format!(
+                "name = \"\"\"\n{}\"\"\"\nframe = 1\n{joint}{joint}",
+                joint.repeat(20)
+            ),
+            format!("frame = 1\nx = [\n1,\n{joint}]\n{joint}"),
+            // An inline joint array, and a table given twice in two pieces.
+            format!("frame = 1\njoint = []\n{joint}{joint}"),
+            format!("frame = 1\njoint = [{{type = \"R\", bodies = [1, 2]}}]\n{joint}{joint}"),
+            format!("frame = 1\njoint = [[[1]], [[2]]]\n{joint}{joint}"),
+            format!("frame = 1\n{joint}[expect]\nmobility = 1\n{joint}[expect]\ngroups = 1\n"),
+            // `[[body]]` arrays in two pieces (valid TOML: the serial parse joins them).
+            format!("frame = 1\n{joint}[[body]]\nid = 1\n{joint}[[body]]\nid = 2\n"),
+            // A joint table redefined as a plain table.
+            format!("frame = 1\n{joint}{joint}[joint]\nx = 1\n"),
+        ];
+        for text in &cases {
+            for pieces in [2, 3, 8] {
+                chunked_agrees(text, pieces);
+            }
+            assert!(parse_toml_chunked(text, 2).is_none(), "{text}");
         }
     }
 
