@@ -8,6 +8,7 @@ use crate::joint::JointType;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
 use std::fmt;
+use std::fmt::Write as _;
 
 /// The motion space: B = 6 (spatial) or 3 (planar, spherical).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
@@ -199,23 +200,32 @@ pub struct Expect {
 /// Compare joint ids in natural order (`1-2` < `1-10` < `13-9`, `A` < `B`): digit runs compare
 /// as numbers, the rest as text.
 pub fn natural_cmp(a: &str, b: &str) -> Ordering {
-    fn chunks(s: &str) -> impl Iterator<Item = (bool, &str)> {
-        let mut rest = s;
-        std::iter::from_fn(move || {
-            let first = rest.chars().next()?;
-            let digit = first.is_ascii_digit();
-            let end = rest
-                .find(|c: char| c.is_ascii_digit() != digit)
-                .unwrap_or(rest.len());
-            let (head, tail) = rest.split_at(end);
-            rest = tail;
-            Some((digit, head))
-        })
-    }
-    let (mut x, mut y) = (chunks(a), chunks(b));
+    cmp_chunks(natural_chunks(a), natural_chunks(b)).then_with(|| a.cmp(b))
+}
+
+/// The digit runs and other runs of `s`, in order (`true` for digits).
+fn natural_chunks(s: &str) -> impl Iterator<Item = (bool, &str)> {
+    let mut rest = s;
+    std::iter::from_fn(move || {
+        let first = rest.chars().next()?;
+        let digit = first.is_ascii_digit();
+        let end = rest
+            .find(|c: char| c.is_ascii_digit() != digit)
+            .unwrap_or(rest.len());
+        let (head, tail) = rest.split_at(end);
+        rest = tail;
+        Some((digit, head))
+    })
+}
+
+/// [`natural_cmp`] on chunk sequences, before its tie-break on the whole text.
+fn cmp_chunks<'a>(
+    mut x: impl Iterator<Item = (bool, &'a str)>,
+    mut y: impl Iterator<Item = (bool, &'a str)>,
+) -> Ordering {
     loop {
         match (x.next(), y.next()) {
-            (None, None) => return a.cmp(b),
+            (None, None) => return Ordering::Equal,
             (None, Some(_)) => return Ordering::Less,
             (Some(_), None) => return Ordering::Greater,
             (Some((dx, cx)), Some((dy, cy))) => {
@@ -350,55 +360,85 @@ impl Mechanism {
         extra_bodies: Vec<Body>,
         joints: Vec<JointSpec>,
     ) -> Mechanism {
-        let mut bodies: Vec<Body> = extra_bodies;
-        let mut seen: std::collections::BTreeSet<BodyId> =
-            bodies.iter().map(|b| b.id.clone()).collect();
-        let mut push = |id: &BodyId, bodies: &mut Vec<Body>| {
-            if seen.insert(id.clone()) {
-                bodies.push(Body {
+        // Every body once, sorted by id: the declared ones keep their labels.
+        let mut extra_bodies = extra_bodies;
+        extra_bodies.sort_by(|a, b| a.id.cmp(&b.id));
+        extra_bodies.dedup_by(|b, a| a.id == b.id);
+        let mut ids: Vec<&BodyId> = std::iter::once(&frame)
+            .chain(joints.iter().flat_map(|j| j.bodies.iter()))
+            .collect();
+        ids.sort_unstable();
+        ids.dedup();
+        let mut bodies: Vec<Body> = Vec::with_capacity(ids.len() + extra_bodies.len());
+        let mut declared = extra_bodies.into_iter().peekable();
+        for id in ids {
+            while let Some(d) = declared.next_if(|d| d.id < *id) {
+                bodies.push(d);
+            }
+            match declared.next_if(|d| d.id == *id) {
+                Some(d) => bodies.push(d),
+                None => bodies.push(Body {
                     id: id.clone(),
                     label: None,
-                });
-            }
-        };
-        push(&frame, &mut bodies);
-        for j in &joints {
-            for b in &j.bodies {
-                push(b, &mut bodies);
+                }),
             }
         }
-        bodies.sort_by(|a, b| a.id.cmp(&b.id));
+        bodies.extend(declared);
         let index = |id: &BodyId| {
             bodies
                 .binary_search_by(|b| b.id.cmp(id))
                 .expect("every joint body was inserted above")
         };
         let frame = index(&frame);
-        let mut used = std::collections::HashMap::<String, usize>::new();
-        let joints = joints
+        let mut joints: Vec<Joint> = joints
             .into_iter()
-            .map(|j| {
-                let base = j.id.unwrap_or_else(|| {
-                    j.bodies
-                        .iter()
-                        .map(|b| b.to_string())
-                        .collect::<Vec<_>>()
-                        .join("-")
-                });
-                let n = used.entry(base.clone()).or_insert(0);
-                *n += 1;
-                let id = if *n == 1 { base } else { format!("{base}#{n}") };
-                Joint {
-                    id,
-                    kind: j.kind,
-                    bodies: j.bodies.iter().map(index).collect(),
-                    driven: j.driven,
-                    geometry: j.geometry,
-                }
+            .map(|j| Joint {
+                id: j.id.unwrap_or_else(|| {
+                    let mut id = String::new();
+                    for (i, b) in j.bodies.iter().enumerate() {
+                        let sep = if i == 0 { "" } else { "-" };
+                        // Writing into a String cannot fail.
+                        let _ = write!(id, "{sep}{b}");
+                    }
+                    id
+                }),
+                kind: j.kind,
+                bodies: j.bodies.iter().map(index).collect(),
+                driven: j.driven,
+                geometry: j.geometry,
             })
             .collect();
-        let mut joints: Vec<Joint> = joints;
-        joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
+        // Natural order by id; the n-th joint (in given order) with an id already used gets
+        // `id#n`. The sort is stable, so equal ids stay in given order next to each other.
+        let mut order: Vec<usize> = (0..joints.len()).collect();
+        {
+            // Each id split into chunks once, not at every comparison.
+            let keys: Vec<Vec<(bool, &str)>> = joints
+                .iter()
+                .map(|j| natural_chunks(&j.id).collect())
+                .collect();
+            order.sort_by(|&a, &b| {
+                cmp_chunks(keys[a].iter().copied(), keys[b].iter().copied())
+                    .then_with(|| joints[a].id.cmp(&joints[b].id))
+            });
+        }
+        let mut renamed = false;
+        let mut k = 0;
+        while k < order.len() {
+            let mut n = 1;
+            while k + n < order.len() && joints[order[k + n]].id == joints[order[k]].id {
+                let j = &mut joints[order[k + n]];
+                n += 1;
+                j.id = format!("{}#{n}", j.id);
+                renamed = true;
+            }
+            k += n;
+        }
+        let mut slots: Vec<Option<Joint>> = joints.into_iter().map(Some).collect();
+        let mut joints: Vec<Joint> = order.into_iter().filter_map(|i| slots[i].take()).collect();
+        if renamed {
+            joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
+        }
         Mechanism {
             name: name.into(),
             description: None,

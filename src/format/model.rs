@@ -5,7 +5,8 @@ use super::error::{ErrorKind, Label, LoadError};
 use super::tree::{Entry, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
 use crate::mechanism::{Body, BodyId, Expect, Geometry, JointSpec, Mechanism, Space};
-use std::collections::{BTreeMap, BTreeSet};
+use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::fmt::Write as _;
 use std::ops::Range;
 
 const TOP_KEYS: &[&str] = &[
@@ -467,7 +468,8 @@ fn build_joints(
         return Err(no_joints(&joints.value.span, "empty list"));
     }
     // (spec without final id, explicit id and its span, span of the joint for later errors)
-    let mut specs: Vec<(JointSpec, Option<Range<usize>>, Range<usize>)> = Vec::new();
+    let mut specs: Vec<(JointSpec, Option<Range<usize>>, Range<usize>)> =
+        Vec::with_capacity(list.len());
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
     for j in list {
         let es = as_map(j, "a joint")?;
@@ -636,16 +638,17 @@ fn build_joints(
     if !specs.iter().any(|(s, ..)| s.bodies.contains(&frame)) {
         return Err(frame_not_in_joint(&frame, frame_node));
     }
-    // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too).
-    let mut taken: BTreeSet<String> = explicit.keys().cloned().collect();
+    // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too). Without
+    // explicit ids, the n-th joint of a body list gets `#n`: `Mechanism::from_parts` does that.
+    let mut taken: HashSet<String> = explicit.keys().cloned().collect();
     for (s, ..) in &mut specs {
-        if s.id.is_none() {
-            let base = s
-                .bodies
-                .iter()
-                .map(|b| b.to_string())
-                .collect::<Vec<_>>()
-                .join("-");
+        if s.id.is_none() && !explicit.is_empty() {
+            let mut base = String::new();
+            for (i, b) in s.bodies.iter().enumerate() {
+                let sep = if i == 0 { "" } else { "-" };
+                // Writing into a String cannot fail.
+                let _ = write!(base, "{sep}{b}");
+            }
             let mut id = base.clone();
             let mut n = 1;
             while taken.contains(&id) {
