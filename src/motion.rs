@@ -37,7 +37,7 @@
 
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 pub use crate::rng::SplitMix64;
 
@@ -169,64 +169,107 @@ fn columns(b: usize, cols: &[Vec<f64>]) -> DMatrix<f64> {
     DMatrix::from_fn(b, cols.len(), |i, j| cols[j][i])
 }
 
+// The Gram-Schmidt helpers run on stack vectors of the motion space (B <= 6): they are called
+// for every joint of every realization. Their arithmetic is nalgebra's for vectors shorter
+// than 8 (dot products summed in order from 0, `normalize` as division by the norm), so the
+// results are bit for bit those of the DVector code they replaced.
+
+/// Largest motion-space dimension.
+const MAX_B: usize = 6;
+
+type Vb = [f64; MAX_B];
+
+fn dot(a: &Vb, b: &Vb, n: usize) -> f64 {
+    let mut r = 0.0;
+    for k in 0..n {
+        r += a[k] * b[k];
+    }
+    r
+}
+
+fn norm(a: &Vb, n: usize) -> f64 {
+    dot(a, a, n).sqrt()
+}
+
+/// `v -= (q · v) q` twice over the basis (re-orthogonalization).
+fn project_out(v: &mut Vb, basis: &[Vb], n: usize) {
+    for _ in 0..2 {
+        for q in basis {
+            let d = dot(q, v, n);
+            for k in 0..n {
+                v[k] -= q[k] * d;
+            }
+        }
+    }
+}
+
+fn normalized(v: &Vb, n: usize) -> Vb {
+    let len = norm(v, n);
+    let mut out = [0.0; MAX_B];
+    for k in 0..n {
+        out[k] = v[k] / len;
+    }
+    out
+}
+
 /// Orthonormal basis (as rows) of the orthogonal complement of the column space of `a`
 /// (`b × d`, full column rank): greedy Gram-Schmidt on the unit vectors, always taking the one
 /// with the largest residual, so no threshold is involved.
 fn complement_rows(a: &DMatrix<f64>) -> DMatrix<f64> {
     let b = a.nrows();
-    let q = orthonormal_columns(a);
-    let mut basis: Vec<DVector<f64>> = q.column_iter().map(|c| c.into_owned()).collect();
-    let mut out: Vec<DVector<f64>> = Vec::new();
+    assert!(b <= MAX_B, "motion spaces have at most {MAX_B} dimensions");
+    let mut basis: Vec<Vb> = orthonormal(a);
+    let first_new = basis.len();
     while basis.len() < b {
-        let mut best: Option<DVector<f64>> = None;
+        let mut best: Option<(Vb, f64)> = None;
         for i in 0..b {
-            let mut v = DVector::zeros(b);
+            let mut v = [0.0; MAX_B];
             v[i] = 1.0;
-            for _ in 0..2 {
-                for q in &basis {
-                    let d = q.dot(&v);
-                    v -= q * d;
-                }
-            }
-            if best.as_ref().is_none_or(|w| v.norm() > w.norm()) {
-                best = Some(v);
+            project_out(&mut v, &basis, b);
+            let n = norm(&v, b);
+            if best.is_none_or(|(_, w)| n > w) {
+                best = Some((v, n));
             }
         }
-        let v = best
-            .expect("b > basis.len() >= 0 so the loop ran")
-            .normalize();
-        basis.push(v.clone());
-        out.push(v);
+        let (v, _) = best.expect("b > basis.len() >= 0 so the loop ran");
+        basis.push(normalized(&v, b));
     }
-    let mut rows = DMatrix::zeros(out.len(), b);
-    for (i, v) in out.iter().enumerate() {
-        rows.set_row(i, &v.transpose());
-    }
-    rows
+    DMatrix::from_fn(b - first_new, b, |i, j| basis[first_new + i][j])
 }
 
 /// Orthonormalize the columns of `a` (modified Gram-Schmidt, twice); columns that vanish are
 /// dropped.
-fn orthonormal_columns(a: &DMatrix<f64>) -> DMatrix<f64> {
-    let scale = a.norm().max(1e-300);
-    let mut out: Vec<DVector<f64>> = Vec::new();
-    for c in a.column_iter() {
-        let mut v = c.into_owned();
-        for _ in 0..2 {
-            for q in &out {
-                let d = q.dot(&v);
-                v -= q * d;
+fn orthonormal(a: &DMatrix<f64>) -> Vec<Vb> {
+    let b = a.nrows();
+    assert!(b <= MAX_B, "motion spaces have at most {MAX_B} dimensions");
+    // `a.norm()`: the column dot products summed in order.
+    let mut sq = 0.0;
+    let cols: Vec<Vb> = a
+        .column_iter()
+        .map(|c| {
+            let mut v = [0.0; MAX_B];
+            for k in 0..b {
+                v[k] = c[k];
             }
-        }
-        if v.norm() > 1e-10 * scale {
-            out.push(v.normalize());
+            sq += dot(&v, &v, b);
+            v
+        })
+        .collect();
+    let scale = sq.sqrt().max(1e-300);
+    let mut out: Vec<Vb> = Vec::with_capacity(cols.len());
+    for mut v in cols {
+        project_out(&mut v, &out, b);
+        if norm(&v, b) > 1e-10 * scale {
+            out.push(normalized(&v, b));
         }
     }
-    if out.is_empty() {
-        DMatrix::zeros(a.nrows(), 0)
-    } else {
-        DMatrix::from_columns(&out)
-    }
+    out
+}
+
+/// [`orthonormal`] as the columns of a matrix.
+fn orthonormal_columns(a: &DMatrix<f64>) -> DMatrix<f64> {
+    let out = orthonormal(a);
+    DMatrix::from_fn(a.nrows(), out.len(), |i, j| out[j][i])
 }
 
 fn mix_seed(g: &Geometry) -> u64 {
@@ -533,8 +576,9 @@ fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> Join
 /// (seed, joint index). A joint no model fits (a kind invalid in the space, driven above the
 /// grade: the reader rejects both) gets a generic model of its grade.
 pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
+    use rayon::prelude::*;
     m.joints
-        .iter()
+        .par_iter()
         .enumerate()
         .map(|(i, j)| {
             let s = joint_seed(seed, i);
@@ -586,6 +630,7 @@ pub fn has_geometry(m: &Mechanism) -> bool {
 mod tests {
     use super::*;
     use crate::mechanism::{BodyId, JointSpec};
+    use nalgebra::DVector;
 
     fn check(m: &JointModel, b: usize, dim: usize) {
         assert_eq!(m.twists.nrows(), b);
