@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod diagnostic;
+mod elimination;
 pub mod examples;
 pub mod expect;
 pub mod format;

@@ -20,10 +20,12 @@
 
 use super::count::{Decomposition, Equations, Part, decompose};
 use super::{Isolated, Redundancy, Unchecked};
+use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use crate::motion;
 use nalgebra::DMatrix;
+use rayon::prelude::*;
 use std::collections::HashSet;
 
 /// What the rank check found, with the final decomposition.
@@ -101,6 +103,127 @@ fn rank_of(a: &DMatrix<f64>) -> usize {
     sv.iter().filter(|&&s| s > tol).count()
 }
 
+/// The reduced unknowns of a body whose pairs have the constraint rows `rows` (its neighbours
+/// held fixed): `None` when the stacked rows have full column rank (no isolated freedom: the
+/// body keeps all `b` unknowns, basis the identity), else an orthonormal basis of the
+/// complement of their null space.
+///
+/// Full column rank is first screened on the `b × b` Gram matrix: an eigenvalue ratio above
+/// 1e-6 (a singular value ratio above 1e-3) is far from the SVD threshold of [`REL_TOL`], so
+/// the SVD would keep every direction too. Anything closer goes to the padded SVD.
+fn reduced_basis<'a>(
+    b: usize,
+    rows: impl Iterator<Item = &'a DMatrix<f64>> + Clone,
+) -> Option<DMatrix<f64>> {
+    let total: usize = rows.clone().map(|r| r.nrows()).sum();
+    if total == 0 {
+        return Some(DMatrix::zeros(b, 0));
+    }
+    if total >= b {
+        let mut gram = DMatrix::<f64>::zeros(b, b);
+        for r in rows.clone() {
+            gram += r.tr_mul(r);
+        }
+        let ev = gram.symmetric_eigenvalues();
+        let max = ev.iter().copied().fold(0.0, f64::max);
+        let min = ev.iter().copied().fold(f64::INFINITY, f64::min);
+        if max > 0.0 && min > 1e-6 * max {
+            return None;
+        }
+    }
+    let mut s = DMatrix::<f64>::zeros(total, b);
+    let mut r0 = 0;
+    for r in rows {
+        s.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
+        r0 += r.nrows();
+    }
+    // Only V is needed: skipping U leaves V and the singular values unchanged.
+    let (sv, tol, _, v_t) = svd_parts(&s, false, true);
+    let v_t = v_t.expect("requested V^T");
+    let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
+    let mut qb = DMatrix::<f64>::zeros(b, keep.len());
+    for (c, &i) in keep.iter().enumerate() {
+        for k in 0..b {
+            qb[(k, c)] = v_t[(i, k)];
+        }
+    }
+    Some(qb)
+}
+
+/// A block to check: its pairs, its bodies (ascending), its part and its signature.
+type Pending<'a> = (&'a [usize], &'a [usize], Part, Vec<usize>);
+
+/// Blocks with more unknowns than this are screened by the sparse elimination first.
+const SCREEN_UNKNOWNS: usize = 8;
+
+/// Margin of the sparse screen over the SVD threshold.
+const SCREEN_MARGIN: f64 = 1e3;
+
+/// The rank of a sound block without forming it densely: a block-sparse QR with column
+/// pivoting (one body at a time, [`Elimination`]) with a pivot threshold [`SCREEN_MARGIN`]
+/// times above the SVD's (whose `σ_max` is bounded by the Frobenius norm). `Some` only when
+/// every needed pivot clears it (full row rank; for the over-determined block, full column
+/// rank): the SVD would find the same rank. `None` leaves the decision to the SVD, so a
+/// deficit is always found and explained by the dense path.
+fn screen(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &[DMatrix<f64>],
+    q: &[Option<DMatrix<f64>>],
+    part: Part,
+) -> Option<usize> {
+    let width = |x: usize| q[x].as_ref().map_or(b, |m| m.ncols());
+    let sizes: Vec<usize> = bodies.iter().map(|&x| width(x)).collect();
+    let ncols: usize = sizes.iter().sum();
+    if ncols <= SCREEN_UNKNOWNS {
+        return None;
+    }
+    let nrows: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+    let mut blocks = Vec::with_capacity(block_eqs.len());
+    let mut frob2 = 0.0;
+    for &e in block_eqs {
+        let [h, o] = eqs.bodies(e);
+        let n = rows[e].nrows();
+        if h == o || n == 0 {
+            continue;
+        }
+        let mut groups = Vec::with_capacity(2);
+        let mut parts: Vec<DMatrix<f64>> = Vec::with_capacity(2);
+        for (x, sign) in [(h, -1.0), (o, 1.0)] {
+            if let Ok(k) = bodies.binary_search(&x)
+                && sizes[k] > 0
+            {
+                let mut p = match &q[x] {
+                    None => rows[e].clone(),
+                    Some(qx) => &rows[e] * qx,
+                };
+                p *= sign;
+                groups.push(k);
+                parts.push(p);
+            }
+        }
+        if groups.is_empty() {
+            continue;
+        }
+        let w: usize = parts.iter().map(|p| p.ncols()).sum();
+        let mut mat = DMatrix::<f64>::zeros(n, w);
+        let mut c0 = 0;
+        for p in &parts {
+            mat.view_mut((0, c0), (n, p.ncols())).copy_from(p);
+            c0 += p.ncols();
+        }
+        frob2 += mat.norm_squared();
+        blocks.push(Block { groups, mat });
+    }
+    let n = nrows.max(ncols);
+    let tol = SCREEN_MARGIN * frob2.sqrt() * n as f64 * REL_TOL;
+    let rank = Elimination::run(&sizes, blocks, tol).rank;
+    let needed = if part == Part::Over { ncols } else { nrows };
+    (rank >= needed).then_some(rank)
+}
+
 /// Run the check; `eqs.cap` and `u` are lowered in place.
 pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]) -> RankResult {
     let b = m.b() as usize;
@@ -136,46 +259,30 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     }
     drop(fill);
 
-    // (a) Isolated freedoms and reduced unknowns.
-    let mut q: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
+    // (a) Isolated freedoms and reduced unknowns (each body on its own, in parallel).
+    let bases: Vec<Option<DMatrix<f64>>> = (0..nb)
+        .into_par_iter()
+        .map(|body| {
+            if body == m.frame {
+                return Some(DMatrix::zeros(b, 0));
+            }
+            let mine = &touch[start[body]..start[body + 1]];
+            reduced_basis(b, mine.iter().map(|&e| &rows[e]))
+        })
+        .collect();
+    let mut q: Vec<Option<DMatrix<f64>>> = Vec::with_capacity(nb);
     let mut isolated = Vec::new();
-    for body in 0..nb {
-        if body == m.frame {
-            continue;
-        }
-        let mine = &touch[start[body]..start[body + 1]];
-        let total: usize = mine.iter().map(|&e| rows[e].nrows()).sum();
-        let basis = if total == 0 {
-            DMatrix::zeros(b, 0)
-        } else {
-            let mut s = DMatrix::<f64>::zeros(total, b);
-            let mut r0 = 0;
-            for &e in mine {
-                s.view_mut((r0, 0), (rows[e].nrows(), b))
-                    .copy_from(&rows[e]);
-                r0 += rows[e].nrows();
-            }
-            // Only V is needed: skipping U leaves V and the singular values unchanged.
-            let (sv, tol, _, v_t) = svd_parts(&s, false, true);
-            let v_t = v_t.expect("requested V^T");
-            let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
-            let mut qb = DMatrix::<f64>::zeros(b, keep.len());
-            for (c, &i) in keep.iter().enumerate() {
-                for k in 0..b {
-                    qb[(k, c)] = v_t[(i, k)];
-                }
-            }
-            qb
-        };
-        let iso = b - basis.ncols();
-        if iso > 0 {
+    for (body, basis) in bases.into_iter().enumerate() {
+        let kept = basis.as_ref().map_or(b, |x| x.ncols());
+        let iso = b - kept;
+        if body != m.frame && iso > 0 {
             isolated.push(Isolated {
                 body: m.body_id(body).to_string(),
                 dimension: iso as u32,
             });
         }
-        u[body] = basis.ncols() as u32;
-        q[body] = basis;
+        u[body] = kept as u32;
+        q.push(basis);
     }
     drop(touch);
     drop(start);
@@ -186,8 +293,6 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     // Blocks already found sound, keyed by their bodies and their pairs with row counts (a
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
-    // Column offset of each body in the block being built (`usize::MAX` outside it).
-    let mut col = vec![usize::MAX; nb];
     loop {
         let dec = decompose(m, eqs, u);
         // Blocks in triangular order: over-determined part, groups, under-determined part.
@@ -232,7 +337,8 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
                 bfill[i] += 1;
             }
         }
-        let mut changed = false;
+        // Blocks to check, in triangular order; already verified and oversized ones skipped.
+        let mut todo: Vec<Pending> = Vec::new();
         for i in 0..nblocks {
             let block_eqs = &beqs[bstart[i]..bstart[i + 1]];
             if block_eqs.is_empty() {
@@ -269,9 +375,20 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
                 verified.insert(signature);
                 continue;
             }
-            let a = block_matrix(block_eqs, bodies, eqs, &rows, &q, &mut col);
-            // Singular values first; the vectors only when a deficit must be explained.
-            let rank = rank_of(&a);
+            todo.push((block_eqs, bodies, part, signature));
+        }
+        // Ranks of all of them in parallel (each depends on its own rows only); the first
+        // deficient one in order is then explained and lowered, as a serial pass would.
+        let ranks: Vec<usize> = todo
+            .par_iter()
+            .map(|(block_eqs, bodies, part, _)| {
+                screen(b, block_eqs, bodies, eqs, &rows, &q, *part)
+                    .unwrap_or_else(|| rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q)))
+            })
+            .collect();
+        let mut changed = false;
+        for ((block_eqs, bodies, part, signature), rank) in todo.into_iter().zip(ranks) {
+            let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
             // The over-determined block is tall: its surplus rows are the count's business
             // unless it also hides a freedom (a column deficit); then every dependent row goes,
             // so that the count sees the freedom.
@@ -312,9 +429,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             let mut lowered = usize::MAX;
             let mut removed = 0;
             for &(e, _) in &order {
-                removed = drop_rows(
-                    e, deficit, block_eqs, bodies, eqs, &mut rows, &q, &mut col, rank,
-                );
+                removed = drop_rows(b, e, deficit, block_eqs, bodies, eqs, &mut rows, &q, rank);
                 if removed > 0 {
                     lowered = e;
                     break;
@@ -384,20 +499,23 @@ fn pair_rows(m: &Mechanism, seed: u64, eqs: &Equations) -> Vec<DMatrix<f64>> {
         .collect()
 }
 
-/// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`.
-/// `col` is scratch of one entry per body, `usize::MAX` on entry and on return.
+/// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`
+/// (ascending body indices).
 fn block_matrix(
+    b: usize,
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
     rows: &[DMatrix<f64>],
-    q: &[DMatrix<f64>],
-    col: &mut [usize],
+    q: &[Option<DMatrix<f64>>],
 ) -> DMatrix<f64> {
+    debug_assert!(bodies.is_sorted());
+    let width = |x: usize| q[x].as_ref().map_or(b, |m| m.ncols());
+    let mut col = Vec::with_capacity(bodies.len());
     let mut ncols = 0;
     for &x in bodies {
-        col[x] = ncols;
-        ncols += q[x].ncols();
+        col.push(ncols);
+        ncols += width(x);
     }
     let nrows: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
     let mut a = DMatrix::<f64>::zeros(nrows, ncols);
@@ -407,21 +525,21 @@ fn block_matrix(
         let n = rows[e].nrows();
         if h != o {
             for (x, sign) in [(h, -1.0), (o, 1.0)] {
-                if col[x] != usize::MAX && q[x].ncols() > 0 {
-                    let blk = &rows[e] * &q[x];
-                    let c0 = col[x];
-                    for c in 0..blk.ncols() {
-                        for r in 0..n {
-                            a[(r0 + r, c0 + c)] = blk[(r, c)] * sign;
-                        }
-                    }
+                let Ok(k) = bodies.binary_search(&x) else {
+                    continue;
+                };
+                if width(x) == 0 {
+                    continue;
                 }
+                let mut dst = a.view_mut((r0, col[k]), (n, width(x)));
+                match &q[x] {
+                    None => dst.copy_from(&rows[e]),
+                    Some(qx) => dst.copy_from(&(&rows[e] * qx)),
+                }
+                dst *= sign;
             }
         }
         r0 += n;
-    }
-    for &x in bodies {
-        col[x] = usize::MAX;
     }
     a
 }
@@ -429,14 +547,14 @@ fn block_matrix(
 /// Remove up to `count` rows of pair `e` that the block can lose without losing rank.
 #[allow(clippy::too_many_arguments)]
 fn drop_rows(
+    b: usize,
     e: usize,
     count: usize,
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
     rows: &mut [DMatrix<f64>],
-    q: &[DMatrix<f64>],
-    col: &mut [usize],
+    q: &[Option<DMatrix<f64>>],
     rank: usize,
 ) -> usize {
     let mut removed = 0;
@@ -445,7 +563,7 @@ fn drop_rows(
         r -= 1;
         let saved = rows[e].clone();
         rows[e] = saved.clone().remove_row(r);
-        let a = block_matrix(block_eqs, bodies, eqs, rows, q, col);
+        let a = block_matrix(b, block_eqs, bodies, eqs, rows, q);
         if rank_of(&a) == rank {
             removed += 1;
         } else {

@@ -1,0 +1,327 @@
+//! Block-sparse rank-revealing elimination (multifrontal QR) over groups of unknowns, shared
+//! by the geometric rigidity analysis and the structural rank check: the rows touching one
+//! group are merged into a front, a Householder QR with column pivoting on that group's
+//! columns decides its rank, and the remaining rows become a new block on its neighbours.
+
+use crate::motion::SplitMix64;
+use nalgebra::{DMatrix, DVector};
+use std::cmp::Reverse;
+use std::collections::{BTreeMap, BTreeSet, BinaryHeap};
+
+/// A row block over some groups of unknowns: `mat` has the groups' columns side by side, in
+/// the order of `groups`.
+#[derive(Clone, Debug)]
+pub(crate) struct Block {
+    pub groups: Vec<usize>,
+    pub mat: DMatrix<f64>,
+}
+
+#[derive(Clone, Debug)]
+pub(crate) struct Record {
+    group: usize,
+    /// Local column of the group for each pivot (then the free columns), in R's order.
+    perm: Vec<usize>,
+    rank: usize,
+    others: Vec<usize>,
+    r: DMatrix<f64>,
+}
+
+pub(crate) struct Elimination {
+    pub offsets: Vec<usize>,
+    pub sizes: Vec<usize>,
+    pub records: Vec<Record>,
+    pub rank: usize,
+    pub kept_min: f64,
+    pub dropped_max: f64,
+}
+
+impl Elimination {
+    /// Rank-revealing elimination of the blocks over groups of the given sizes.
+    pub(crate) fn run(sizes: &[usize], blocks: Vec<Block>, abs_tol: f64) -> Elimination {
+        let n = sizes.len();
+        let mut offsets = Vec::with_capacity(n);
+        let mut acc = 0;
+        for &s in sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        let mut store: Vec<Option<Block>> = Vec::new();
+        let mut of_group: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n];
+        let add =
+            |b: Block, store: &mut Vec<Option<Block>>, of_group: &mut Vec<BTreeSet<usize>>| {
+                let id = store.len();
+                for &g in &b.groups {
+                    of_group[g].insert(id);
+                }
+                store.push(Some(b));
+            };
+        for b in blocks {
+            if !b.groups.is_empty() && b.mat.nrows() > 0 {
+                add(b, &mut store, &mut of_group);
+            }
+        }
+        let score = |g: usize, store: &Vec<Option<Block>>, of_group: &Vec<BTreeSet<usize>>| {
+            let mut u = BTreeSet::new();
+            for &bi in &of_group[g] {
+                if let Some(b) = &store[bi] {
+                    u.extend(b.groups.iter().copied());
+                }
+            }
+            u.iter().map(|&h| sizes[h]).sum::<usize>()
+        };
+        let mut heap = BinaryHeap::new();
+        let mut version = vec![0usize; n];
+        for g in 0..n {
+            heap.push(Reverse((score(g, &store, &of_group), g, 0usize)));
+        }
+        let mut done = vec![false; n];
+        let mut records = Vec::new();
+        let mut rank = 0;
+        let mut kept_min = f64::INFINITY;
+        let mut dropped_max: f64 = 0.0;
+        while let Some(Reverse((_, g, ver))) = heap.pop() {
+            if done[g] || ver != version[g] {
+                continue;
+            }
+            done[g] = true;
+            let ids: Vec<usize> = of_group[g].iter().copied().collect();
+            let mut members: Vec<Block> = Vec::new();
+            for id in ids {
+                if let Some(b) = store[id].take() {
+                    for &h in &b.groups {
+                        of_group[h].remove(&id);
+                    }
+                    members.push(b);
+                }
+            }
+            let others: Vec<usize> = members
+                .iter()
+                .flat_map(|b| b.groups.iter().copied())
+                .filter(|&h| h != g)
+                .collect::<BTreeSet<_>>()
+                .into_iter()
+                .collect();
+            let sg = sizes[g];
+            // Column offsets in the front: g first, then the others.
+            let mut col_of = BTreeMap::new();
+            col_of.insert(g, 0usize);
+            let mut width = sg;
+            for &h in &others {
+                col_of.insert(h, width);
+                width += sizes[h];
+            }
+            let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
+            let mut front = DMatrix::zeros(nrows, width);
+            let mut r0 = 0;
+            for b in &members {
+                let mut c0 = 0;
+                for &h in &b.groups {
+                    let s = sizes[h];
+                    let dst = col_of[&h];
+                    front
+                        .view_mut((r0, dst), (b.mat.nrows(), s))
+                        .copy_from(&b.mat.view((0, c0), (b.mat.nrows(), s)));
+                    c0 += s;
+                }
+                r0 += b.mat.nrows();
+            }
+            let mut perm: Vec<usize> = (0..sg).collect();
+            let mut r = 0;
+            while r < sg && r < nrows {
+                // Column pivoting among the group's remaining columns.
+                let (best, bn) = (r..sg)
+                    .map(|j| (j, front.view((r, j), (nrows - r, 1)).norm()))
+                    .fold((r, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
+                if bn <= abs_tol {
+                    dropped_max = dropped_max.max(bn);
+                    break;
+                }
+                kept_min = kept_min.min(bn);
+                if best != r {
+                    front.swap_columns(best, r);
+                    perm.swap(best, r);
+                }
+                householder(&mut front, r, r);
+                r += 1;
+            }
+            rank += r;
+            let rmat = front.rows(0, r).into_owned();
+            if nrows > r && !others.is_empty() {
+                let mut rest = front.view((r, sg), (nrows - r, width - sg)).into_owned();
+                if rest.nrows() > rest.ncols() {
+                    // Compress: an orthogonal transformation keeps the row space.
+                    let k = rest.ncols();
+                    for c in 0..k {
+                        householder(&mut rest, c, c);
+                    }
+                    rest = rest.rows(0, k).into_owned();
+                }
+                add(
+                    Block {
+                        groups: others.clone(),
+                        mat: rest,
+                    },
+                    &mut store,
+                    &mut of_group,
+                );
+            } else if nrows > r {
+                // Rows left with no unknowns: their residual norm is a dropped decision.
+                let rest = front.view((r, 0), (nrows - r, width)).norm();
+                dropped_max = dropped_max.max(rest.min(abs_tol));
+            }
+            for &h in &others {
+                if !done[h] {
+                    version[h] += 1;
+                    heap.push(Reverse((score(h, &store, &of_group), h, version[h])));
+                }
+            }
+            records.push(Record {
+                group: g,
+                perm,
+                rank: r,
+                others,
+                r: rmat,
+            });
+        }
+        Elimination {
+            offsets,
+            sizes: sizes.to_vec(),
+            records,
+            rank,
+            kept_min,
+            dropped_max,
+        }
+    }
+
+    /// A basis of the null space (dense vectors over all unknowns), one per free column.
+    pub(crate) fn null_space(&self) -> Vec<DVector<f64>> {
+        let total: usize = self.sizes.iter().sum();
+        let mut out = Vec::new();
+        for (ri, rec) in self.records.iter().enumerate() {
+            for fpos in rec.rank..rec.perm.len() {
+                let mut x = DVector::zeros(total);
+                x[self.offsets[rec.group] + rec.perm[fpos]] = 1.0;
+                for hi in (0..=ri).rev() {
+                    let h = &self.records[hi];
+                    if h.rank == 0 {
+                        continue;
+                    }
+                    let sg = self.sizes[h.group];
+                    // rhs = −R_others · x_others − R_free · x_free
+                    let mut rhs = DVector::zeros(h.rank);
+                    let mut any = false;
+                    let mut c = sg;
+                    for &o in &h.others {
+                        let s = self.sizes[o];
+                        let xo = x.rows(self.offsets[o], s);
+                        if xo.iter().any(|v| *v != 0.0) {
+                            any = true;
+                            rhs -= h.r.view((0, c), (h.rank, s)) * xo;
+                        }
+                        c += s;
+                    }
+                    if hi == ri {
+                        any = true;
+                        for q in h.rank..sg {
+                            let v = x[self.offsets[h.group] + h.perm[q]];
+                            if v != 0.0 {
+                                rhs -= h.r.column(q) * v;
+                            }
+                        }
+                    }
+                    if !any {
+                        continue;
+                    }
+                    // Back substitution on the upper-triangular pivot part.
+                    let mut y = DVector::zeros(h.rank);
+                    for i in (0..h.rank).rev() {
+                        let mut s = rhs[i];
+                        for k in i + 1..h.rank {
+                            s -= h.r[(i, k)] * y[k];
+                        }
+                        y[i] = s / h.r[(i, i)];
+                    }
+                    for i in 0..h.rank {
+                        x[self.offsets[h.group] + h.perm[i]] = y[i];
+                    }
+                }
+                out.push(x);
+            }
+        }
+        out
+    }
+}
+
+/// Apply the Householder reflection that zeroes column `c` below row `r` to rows r.. of `m`.
+fn householder(m: &mut DMatrix<f64>, r: usize, c: usize) {
+    let nr = m.nrows();
+    if r >= nr {
+        return;
+    }
+    let mut v: DVector<f64> = m.view((r, c), (nr - r, 1)).column(0).into_owned();
+    let alpha = v.norm();
+    if alpha == 0.0 {
+        return;
+    }
+    let a = if v[0] > 0.0 { -alpha } else { alpha };
+    v[0] -= a;
+    let vn2 = v.norm_squared();
+    if vn2 == 0.0 {
+        return;
+    }
+    let nc = m.ncols();
+    let mut sub = m.view_mut((r, c), (nr - r, nc - c));
+    // sub -= 2 v (vᵀ sub) / (vᵀ v)
+    let w = sub.tr_mul(&v) * (2.0 / vn2);
+    sub.ger(-1.0, &v, &w, 1.0);
+    m[(r, c)] = a;
+    for i in r + 1..nr {
+        m[(i, c)] = 0.0;
+    }
+}
+
+/// σ_max of the block matrix by power iteration on JᵀJ.
+pub(crate) fn sigma_max(sizes: &[usize], offsets: &[usize], blocks: &[Block]) -> f64 {
+    let total: usize = sizes.iter().sum();
+    if total == 0 || blocks.is_empty() {
+        return 0.0;
+    }
+    let mut rng = SplitMix64::new(0x51_67_4D_41);
+    let mut x = DVector::from_fn(total, |_, _| rng.next_signed() + 1.5);
+    let mut est = 0.0;
+    for _ in 0..40 {
+        let n = x.norm();
+        if n == 0.0 {
+            return 0.0;
+        }
+        x /= n;
+        let mut y = DVector::zeros(total);
+        for b in blocks {
+            let mut gathered = DVector::zeros(b.mat.ncols());
+            let mut c = 0;
+            for &g in &b.groups {
+                gathered
+                    .rows_mut(c, sizes[g])
+                    .copy_from(&x.rows(offsets[g], sizes[g]));
+                c += sizes[g];
+            }
+            let jb = &b.mat * gathered;
+            let back = b.mat.tr_mul(&jb);
+            let mut c = 0;
+            for &g in &b.groups {
+                let mut dst = y.rows_mut(offsets[g], sizes[g]);
+                dst += back.rows(c, sizes[g]);
+                c += sizes[g];
+            }
+        }
+        let e = y.norm().sqrt();
+        x = y;
+        if (e - est).abs() <= 1e-6 * e {
+            est = e;
+            break;
+        }
+        est = e;
+    }
+    // Power iteration converges from below; a small margin keeps the threshold conservative.
+    est * 1.0
+}
