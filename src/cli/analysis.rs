@@ -1,6 +1,6 @@
 //! `mbsa analyze`, `mbsa dot` and `mbsa rigid`: the analyses over one FILE.
 
-use super::{Failure, FileArg, OutputFormat, emit, load_with_inputs};
+use super::{Failure, FileArg, OutputFormat, emit, keep_until_exit, load_with_inputs};
 use clap::{Args, ValueEnum};
 use mbsa::report::dot::View;
 use mbsa::rigidity::{geometric, pebble};
@@ -68,10 +68,12 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
     let m = load_with_inputs(file, args.inputs.as_deref())?;
     let lib = args.library()?;
     let a = structure::analyze(&m, &args.options(), &lib);
-    emit(&match format {
+    let out = emit(&match format {
         OutputFormat::Table => mbsa::report::structure::table(&a),
         OutputFormat::Json => mbsa::report::json(&a),
-    })
+    });
+    keep_until_exit((m, a));
+    out
 }
 
 /// `--view` values.
@@ -103,7 +105,9 @@ pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Fa
         ViewArg::Topology => View::Topology,
         ViewArg::Rigid => View::Rigid,
     };
-    emit(&mbsa::report::dot::render(view, &m, &a))
+    let out = emit(&mbsa::report::dot::render(view, &m, &a));
+    keep_until_exit((m, a));
+    out
 }
 
 /// Which rigidity analyses `mbsa rigid` runs.
