@@ -2,6 +2,7 @@
 //!
 //! - [`assur`]: the planar Assur-group linkages of `docs/benchmarks.md` (the paper's Table 16
 //!   family), exactly as specified there (SplitMix64, templates, port rule).
+//! - [`assur_spatial`]: the same linkages in space, with universal joints.
 //! - [`stewart_stack`]: N Stewart platforms stacked, each on six UPS legs (spatial).
 //! - [`random`]: random count-determined mechanisms with mixed joint types, built group by
 //!   group so that the expected number of structural groups is known.
@@ -49,6 +50,31 @@ pub fn assur(
     seed: u64,
     variant: Variant,
 ) -> Result<Mechanism, GenerateError> {
+    assur_in(class, groups, seed, variant, Space::Planar)
+}
+
+/// The spatial counterpart of [`assur`]: the same bodies, pairs, port targets and driven
+/// pair, with every pair a universal joint (4 equations) but the crank (1, 2), a revolute.
+/// Each template then has exactly 6 equations per body (dyad 3 · 4 = 2 · 6, triad 6 · 4 =
+/// 4 · 6, hexagon 9 · 4 = 6 · 6), so with the crank driven (variant A) every group is one
+/// structural group again; variant B merges them as in the plane. Not from the paper: a
+/// spatial family of the same shape for the scale benchmarks.
+pub fn assur_spatial(
+    class: u32,
+    groups: u64,
+    seed: u64,
+    variant: Variant,
+) -> Result<Mechanism, GenerateError> {
+    assur_in(class, groups, seed, variant, Space::Spatial)
+}
+
+fn assur_in(
+    class: u32,
+    groups: u64,
+    seed: u64,
+    variant: Variant,
+    space: Space,
+) -> Result<Mechanism, GenerateError> {
     if !(1..=3).contains(&class) {
         return Err(GenerateError::Range(format!(
             "Assur class must be 1, 2 or 3, not {class}"
@@ -93,7 +119,12 @@ pub fn assur(
         .iter()
         .map(|&(a, b)| {
             let driven = u32::from((a, b) == driven_pair);
-            JointSpec::new(JointType::R, a as i64, b as i64, driven)
+            let kind = if space == Space::Planar || (a, b) == (1, 2) {
+                JointType::R
+            } else {
+                JointType::U
+            };
+            JointSpec::new(kind, a as i64, b as i64, driven)
         })
         .collect();
     let v = match variant {
@@ -101,15 +132,19 @@ pub fn assur(
         Variant::B => "B",
     };
     let roman = ["I", "II", "III"][class as usize - 1];
+    let (prefix, what) = match space {
+        Space::Planar => ("", ""),
+        _ => ("spatial ", "spatial "),
+    };
     let mut m = Mechanism::from_parts(
-        format!("ASSUR {roman}-{groups}{v} (seed {seed})"),
-        Space::Planar,
+        format!("{prefix}ASSUR {roman}-{groups}{v} (seed {seed})"),
+        space,
         BodyId::Int(1),
         vec![],
         joints,
     );
     m.description = Some(format!(
-        "Generated: crank plus {groups} Assur group(s) of class {class}, variant {v}, seed {seed} (docs/benchmarks.md)"
+        "Generated: crank plus {groups} {what}Assur group(s) of class {class}, variant {v}, seed {seed} (docs/benchmarks.md)"
     ));
     Ok(m)
 }

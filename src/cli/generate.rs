@@ -27,6 +27,10 @@ pub enum Family {
         /// Random seed (SplitMix64).
         #[arg(long, default_value_t = 364)]
         seed: u64,
+        /// The spatial counterpart: every pair a universal joint but the revolute crank
+        /// (not from the paper; same bodies, pairs and groups).
+        #[arg(long)]
+        spatial: bool,
     },
     /// Random count-determined mechanism with mixed joint types.
     #[command(
@@ -71,12 +75,17 @@ pub fn run(family: &Family) -> Result<(), Failure> {
             groups,
             variant,
             seed,
+            spatial,
         } => {
             let v = match variant {
                 VariantArg::A => Variant::A,
                 VariantArg::B => Variant::B,
             };
-            generate::assur(class, groups, seed, v)
+            if spatial {
+                generate::assur_spatial(class, groups, seed, v)
+            } else {
+                generate::assur(class, groups, seed, v)
+            }
         }
         Family::Random {
             bodies,
