@@ -108,9 +108,9 @@ fn rank_of(a: &DMatrix<f64>) -> usize {
 /// body keeps all `b` unknowns, basis the identity), else an orthonormal basis of the
 /// complement of their null space.
 ///
-/// Full column rank is first screened on the `b × b` Gram matrix: an eigenvalue ratio above
-/// 1e-6 (a singular value ratio above 1e-3) is far from the SVD threshold of [`REL_TOL`], so
-/// the SVD would keep every direction too. Anything closer goes to the padded SVD.
+/// Full column rank is first screened by [`surely_full_rank`]: a singular value ratio above
+/// 1e-6 is far from the SVD threshold of [`REL_TOL`], so the SVD would keep every direction
+/// too. Anything else goes to the padded SVD.
 fn reduced_basis<'a>(
     b: usize,
     rows: impl Iterator<Item = &'a DMatrix<f64>> + Clone,
@@ -119,17 +119,8 @@ fn reduced_basis<'a>(
     if total == 0 {
         return Some(DMatrix::zeros(b, 0));
     }
-    if total >= b {
-        let mut gram = DMatrix::<f64>::zeros(b, b);
-        for r in rows.clone() {
-            gram += r.tr_mul(r);
-        }
-        let ev = gram.symmetric_eigenvalues();
-        let max = ev.iter().copied().fold(0.0, f64::max);
-        let min = ev.iter().copied().fold(f64::INFINITY, f64::min);
-        if max > 0.0 && min > 1e-6 * max {
-            return None;
-        }
+    if total >= b && surely_full_rank(b, rows.clone()) {
+        return None;
     }
     let mut s = DMatrix::<f64>::zeros(total, b);
     let mut r0 = 0;
@@ -222,6 +213,62 @@ fn screen(
     let rank = Elimination::run(&sizes, blocks, tol).rank;
     let needed = if part == Part::Over { ncols } else { nrows };
     (rank >= needed).then_some(rank)
+}
+
+/// Whether the stacked `rows` (`b` columns) surely have full column rank, far from the SVD
+/// threshold. Gaussian elimination with partial pivoting picks `b` rows, a square submatrix
+/// `T` with `|det T|` the product of the pivots and `σ_min(T) ≥ |det T| / ‖T‖_F^(b−1)`;
+/// removing rows never raises `σ_min`, and `σ_max ≤ F`, the Frobenius norm of all rows. So
+/// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, twenty times or more
+/// above the SVD threshold (`n · 1e-9` with n ≤ 48 rows here). Runs for every body, on the
+/// stack.
+fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) -> bool {
+    const MAX_ROWS: usize = 48;
+    let mut a = [[0.0f64; 6]; MAX_ROWS];
+    let mut norm2 = [0.0f64; MAX_ROWS];
+    let mut n = 0;
+    if b > 6 {
+        return false;
+    }
+    for r in rows {
+        for i in 0..r.nrows() {
+            if n == MAX_ROWS {
+                return false;
+            }
+            for k in 0..b {
+                a[n][k] = r[(i, k)];
+                norm2[n] += a[n][k] * a[n][k];
+            }
+            n += 1;
+        }
+    }
+    let frob2: f64 = norm2[..n].iter().sum();
+    if n < b || frob2 == 0.0 {
+        return false;
+    }
+    let mut det = 1.0f64;
+    let mut sub2 = 0.0;
+    for c in 0..b {
+        let p = (c..n)
+            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+            .unwrap_or(c);
+        let pivot = a[p][c];
+        if pivot == 0.0 {
+            return false;
+        }
+        a.swap(c, p);
+        norm2.swap(c, p);
+        det *= pivot.abs();
+        sub2 += norm2[c];
+        let top = a[c];
+        for row in a.iter_mut().take(n).skip(c + 1) {
+            let f = row[c] / pivot;
+            for k in c..b {
+                row[k] -= f * top[k];
+            }
+        }
+    }
+    det > 1e-6 * frob2.sqrt() * sub2.sqrt().powi(b as i32 - 1)
 }
 
 /// Run the check; `eqs.cap` and `u` are lowered in place.
