@@ -39,7 +39,9 @@ pub(crate) struct RankResult {
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
 /// O(n^3) time and O(n^2) memory: 1,200 unknowns is about a second and 20 MB, while the giant
 /// groups of some generated mechanisms (tens of thousands of unknowns) would need gigabytes
-/// to terabytes. Larger blocks keep the count's verdict and are reported as unchecked.
+/// to terabytes. Larger blocks keep the count's verdict and are reported as unchecked (the
+/// sparse screen is not a way out: on the giant groups of variant B its fill-in grows
+/// without bound, 10 minutes and more at 22,000 unknowns).
 pub(crate) const MAX_DENSE_UNKNOWNS: usize = 1200;
 
 /// Relative tolerance on singular values (scaled by the largest one and the size).
@@ -411,13 +413,12 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             if verified.contains(&signature) {
                 continue;
             }
-            let unknowns: usize = bodies.iter().map(|&x| u[x] as usize).sum();
-            let equations: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
-            if unknowns.max(equations) > MAX_DENSE_UNKNOWNS {
+            let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+            if nrows.max(ncols) > MAX_DENSE_UNKNOWNS {
                 unchecked.push(Unchecked {
                     bodies: bodies.len(),
-                    unknowns,
-                    equations,
+                    unknowns: ncols,
+                    equations: nrows,
                 });
                 verified.insert(signature);
                 continue;
@@ -435,19 +436,20 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             .collect();
         let mut changed = false;
         for ((block_eqs, bodies, part, signature), rank) in todo.into_iter().zip(ranks) {
-            let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
+            let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
             // The over-determined block is tall: its surplus rows are the count's business
             // unless it also hides a freedom (a column deficit); then every dependent row goes,
             // so that the count sees the freedom.
-            if part == Part::Over && rank >= a.ncols() {
+            if part == Part::Over && rank >= ncols {
                 verified.insert(signature);
                 continue;
             }
-            let deficit = a.nrows().saturating_sub(rank);
+            let deficit = nrows.saturating_sub(rank);
             if deficit == 0 {
                 verified.insert(signature);
                 continue;
             }
+            let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
             let svd = Svd::of(&a);
             debug_assert_eq!(
                 svd.rank(),
@@ -544,6 +546,22 @@ fn pair_rows(m: &Mechanism, seed: u64, eqs: &Equations) -> Vec<DMatrix<f64>> {
             }
         })
         .collect()
+}
+
+/// Rows and columns of the block's matrix ([`block_matrix`]) without building it.
+fn block_shape(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    rows: &[DMatrix<f64>],
+    q: &[Option<DMatrix<f64>>],
+) -> (usize, usize) {
+    let nrows = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+    let ncols = bodies
+        .iter()
+        .map(|&x| q[x].as_ref().map_or(b, |m| m.ncols()))
+        .sum();
+    (nrows, ncols)
 }
 
 /// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`
