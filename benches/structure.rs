@@ -5,8 +5,8 @@
 //!   method, count-only and default (rank check) modes.
 //! - `exhaustive`: the paper's smallest-first search on the same inputs, count-only, only for
 //!   the cases that finished within the time budget in a probe run before the benchmarks.
-//! - `scale`: 10^3 to 10^6 bodies (planar Assur II A and B, spatial Stewart stack, random
-//!   spatial and planar), both modes.
+//! - `scale`: 10^3 to 10^6 bodies (planar and spatial Assur II A and B, spatial Stewart
+//!   stack, random spatial and planar), both modes.
 //! - `pipeline`: a 10^5-body mechanism as TOML text: `format::load`, `structure::analyze`,
 //!   `report::json`, each timed alone.
 //!
@@ -300,6 +300,10 @@ enum Family {
     AssurA,
     /// The same, variant B.
     AssurB,
+    /// Spatial Assur class II (universal joints), variant A.
+    SpatialA,
+    /// The same, variant B.
+    SpatialB,
     /// Spatial Stewart platforms stacked (13 bodies per stage).
     Stewart,
     /// Random spatial count-determined mechanism (seed 1).
@@ -309,9 +313,11 @@ enum Family {
 }
 
 impl Family {
-    const ALL: [Family; 5] = [
+    const ALL: [Family; 7] = [
         Family::AssurA,
         Family::AssurB,
+        Family::SpatialA,
+        Family::SpatialB,
         Family::Stewart,
         Family::RandomSpatial,
         Family::RandomPlanar,
@@ -321,6 +327,8 @@ impl Family {
         match self {
             Family::AssurA => "assur2A",
             Family::AssurB => "assur2B",
+            Family::SpatialA => "assur3dA",
+            Family::SpatialB => "assur3dB",
             Family::Stewart => "stewart",
             Family::RandomSpatial => "random3d",
             Family::RandomPlanar => "random2d",
@@ -333,6 +341,12 @@ impl Family {
             // N = 2 + 4n for class II.
             Family::AssurA => generate::assur(2, (bodies - 2).div_ceil(4), SEED, Variant::A),
             Family::AssurB => generate::assur(2, (bodies - 2).div_ceil(4), SEED, Variant::B),
+            Family::SpatialA => {
+                generate::assur_spatial(2, (bodies - 2).div_ceil(4), SEED, Variant::A)
+            }
+            Family::SpatialB => {
+                generate::assur_spatial(2, (bodies - 2).div_ceil(4), SEED, Variant::B)
+            }
             // N = 1 + 13 s.
             Family::Stewart => generate::stewart_stack((bodies - 1).div_ceil(13)),
             Family::RandomSpatial => generate::random(bodies, false, 1).map(|(m, _)| m),
@@ -355,23 +369,6 @@ fn scaled(sizes: &[u64]) -> Vec<Scaled> {
         .collect()
 }
 
-/// Where the rank check is out of reach (measured, see docs/benchmarks.md): it builds one
-/// dense matrix per group, or per not-determined part, and takes its SVD: O(s³) time and
-/// O(s²) memory for s bodies. Variant B merges groups into giant ones (largest SG 321 bodies at
-/// 10^3, 889 at 10^4, 7,353 at 10^5): 10^4 takes over 120 s. Random mechanisms are mostly not
-/// determined at generic geometry, and the whole not-determined part becomes one dense matrix:
-/// random spatial 10^3 takes over 60 s and 10^4 aborts allocating 26 GB; random planar 10^4
-/// takes over 60 s and 10^5 aborts allocating 700 GB; the Stewart stack at 10^6 aborts
-/// allocating 121 TB in `rank::block_matrix`. Those runs are left out.
-fn rank_feasible(s: &Scaled) -> bool {
-    match s.family {
-        Family::AssurA => true,
-        Family::Stewart => s.bodies <= 100_000,
-        Family::AssurB | Family::RandomPlanar => s.bodies <= 1_000,
-        Family::RandomSpatial => false,
-    }
-}
-
 /// Count-only analysis of random spatial mechanisms grows superlinearly (0.05 s at 10^3,
 /// 0.5 s at 10^4, 10.5 s at 10^5): 10^6 is left out to keep `cargo bench` short.
 fn count_feasible(s: &Scaled) -> bool {
@@ -382,12 +379,14 @@ fn scaled_counted(sizes: &[u64]) -> Vec<Scaled> {
     scaled(sizes).into_iter().filter(count_feasible).collect()
 }
 
-/// Rank-check runs, up to 10^5 bodies: the one feasible 10^6 run (Assur A) takes about a
-/// minute, so it is measured through the binary (docs/benchmarks.md, peak memory) instead.
+/// Rank-check runs, up to 10^5 bodies: 10^6 runs take seconds each, so they are measured
+/// through the binary (docs/benchmarks.md, peak memory) instead. Every family is in reach:
+/// blocks above 1,200 unknowns (variant B's giant group, the large under-determined part of
+/// the random families) keep the count's verdict and are listed as unchecked.
 fn scaled_ranked(sizes: &[u64]) -> Vec<Scaled> {
     scaled(sizes)
         .into_iter()
-        .filter(|s| rank_feasible(s) && s.bodies <= 100_000)
+        .filter(|s| s.bodies <= 100_000)
         .collect()
 }
 
@@ -398,14 +397,14 @@ mod scale {
 
     const SIZES: [u64; 4] = [1_000, 10_000, 100_000, 1_000_000];
 
-    #[divan::bench(args = scaled_counted(&SIZES), sample_size = 1, sample_count = 5)]
+    #[divan::bench(args = scaled_counted(&SIZES), sample_size = 1, sample_count = 3)]
     fn count_only(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(true, Method::Flow);
         bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
     }
 
-    #[divan::bench(args = scaled_ranked(&SIZES), sample_size = 1, sample_count = 5)]
+    #[divan::bench(args = scaled_ranked(&SIZES), sample_size = 1, sample_count = 3)]
     fn rank_check(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(false, Method::Flow);
@@ -445,12 +444,11 @@ mod pipeline {
         bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
     }
 
-    /// Serialization of the default-mode analysis (count-only where the rank check is out of
-    /// reach).
+    /// Serialization of the default-mode analysis.
     #[divan::bench(args = families())]
     fn json(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
-        let a = structure::analyze(&m, &options(!rank_feasible(&s), Method::Flow), library());
+        let a = structure::analyze(&m, &options(false, Method::Flow), library());
         bencher.bench_local(|| mbsa::report::json(black_box(&a)));
     }
 }
