@@ -5,7 +5,8 @@
 #   scripts/bench.sh --no-bench # reuse target/bench/divan.txt from an earlier run
 #
 # Steps: release build; `cargo bench --bench structure` (divan, a few minutes) into
-# target/bench/divan.txt; then scripts/bench_report.py generates mechanism files with
+# target/bench/divan.txt and `cargo bench --bench analyses` (transformations, rigidity) into
+# target/bench/divan-analyses.txt; then scripts/bench_report.py generates mechanism files with
 # `mbsa generate`, measures peak memory (/usr/bin/time -v) and end-to-end time (hyperfine when
 # installed, else a repeated loop) of `mbsa analyze --format json`, and rewrites the generated
 # blocks of docs/benchmarks.md and the plot docs/benchmarks-growth.svg.
@@ -19,5 +20,6 @@ mkdir -p "$out"
 cargo build --release --bin mbsa
 if [[ "${1:-}" != "--no-bench" ]]; then
     cargo bench --bench structure | tee "$out/divan.txt"
+    cargo bench --bench analyses | tee "$out/divan-analyses.txt"
 fi
 python3 scripts/bench_report.py --bin target/release/mbsa --out "$out" --docs docs/benchmarks.md

@@ -338,6 +338,32 @@ def replace_block(text, name, body):
     return pattern.sub(lambda m: m.group(1) + body.rstrip() + "\n" + m.group(2), text)
 
 
+ANALYSES = [
+    ("transform_all/default/rotor", "`mbsa transform`: every placement, analysed in full", "rotor", "< 1 s", 1.0),
+    ("transform_all/count_only/rotor", "the same, `--count-only`", "rotor", "", None),
+    ("transform_all/default/micro-manipulator", "`mbsa transform`: every placement, analysed in full",
+     "micro-manipulator", "< 10 s", 10.0),
+    ("transform_all/count_only/micro-manipulator", "the same, `--count-only`", "micro-manipulator", "", None),
+    ("pebble_game/framework_10k_bars/degree3", "pebble game", "10^4 bars, mean point degree 3", "", None),
+    ("pebble_game/framework_10k_bars/degree4", "pebble game", "10^4 bars, degree 4 (threshold)", "< 1 s", 1.0),
+    ("pebble_game/framework_10k_bars/degree6", "pebble game", "10^4 bars, degree 6", "", None),
+    ("pebble_game/random_planar_10k_bodies", "pebble game", "random planar mechanism, 10^4 bodies", "", None),
+    ("geometric_rigidity/double_banana", "geometric rigidity", "double banana (file geometry)", "< 10 ms", 0.01),
+    ("geometric_rigidity/framework_996_bars", "geometric rigidity", "Henneberg framework, 996 bars", "< 2 s", 2.0),
+]
+
+
+def analyses_block(medians):
+    rows = ["| analysis | input | median | target |", "|---|---|---:|---|"]
+    for key, what, inp, target, limit in ANALYSES:
+        t = medians.get(key)
+        verdict = ""
+        if limit is not None and t is not None:
+            verdict = ": met" if t < limit else ": **missed**"
+        rows.append(f"| {what} | {inp} | {fmt_time(t)} | {target}{verdict} |")
+    return "\n".join(rows)
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--bin", default="target/release/mbsa")
@@ -355,6 +381,9 @@ def main():
               "table16": table16_block(medians, checks, probes),
               "scale": scale_block(medians),
               "pipeline": pipeline_block(medians)}
+    other = os.path.join(args.out, "divan-analyses.txt")
+    if os.path.exists(other):
+        blocks["analyses"] = analyses_block(parse_divan(other)[0])
 
     # Peak memory and wall time through the binary, every family and size.
     rows = ["| family | bodies | file size | mode | max RSS | wall time |", "|---|---|---|---|---|---|"]

@@ -313,6 +313,96 @@ fn toml_vec(v: &[f64; 3], planar: bool) -> String {
     format!("[{}]", parts.join(", "))
 }
 
+/// A random planar bar-joint framework: `bars` random bars on `points` points (no repeated
+/// pair, no loop), each bar a body, each point a multiple revolute joint, bar 1 the frame.
+/// For the pebble-game benchmarks (mean point degree 2·bars/points; 4 is the rigidity
+/// threshold).
+pub fn planar_framework(points: u64, bars: usize, seed: u64) -> Mechanism {
+    let mut rng = SplitMix64::new(seed);
+    let mut seen = std::collections::BTreeSet::new();
+    let mut at: Vec<Vec<i64>> = vec![Vec::new(); points as usize];
+    while seen.len() < bars {
+        let (a, b) = (rng.below(points), rng.below(points));
+        if a == b || !seen.insert((a.min(b), a.max(b))) {
+            continue;
+        }
+        let id = seen.len() as i64;
+        at[a as usize].push(id);
+        at[b as usize].push(id);
+    }
+    let joints = at
+        .into_iter()
+        .enumerate()
+        .filter(|(_, bs)| bs.len() >= 2)
+        .map(|(p, bs)| JointSpec {
+            id: Some(format!("p{p}")),
+            kind: JointType::R,
+            bodies: bs.into_iter().map(BodyId::Int).collect(),
+            driven: 0,
+            geometry: Geometry::default(),
+        })
+        .collect();
+    Mechanism::from_parts(
+        "random framework",
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    )
+}
+
+/// A random spatial framework built by Henneberg steps: each new point is joined by bars to three
+/// earlier points (three of the six nearest). Generically rigid: true mobility = bars − 1 spins +
+/// 1 frame-bar spin, no redundancy. Bars are bodies, points are multiple S joints with their
+/// centres as geometry. For the geometric-rigidity benchmarks.
+pub fn henneberg_framework(points: usize, seed: u64) -> Mechanism {
+    let mut rng = SplitMix64::new(seed);
+    let mut p: Vec<[f64; 3]> = Vec::new();
+    let mut bars: Vec<(usize, usize)> = vec![(0, 1), (0, 2), (1, 2)];
+    for i in 0..points {
+        let s = (i as f64).cbrt();
+        p.push([
+            s * rng.next_signed(),
+            s * rng.next_signed(),
+            s * rng.next_signed(),
+        ]);
+        if i >= 3 {
+            let mut near: Vec<(f64, usize)> = (0..i)
+                .map(|j| {
+                    let d: f64 = (0..3).map(|k| (p[i][k] - p[j][k]).powi(2)).sum();
+                    (d, j)
+                })
+                .collect();
+            near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            // Three of the six nearest, at random: local, and not too flat.
+            let mut pick: Vec<usize> = near.iter().take(6).map(|x| x.1).collect();
+            for _ in 0..3 {
+                let k = rng.below(pick.len() as u64) as usize;
+                bars.push((pick.swap_remove(k), i));
+            }
+        }
+    }
+    let name = |k: usize| BodyId::Name(format!("b{k:05}"));
+    let joints = (0..points)
+        .map(|i| JointSpec {
+            id: Some(format!("p{i}")),
+            kind: JointType::S,
+            bodies: bars
+                .iter()
+                .enumerate()
+                .filter(|(_, (a, b))| *a == i || *b == i)
+                .map(|(k, _)| name(k))
+                .collect(),
+            driven: 0,
+            geometry: Geometry {
+                origin: Some(p[i]),
+                ..Geometry::default()
+            },
+        })
+        .collect();
+    Mechanism::from_parts("framework", Space::Spatial, name(0), vec![], joints)
+}
+
 /// Write a mechanism as a format-v1 TOML file (joints only; bodies declared when labelled).
 pub fn to_toml(m: &Mechanism) -> String {
     let mut out = String::new();
