@@ -169,7 +169,7 @@ fn global_rank(m: &Mechanism, seed: u64) -> (usize, usize, usize) {
     }
     let svd = jac.clone().svd(false, false);
     let max = svd.singular_values.iter().copied().fold(0.0, f64::max);
-    let tol = max * nrows.max(n) as f64 * 1e-9;
+    let tol = max * nrows.max(n) as f64 * 1e-12;
     let rank = svd.singular_values.iter().filter(|&&s| s > tol).count();
     (rank, nrows, n)
 }

@@ -44,8 +44,12 @@ pub(crate) struct RankResult {
 /// without bound, 10 minutes and more at 22,000 unknowns).
 pub(crate) const MAX_DENSE_UNKNOWNS: usize = 1200;
 
-/// Relative tolerance on singular values (scaled by the largest one and the size).
-const REL_TOL: f64 = 1e-9;
+/// Relative tolerance on singular values (scaled by the largest one and the size). An exact
+/// deficiency at random generic geometry leaves singular values near `n · ε` (numpy's
+/// `matrix_rank` threshold, `ε` = 2.2e-16), 4,500 times below this; a long chain of loops is
+/// nonsingular but can be badly conditioned: the 321-body group of a variant-B linkage of
+/// 10^3 bodies has `σ_min / σ_max` below 1e-6, which a tolerance of 1e-9 took for a deficit.
+const REL_TOL: f64 = 1e-12;
 
 /// Singular values and vectors of `a` padded with zeros to a square matrix, so that the thin
 /// SVD holds full bases of both null spaces.
@@ -167,8 +171,7 @@ fn screen(
     q: &[Option<DMatrix<f64>>],
     part: Part,
 ) -> Option<usize> {
-    let width = |x: usize| q[x].as_ref().map_or(b, |m| m.ncols());
-    let sizes: Vec<usize> = bodies.iter().map(|&x| width(x)).collect();
+    let sizes: Vec<usize> = bodies.iter().map(|&x| width(b, q, x)).collect();
     let ncols: usize = sizes.iter().sum();
     if ncols <= SCREEN_UNKNOWNS {
         return None;
@@ -221,9 +224,8 @@ fn screen(
 /// threshold. Gaussian elimination with partial pivoting picks `b` rows, a square submatrix
 /// `T` with `|det T|` the product of the pivots and `σ_min(T) ≥ |det T| / ‖T‖_F^(b−1)`;
 /// removing rows never raises `σ_min`, and `σ_max ≤ F`, the Frobenius norm of all rows. So
-/// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, twenty times or more
-/// above the SVD threshold (`n · 1e-9` with n ≤ 48 rows here). Runs for every body, on the
-/// stack.
+/// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, far above the SVD
+/// threshold (`n ·` [`REL_TOL`] with n ≤ 48 rows here). Runs for every body, on the stack.
 fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) -> bool {
     const MAX_ROWS: usize = 48;
     let mut a = [[0.0f64; 6]; MAX_ROWS];
@@ -557,11 +559,13 @@ fn block_shape(
     q: &[Option<DMatrix<f64>>],
 ) -> (usize, usize) {
     let nrows = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
-    let ncols = bodies
-        .iter()
-        .map(|&x| q[x].as_ref().map_or(b, |m| m.ncols()))
-        .sum();
+    let ncols = bodies.iter().map(|&x| width(b, q, x)).sum();
     (nrows, ncols)
+}
+
+/// Body `x`'s reduced unknowns: its basis's columns, all `b` for the identity.
+fn width(b: usize, q: &[Option<DMatrix<f64>>], x: usize) -> usize {
+    q[x].as_ref().map_or(b, |m| m.ncols())
 }
 
 /// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`
@@ -575,7 +579,7 @@ fn block_matrix(
     q: &[Option<DMatrix<f64>>],
 ) -> DMatrix<f64> {
     debug_assert!(bodies.is_sorted());
-    let width = |x: usize| q[x].as_ref().map_or(b, |m| m.ncols());
+    let width = |x: usize| width(b, q, x);
     let mut col = Vec::with_capacity(bodies.len());
     let mut ncols = 0;
     for &x in bodies {
