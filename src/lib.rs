@@ -17,6 +17,7 @@ pub mod joint;
 pub mod mechanism;
 pub mod mobility;
 pub mod motion;
+mod par;
 pub mod report;
 pub mod rigidity;
 pub mod rng;

@@ -576,18 +576,14 @@ fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> Join
 /// (seed, joint index). A joint no model fits (a kind invalid in the space, driven above the
 /// grade: the reader rejects both) gets a generic model of its grade.
 pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
-    use rayon::prelude::*;
-    m.joints
-        .par_iter()
-        .enumerate()
-        .map(|(i, j)| {
-            let s = joint_seed(seed, i);
-            let mut rng = SplitMix64::new(s);
-            let g = random_geometry(j.kind, m.space, &mut rng);
-            joint_model(j.kind, &g, m.space, j.driven)
-                .unwrap_or_else(|_| fallback_model(j.kind, m.space, j.driven, s))
-        })
-        .collect()
+    crate::par::map(m.joints.len(), |i| {
+        let j = &m.joints[i];
+        let s = joint_seed(seed, i);
+        let mut rng = SplitMix64::new(s);
+        let g = random_geometry(j.kind, m.space, &mut rng);
+        joint_model(j.kind, &g, m.space, j.driven)
+            .unwrap_or_else(|_| fallback_model(j.kind, m.space, j.driven, s))
+    })
 }
 
 /// One model per joint at the file geometry. Count-only kinds without geometry get the generic

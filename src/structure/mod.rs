@@ -20,7 +20,6 @@ pub use library::{Library, LibraryError};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use count::{Decomposition, Equations, Part, RawGroup};
-use rayon::prelude::*;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -338,69 +337,66 @@ fn build(
     let code = |e: usize| m.joints[eqs.joint[e]].kind.code();
     // Each group's pair lists, type and inputs on its own (in parallel: they read shared
     // data only); then the types are numbered in order of first appearance.
-    let rendered: Vec<(String, String, String, String, u32)> = raw
-        .par_iter()
-        .enumerate()
-        .map(|(g, grp)| {
-            let gk = g as i64;
-            let mut from: Vec<(usize, usize, usize)> = Vec::new();
-            let mut internal: Vec<(usize, usize, usize)> = Vec::new();
-            let mut to: Vec<(usize, usize, usize)> = Vec::new();
-            let mut kinds: Vec<(JointType, usize)> = Vec::new();
-            let mut inputs = 0u32;
-            for &x in &grp.bodies {
-                for &e in &touch[start[x]..start[x + 1]] {
-                    let [a, c] = eqs.bodies(e);
-                    let y = if a == x { c } else { a };
-                    let active = if key[y] == gk {
-                        // Count an internal pair once, from its hub's side.
-                        if x != a {
-                            continue;
-                        }
-                        internal.push((x.min(y), x.max(y), e));
-                        true
-                    } else if key[y] < gk {
-                        from.push((x, y, e));
-                        true
-                    } else {
-                        to.push((x, y, e));
-                        false
-                    };
-                    if active {
-                        let jt = m.joints[eqs.joint[e]].kind;
-                        match kinds.iter_mut().find(|(k, _)| *k == jt) {
-                            Some((_, n)) => *n += 1,
-                            None => kinds.push((jt, 1)),
-                        }
-                        inputs += eqs.driven[e];
+    let rendered: Vec<(String, String, String, String, u32)> = crate::par::map(raw.len(), |g| {
+        let grp = &raw[g];
+        let gk = g as i64;
+        let mut from: Vec<(usize, usize, usize)> = Vec::new();
+        let mut internal: Vec<(usize, usize, usize)> = Vec::new();
+        let mut to: Vec<(usize, usize, usize)> = Vec::new();
+        let mut kinds: Vec<(JointType, usize)> = Vec::new();
+        let mut inputs = 0u32;
+        for &x in &grp.bodies {
+            for &e in &touch[start[x]..start[x + 1]] {
+                let [a, c] = eqs.bodies(e);
+                let y = if a == x { c } else { a };
+                let active = if key[y] == gk {
+                    // Count an internal pair once, from its hub's side.
+                    if x != a {
+                        continue;
                     }
+                    internal.push((x.min(y), x.max(y), e));
+                    true
+                } else if key[y] < gk {
+                    from.push((x, y, e));
+                    true
+                } else {
+                    to.push((x, y, e));
+                    false
+                };
+                if active {
+                    let jt = m.joints[eqs.joint[e]].kind;
+                    match kinds.iter_mut().find(|(k, _)| *k == jt) {
+                        Some((_, n)) => *n += 1,
+                        None => kinds.push((jt, 1)),
+                    }
+                    inputs += eqs.driven[e];
                 }
             }
-            let render = |list: &mut Vec<(usize, usize, usize)>| {
-                list.sort_unstable();
-                let mut s = String::with_capacity(list.len() * 8);
-                for &(i, j, e) in list.iter() {
-                    // Writing into a String cannot fail.
-                    let _ = write!(s, "{}&{}{}.", m.body_id(i), m.body_id(j), code(e));
-                }
-                s
-            };
-            // Joint types in catalogue order, as the BTreeMap over `JointType` gave them.
-            kinds.sort_unstable_by_key(|&(k, _)| k);
-            let mut kind = String::new();
-            for (k, n) in &kinds {
-                let _ = write!(kind, "{n}{}", k.code());
+        }
+        let render = |list: &mut Vec<(usize, usize, usize)>| {
+            list.sort_unstable();
+            let mut s = String::with_capacity(list.len() * 8);
+            for &(i, j, e) in list.iter() {
+                // Writing into a String cannot fail.
+                let _ = write!(s, "{}&{}{}.", m.body_id(i), m.body_id(j), code(e));
             }
-            kind.push_str(m.space.suffix());
-            (
-                kind,
-                render(&mut from),
-                render(&mut internal),
-                render(&mut to),
-                inputs,
-            )
-        })
-        .collect();
+            s
+        };
+        // Joint types in catalogue order, as the BTreeMap over `JointType` gave them.
+        kinds.sort_unstable_by_key(|&(k, _)| k);
+        let mut kind = String::new();
+        for (k, n) in &kinds {
+            let _ = write!(kind, "{n}{}", k.code());
+        }
+        kind.push_str(m.space.suffix());
+        (
+            kind,
+            render(&mut from),
+            render(&mut internal),
+            render(&mut to),
+            inputs,
+        )
+    });
     let mut groups = Vec::with_capacity(raw.len());
     // Types in order of first appearance, with their counts and library membership.
     let mut type_order: Vec<(String, usize, bool)> = Vec::new();

@@ -25,7 +25,6 @@ use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use crate::motion;
 use nalgebra::DMatrix;
-use rayon::prelude::*;
 use std::collections::HashSet;
 
 /// What the rank check found, with the final decomposition.
@@ -311,16 +310,13 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     drop(fill);
 
     // (a) Isolated freedoms and reduced unknowns (each body on its own, in parallel).
-    let bases: Vec<Option<DMatrix<f64>>> = (0..nb)
-        .into_par_iter()
-        .map(|body| {
-            if body == m.frame {
-                return Some(DMatrix::zeros(b, 0));
-            }
-            let mine = &touch[start[body]..start[body + 1]];
-            reduced_basis(b, mine.iter().map(|&e| &rows[e]))
-        })
-        .collect();
+    let bases: Vec<Option<DMatrix<f64>>> = crate::par::map(nb, |body| {
+        if body == m.frame {
+            return Some(DMatrix::zeros(b, 0));
+        }
+        let mine = &touch[start[body]..start[body + 1]];
+        reduced_basis(b, mine.iter().map(|&e| &rows[e]))
+    });
     let mut q: Vec<Option<DMatrix<f64>>> = Vec::with_capacity(nb);
     let mut isolated = Vec::new();
     for (body, basis) in bases.into_iter().enumerate() {
@@ -429,13 +425,11 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         }
         // Ranks of all of them in parallel (each depends on its own rows only); the first
         // deficient one in order is then explained and lowered, as a serial pass would.
-        let ranks: Vec<usize> = todo
-            .par_iter()
-            .map(|(block_eqs, bodies, part, _)| {
-                screen(b, block_eqs, bodies, eqs, &rows, &q, *part)
-                    .unwrap_or_else(|| rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q)))
-            })
-            .collect();
+        let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
+            let (block_eqs, bodies, part, _) = &todo[i];
+            screen(b, block_eqs, bodies, eqs, &rows, &q, *part)
+                .unwrap_or_else(|| rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q)))
+        });
         let mut changed = false;
         for ((block_eqs, bodies, part, signature), rank) in todo.into_iter().zip(ranks) {
             let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
