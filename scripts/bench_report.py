@@ -427,8 +427,7 @@ def main():
         print(f"end-to-end {fam}: floor {fmt_time(floor)}, count-only {fmt_time(co)}, "
               f"default {fmt_time(de)}", file=sys.stderr)
     rows.append("")
-    rows.append(f"Timed with {tool}, {args.runs} runs after one warm-up; mean ± standard deviation. "
-                "The default-mode row's RSS is for count-only where the rank check is not run.")
+    rows.append(f"Timed with {tool}, {args.runs} runs after one warm-up; mean ± standard deviation.")
     blocks["endtoend"] = "\n".join(rows)
 
     svg = os.path.join(os.path.dirname(args.docs), "benchmarks-growth.svg")
