@@ -24,7 +24,7 @@ use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use crate::motion;
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DMatrixViewMut};
 use std::collections::HashSet;
 
 /// What the rank check found, with the final decomposition.
@@ -146,8 +146,9 @@ fn reduced_basis<'a>(
     Some(qb)
 }
 
-/// A block to check: its pairs, its bodies (ascending), its part and its signature.
-type Pending<'a> = (&'a [usize], &'a [usize], Part, Vec<usize>);
+/// A block to check: its pairs, its bodies (ascending), its part, its signature and its
+/// matrix's (rows, columns).
+type Pending<'a> = (&'a [usize], &'a [usize], Part, Vec<usize>, (usize, usize));
 
 /// Blocks with more unknowns than this are screened by the sparse elimination first.
 const SCREEN_UNKNOWNS: usize = 8;
@@ -184,31 +185,29 @@ fn screen(
         if h == o || n == 0 {
             continue;
         }
-        let mut groups = Vec::with_capacity(2);
-        let mut parts: Vec<DMatrix<f64>> = Vec::with_capacity(2);
-        for (x, sign) in [(h, -1.0), (o, 1.0)] {
-            if let Ok(k) = bodies.binary_search(&x)
-                && sizes[k] > 0
-            {
-                let mut p = match &q[x] {
-                    None => rows[e].clone(),
-                    Some(qx) => &rows[e] * qx,
-                };
-                p *= sign;
-                groups.push(k);
-                parts.push(p);
-            }
-        }
-        if groups.is_empty() {
+        let sides: Vec<(usize, usize, f64)> = [(h, -1.0), (o, 1.0)]
+            .into_iter()
+            .filter_map(|(x, sign)| {
+                let k = bodies.binary_search(&x).ok()?;
+                (sizes[k] > 0).then_some((x, k, sign))
+            })
+            .collect();
+        if sides.is_empty() {
             continue;
         }
-        let w: usize = parts.iter().map(|p| p.ncols()).sum();
+        let w: usize = sides.iter().map(|&(_, k, _)| sizes[k]).sum();
         let mut mat = DMatrix::<f64>::zeros(n, w);
         let mut c0 = 0;
-        for p in &parts {
-            mat.view_mut((0, c0), (n, p.ncols())).copy_from(p);
-            c0 += p.ncols();
+        for &(x, k, sign) in &sides {
+            put(
+                &mut mat.view_mut((0, c0), (n, sizes[k])),
+                &rows[e],
+                &q[x],
+                sign,
+            );
+            c0 += sizes[k];
         }
+        let groups = sides.iter().map(|&(_, k, _)| k).collect();
         frob2 += mat.norm_squared();
         blocks.push(Block { groups, mat });
     }
@@ -421,18 +420,19 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
                 verified.insert(signature);
                 continue;
             }
-            todo.push((block_eqs, bodies, part, signature));
+            todo.push((block_eqs, bodies, part, signature, (nrows, ncols)));
         }
         // Ranks of all of them in parallel (each depends on its own rows only); the first
         // deficient one in order is then explained and lowered, as a serial pass would.
         let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
-            let (block_eqs, bodies, part, _) = &todo[i];
+            let (block_eqs, bodies, part, ..) = &todo[i];
             screen(b, block_eqs, bodies, eqs, &rows, &q, *part)
                 .unwrap_or_else(|| rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q)))
         });
         let mut changed = false;
-        for ((block_eqs, bodies, part, signature), rank) in todo.into_iter().zip(ranks) {
-            let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+        for ((block_eqs, bodies, part, signature, (nrows, ncols)), rank) in
+            todo.into_iter().zip(ranks)
+        {
             // The over-determined block is tall: its surplus rows are the count's business
             // unless it also hides a freedom (a column deficit); then every dependent row goes,
             // so that the count sees the freedom.
@@ -562,6 +562,21 @@ fn width(b: usize, q: &[Option<DMatrix<f64>>], x: usize) -> usize {
     q[x].as_ref().map_or(b, |m| m.ncols())
 }
 
+/// A pair's rows acting on one body's reduced unknowns (`rows · Q_x`, the rows themselves for
+/// the identity basis), times `sign`, written into `dst`.
+fn put(
+    dst: &mut DMatrixViewMut<'_, f64>,
+    rows: &DMatrix<f64>,
+    qx: &Option<DMatrix<f64>>,
+    sign: f64,
+) {
+    match qx {
+        None => dst.copy_from(rows),
+        Some(qx) => dst.copy_from(&(rows * qx)),
+    }
+    *dst *= sign;
+}
+
 /// The block's matrix: rows of `block_eqs`, columns the reduced unknowns of `bodies`
 /// (ascending body indices).
 fn block_matrix(
@@ -594,12 +609,12 @@ fn block_matrix(
                 if width(x) == 0 {
                     continue;
                 }
-                let mut dst = a.view_mut((r0, col[k]), (n, width(x)));
-                match &q[x] {
-                    None => dst.copy_from(&rows[e]),
-                    Some(qx) => dst.copy_from(&(&rows[e] * qx)),
-                }
-                dst *= sign;
+                put(
+                    &mut a.view_mut((r0, col[k]), (n, width(x))),
+                    &rows[e],
+                    &q[x],
+                    sign,
+                );
             }
         }
         r0 += n;
