@@ -6,7 +6,7 @@
 use assert_cmd::Command;
 
 /// The files of issue 13's "Done when" list, by bundled name.
-const ISSUE13: [&str; 16] = [
+const ISSUE13: [&str; 18] = [
     "four-bar-3d-driven",
     "slider-crank-3d-driven",
     "bricard",
@@ -16,6 +16,8 @@ const ISSUE13: [&str; 16] = [
     "bennett-rounded-8",
     "n-four-bar-40",
     "n-four-bar-40-3d",
+    "n-four-bar-40-driven",
+    "n-four-bar-40-3d-driven",
     "pendulum",
     "pendulum-driven",
     "rrp-chain",
