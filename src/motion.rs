@@ -981,8 +981,8 @@ pub fn rounding_of(x: f64) -> f64 {
     let (mantissa, exp) = text.split_once('e').unwrap_or((&text, "0"));
     let exp: i32 = exp.parse().unwrap_or(0);
     let digits = mantissa.chars().filter(|c| c.is_ascii_digit()).count() as i32;
-    if digits < 4 || digits >= 16 {
-        // Short numbers are exact; 16-17 digits is full double precision.
+    if digits < 4 || digits >= 15 {
+        // Short numbers are exact; 15-17 digits is full double precision.
         return 0.0;
     }
     // The last significant digit sits at 10^(exp − digits + 1).

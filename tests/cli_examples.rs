@@ -22,39 +22,6 @@ fn names() -> Vec<&'static str> {
     mbsa::examples::names().collect()
 }
 
-/// The bundled files added for issue 13 (tests/mechanisms_issue13.rs): their `[expect]` tables
-/// hold the numbers the corrected analyses must give, which today's code does not, and their
-/// analyses are not snapshotted until then. TODO(issue 13): empty this list when it lands
-/// (and restore `check @all` in tests/cli_exit_codes.rs).
-const ISSUE13_PENDING: [&str; 18] = [
-    "four-bar-3d-driven",
-    "slider-crank-3d-driven",
-    "bricard",
-    "bricard-driven",
-    "bennett-rounded-4",
-    "bennett-rounded-6",
-    "bennett-rounded-8",
-    "n-four-bar-40",
-    "n-four-bar-40-3d",
-    "n-four-bar-40-driven",
-    "n-four-bar-40-3d-driven",
-    "pendulum",
-    "pendulum-driven",
-    "rrp-chain",
-    "floating-base",
-    "planar-path-free-end",
-    "multiple-joint-order",
-    "multiple-joint-order-b",
-];
-
-/// Bundled names less the issue-13 files still pending.
-fn settled() -> Vec<&'static str> {
-    names()
-        .into_iter()
-        .filter(|n| !ISSUE13_PENDING.contains(n))
-        .collect()
-}
-
 fn snapshot(name: &str, value: &str) {
     insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!(name, value);
@@ -63,20 +30,20 @@ fn snapshot(name: &str, value: &str) {
 
 #[test]
 fn every_bundled_mechanism_meets_its_expectations() {
-    let files: Vec<String> = settled().iter().map(|n| format!("@{n}")).collect();
+    let files: Vec<String> = names().iter().map(|n| format!("@{n}")).collect();
     let mut args = vec!["check"];
     args.extend(files.iter().map(String::as_str));
     let (code, out, err) = mbsa(&args);
     assert_eq!(code, 0, "{out}{err}");
     assert_eq!(
         out.lines().filter(|l| l.starts_with("ok")).count(),
-        settled().len()
+        names().len()
     );
 }
 
 #[test]
 fn analyze_snapshots() {
-    for name in settled() {
+    for name in names() {
         let at = format!("@{name}");
         let (code, table, err) = mbsa(&["analyze", &at]);
         assert_eq!(code, 0, "{name}: {err}");

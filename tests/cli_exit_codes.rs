@@ -47,8 +47,7 @@ fn success_is_0() {
         &["schema"],
         &["mobility", "@rotor"],
         &["mobility", "--format", "json", "@four-bar"],
-        // TODO(issue 13): back to `check @all` when the issue-13 fixtures pass.
-        &["check", "@four-bar", "@rotor", "@rig-bennett"],
+        &["check", "@all"],
     ] {
         assert_eq!(code(args), 0, "{args:?}");
     }

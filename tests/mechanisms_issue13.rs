@@ -57,7 +57,6 @@ fn issue13_files_are_bundled_with_expectations() {
 }
 
 #[test]
-#[ignore = "enabled when issue 13 lands"]
 fn issue13_files_meet_their_expectations() {
     let mut failed = Vec::new();
     for name in ISSUE13 {
@@ -71,7 +70,6 @@ fn issue13_files_meet_their_expectations() {
 
 /// The two listings of the issue's multiple-joint example give the same groups.
 #[test]
-#[ignore = "enabled when issue 13 lands"]
 fn multiple_joint_listing_order_does_not_change_the_groups() {
     let groups = |name: &str| {
         let (code, json, err) = mbsa(&["analyze", &format!("@{name}"), "--format", "json"]);
