@@ -321,47 +321,18 @@ impl Factor {
             offsets.push(acc);
             acc += s;
         }
-        let mut store: Vec<Option<Blk>> = Vec::with_capacity(blocks.len() * 2);
-        let mut of_group: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let add = |b: Blk, store: &mut Vec<Option<Blk>>, of_group: &mut Vec<Vec<usize>>| {
-            let id = store.len();
-            for &g in &b.groups {
-                of_group[g].push(id);
-            }
-            store.push(Some(b));
-        };
+        let mut pool = Pool::new(&sizes, blocks.len() * 2);
         for b in blocks {
-            add(b, &mut store, &mut of_group);
+            pool.add(b);
         }
         // Scratch: a stamp per group (dedup) and the front column of each group.
         let mut stamp = vec![0usize; n];
         let mut clock = 0usize;
         let mut pos = vec![0usize; n];
-        // Front width of eliminating g now (its own and its neighbours' columns).
-        let score = |g: usize,
-                     store: &Vec<Option<Blk>>,
-                     of_group: &mut Vec<Vec<usize>>,
-                     stamp: &mut Vec<usize>,
-                     clock: &mut usize| {
-            *clock += 1;
-            of_group[g].retain(|&id| store[id].is_some());
-            let mut w = 0;
-            for &id in &of_group[g] {
-                if let Some(b) = &store[id] {
-                    for &h in &b.groups {
-                        if stamp[h] != *clock {
-                            stamp[h] = *clock;
-                            w += sizes[h];
-                        }
-                    }
-                }
-            }
-            w.max(sizes[g])
-        };
         let mut heap = BinaryHeap::with_capacity(n);
         let mut version = vec![0usize; n];
         for g in 0..n {
-            let s = score(g, &store, &mut of_group, &mut stamp, &mut clock);
+            let s = pool.score(g, &mut stamp, &mut clock);
             heap.push(Reverse((s, g, 0usize)));
         }
         let mut done = vec![false; n];
@@ -376,8 +347,10 @@ impl Factor {
                 continue;
             }
             done[g] = true;
-            let ids = std::mem::take(&mut of_group[g]);
-            let members: Vec<Blk> = ids.into_iter().filter_map(|id| store[id].take()).collect();
+            let mut members = pool.take(g);
+            // Narrow blocks first: their rows are preferred as pivots, so that the rows
+            // left over (and the pivot rows kept) stay narrow.
+            members.sort_by_key(|b| b.groups.iter().map(|&h| sizes[h]).sum::<usize>());
             clock += 1;
             stamp[g] = clock;
             let mut others = Vec::new();
@@ -425,7 +398,8 @@ impl Factor {
                     free.push(c);
                     continue;
                 };
-                swap_rows(&mut front, width, r, p);
+                // Keep the row order otherwise (narrow rows stay first).
+                front[r * width..(p + 1) * width].rotate_right(width);
                 let inv = front[r * width + c].inv();
                 scale(&mut front[r * width + c..(r + 1) * width], inv);
                 for i in 0..nrows {
@@ -442,41 +416,92 @@ impl Factor {
                 r += 1;
             }
             rank += r;
-            // The rest: rows r.. over the others' columns, compressed to echelon form.
-            let rest_w = width - sg;
-            let rest_rows = nrows - r;
-            if rest_rows > 0 {
-                let mut rest = Vec::with_capacity(rest_rows * rest_w);
-                for i in r..nrows {
-                    rest.extend_from_slice(&front[i * width + sg..(i + 1) * width]);
-                }
-                let kept = if rest_w == 0 {
-                    0
-                } else if rest_rows > rest_w {
-                    echelon(&mut rest, rest_w)
-                } else {
-                    drop_zero_rows(&mut rest, rest_w)
-                };
-                stats.dependent_rows += rest_rows - kept;
-                rest.truncate(kept * rest_w);
-                if kept > 0 {
-                    add(
-                        Blk {
-                            groups: others.clone(),
-                            nrows: kept,
-                            data: rest,
-                        },
-                        &mut store,
-                        &mut of_group,
-                    );
+            // Which of the others' groups each row touches.
+            let words = others.len().div_ceil(64);
+            let mut masks = vec![0u64; nrows * words];
+            for i in 0..nrows {
+                let row = &front[i * width..(i + 1) * width];
+                for (k, &h) in others.iter().enumerate() {
+                    if row[pos[h]..pos[h] + sizes[h]].iter().any(|x| !x.is_zero()) {
+                        masks[i * words + k / 64] |= 1 << (k % 64);
+                    }
                 }
             }
-            front.truncate(r * width);
-            stats.factor_entries += front.len();
+            // The rest: rows r.. split by the groups they touch, each part compressed.
+            if r < nrows {
+                let mut order: Vec<usize> = (r..nrows).collect();
+                order.sort_by(|&a, &b| {
+                    masks[a * words..(a + 1) * words].cmp(&masks[b * words..(b + 1) * words])
+                });
+                let mut i = 0;
+                while i < order.len() {
+                    let key = &masks[order[i] * words..(order[i] + 1) * words];
+                    let mut j = i;
+                    while j < order.len() && masks[order[j] * words..(order[j] + 1) * words] == *key
+                    {
+                        j += 1;
+                    }
+                    let groups: Vec<usize> = (0..others.len())
+                        .filter(|&k| key[k / 64] >> (k % 64) & 1 == 1)
+                        .map(|k| others[k])
+                        .collect();
+                    let bw: usize = groups.iter().map(|&h| sizes[h]).sum();
+                    let n_in = j - i;
+                    if bw == 0 {
+                        stats.dependent_rows += n_in;
+                        i = j;
+                        continue;
+                    }
+                    let mut data = Vec::with_capacity(n_in * bw);
+                    for &ri in &order[i..j] {
+                        let row = &front[ri * width..(ri + 1) * width];
+                        for &h in &groups {
+                            data.extend_from_slice(&row[pos[h]..pos[h] + sizes[h]]);
+                        }
+                    }
+                    let kept = if n_in > bw {
+                        echelon(&mut data, bw)
+                    } else {
+                        n_in
+                    };
+                    stats.dependent_rows += n_in - kept;
+                    data.truncate(kept * bw);
+                    if kept > 0 {
+                        pool.add(Blk {
+                            groups,
+                            nrows: kept,
+                            data,
+                        });
+                    }
+                    i = j;
+                }
+            }
+            // The pivot rows, over the group's columns and the others they touch.
+            let mut used = vec![0u64; words];
+            for i in 0..r {
+                for w in 0..words {
+                    used[w] |= masks[i * words + w];
+                }
+            }
+            let rec_others: Vec<usize> = (0..others.len())
+                .filter(|&k| used[k / 64] >> (k % 64) & 1 == 1)
+                .map(|k| others[k])
+                .collect();
+            let rec_width = sg + rec_others.iter().map(|&h| sizes[h]).sum::<usize>();
+            let mut rows = Vec::with_capacity(r * rec_width);
+            for i in 0..r {
+                let row = &front[i * width..(i + 1) * width];
+                rows.extend_from_slice(&row[..sg]);
+                for &h in &rec_others {
+                    rows.extend_from_slice(&row[pos[h]..pos[h] + sizes[h]]);
+                }
+            }
+            drop(front);
+            stats.factor_entries += rows.len();
             for &h in &others {
                 if !done[h] {
                     version[h] += 1;
-                    let s = score(h, &store, &mut of_group, &mut stamp, &mut clock);
+                    let s = pool.score(h, &mut stamp, &mut clock);
                     heap.push(Reverse((s, h, version[h])));
                 }
             }
@@ -484,9 +509,9 @@ impl Factor {
                 group: g,
                 pivots,
                 free,
-                others,
-                rows: front,
-                width,
+                others: rec_others,
+                rows,
+                width: rec_width,
             });
         }
         Factor {
@@ -632,6 +657,149 @@ impl Factor {
     }
 }
 
+/// The live blocks of an elimination, indexed by group, with per-group row and width sums
+/// kept up to date for the pivot order.
+struct Pool<'a> {
+    sizes: &'a [usize],
+    store: Vec<Option<Blk>>,
+    /// Block ids per group (dead ids pruned lazily).
+    of_group: Vec<Vec<usize>>,
+    /// Live blocks, their rows and the sum of their widths, per group.
+    nblk: Vec<usize>,
+    rsum: Vec<usize>,
+    wsum: Vec<usize>,
+}
+
+/// Groups with more live blocks than this get the width bound instead of the exact union.
+const EXACT_SCORE_BLOCKS: usize = 32;
+
+impl<'a> Pool<'a> {
+    fn new(sizes: &'a [usize], cap: usize) -> Pool<'a> {
+        let n = sizes.len();
+        Pool {
+            sizes,
+            store: Vec::with_capacity(cap),
+            of_group: vec![Vec::new(); n],
+            nblk: vec![0; n],
+            rsum: vec![0; n],
+            wsum: vec![0; n],
+        }
+    }
+
+    fn width(&self, b: &Blk) -> usize {
+        b.groups.iter().map(|&h| self.sizes[h]).sum()
+    }
+
+    fn add(&mut self, b: Blk) {
+        let id = self.store.len();
+        let w = self.width(&b);
+        for &g in &b.groups {
+            self.of_group[g].push(id);
+            self.nblk[g] += 1;
+            self.rsum[g] += b.nrows;
+            self.wsum[g] += w;
+        }
+        self.store.push(Some(b));
+    }
+
+    /// Remove and return the live blocks on group `g`.
+    fn take(&mut self, g: usize) -> Vec<Blk> {
+        let ids = std::mem::take(&mut self.of_group[g]);
+        let mut out = Vec::with_capacity(ids.len());
+        for id in ids {
+            if let Some(b) = self.store[id].take() {
+                let w = self.width(&b);
+                for &h in &b.groups {
+                    self.nblk[h] -= 1;
+                    self.rsum[h] -= b.nrows;
+                    self.wsum[h] -= w;
+                }
+                out.push(b);
+            }
+        }
+        out
+    }
+
+    /// The cost of eliminating `g` now, as (estimated new entries, front width). The
+    /// estimate takes the pivots from the narrowest blocks (as the elimination does), lets
+    /// `U` be the columns those pivot rows span, and counts the pivot rows (`|U|` each) and,
+    /// for every row left over, the columns of `U` its block lacks (its fill). A group whose
+    /// front has no more rows than columns leaves nothing behind (a tip of a chain, a leaf
+    /// of a star, the last body of a determined group); a row crossing many groups that is
+    /// only carried along adds little. Groups on more than [`EXACT_SCORE_BLOCKS`] blocks
+    /// get a bound instead (they go late).
+    fn score(&mut self, g: usize, stamp: &mut [usize], clock: &mut usize) -> (usize, usize) {
+        let sg = self.sizes[g];
+        let ids = &mut self.of_group[g];
+        if ids.len() > 2 * self.nblk[g] + 8 {
+            let store = &self.store;
+            ids.retain(|&id| store[id].is_some());
+        }
+        if self.nblk[g] > EXACT_SCORE_BLOCKS {
+            let width = (self.wsum[g] + sg).saturating_sub(self.nblk[g] * sg);
+            return (self.rsum[g].saturating_mul(width), width);
+        }
+        let mut blocks: Vec<(usize, usize, usize)> = self.of_group[g]
+            .iter()
+            .filter_map(|&id| {
+                let b = self.store[id].as_ref()?;
+                Some((self.width(b), b.nrows, id))
+            })
+            .collect();
+        blocks.sort_unstable();
+        // U: the union of the narrowest blocks supplying sg rows.
+        *clock += 1;
+        let mark = *clock;
+        stamp[g] = mark;
+        let mut uw = sg;
+        let mut need = sg;
+        let mut width = sg;
+        let mut fill = 0;
+        for &(_, nr, id) in &blocks {
+            if need == 0 {
+                break;
+            }
+            if let Some(b) = &self.store[id] {
+                for &h in &b.groups {
+                    if stamp[h] != mark {
+                        stamp[h] = mark;
+                        uw += self.sizes[h];
+                    }
+                }
+            }
+            need = need.saturating_sub(nr);
+        }
+        let pivots = sg - need;
+        fill += pivots * uw;
+        // Rows left over gain the columns of U their block lacks; also count the width.
+        let mut left = pivots;
+        *clock += 1;
+        let wmark = *clock;
+        stamp[g] = wmark;
+        for &(_, nr, id) in &blocks {
+            let used = left.min(nr);
+            left -= used;
+            let rest = nr - used;
+            if let Some(b) = &self.store[id] {
+                let mut inside = sg;
+                for &h in &b.groups {
+                    if stamp[h] == mark {
+                        inside += self.sizes[h];
+                    }
+                    if stamp[h] != wmark && stamp[h] != mark {
+                        stamp[h] = wmark;
+                        width += self.sizes[h];
+                    }
+                }
+                fill += rest * uw.saturating_sub(inside);
+            }
+        }
+        // Groups of U were not counted in the width pass (their stamp is `mark`).
+        width += uw - sg;
+        (fill, width)
+    }
+}
+
 fn swap_rows(m: &mut [Fp], w: usize, i: usize, k: usize) {
     if i != k {
         let (a, b) = (i.min(k), i.max(k));
@@ -676,19 +844,6 @@ fn echelon(m: &mut [Fp], w: usize) -> usize {
         r += 1;
     }
     r
-}
-
-/// Move the nonzero rows first (order kept); returns their number.
-fn drop_zero_rows(m: &mut [Fp], w: usize) -> usize {
-    let nr = m.len() / w;
-    let mut k = 0;
-    for i in 0..nr {
-        if m[i * w..(i + 1) * w].iter().any(|x| !x.is_zero()) {
-            swap_rows(m, w, k, i);
-            k += 1;
-        }
-    }
-    k
 }
 
 /// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows), by factoring the
