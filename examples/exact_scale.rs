@@ -102,7 +102,7 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
     for j in &m.joints {
         let (x, y) = (j.bodies[0], j.bodies[1]);
         let (cx, cy) = (col[x] != usize::MAX, col[y] != usize::MAX);
-        let ok = (cx && cy) || (cx && before[y]) || (cy && before[x]);
+        let ok = (cx && (cy || before[y])) || (cy && before[x]);
         if !ok {
             continue;
         }
@@ -170,10 +170,10 @@ fn main() {
         }
         if with_basis {
             let t = Instant::now();
-            let mut rb = RowBasis::new(a.ncols);
+            let mut rb = RowBasis::with_column_order(&f.column_order());
             let kept = a.rows.iter().filter(|r| rb.insert(r)).count();
             print!(
-                "; row basis {:.3?} (kept {kept}, {} entries)",
+                "; row basis in factor order {:.3?} (kept {kept}, {} entries)",
                 t.elapsed(),
                 rb.entries()
             );

@@ -141,7 +141,10 @@ proptest! {
         }
         let mut rb = RowBasis::new(c.n);
         let kept: Vec<usize> = (0..c.m).filter(|&i| rb.insert(&s.rows[i])).collect();
-        prop_assert_eq!(kept, dense::independent_rows(&d));
+        prop_assert_eq!(&kept, &dense::independent_rows(&d));
+        let mut ordered = RowBasis::with_column_order(&f.column_order());
+        let kept2: Vec<usize> = (0..c.m).filter(|&i| ordered.insert(&s.rows[i])).collect();
+        prop_assert_eq!(kept2, kept);
         // The block interface gives the same rank (one block per row).
         let mut offsets = vec![0];
         for g in &c.groups {

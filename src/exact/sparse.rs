@@ -183,11 +183,18 @@ pub struct FpBlock {
     pub mat: DMatrix<Fp>,
 }
 
-/// Working block: row-major.
+/// Working block: row-major, never empty.
 struct Blk {
     groups: Vec<usize>,
     nrows: usize,
     data: Vec<Fp>,
+}
+
+impl Blk {
+    /// Its number of columns.
+    fn width(&self) -> usize {
+        self.data.len().checked_div(self.nrows).unwrap_or(0)
+    }
 }
 
 /// The eliminated rows of one group: pivots reduced to the identity on the group's columns.
@@ -303,10 +310,26 @@ impl Factor {
                     }
                 }
                 input += data.iter().filter(|x| !x.is_zero()).count();
+                // Groups in increasing order (the elimination's invariant).
+                let mut starts = Vec::with_capacity(b.groups.len());
+                let mut c = 0;
+                for &g in &b.groups {
+                    starts.push(c);
+                    c += sizes[g];
+                }
+                let mut order: Vec<usize> = (0..b.groups.len()).collect();
+                order.sort_by_key(|&k| b.groups[k]);
+                let mut sorted = Vec::with_capacity(m * n);
+                for i in 0..m {
+                    for &k in &order {
+                        let s0 = i * n + starts[k];
+                        sorted.extend_from_slice(&data[s0..s0 + sizes[b.groups[k]]]);
+                    }
+                }
                 Blk {
-                    groups: b.groups,
+                    groups: order.iter().map(|&k| b.groups[k]).collect(),
                     nrows: m,
-                    data,
+                    data: sorted,
                 }
             })
             .collect();
@@ -329,6 +352,7 @@ impl Factor {
         let mut stamp = vec![0usize; n];
         let mut clock = 0usize;
         let mut pos = vec![0usize; n];
+        let mut stamp_rescore = vec![0usize; n];
         let mut heap = BinaryHeap::with_capacity(n);
         let mut version = vec![0usize; n];
         for g in 0..n {
@@ -348,9 +372,21 @@ impl Factor {
             }
             done[g] = true;
             let mut members = pool.take(g);
+            // Neighbours to rescore: those on a narrow block of this front (a group reached
+            // only through a wide block keeps its score, a heuristic that keeps long
+            // carried rows from costing a pass over all their groups at every step).
+            clock += 1;
+            let rescore_mark = clock;
+            for b in &members {
+                if b.groups.len() <= WIDE_BLOCK {
+                    for &h in &b.groups {
+                        stamp_rescore[h] = rescore_mark;
+                    }
+                }
+            }
             // Narrow blocks first: their rows are preferred as pivots, so that the rows
             // left over (and the pivot rows kept) stay narrow.
-            members.sort_by_key(|b| b.groups.iter().map(|&h| sizes[h]).sum::<usize>());
+            members.sort_by_key(Blk::width);
             clock += 1;
             stamp[g] = clock;
             let mut others = Vec::new();
@@ -374,7 +410,7 @@ impl Factor {
             let mut front = vec![Fp::ZERO; nrows * width];
             let mut r0 = 0;
             for b in &members {
-                let bw: usize = b.groups.iter().map(|&h| sizes[h]).sum();
+                let bw = b.width();
                 for i in 0..b.nrows {
                     let src = &b.data[i * bw..(i + 1) * bw];
                     let dst = &mut front[(r0 + i) * width..(r0 + i + 1) * width];
@@ -467,6 +503,11 @@ impl Factor {
                     stats.dependent_rows += n_in - kept;
                     data.truncate(kept * bw);
                     if kept > 0 {
+                        if groups.len() <= WIDE_BLOCK {
+                            for &h in &groups {
+                                stamp_rescore[h] = rescore_mark;
+                            }
+                        }
                         pool.add(Blk {
                             groups,
                             nrows: kept,
@@ -499,7 +540,7 @@ impl Factor {
             drop(front);
             stats.factor_entries += rows.len();
             for &h in &others {
-                if !done[h] {
+                if !done[h] && stamp_rescore[h] == rescore_mark {
                     version[h] += 1;
                     let s = pool.score(h, &mut stamp, &mut clock);
                     heap.push(Reverse((s, h, version[h])));
@@ -541,6 +582,25 @@ impl Factor {
     /// Fill and front sizes of the factorization.
     pub fn stats(&self) -> FactorStats {
         self.stats
+    }
+
+    /// The columns in elimination order (group by group, each group's columns in order):
+    /// a fill-reducing order for [`RowBasis::with_column_order`].
+    pub fn column_order(&self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.ncols());
+        let mut seen = vec![false; self.sizes.len()];
+        for rec in &self.records {
+            seen[rec.group] = true;
+            let off = self.offsets[rec.group];
+            out.extend((off..off + self.sizes[rec.group]).map(|c| c as u32));
+        }
+        for (g, &s) in self.sizes.iter().enumerate() {
+            if !seen[g] {
+                let off = self.offsets[g];
+                out.extend((off..off + s).map(|c| c as u32));
+            }
+        }
+        out
     }
 
     /// The free columns (global indices), one per null-space vector, in the order of
@@ -670,6 +730,10 @@ struct Pool<'a> {
     wsum: Vec<usize>,
 }
 
+/// Blocks on more groups than this are "wide" (a carried row): the pivot order treats them
+/// approximately.
+const WIDE_BLOCK: usize = 64;
+
 /// Groups with more live blocks than this get the width bound instead of the exact union.
 const EXACT_SCORE_BLOCKS: usize = 32;
 
@@ -687,7 +751,7 @@ impl<'a> Pool<'a> {
     }
 
     fn width(&self, b: &Blk) -> usize {
-        b.groups.iter().map(|&h| self.sizes[h]).sum()
+        b.width()
     }
 
     fn add(&mut self, b: Blk) {
@@ -751,10 +815,9 @@ impl<'a> Pool<'a> {
         *clock += 1;
         let mark = *clock;
         stamp[g] = mark;
+        let mut u_groups: Vec<usize> = Vec::new();
         let mut uw = sg;
         let mut need = sg;
-        let mut width = sg;
-        let mut fill = 0;
         for &(_, nr, id) in &blocks {
             if need == 0 {
                 break;
@@ -764,38 +827,46 @@ impl<'a> Pool<'a> {
                     if stamp[h] != mark {
                         stamp[h] = mark;
                         uw += self.sizes[h];
+                        u_groups.push(h);
                     }
                 }
             }
             need = need.saturating_sub(nr);
         }
         let pivots = sg - need;
-        fill += pivots * uw;
-        // Rows left over gain the columns of U their block lacks; also count the width.
+        let mut fill = pivots * uw;
+        // Rows left over gain the columns of U their block lacks; the width counts the
+        // narrow blocks' groups exactly and the wide ones' by their width.
         let mut left = pivots;
         *clock += 1;
         let wmark = *clock;
         stamp[g] = wmark;
-        for &(_, nr, id) in &blocks {
+        let mut width = uw;
+        for &(bw, nr, id) in &blocks {
             let used = left.min(nr);
             left -= used;
             let rest = nr - used;
-            if let Some(b) = &self.store[id] {
-                let mut inside = sg;
+            let Some(b) = &self.store[id] else { continue };
+            let mut inside = sg;
+            if b.groups.len() <= WIDE_BLOCK {
                 for &h in &b.groups {
                     if stamp[h] == mark {
                         inside += self.sizes[h];
-                    }
-                    if stamp[h] != wmark && stamp[h] != mark {
+                    } else if stamp[h] != wmark {
                         stamp[h] = wmark;
                         width += self.sizes[h];
                     }
                 }
-                fill += rest * uw.saturating_sub(inside);
+            } else {
+                for &h in &u_groups {
+                    if b.groups.binary_search(&h).is_ok() {
+                        inside += self.sizes[h];
+                    }
+                }
+                width += bw - inside;
             }
+            fill += rest * uw.saturating_sub(inside);
         }
-        // Groups of U were not counted in the width pass (their stamp is `mark`).
-        width += uw - sg;
         (fill, width)
     }
 }
@@ -891,6 +962,8 @@ pub fn dependent_rows(a: &SparseMatrix) -> Vec<DependentRow> {
 #[derive(Clone, Debug)]
 pub struct RowBasis {
     ncols: usize,
+    /// Position of each column in the pivot order (empty: the identity).
+    rank_of: Vec<u32>,
     /// The kept rows, reduced: leading entry 1, all other columns after it.
     rows: Vec<SparseRow>,
     /// The kept row leading at each column.
@@ -906,11 +979,34 @@ impl RowBasis {
     pub fn new(ncols: usize) -> RowBasis {
         RowBasis {
             ncols,
+            rank_of: Vec::new(),
             rows: Vec::new(),
             pivot: vec![NO_PIVOT; ncols],
             acc: vec![Fp::ZERO; ncols],
             mark: vec![false; ncols],
         }
+    }
+
+    /// An empty basis whose pivots follow the given column order (`order[k]` is the k-th
+    /// column; a permutation of `0..ncols`), for example [`Factor::column_order`]: rows
+    /// are then reduced as the factorization would eliminate them, which keeps the kept
+    /// rows short where the natural order fills in (the hub of a star numbered first).
+    ///
+    /// # Panics
+    /// If `order` is not a permutation (a caller's error).
+    pub fn with_column_order(order: &[u32]) -> RowBasis {
+        let ncols = order.len();
+        let mut rank_of = vec![u32::MAX; ncols];
+        for (k, &c) in order.iter().enumerate() {
+            assert!(
+                (c as usize) < ncols && rank_of[c as usize] == u32::MAX,
+                "column order is not a permutation"
+            );
+            rank_of[c as usize] = k as u32;
+        }
+        let mut b = RowBasis::new(ncols);
+        b.rank_of = rank_of;
+        b
     }
 
     /// The number of rows kept (the rank of the rows inserted so far).
@@ -937,6 +1033,11 @@ impl RowBasis {
         let mut heap: BinaryHeap<Reverse<u32>> = BinaryHeap::with_capacity(row.len() * 2);
         let mut touched: Vec<u32> = Vec::with_capacity(row.len() * 2);
         for &(c, v) in row {
+            let c = if self.rank_of.is_empty() {
+                c
+            } else {
+                self.rank_of[c as usize]
+            };
             let cu = c as usize;
             self.acc[cu] += v;
             if !self.mark[cu] {
@@ -1058,6 +1159,11 @@ mod tests {
             .filter(|&i| basis.insert(&a.rows[i]))
             .collect();
         assert_eq!(kept, dense::independent_rows(&d));
+        let mut ordered = RowBasis::with_column_order(&f.column_order());
+        let kept2: Vec<usize> = (0..a.nrows())
+            .filter(|&i| ordered.insert(&a.rows[i]))
+            .collect();
+        assert_eq!(kept2, kept);
     }
 
     #[test]
