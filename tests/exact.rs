@@ -136,8 +136,11 @@ proptest! {
         let keep: Vec<usize> = (0..c.m).filter(|i| !deps.iter().any(|x| x.row == *i)).collect();
         let sub = DMatrix::from_fn(keep.len(), c.n, |i, j| d[(keep[i], j)]);
         prop_assert_eq!(dense::rank(&sub), r);
+        let greedy = dense::independent_rows(&d);
         for dep in &deps {
-            prop_assert!(dep.support.contains(&dep.row));
+            prop_assert!(!greedy.contains(&dep.row));
+            prop_assert_eq!(dep.support.last(), Some(&dep.row));
+            prop_assert!(is_zero(&s.left_mul_sparse(&dep.vector)));
         }
         let mut rb = RowBasis::new(c.n);
         let kept: Vec<usize> = (0..c.m).filter(|&i| rb.insert(&s.rows[i])).collect();

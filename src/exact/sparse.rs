@@ -917,40 +917,63 @@ fn echelon(m: &mut [Fp], w: usize) -> usize {
     r
 }
 
-/// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows), by factoring the
-/// transpose.
-pub fn left_null_space(a: &SparseMatrix) -> Vec<SparseRow> {
-    Factor::new(&a.transpose()).null_space()
-}
-
-/// A row that the others make redundant, with the rows taking part in its dependency.
+/// A row that the earlier rows make redundant, with the rows taking part in its dependency.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DependentRow {
     /// The row.
     pub row: usize,
-    /// Rows (this one included) with a nonzero coefficient in the left null vector that
-    /// expresses the dependency, increasing.
+    /// Rows with a nonzero coefficient in the left null vector that expresses the
+    /// dependency (this row, coefficient one, and earlier rows), increasing.
     pub support: Vec<usize>,
+    /// That left null vector over the rows: `Σ y_i row_i = 0`.
+    pub vector: SparseRow,
 }
 
-/// A maximal set of dependent rows: removing all of them keeps the rank (the rows left are
-/// a basis of the row space), each with the support of a left null vector in which it has
-/// coefficient one and the other listed rows zero. The set follows the elimination order,
-/// not the row order; for the greedy row-order answer use [`RowBasis`].
+impl Factor {
+    /// The rows of `a` (the matrix this factor was computed from) that are combinations of
+    /// the rows before them, greedy in row order, each with its dependency. Removing them
+    /// all keeps the rank; their vectors are a basis of the left null space. Computed with
+    /// a tracked [`RowBasis`] in this factor's column order.
+    pub fn dependent_rows(&self, a: &SparseMatrix) -> Vec<DependentRow> {
+        if self.rank == a.nrows() {
+            return Vec::new();
+        }
+        let mut basis = RowBasis::with_column_order(&self.column_order()).with_tracking();
+        let mut out = Vec::new();
+        for (i, r) in a.rows.iter().enumerate() {
+            if !basis.insert(r) {
+                let vector = basis.last_dependency().cloned().unwrap_or_default();
+                out.push(DependentRow {
+                    row: i,
+                    support: vector.iter().map(|&(k, _)| k as usize).collect(),
+                    vector,
+                });
+            }
+        }
+        out
+    }
+
+    /// A basis of the left null space {y : yᵀ A = 0} of `a` (the matrix this factor was
+    /// computed from), as vectors over the rows: the dependencies of
+    /// [`Factor::dependent_rows`]. Empty at once when the rows are independent.
+    pub fn left_null_space(&self, a: &SparseMatrix) -> Vec<SparseRow> {
+        self.dependent_rows(a)
+            .into_iter()
+            .map(|d| d.vector)
+            .collect()
+    }
+}
+
+/// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows); see
+/// [`Factor::left_null_space`].
+pub fn left_null_space(a: &SparseMatrix) -> Vec<SparseRow> {
+    Factor::new(a).left_null_space(a)
+}
+
+/// The rows dependent on the rows before them, with their dependencies; see
+/// [`Factor::dependent_rows`].
 pub fn dependent_rows(a: &SparseMatrix) -> Vec<DependentRow> {
-    let f = Factor::new(&a.transpose());
-    let free = f.free_columns();
-    let mut out: Vec<DependentRow> = f
-        .null_space()
-        .into_iter()
-        .zip(free)
-        .map(|(y, r)| DependentRow {
-            row: r as usize,
-            support: y.iter().map(|&(i, _)| i as usize).collect(),
-        })
-        .collect();
-    out.sort_by_key(|d| d.row);
-    out
+    Factor::new(a).dependent_rows(a)
 }
 
 /// An incremental row basis in echelon form with respect to the column order: insert
@@ -970,6 +993,15 @@ pub struct RowBasis {
     pivot: Vec<u32>,
     acc: Vec<Fp>,
     mark: Vec<bool>,
+    /// Rows inserted so far (the next row's id).
+    inserted: u32,
+    /// Whether combinations are tracked ([`RowBasis::with_tracking`]).
+    track: bool,
+    /// Per kept row, its combination of the inserted rows (by id).
+    combos: Vec<SparseRow>,
+    cacc: Vec<Fp>,
+    cmark: Vec<bool>,
+    last_dependency: Option<SparseRow>,
 }
 
 const NO_PIVOT: u32 = u32::MAX;
@@ -984,7 +1016,30 @@ impl RowBasis {
             pivot: vec![NO_PIVOT; ncols],
             acc: vec![Fp::ZERO; ncols],
             mark: vec![false; ncols],
+            inserted: 0,
+            track: false,
+            combos: Vec::new(),
+            cacc: Vec::new(),
+            cmark: Vec::new(),
+            last_dependency: None,
         }
+    }
+
+    /// Track, for every kept row, which inserted rows it combines, so that a dependent row
+    /// comes with its dependency ([`RowBasis::last_dependency`]). Costs memory and time in
+    /// proportion to those combinations (the inverse of the triangular factor, denser than
+    /// the kept rows); call on an empty basis.
+    pub fn with_tracking(mut self) -> RowBasis {
+        self.track = true;
+        self
+    }
+
+    /// With tracking, after an [`insert`](RowBasis::insert) that returned `false`: the left
+    /// null vector over the inserted rows (by insertion index, from 0) in which the last row
+    /// has coefficient one and only rows inserted before it take part: `Σ y_i row_i = 0`.
+    /// `None` after a kept row or without tracking.
+    pub fn last_dependency(&self) -> Option<&SparseRow> {
+        self.last_dependency.as_ref()
     }
 
     /// An empty basis whose pivots follow the given column order (`order[k]` is the k-th
@@ -1030,6 +1085,20 @@ impl RowBasis {
     /// # Panics
     /// If a column is not below `ncols` (a caller's indexing error).
     pub fn insert(&mut self, row: &[(u32, Fp)]) -> bool {
+        let id = self.inserted;
+        self.inserted += 1;
+        self.last_dependency = None;
+        let mut ctouched: Vec<u32> = Vec::new();
+        if self.track {
+            if self.cacc.len() <= id as usize {
+                let n = (2 * self.cacc.len()).max(id as usize + 1);
+                self.cacc.resize(n, Fp::ZERO);
+                self.cmark.resize(n, false);
+            }
+            self.cacc[id as usize] = Fp::ONE;
+            self.cmark[id as usize] = true;
+            ctouched.push(id);
+        }
         let mut heap: BinaryHeap<Reverse<u32>> = BinaryHeap::with_capacity(row.len() * 2);
         let mut touched: Vec<u32> = Vec::with_capacity(row.len() * 2);
         for &(c, v) in row {
@@ -1067,8 +1136,27 @@ impl RowBasis {
                 }
                 self.pivot[c as usize] = self.rows.len() as u32;
                 self.rows.push(new_row);
+                if self.track {
+                    ctouched.sort_unstable();
+                    let combo = ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize] * inv))
+                        .filter(|e| !e.1.is_zero())
+                        .collect();
+                    self.combos.push(combo);
+                }
                 kept = true;
                 break;
+            }
+            if self.track {
+                for &(i, w) in &self.combos[p as usize] {
+                    let iu = i as usize;
+                    self.cacc[iu] -= v * w;
+                    if !self.cmark[iu] {
+                        self.cmark[iu] = true;
+                        ctouched.push(i);
+                    }
+                }
             }
             let prow = &self.rows[p as usize];
             for &(k, w) in &prow[1..] {
@@ -1086,7 +1174,28 @@ impl RowBasis {
             self.acc[c as usize] = Fp::ZERO;
             self.mark[c as usize] = false;
         }
+        if self.track {
+            ctouched.sort_unstable();
+            if !kept {
+                self.last_dependency = Some(
+                    ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize]))
+                        .filter(|e| !e.1.is_zero())
+                        .collect(),
+                );
+            }
+            for i in ctouched {
+                self.cacc[i as usize] = Fp::ZERO;
+                self.cmark[i as usize] = false;
+            }
+        }
         kept
+    }
+
+    /// Entries stored in the tracked combinations.
+    pub fn combination_entries(&self) -> usize {
+        self.combos.iter().map(|r| r.len()).sum()
     }
 }
 
@@ -1149,6 +1258,11 @@ mod tests {
         }
         let deps = dependent_rows(a);
         assert_eq!(deps.len(), a.nrows() - r);
+        let greedy = dense::independent_rows(&d);
+        for dep in &deps {
+            assert!(!greedy.contains(&dep.row));
+            assert_eq!(dep.support.last(), Some(&dep.row));
+        }
         let keep: Vec<usize> = (0..a.nrows())
             .filter(|i| !deps.iter().any(|d| d.row == *i))
             .collect();
@@ -1164,6 +1278,19 @@ mod tests {
             .filter(|&i| ordered.insert(&a.rows[i]))
             .collect();
         assert_eq!(kept2, kept);
+        let mut tracked = RowBasis::with_column_order(&f.column_order()).with_tracking();
+        for i in 0..a.nrows() {
+            let k = tracked.insert(&a.rows[i]);
+            assert_eq!(k, kept.contains(&i));
+            match tracked.last_dependency() {
+                Some(y) => {
+                    assert!(!k);
+                    assert_eq!(y.last(), Some(&(i as u32, Fp::ONE)));
+                    assert!(a.left_mul_sparse(y).iter().all(|v| v.is_zero()));
+                }
+                None => assert!(k),
+            }
+        }
     }
 
     #[test]
