@@ -94,7 +94,8 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
         count_only: true,
         ..Options::default()
     };
-    let a = structure::analyze(&m, &opts, &Library::builtin());
+    let a = structure::analyze(&m, &opts, &Library::builtin())
+        .expect("generated mechanisms need no geometry");
     let (gi, g) = a
         .groups
         .iter()
