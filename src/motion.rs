@@ -754,37 +754,43 @@ pub fn realization(
     source: GeometrySource,
     precision: Option<f64>,
 ) -> Result<Realization, MotionError> {
-    let random = |seed: u64, note: Option<String>| Realization {
-        models: realize(m, seed),
-        used: GeometryUsed {
-            mode: "random",
-            seed: Some(seed),
-            configuration: "a random generic realization of the joint types".into(),
-            note,
-            precision: None,
-        },
+    let used = choose(m, source, precision)?;
+    let models = match used.seed {
+        Some(seed) => realize(m, seed),
+        None => configure(m)?,
     };
-    let file = |note: Option<String>| -> Result<Realization, MotionError> {
-        Ok(Realization {
-            models: configure(m)?,
-            used: GeometryUsed {
-                mode: "file",
-                seed: None,
-                configuration: "the configuration written in the file".into(),
-                note,
-                precision: Some(precision.unwrap_or_else(|| written_precision(m))),
-            },
+    Ok(Realization { models, used })
+}
+
+/// Which geometry `source` gives for `m` (see [`realization`]), without building the joint
+/// models; the file geometry is checked (an error names the joint) when it is chosen.
+pub fn choose(
+    m: &Mechanism,
+    source: GeometrySource,
+    precision: Option<f64>,
+) -> Result<GeometryUsed, MotionError> {
+    let random = |seed: u64, note: Option<String>| GeometryUsed {
+        mode: "random",
+        seed: Some(seed),
+        configuration: "a random generic realization of the joint types".into(),
+        note,
+        precision: None,
+    };
+    let file = |note: Option<String>| -> Result<GeometryUsed, MotionError> {
+        // Every joint model must build at the file's geometry.
+        check_file_geometry(m)?;
+        Ok(GeometryUsed {
+            mode: "file",
+            seed: None,
+            configuration: "the configuration written in the file".into(),
+            note,
+            precision: Some(precision.unwrap_or_else(|| written_precision(m))),
         })
     };
     let lack = lacking(m);
     match source {
         GeometrySource::Random { seed } => Ok(random(seed, None)),
         GeometrySource::File => {
-            let modelled_all = lack.iter().all(|l| l.no_model);
-            if !modelled_all {
-                // The first joint lacking a field, as the error.
-                configure(m)?;
-            }
             let note = (!lack.is_empty()).then(|| {
                 format!(
                     "no geometric model for {}: generic contact lines used",
@@ -825,6 +831,27 @@ pub fn realization(
     }
 }
 
+/// Build every joint model at the file's geometry (in parallel), keeping only the first error
+/// in joint order.
+fn check_file_geometry(m: &Mechanism) -> Result<(), MotionError> {
+    let errors: Vec<Option<MotionError>> = crate::par::map(m.joints.len(), |i| {
+        let j = &m.joints[i];
+        if !modelled(j.kind, m.space) && j.geometry.is_empty() {
+            return None;
+        }
+        joint_model(j.kind, &j.geometry, m.space, j.driven)
+            .err()
+            .map(|e| MotionError::InJoint {
+                joint: j.id.clone(),
+                source: Box::new(e),
+            })
+    });
+    match errors.into_iter().flatten().next() {
+        Some(e) => Err(e),
+        None => Ok(()),
+    }
+}
+
 /// The geometry of every joint at `source` (see [`realization`]): the file's, or a random
 /// generic realization drawn per (seed, joint index) as [`realize`] does. Analyses that build
 /// models per binary pair with their own driven share ([`pair_model`]) start from these.
@@ -833,8 +860,8 @@ pub fn geometries(
     source: GeometrySource,
     precision: Option<f64>,
 ) -> Result<(Vec<Geometry>, GeometryUsed), MotionError> {
-    let real = realization(m, source, precision)?;
-    let geoms = match real.used.seed {
+    let used = choose(m, source, precision)?;
+    let geoms = match used.seed {
         Some(seed) => (0..m.joints.len())
             .map(|i| {
                 let j = &m.joints[i];
@@ -854,7 +881,7 @@ pub fn geometries(
             })
             .collect(),
     };
-    Ok((geoms, real.used))
+    Ok((geoms, used))
 }
 
 /// The model of one binary pair of joint `index` of `m` at geometry `g` with `driven` of its

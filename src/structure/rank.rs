@@ -313,7 +313,7 @@ pub(crate) fn check(
 ) -> RankResult {
     let b = m.b() as usize;
     let nb = eqs.nodes;
-    let (mut rows, free) = pair_rows(m, geoms, eqs);
+    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file());
     let tol = match used.precision {
         Some(delta) => Tol {
             rel: 1e-9,
@@ -378,9 +378,12 @@ pub(crate) fn check(
         if eqs.is_element(body) {
             // The shared element moves only across its joint's constraint directions: its
             // unknowns are the row space of the joint's rows (orthonormal, so their transpose).
+            // (At the file's configuration `rows` may already have lost dependent equations:
+            // the joint's full rows are in `free` then.)
             let e = pin_pair[body - eqs.bodies];
             return Some(
                 free.get(e)
+                    .or(rows.get(e))
                     .map_or_else(|| DMatrix::zeros(b, 0), |r| r.transpose()),
             );
         }
@@ -602,43 +605,59 @@ pub(crate) fn check(
 }
 
 /// Rows of every pair at the given joint geometry: its constraint rows with its share of the
-/// driven DOF fixed, and its constraint rows alone (no input).
+/// driven DOF fixed, and (when `with_free`, for the file's configuration) its constraint rows
+/// alone (no input; empty otherwise).
 fn pair_rows(
     m: &Mechanism,
     geoms: &[Geometry],
     eqs: &Equations,
+    with_free: bool,
 ) -> (Vec<DMatrix<f64>>, Vec<DMatrix<f64>>) {
-    // One model per joint with its own driven DOF and one without, in parallel.
-    let base: Vec<(DMatrix<f64>, DMatrix<f64>)> = crate::par::map(m.joints.len(), |ji| {
-        let j = &m.joints[ji];
-        let free = motion::pair_model(m, ji, &geoms[ji], 0).rows;
-        let own = if j.driven == 0 {
-            free.clone()
-        } else {
-            motion::pair_model(m, ji, &geoms[ji], j.driven).rows
-        };
-        (own, free)
-    });
     let b = m.b() as usize;
+    // One model per joint with its own driven DOF (and one without), in parallel.
+    let mut base: Vec<(DMatrix<f64>, Option<DMatrix<f64>>)> =
+        crate::par::map(m.joints.len(), |ji| {
+            let j = &m.joints[ji];
+            let own = motion::pair_model(m, ji, &geoms[ji], j.driven).rows;
+            let free = (with_free || j.bodies.len() > 2).then(|| {
+                if j.driven == 0 {
+                    own.clone()
+                } else {
+                    motion::pair_model(m, ji, &geoms[ji], 0).rows
+                }
+            });
+            (own, free)
+        });
+    let empty = || DMatrix::zeros(0, b);
     let mut rows = Vec::with_capacity(eqs.len());
-    let mut free = Vec::with_capacity(eqs.len());
+    let mut free = Vec::with_capacity(if with_free { eqs.len() } else { 0 });
     for e in 0..eqs.len() {
         let ji = eqs.joint[e];
-        let (own, f) = &base[ji];
-        if eqs.input_only[e] {
+        // A joint's pairs are consecutive: its last pair takes the rows instead of copying.
+        let last = e + 1 == eqs.len() || eqs.joint[e + 1] != ji;
+        let j = &m.joints[ji];
+        let (r, f) = if eqs.input_only[e] {
             // A multiple joint's inputs between two of its bodies: the driven rows alone.
             let driven = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
-            rows.push(input_rows(&driven, f));
-            free.push(DMatrix::zeros(0, b));
+            let f = base[ji].1.as_ref().map_or_else(empty, |f| f.clone());
+            (input_rows(&driven, &f), empty())
+        } else if eqs.driven[e] == j.driven {
+            let own = if last {
+                std::mem::replace(&mut base[ji].0, empty())
+            } else {
+                base[ji].0.clone()
+            };
+            (own, base[ji].1.clone().unwrap_or_else(empty))
         } else if eqs.driven[e] == 0 {
-            rows.push(f.clone());
-            free.push(f.clone());
-        } else if eqs.driven[e] == m.joints[ji].driven {
-            rows.push(own.clone());
-            free.push(f.clone());
+            let f = base[ji].1.clone().unwrap_or_else(empty);
+            (f.clone(), f)
         } else {
-            rows.push(motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows);
-            free.push(f.clone());
+            let own = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
+            (own, base[ji].1.clone().unwrap_or_else(empty))
+        };
+        rows.push(r);
+        if with_free {
+            free.push(f);
         }
     }
     (rows, free)
