@@ -1,0 +1,214 @@
+//! Gauss–Newton least squares on a set of joint equations over a set of unknown bodies.
+//!
+//! Each step is the minimum-norm least-squares solution of `J δ = −e` (SVD, singular values
+//! below `1e-10·σ_max` dropped), so redundant equations (a planar loop written in 3D) and
+//! unknowns the equations leave free are both fine: free unknowns do not move (least change).
+//! A step that does not lower `‖e‖` is halved (up to 30 times).
+
+use super::pose::Configuration;
+use super::residual::PositionModel;
+use nalgebra::{DMatrix, DVector};
+
+/// A system: some pairs' equations, some bodies unknown (the others held at their poses).
+#[derive(Clone, Debug)]
+pub struct System {
+    /// Pair indices (into `PositionModel::pairs`).
+    pub pairs: Vec<usize>,
+    /// Unknown bodies, in column order.
+    pub bodies: Vec<usize>,
+}
+
+/// Options of [`System::solve`].
+#[derive(Clone, Copy, Debug)]
+pub struct NewtonOptions {
+    /// Converged when every residual is at most this (model units).
+    pub tolerance: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            tolerance: 1e-11,
+            max_iterations: 60,
+        }
+    }
+}
+
+/// The outcome of a solve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewtonOutcome {
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Iterations done.
+    pub iterations: usize,
+    /// Largest residual at the end (model units).
+    pub residual: f64,
+    /// Singular values of the final Jacobian, descending.
+    pub singular_values: Vec<f64>,
+    /// Unknowns (columns).
+    pub unknowns: usize,
+    /// Equations (rows).
+    pub equations: usize,
+    /// Largest residual per pair at the end, in `System::pairs` order.
+    pub pair_residuals: Vec<f64>,
+}
+
+impl NewtonOutcome {
+    /// Nullity of the Jacobian (columns less rank, relative threshold `rel`).
+    pub fn nullity(&self, rel: f64) -> usize {
+        let top = self
+            .singular_values
+            .first()
+            .copied()
+            .unwrap_or(0.0)
+            .max(1.0);
+        let rank = self
+            .singular_values
+            .iter()
+            .filter(|&&s| s > rel * top)
+            .count();
+        self.unknowns - rank
+    }
+
+    /// Smallest singular value over the unknowns (0 when there are more unknowns than
+    /// equations), relative to the largest (at least 1).
+    pub fn conditioning(&self) -> f64 {
+        let top = self
+            .singular_values
+            .first()
+            .copied()
+            .unwrap_or(0.0)
+            .max(1.0);
+        if self.singular_values.len() < self.unknowns {
+            return 0.0;
+        }
+        self.singular_values.last().copied().unwrap_or(0.0) / top
+    }
+}
+
+/// Driven targets per pair (model units; empty = not driven).
+pub type Targets = Vec<Vec<f64>>;
+
+impl System {
+    /// Residual vector, Jacobian and per-pair maximum residual at `config`.
+    pub fn evaluate(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+    ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
+        let b = model.b();
+        let mut col = vec![usize::MAX; model.bodies];
+        for (i, &body) in self.bodies.iter().enumerate() {
+            col[body] = i * b;
+        }
+        let blocks: Vec<_> = self
+            .pairs
+            .iter()
+            .map(|&p| {
+                let pair = &model.pairs[p];
+                model.pair_equations(
+                    p,
+                    &config.poses[pair.a],
+                    &config.poses[pair.b],
+                    targets.get(p).map(Vec::as_slice).unwrap_or(&[]),
+                )
+            })
+            .collect();
+        let rows: usize = blocks.iter().map(|e| e.residual.len()).sum();
+        let mut r = DVector::zeros(rows);
+        let mut j = DMatrix::zeros(rows, self.bodies.len() * b);
+        let mut per_pair = Vec::with_capacity(blocks.len());
+        let mut at = 0;
+        for (e, &p) in blocks.iter().zip(&self.pairs) {
+            let pair = &model.pairs[p];
+            let n = e.residual.len();
+            let mut worst: f64 = 0.0;
+            for i in 0..n {
+                r[at + i] = e.residual[i];
+                worst = worst.max(e.residual[i].abs());
+            }
+            per_pair.push(worst);
+            for (side, body) in [(0, pair.a), (1, pair.b)] {
+                if col[body] == usize::MAX || (side == 1 && pair.a == pair.b) {
+                    continue;
+                }
+                for i in 0..n {
+                    for k in 0..b {
+                        j[(at + i, col[body] + k)] += e.jacobian[(i, side * b + k)];
+                    }
+                }
+            }
+            at += n;
+        }
+        (r, j, per_pair)
+    }
+
+    /// Solve in place from `config` (only the unknown bodies move).
+    pub fn solve(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &mut Configuration,
+        opts: &NewtonOptions,
+    ) -> NewtonOutcome {
+        let b = model.b();
+        let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let (mut r, mut j, mut per_pair) = self.evaluate(model, targets, config);
+        let mut iterations = 0;
+        let mut svd_values;
+        loop {
+            if j.nrows() == 0 || j.ncols() == 0 {
+                svd_values = Vec::new();
+                break;
+            }
+            let svd = j.clone().svd(true, true);
+            svd_values = svd.singular_values.iter().copied().collect::<Vec<_>>();
+            if inf(&r) <= opts.tolerance
+                || iterations >= opts.max_iterations
+                || !r.iter().all(|x| x.is_finite())
+            {
+                break;
+            }
+            let top = svd_values.iter().copied().fold(0.0, f64::max);
+            let step = match svd.solve(&(-&r), 1e-10 * top.max(1e-300)) {
+                Ok(s) => s,
+                Err(_) => break,
+            };
+            iterations += 1;
+            let base = config.clone();
+            let norm0 = r.norm();
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..30 {
+                for (i, &body) in self.bodies.iter().enumerate() {
+                    let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
+                    config.poses[body] = base.poses[body].moved_by(model.space, &tw);
+                }
+                let (r2, j2, p2) = self.evaluate(model, targets, config);
+                if r2.norm() < norm0 || inf(&r2) <= opts.tolerance {
+                    (r, j, per_pair) = (r2, j2, p2);
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                config.poses.clone_from(&base.poses);
+                break;
+            }
+        }
+        svd_values.sort_by(|a, b| b.total_cmp(a));
+        NewtonOutcome {
+            converged: inf(&r) <= opts.tolerance,
+            iterations,
+            residual: inf(&r),
+            singular_values: svd_values,
+            unknowns: j.ncols(),
+            equations: j.nrows(),
+            pair_residuals: per_pair,
+        }
+    }
+}
