@@ -29,7 +29,10 @@ pub use finite::{FiniteMobility, FiniteOptions, Verdict, finite_mobility};
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
 pub use pose::{Configuration, Pose, PoseReport};
 pub use residual::{ModelError, PositionModel};
-pub use solve::{Schedule, Solution, SolveError, Step, schedule, solve_global, solve_groups};
+pub use solve::{
+    JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,
+    schedule, solve_global, solve_groups,
+};
 
 /// The closure section for the file's own configuration (what other reports show).
 pub fn file_closure(m: &crate::Mechanism, tolerance: Option<f64>) -> Result<Closure, ModelError> {

@@ -72,8 +72,8 @@ impl NewtonOutcome {
         self.unknowns - rank
     }
 
-    /// Smallest singular value over the unknowns (0 when there are more unknowns than
-    /// equations), relative to the largest (at least 1).
+    /// Smallest singular value above `1e-9 ×` the largest, relative to the largest (at
+    /// least 1): how close the equations are to losing one more rank (1 when there are none).
     pub fn conditioning(&self) -> f64 {
         let top = self
             .singular_values
@@ -81,10 +81,12 @@ impl NewtonOutcome {
             .copied()
             .unwrap_or(0.0)
             .max(1.0);
-        if self.singular_values.len() < self.unknowns {
-            return 0.0;
-        }
-        self.singular_values.last().copied().unwrap_or(0.0) / top
+        self.singular_values
+            .iter()
+            .copied()
+            .filter(|&s| s > 1e-9 * top)
+            .fold(top, f64::min)
+            / top
     }
 }
 

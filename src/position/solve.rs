@@ -142,7 +142,11 @@ pub struct StepReport {
     pub iterations: usize,
     /// Largest residual after the step (file units).
     pub residual: f64,
-    /// Smallest over largest singular value of the step's Jacobian (0: singular).
+    /// Nullity of the step's Jacobian over its unknowns (relative threshold 1e-9): freedoms
+    /// the step's equations leave (an isolated spin; more at a singular configuration).
+    pub nullity: usize,
+    /// Smallest nonzero over largest singular value of the step's Jacobian (near 0: close to
+    /// a singular configuration).
     pub conditioning: f64,
 }
 
@@ -225,6 +229,7 @@ fn report(m: &Mechanism, model: &PositionModel, step: &Step, out: &NewtonOutcome
             .collect(),
         iterations: out.iterations,
         residual: out.residual * model.scale,
+        nullity: out.nullity(1e-9),
         conditioning: out.conditioning(),
     }
 }
@@ -363,4 +368,81 @@ pub fn pose_reports(
             )
         })
         .collect()
+}
+
+/// The values of one joint (driven-DOF order; all pairs of a multiple joint in turn).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointValues {
+    /// Joint id.
+    pub joint: String,
+    /// Values: degrees for angles, file lengths for slides.
+    pub values: Vec<f64>,
+    /// `deg` or `length` per value.
+    pub units: Vec<&'static str>,
+}
+
+/// Every joint's values at `config` (measured from the file's configuration).
+pub fn joint_values(
+    m: &Mechanism,
+    model: &PositionModel,
+    config: &Configuration,
+) -> Vec<JointValues> {
+    let mut out: Vec<JointValues> = m
+        .joints
+        .iter()
+        .map(|j| JointValues {
+            joint: j.id.clone(),
+            values: Vec::new(),
+            units: Vec::new(),
+        })
+        .collect();
+    for (p, pair) in model.pairs.iter().enumerate() {
+        let vals = model.pair_values(p, &config.poses[pair.a], &config.poses[pair.b]);
+        let o = &mut out[pair.joint];
+        for (v, angle) in vals {
+            o.values.push(super::pose::tidy(if angle {
+                v.to_degrees()
+            } else {
+                v * model.scale
+            }));
+            o.units.push(if angle { "deg" } else { "length" });
+        }
+    }
+    out
+}
+
+/// A solve as reported (`mbsa solve --format json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SolveReport {
+    /// Mechanism name.
+    pub name: String,
+    /// How it was solved: `groups` or `global`.
+    pub method: &'static str,
+    /// The steps in solve order.
+    pub steps: Vec<StepReport>,
+    /// Largest residual over every joint (file units).
+    pub max_residual: f64,
+    /// Body poses.
+    pub poses: Vec<PoseReport>,
+    /// Joint values.
+    pub joint_values: Vec<JointValues>,
+}
+
+impl SolveReport {
+    /// The report of `sol`.
+    pub fn new(
+        m: &Mechanism,
+        model: &PositionModel,
+        sol: &Solution,
+        method: &'static str,
+    ) -> SolveReport {
+        SolveReport {
+            name: m.name.clone(),
+            method,
+            steps: sol.steps.clone(),
+            max_residual: super::pose::tidy(sol.max_residual),
+            poses: pose_reports(m, model, &sol.config),
+            joint_values: joint_values(m, model, &sol.config),
+        }
+    }
 }
