@@ -18,6 +18,7 @@ pub mod finite;
 pub mod inputs;
 pub mod newton;
 pub mod pose;
+pub mod realize;
 pub mod residual;
 pub mod solve;
 mod track;
@@ -28,6 +29,7 @@ pub use closure::{
 pub use finite::{FiniteMobility, FiniteOptions, Verdict, finite_mobility};
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
 pub use pose::{Configuration, Pose, PoseReport};
+pub use realize::with_random_geometry;
 pub use residual::{ModelError, PositionModel};
 pub use solve::{
     JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,

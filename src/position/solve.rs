@@ -30,9 +30,10 @@ pub struct Schedule {
     pub steps: Vec<Step>,
 }
 
-/// The schedule of `m` from its structural analysis: groups by level, then the bodies no
-/// group holds (an over- or under-determined part) as one last step. A pair is solved by the
-/// first step after which both its bodies are known.
+/// The schedule of `m` from its structural analysis: the over-determined part first (it is
+/// known with the frame: step `over`, level 0), the groups by level, then the bodies no group
+/// holds (an under-determined part) as one last step `rest`. A pair is solved by the first
+/// step after which both its bodies are known.
 pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule {
     let by_id: HashMap<String, usize> = (0..m.bodies.len())
         .map(|i| (m.body_id(i).to_string(), i))
@@ -42,10 +43,8 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
     let mut placed = vec![false; m.bodies.len()];
     placed[m.frame] = true;
     let mut steps: Vec<Step> = Vec::new();
-    for g in order {
-        let grp = &a.groups[g];
-        let bodies: Vec<usize> = grp
-            .bodies
+    let take = |ids: &[String], placed: &mut Vec<bool>| -> Vec<usize> {
+        let bodies: Vec<usize> = ids
             .iter()
             .filter_map(|id| by_id.get(id).copied())
             .filter(|&b| !placed[b])
@@ -53,6 +52,22 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
         for &b in &bodies {
             placed[b] = true;
         }
+        bodies
+    };
+    if let Some(over) = a.diagnosis.as_ref().and_then(|d| d.overdetermined.as_ref()) {
+        let bodies = take(&over.bodies, &mut placed);
+        if !bodies.is_empty() {
+            steps.push(Step {
+                name: "over".into(),
+                level: 0,
+                bodies,
+                pairs: Vec::new(),
+            });
+        }
+    }
+    for g in order {
+        let grp = &a.groups[g];
+        let bodies = take(&grp.bodies, &mut placed);
         if !bodies.is_empty() {
             steps.push(Step {
                 name: grp.name.clone(),
