@@ -46,6 +46,10 @@ pub struct SolveArgs {
     /// Closure tolerance in file lengths (default 1e-9 x model size).
     #[arg(long)]
     pub tolerance: Option<f64>,
+    /// Also report the finite mobility at the solved configuration (local dimension of the
+    /// solution set against the first-order mobility; toggles and singular poses named).
+    #[arg(long)]
+    pub finite: bool,
     /// Output format.
     #[arg(long, value_enum, default_value_t = SolveFormat::Table)]
     pub format: SolveFormat,
@@ -234,7 +238,17 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
     let method = if args.global { "global" } else { "groups" };
     let Some(sw) = sweep else {
         let sol = run(&sets, &config)?.map_err(|e| solve_failure(name, &e))?;
-        let report = SolveReport::new(&m, &model, &sol, method);
+        let mut report = SolveReport::new(&m, &model, &sol, method);
+        if args.finite {
+            report.finite = Some(
+                mbsa::position::finite_mobility(
+                    &m,
+                    &sol.config,
+                    &mbsa::position::FiniteOptions::default(),
+                )
+                .map_err(|e| input_err(name, &e))?,
+            );
+        }
         return emit(&match args.format {
             SolveFormat::Table => mbsa::report::position::solve_table(&report),
             SolveFormat::Json => mbsa::report::json(&report),

@@ -183,12 +183,18 @@ fn arr(v: nalgebra::Vector3<f64>, planar: bool) -> [f64; 3] {
 pub fn moved_mechanism(m: &Mechanism, config: &Configuration) -> Mechanism {
     let mut out = m.clone();
     let planar = m.space == Space::Planar;
+    // Pose translations are in model units.
+    let scale = super::residual::model_size(m);
+    let file_units = |p: Pose| Pose {
+        rotation: p.rotation,
+        translation: p.translation * scale,
+    };
     for j in &mut out.joints {
-        let a = config.poses[j.bodies[0]];
+        let a = file_units(config.poses[j.bodies[0]]);
         let b = j
             .bodies
             .get(1)
-            .map(|&i| config.poses[i])
+            .map(|&i| file_units(config.poses[i]))
             .unwrap_or_else(Pose::identity);
         let on_second = matches!(j.kind, JointType::SP | JointType::SC | JointType::PC);
         let owner = if on_second { b } else { a };

@@ -32,7 +32,8 @@ pub struct Schedule {
 
 /// The schedule of `m` from its structural analysis: the over-determined part first (it is
 /// known with the frame: step `over`, level 0), the groups by level, then the bodies no group
-/// holds (an under-determined part) as one last step `rest`. A pair is solved by the first
+/// holds (an under-determined part) as one last step `rest`; the first step is named
+/// `overdetermined`. A pair is solved by the first
 /// step after which both its bodies are known.
 pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule {
     let by_id: HashMap<String, usize> = (0..m.bodies.len())
@@ -58,7 +59,7 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
         let bodies = take(&over.bodies, &mut placed);
         if !bodies.is_empty() {
             steps.push(Step {
-                name: "over".into(),
+                name: "overdetermined".into(),
                 level: 0,
                 bodies,
                 pairs: Vec::new(),
@@ -441,6 +442,9 @@ pub struct SolveReport {
     pub poses: Vec<PoseReport>,
     /// Joint values.
     pub joint_values: Vec<JointValues>,
+    /// Finite against first-order mobility at the solved configuration, when asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finite: Option<super::finite::FiniteMobility>,
 }
 
 impl SolveReport {
@@ -458,6 +462,7 @@ impl SolveReport {
             max_residual: super::pose::tidy(sol.max_residual),
             poses: pose_reports(m, model, &sol.config),
             joint_values: joint_values(m, model, &sol.config),
+            finite: None,
         }
     }
 }

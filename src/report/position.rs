@@ -89,6 +89,9 @@ pub fn solve_table(r: &SolveReport) -> String {
         }
     }
     let _ = writeln!(s, "\n{t}");
+    if let Some(f) = &r.finite {
+        let _ = write!(s, "\n{}", finite_section(f));
+    }
     s
 }
 
