@@ -273,6 +273,13 @@ struct SweepReport {
     stopped: Option<String>,
 }
 
+/// Solves for given values from a configuration (the outer error is an input error).
+type Runner<'a> = dyn Fn(
+        &[(usize, Vec<Value>)],
+        &Configuration,
+    ) -> Result<Result<mbsa::position::Solution, SolveError>, Failure>
+    + 'a;
+
 #[allow(clippy::too_many_arguments)]
 fn sweep_run(
     m: &Mechanism,
@@ -282,10 +289,7 @@ fn sweep_run(
     sw: &inputs::Sweep,
     mut config: Configuration,
     args: &SolveArgs,
-    run: &dyn Fn(
-        &[(usize, Vec<Value>)],
-        &Configuration,
-    ) -> Result<Result<mbsa::position::Solution, SolveError>, Failure>,
+    run: &Runner<'_>,
 ) -> Result<(), Failure> {
     let joint = m.joints[sw.joint].id.clone();
     let mut steps: Vec<SweepStep> = Vec::new();

@@ -10,7 +10,7 @@
 //! - [`closure`]: [`check_closure`], [`assemble`], [`moved_mechanism`].
 //! - [`solve`]: the group-by-group schedule, [`solve_groups`] and the global reference
 //!   [`solve_global`].
-//! - [`finite`]: [`finite_mobility`].
+//! - [`finite`]: the finite-mobility test, [`finite_mobility()`].
 //! - [`inputs`]: input values (`JOINT=30`, `JOINT=0.5rad`, sweeps).
 
 pub mod closure;

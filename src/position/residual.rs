@@ -229,7 +229,6 @@ fn features(
         None => default.ok_or_else(|| missing(field)),
     };
     let z = Some(Vector3::z());
-    let x = Some(Vector3::x());
     let mut f = Features {
         o: Vector3::zeros(),
         o2: Vector3::zeros(),
@@ -311,7 +310,7 @@ fn features(
         },
         Space::Spherical => match kind {
             R => f.u = dir(g.axis, "axis", None)?,
-            FP => f.u = x.unwrap_or_default(),
+            FP => f.u = Vector3::x(),
             _ => return Err(no_model()),
         },
     }

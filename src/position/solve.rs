@@ -97,10 +97,10 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
     }
     for (p, pair) in model.pairs.iter().enumerate() {
         let s = known_at[pair.a].max(known_at[pair.b]);
-        if let Some(step) = steps.get_mut(s) {
-            if step.bodies.contains(&pair.a) || step.bodies.contains(&pair.b) {
-                step.pairs.push(p);
-            }
+        if let Some(step) = steps.get_mut(s)
+            && (step.bodies.contains(&pair.a) || step.bodies.contains(&pair.b))
+        {
+            step.pairs.push(p);
         }
     }
     Schedule { steps }
