@@ -5,9 +5,10 @@
 //! unknowns the equations leave free are both fine: free unknowns do not move (least change).
 //! A step that does not lower `‖e‖` is halved (up to 30 times).
 
-use super::pose::Configuration;
+use super::pose::{Configuration, Pose};
 use super::residual::PositionModel;
 use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
 
 /// A system: some pairs' equations, some bodies unknown (the others held at their poses).
 #[derive(Clone, Debug)]
@@ -101,11 +102,34 @@ impl System {
         targets: &Targets,
         config: &Configuration,
     ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
+        let local: Vec<Pose> = self.bodies.iter().map(|&b| config.poses[b]).collect();
+        self.evaluate_local(model, targets, config, &local, &self.columns())
+    }
+
+    /// Column block of each unknown body.
+    fn columns(&self) -> HashMap<usize, usize> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| (b, i))
+            .collect()
+    }
+
+    /// [`System::evaluate`] with the unknown bodies at `local` (in `bodies` order) and the
+    /// others at `config`.
+    fn evaluate_local(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+        local: &[Pose],
+        col: &HashMap<usize, usize>,
+    ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
         let b = model.b();
-        let mut col = vec![usize::MAX; model.bodies];
-        for (i, &body) in self.bodies.iter().enumerate() {
-            col[body] = i * b;
-        }
+        let pose = |body: usize| match col.get(&body) {
+            Some(&i) => local[i],
+            None => config.poses[body],
+        };
         let blocks: Vec<_> = self
             .pairs
             .iter()
@@ -113,8 +137,8 @@ impl System {
                 let pair = &model.pairs[p];
                 model.pair_equations(
                     p,
-                    &config.poses[pair.a],
-                    &config.poses[pair.b],
+                    &pose(pair.a),
+                    &pose(pair.b),
                     targets.get(p).map(Vec::as_slice).unwrap_or(&[]),
                 )
             })
@@ -134,12 +158,13 @@ impl System {
             }
             per_pair.push(worst);
             for (side, body) in [(0, pair.a), (1, pair.b)] {
-                if col[body] == usize::MAX || (side == 1 && pair.a == pair.b) {
+                let Some(&c) = col.get(&body) else { continue };
+                if side == 1 && pair.a == pair.b {
                     continue;
                 }
                 for i in 0..n {
                     for k in 0..b {
-                        j[(at + i, col[body] + k)] += e.jacobian[(i, side * b + k)];
+                        j[(at + i, c * b + k)] += e.jacobian[(i, side * b + k)];
                     }
                 }
             }
@@ -156,9 +181,28 @@ impl System {
         config: &mut Configuration,
         opts: &NewtonOptions,
     ) -> NewtonOutcome {
+        let (out, poses) = self.solve_local(model, targets, config, opts);
+        for (&b, p) in self.bodies.iter().zip(poses) {
+            config.poses[b] = p;
+        }
+        out
+    }
+
+    /// Solve from `config` without changing it: the outcome and the unknown bodies' new poses
+    /// (in `bodies` order). Reads only the poses the system's pairs touch.
+    pub fn solve_local(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+        opts: &NewtonOptions,
+    ) -> (NewtonOutcome, Vec<Pose>) {
         let b = model.b();
+        let col = self.columns();
         let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let (mut r, mut j, mut per_pair) = self.evaluate(model, targets, config);
+        let mut local: Vec<Pose> = self.bodies.iter().map(|&x| config.poses[x]).collect();
+        let (mut r, mut j, mut per_pair) =
+            self.evaluate_local(model, targets, config, &local, &col);
         let mut iterations = 0;
         let mut svd_values;
         loop {
@@ -180,16 +224,16 @@ impl System {
                 Err(_) => break,
             };
             iterations += 1;
-            let base = config.clone();
+            let base = local.clone();
             let norm0 = r.norm();
             let mut t = 1.0;
             let mut accepted = false;
             for _ in 0..30 {
-                for (i, &body) in self.bodies.iter().enumerate() {
+                for (i, p) in local.iter_mut().enumerate() {
                     let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
-                    config.poses[body] = base.poses[body].moved_by(model.space, &tw);
+                    *p = base[i].moved_by(model.space, &tw);
                 }
-                let (r2, j2, p2) = self.evaluate(model, targets, config);
+                let (r2, j2, p2) = self.evaluate_local(model, targets, config, &local, &col);
                 if r2.norm() < norm0 || inf(&r2) <= opts.tolerance {
                     (r, j, per_pair) = (r2, j2, p2);
                     accepted = true;
@@ -198,12 +242,12 @@ impl System {
                 t *= 0.5;
             }
             if !accepted {
-                config.poses.clone_from(&base.poses);
+                local = base;
                 break;
             }
         }
         svd_values.sort_by(|a, b| b.total_cmp(a));
-        NewtonOutcome {
+        let out = NewtonOutcome {
             converged: inf(&r) <= opts.tolerance,
             iterations,
             residual: inf(&r),
@@ -211,6 +255,7 @@ impl System {
             unknowns: j.ncols(),
             equations: j.nrows(),
             pair_residuals: per_pair,
-        }
+        };
+        (out, local)
     }
 }

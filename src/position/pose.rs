@@ -44,17 +44,27 @@ impl Pose {
         self.rotation * u
     }
 
-    /// Move by the spatial twist `(ω; v)` taken as a finite step: `y ↦ exp(ω) y + v`
-    /// (a retraction: first order in the twist it is the twist's motion).
+    /// Move by the spatial twist `(ω; v)` taken as a finite step: the exponential of the
+    /// twist (a screw motion), `y ↦ exp(ω) y + V v` with `V = I + (1 − cos θ)/θ² [ω] +
+    /// (θ − sin θ)/θ³ [ω]²`, `θ = |ω|`. A rotation about an axis far from the origin is then
+    /// exact, so Newton's steps do not degrade with the distance of a body from the origin.
     pub fn moved(&self, w: &Vector3<f64>, v: &Vector3<f64>) -> Pose {
         let r = Rotation3::new(*w).into_inner();
-        let mut rotation = r * self.rotation;
-        // Keep the rotation orthonormal over long sweeps.
-        let q = UnitQuaternion::from_matrix(&rotation);
-        rotation = q.to_rotation_matrix().into_inner();
+        let th = w.norm();
+        let k = Matrix3::new(0.0, -w.z, w.y, w.z, 0.0, -w.x, -w.y, w.x, 0.0);
+        let (a, b) = if th < 1e-6 {
+            (0.5 - th * th / 24.0, 1.0 / 6.0 - th * th / 120.0)
+        } else {
+            (
+                (1.0 - th.cos()) / (th * th),
+                (th - th.sin()) / (th * th * th),
+            )
+        };
+        let vv = Matrix3::identity() + k * a + k * k * b;
+        let rotation = orthonormalized(&(r * self.rotation));
         Pose {
             rotation,
-            translation: r * self.translation + v,
+            translation: r * self.translation + vv * v,
         }
     }
 
@@ -68,6 +78,16 @@ impl Pose {
     pub fn rotation_vector(&self) -> Vector3<f64> {
         Rotation3::from_matrix_unchecked(self.rotation).scaled_axis()
     }
+}
+
+/// The rotation nearest to an almost orthonormal `m` (Gram–Schmidt on its columns), so that
+/// rounding does not build up over long sweeps.
+fn orthonormalized(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let c0 = m.column(0).normalize();
+    let c1 = m.column(1) - c0 * c0.dot(&m.column(1));
+    let c1 = c1.normalize();
+    let c2 = c0.cross(&c1);
+    Matrix3::from_columns(&[c0, c1, c2])
 }
 
 /// A spatial twist `(ω, v)` from the `B` numbers of a motion-space twist: planar
@@ -136,7 +156,8 @@ impl PoseReport {
     /// Report `pose` of body `body` in a `space` mechanism; `scale` converts lengths back to
     /// file units.
     pub fn new(body: String, pose: &Pose, space: Space, scale: f64) -> PoseReport {
-        let q = UnitQuaternion::from_matrix(&pose.rotation);
+        let q =
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(pose.rotation));
         let (mut axis, mut angle) = q
             .axis_angle()
             .map(|(a, t)| (a.into_inner(), t))

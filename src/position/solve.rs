@@ -283,9 +283,7 @@ pub fn solve_groups(
                 pairs: step.pairs.clone(),
                 bodies: step.bodies.clone(),
             };
-            let mut c = config.clone();
-            let out = sys.solve(model, targets, &mut c, opts);
-            let poses: Vec<_> = step.bodies.iter().map(|&b| c.poses[b]).collect();
+            let (out, poses) = sys.solve_local(model, targets, &config, opts);
             (sys, out, poses)
         };
         let results: Vec<_> = if e - s > 1 && model.bodies > 64 {
