@@ -414,11 +414,14 @@ pub fn joint_values(
         let vals = model.pair_values(p, &config.poses[pair.a], &config.poses[pair.b]);
         let o = &mut out[pair.joint];
         for (v, angle) in vals {
-            o.values.push(super::pose::tidy(if angle {
-                v.to_degrees()
+            let x = if angle {
+                // (−180, 180]: a half turn reads 180 whatever the rounding.
+                let d = v.to_degrees();
+                if d <= -180.0 + 1e-9 { d + 360.0 } else { d }
             } else {
                 v * model.scale
-            }));
+            };
+            o.values.push(super::pose::tidy(x));
             o.units.push(if angle { "deg" } else { "length" });
         }
     }
