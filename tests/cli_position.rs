@@ -212,3 +212,21 @@ fn finite_mobility_of_the_bennett() {
     assert_eq!(v["finite"]["count"], -2);
     assert_eq!(v["finite"]["verdict"], "overconstrained_moving");
 }
+
+#[test]
+fn hostile_values_are_refused() {
+    for (args, needle) in [
+        (vec!["--set", "O=1e308"], "out of range"),
+        (vec!["--set", "S=1e300"], "out of range"),
+        (vec!["--set", "S=nan"], "not a finite number"),
+        (vec!["--sweep", "O=0..1e9:1e-9"], "at most 100000"),
+        (vec!["--tolerance=-1"], "positive length"),
+        (vec!["--set", "S=1e5"], "cannot be closed"),
+    ] {
+        let mut a = vec!["solve", "@slider-crank-geometry"];
+        a.extend(args);
+        let (code, out, err) = mbsa(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        assert!(out.is_empty() && err.contains(needle), "{a:?}: {err}");
+    }
+}

@@ -147,6 +147,13 @@ fn start(
     tolerance: Option<f64>,
     assemble: bool,
 ) -> Result<(Configuration, Option<String>), Failure> {
+    if let Some(t) = tolerance
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Failure::Input(format!(
+            "error: --tolerance must be a positive length, not {t}"
+        )));
+    }
     let scale = mbsa::position::residual::model_size(m);
     let c = match poses {
         Some(p) => read_poses(p, m, scale)?,

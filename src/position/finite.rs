@@ -96,7 +96,12 @@ fn null_basis(j: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
     let rows = j.nrows().max(n);
     let mut a = DMatrix::zeros(rows, n);
     a.view_mut((0, 0), (j.nrows(), n)).copy_from(j);
-    let svd = a.svd(false, true);
+    if !a.iter().all(|x| x.is_finite()) {
+        return DMatrix::zeros(n, 0);
+    }
+    let Some(svd) = nalgebra::SVD::try_new(a, false, true, f64::EPSILON, 10_000) else {
+        return DMatrix::zeros(n, 0);
+    };
     let (Some(vt), s) = (svd.v_t, svd.singular_values) else {
         return DMatrix::zeros(n, 0);
     };
@@ -187,10 +192,11 @@ pub fn finite_mobility(
     if instantaneous_only > 0 {
         // The part of the first-order motions far from the nearby tangent space.
         let proj = &n0 - &near * (near.transpose() * &n0);
-        let svd = proj.svd(true, false);
-        if let Some(u) = svd.u {
-            let keep: Vec<usize> = (0..svd.singular_values.len())
-                .filter(|&i| svd.singular_values[i] > 0.1)
+        let svd = nalgebra::SVD::try_new(proj, true, false, f64::EPSILON, 10_000);
+        if let Some((Some(u), values)) = svd.map(|d| (d.u, d.singular_values)) {
+            let svd_values = values;
+            let keep: Vec<usize> = (0..svd_values.len())
+                .filter(|&i| svd_values[i] > 0.1)
                 .collect();
             let extra = DMatrix::from_fn(u.nrows(), keep.len(), |r, c| u[(r, keep[c])]);
             for p in 0..model.pairs.len() {

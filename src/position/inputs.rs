@@ -43,6 +43,26 @@ pub enum InputError {
         /// Values.
         given: usize,
     },
+    /// A value too large to mean anything.
+    #[error(
+        "joint `{joint}`: value {index} ({text}) is out of range: at most 1e6 radians or 1e6 model sizes"
+    )]
+    OutOfRange {
+        /// Joint id.
+        joint: String,
+        /// 1-based DOF.
+        index: usize,
+        /// The value.
+        text: String,
+    },
+    /// A sweep with too many steps.
+    #[error("the sweep `{text}` has {steps:.0e} steps; at most 100000")]
+    TooManySteps {
+        /// What was written.
+        text: String,
+        /// Its steps.
+        steps: f64,
+    },
     /// A unit on a slide.
     #[error("joint `{joint}`: value {index} is a slide (a length), not an angle: drop `{unit}`")]
     UnitOnSlide {
@@ -113,7 +133,8 @@ pub struct Sweep {
 }
 
 impl Sweep {
-    /// The values of the sweep, FROM to TO inclusive (at most 100 000).
+    /// The values of the sweep, FROM to TO inclusive ([`parse_sweep`] allows at most 100 000
+    /// steps).
     pub fn values(&self) -> Vec<Value> {
         let (a, b) = (self.from.number, self.to.number);
         let s = self.step.number.abs();
@@ -147,6 +168,13 @@ pub fn parse_sweep(m: &Mechanism, text: &str) -> Result<Sweep, InputError> {
     let (from, to, step) = (parse_value(from)?, parse_value(to)?, parse_value(step)?);
     if step.number == 0.0 {
         return Err(bad("STEP is zero"));
+    }
+    let steps = (to.number - from.number).abs() / step.number.abs();
+    if !(steps <= 100_000.0) {
+        return Err(InputError::TooManySteps {
+            text: text.into(),
+            steps,
+        });
     }
     Ok(Sweep {
         joint,
@@ -205,6 +233,13 @@ pub fn targets(
                     });
                 }
             };
+            if !(x.abs() <= 1e6) {
+                return Err(InputError::OutOfRange {
+                    joint: m.joints[*j].id.clone(),
+                    index: i + 1,
+                    text: format!("{:?}", v.number),
+                });
+            }
             if let Some(slot) = per_joint[*j].get_mut(i) {
                 *slot = x;
             }

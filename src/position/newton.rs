@@ -199,18 +199,30 @@ impl System {
     ) -> (NewtonOutcome, Vec<Pose>) {
         let b = model.b();
         let col = self.columns();
-        let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let inf = |r: &DVector<f64>| {
+            if r.iter().all(|x| x.is_finite()) {
+                r.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+            } else {
+                f64::INFINITY
+            }
+        };
         let mut local: Vec<Pose> = self.bodies.iter().map(|&x| config.poses[x]).collect();
         let (mut r, mut j, mut per_pair) =
             self.evaluate_local(model, targets, config, &local, &col);
         let mut iterations = 0;
         let mut svd_values;
         loop {
-            if j.nrows() == 0 || j.ncols() == 0 {
+            if j.nrows() == 0 || j.ncols() == 0 || !j.iter().chain(r.iter()).all(|x| x.is_finite())
+            {
                 svd_values = Vec::new();
                 break;
             }
-            let svd = j.clone().svd(true, true);
+            // Bounded iterations: never loop on a pathological matrix.
+            let Some(svd) = nalgebra::SVD::try_new(j.clone(), true, true, f64::EPSILON, 10_000)
+            else {
+                svd_values = Vec::new();
+                break;
+            };
             svd_values = svd.singular_values.iter().copied().collect::<Vec<_>>();
             if inf(&r) <= opts.tolerance
                 || iterations >= opts.max_iterations
