@@ -170,7 +170,7 @@ pub fn parse_sweep(m: &Mechanism, text: &str) -> Result<Sweep, InputError> {
         return Err(bad("STEP is zero"));
     }
     let steps = (to.number - from.number).abs() / step.number.abs();
-    if !(steps <= 100_000.0) {
+    if steps.is_nan() || steps > 100_000.0 {
         return Err(InputError::TooManySteps {
             text: text.into(),
             steps,
@@ -233,7 +233,7 @@ pub fn targets(
                     });
                 }
             };
-            if !(x.abs() <= 1e6) {
+            if x.is_nan() || x.abs() > 1e6 {
                 return Err(InputError::OutOfRange {
                     joint: m.joints[*j].id.clone(),
                     index: i + 1,
