@@ -36,7 +36,8 @@ struct Case {
 
 fn case(m: Mechanism, degrees: f64) -> Case {
     let model = PositionModel::new(&m).expect("random geometry has a model");
-    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin());
+    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin())
+        .expect("the structure of a mechanism with geometry");
     let sched = schedule(&m, &a, &model);
     let driven = (0..m.joints.len())
         .find(|&j| m.joints[j].driven > 0)

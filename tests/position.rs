@@ -27,6 +27,7 @@ fn geometry(kind: JointType, space: Space, r: &mut SplitMix64) -> Geometry {
         axis2: Some(unit(r)),
         normal: Some(unit(r)),
         pitch: Some(0.3),
+        ..Geometry::default()
     };
     if matches!(kind, JointType::PC | JointType::CR) {
         // normal perpendicular to axis
@@ -289,7 +290,7 @@ fn four_bar(space: Space, theta0: f64) -> Mechanism {
 }
 
 fn analysis(m: &Mechanism) -> structure::Analysis {
-    structure::analyze(m, &structure::Options::default(), &Library::builtin())
+    structure::analyze(m, &structure::Options::default(), &Library::builtin()).unwrap()
 }
 
 fn solve_both(

@@ -231,7 +231,8 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         args.assemble,
     )?;
     let opts = NewtonOptions::default();
-    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin());
+    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin())
+        .map_err(|e| input_err(name, &e))?;
     let sched = mbsa::position::schedule(&m, &a, &model);
     let run = |sets: &[(usize, Vec<Value>)], from: &Configuration| {
         let tg = inputs::targets(&m, &model, sets).map_err(|e| input_err("--set", &e))?;

@@ -207,6 +207,9 @@ pub fn moved_mechanism(m: &Mechanism, config: &Configuration) -> Mechanism {
             let p = if j.kind == JointType::PC { b } else { a };
             g.axis = Some(arr(p.dir(&v(u)), planar && j.kind != JointType::R));
         }
+        if let Some(o) = g.origin2 {
+            g.origin2 = Some(arr(b.point(&v(o)), planar));
+        }
         if let Some(u) = g.axis2 {
             g.axis2 = Some(arr(b.dir(&v(u)), false));
         }

@@ -320,10 +320,9 @@ fn features(
     Ok(f)
 }
 
-/// The second centre of a sphere-sphere joint. The file format gains `origin2` in this
-/// session (lead's issue-13 work); until it lands, no SPSP has one.
-fn origin2(_g: &Geometry) -> Option<[f64; 3]> {
-    None
+/// The second centre of a sphere-sphere joint (on the second body).
+fn origin2(g: &Geometry) -> Option<[f64; 3]> {
+    g.origin2
 }
 
 /// The angle of B about `u` relative to A (right-hand rule), from a perpendicular pair.
