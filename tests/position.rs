@@ -27,7 +27,7 @@ fn geometry(kind: JointType, space: Space, r: &mut SplitMix64) -> Geometry {
         axis2: Some(unit(r)),
         normal: Some(unit(r)),
         pitch: Some(0.3),
-        ..Geometry::default()
+        origin2: Some(rv(r)),
     };
     if matches!(kind, JointType::PC | JointType::CR) {
         // normal perpendicular to axis
@@ -67,7 +67,7 @@ fn one_joint(kind: JointType, space: Space, g: Geometry, driven: u32) -> Mechani
 fn kinds(space: Space) -> Vec<JointType> {
     use JointType::*;
     match space {
-        Space::Spatial => vec![R, P, H, C, U, S, PL, FP, F, ER, SP, SC, PC, CR],
+        Space::Spatial => vec![R, P, H, C, U, S, PL, FP, F, ER, SP, SPSP, SC, PC, CR],
         Space::Planar => vec![R, P, FP],
         Space::Spherical => vec![R, FP],
     }
