@@ -598,6 +598,7 @@ fn build(
         }
     }
     let mut deps_shown: Vec<Vec<usize>> = Vec::with_capacity(raw.len());
+    #[allow(clippy::needless_range_loop)]
     for g in 0..raw.len() {
         let mut d: Vec<usize> = Vec::new();
         for &x in &raw[g].deps {
