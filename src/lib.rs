@@ -19,6 +19,7 @@ pub mod mechanism;
 pub mod mobility;
 pub mod motion;
 mod par;
+pub mod position;
 pub mod report;
 pub mod rigidity;
 pub mod rng;

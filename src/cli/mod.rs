@@ -6,6 +6,7 @@ mod analysis;
 mod check;
 mod generate;
 mod input;
+mod position;
 mod transform;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -105,6 +106,37 @@ enum Command {
         structure: analysis::StructureArgs,
         #[command(flatten)]
         transform: transform::TransformArgs,
+    },
+    /// Positions: every body's pose for given input values, group by group.
+    ///
+    /// Solves the position equations of the joints (the file's geometry is the reference
+    /// configuration, value 0 of every joint) for the values given with `--set`, group by
+    /// group in the level order of the structural analysis (groups of one level in
+    /// parallel), each by Gauss-Newton from the file's configuration. `--sweep` traces a
+    /// motion and stops at a dead point or branch change; `--format toml` writes the
+    /// mechanism at the solved configuration.
+    #[command(
+        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set A=30\n  mbsa solve @slider-crank-geometry --sweep A=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml"
+    )]
+    Solve {
+        #[command(flatten)]
+        file: FileArg,
+        #[command(flatten)]
+        args: position::SolveArgs,
+    },
+    /// Close a configuration: project it onto the joint constraints and write the mechanism file.
+    ///
+    /// Gauss-Newton with minimum-norm steps (least change) from the file's configuration or
+    /// from `--poses`; writes the mechanism with its joint geometry at the closed
+    /// configuration, with the residuals before and after in a comment.
+    #[command(
+        after_help = "Example:\n  mbsa assemble robot.toml --poses keyframe.json > closed.toml"
+    )]
+    Assemble {
+        #[command(flatten)]
+        file: FileArg,
+        #[command(flatten)]
+        args: position::AssembleArgs,
     },
     /// Write a generated mechanism file (benchmark families) to standard output.
     #[command(subcommand)]
@@ -219,6 +251,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             structure,
             transform,
         } => transform::run(&file, &structure, &transform),
+        Command::Solve { file, args } => position::solve(&file, &args),
+        Command::Assemble { file, args } => position::assemble(&file, &args),
         Command::Generate(family) => generate::run(&family),
         Command::Mobility {
             file,

@@ -3,6 +3,7 @@
 
 pub mod dot;
 pub mod mobility;
+pub mod position;
 pub mod rigid_geometric;
 pub mod rigid_pebble;
 pub mod structure;

@@ -1,0 +1,409 @@
+//! `mbsa solve` and `mbsa assemble`: the position level.
+
+use super::{Failure, FileArg, emit, load};
+use clap::{Args, ValueEnum};
+use mbsa::Mechanism;
+use mbsa::position::inputs::{self, Value};
+use mbsa::position::{
+    ClosureStatus, Configuration, NewtonOptions, Pose, PositionModel, SolveError, SolveReport,
+};
+use mbsa::structure::{self, Library};
+use std::io::Write;
+
+/// Output formats of `mbsa solve`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SolveFormat {
+    /// Tables for people.
+    Table,
+    /// JSON (poses, joint values, steps).
+    Json,
+    /// The mechanism file at the solved configuration (joint origins and axes moved).
+    Toml,
+}
+
+/// Options of `mbsa solve`.
+#[derive(Args, Debug, Clone)]
+pub struct SolveArgs {
+    /// Input value `JOINT=VALUE[,VALUE...]` (repeatable): JOINT is a joint id or a body pair;
+    /// angles in degrees unless written `0.5rad`, slides in file lengths; measured from the
+    /// file's configuration. A joint not driven in the file becomes driven.
+    #[arg(long = "set", value_name = "JOINT=VALUE")]
+    pub set: Vec<String>,
+    /// Trace a motion `JOINT=FROM..TO:STEP`, each step starting from the previous one; stops
+    /// at a dead point or a branch change.
+    #[arg(long, value_name = "JOINT=FROM..TO:STEP")]
+    pub sweep: Option<String>,
+    /// Project the starting configuration onto the constraints first (least change).
+    #[arg(long)]
+    pub assemble: bool,
+    /// Start from these poses (JSON, as `--format json` writes them) instead of the file's
+    /// configuration.
+    #[arg(long, value_name = "POSES.json")]
+    pub poses: Option<String>,
+    /// Solve every equation at once instead of group by group (the reference).
+    #[arg(long)]
+    pub global: bool,
+    /// Closure tolerance in file lengths (default 1e-9 x model size).
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+    /// Also report the finite mobility at the solved configuration (local dimension of the
+    /// solution set against the first-order mobility; toggles and singular poses named).
+    #[arg(long)]
+    pub finite: bool,
+    /// Output format.
+    #[arg(long, value_enum, default_value_t = SolveFormat::Table)]
+    pub format: SolveFormat,
+}
+
+/// Options of `mbsa assemble`.
+#[derive(Args, Debug, Clone)]
+pub struct AssembleArgs {
+    /// Start from these poses (JSON, as `mbsa solve --format json` writes them).
+    #[arg(long, value_name = "POSES.json")]
+    pub poses: Option<String>,
+    /// Closure tolerance in file lengths (default 1e-9 x model size).
+    #[arg(long)]
+    pub tolerance: Option<f64>,
+}
+
+fn input_err(file: &str, e: &dyn std::error::Error) -> Failure {
+    Failure::Input(format!("error: {file}: {e}"))
+}
+
+/// An analysis failure: the message on standard error, exit code 1.
+fn failed(msg: &str) -> Failure {
+    let _ = writeln!(std::io::stderr().lock(), "error: {msg}");
+    Failure::Check
+}
+
+fn solve_failure(file: &str, e: &SolveError) -> Failure {
+    match e {
+        SolveError::NotConverged { .. } => failed(&e.to_string()),
+        _ => input_err(file, e),
+    }
+}
+
+fn warn(msg: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "warning: {msg}");
+}
+
+/// Read poses written by `mbsa solve --format json` (or a bare array of them).
+fn read_poses(path: &str, m: &Mechanism, scale: f64) -> Result<Configuration, Failure> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Failure::Input(format!("error: cannot read `{path}`: {e}")))?;
+    let v: serde_json::Value = serde_json::from_str(&text)
+        .map_err(|e| Failure::Input(format!("error: {path}: not JSON: {e}")))?;
+    let list = v.get("poses").unwrap_or(&v);
+    let items = list.as_array().ok_or_else(|| {
+        Failure::Input(format!(
+            "error: {path}: expected an array of poses or {{\"poses\": [...]}}"
+        ))
+    })?;
+    let mut c = Configuration::reference(m.bodies.len());
+    for (i, item) in items.iter().enumerate() {
+        let bad = |what: &str| Failure::Input(format!("error: {path}: pose {}: {what}", i + 1));
+        let body = match item.get("body") {
+            Some(serde_json::Value::String(s)) => s.clone(),
+            Some(serde_json::Value::Number(n)) => n.to_string(),
+            _ => return Err(bad("missing `body`")),
+        };
+        let idx = (0..m.bodies.len())
+            .find(|&b| m.body_id(b).to_string() == body)
+            .ok_or_else(|| bad(&format!("no body `{body}` in the mechanism")))?;
+        let nums = |key: &str, n: usize| -> Result<Vec<f64>, Failure> {
+            let a = item
+                .get(key)
+                .and_then(|x| x.as_array())
+                .ok_or_else(|| bad(&format!("missing `{key}`")))?;
+            let v: Vec<f64> = a.iter().filter_map(|x| x.as_f64()).collect();
+            if v.len() != n || !v.iter().all(|x| x.is_finite()) {
+                return Err(bad(&format!("`{key}` needs {n} finite numbers")));
+            }
+            Ok(v)
+        };
+        let t = nums("translation", 3)?;
+        let q = nums("quaternion", 4)?;
+        let quat = nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]);
+        if quat.norm() < 1e-12 {
+            return Err(bad("`quaternion` is zero"));
+        }
+        let rot = nalgebra::UnitQuaternion::from_quaternion(quat).to_rotation_matrix();
+        if idx != m.frame {
+            c.poses[idx] = Pose {
+                rotation: rot.into_inner(),
+                translation: nalgebra::Vector3::new(t[0], t[1], t[2]) / scale,
+            };
+        }
+    }
+    Ok(c)
+}
+
+/// The starting configuration: the file's or `--poses`, checked for closure, assembled if
+/// asked.
+fn start(
+    file: &str,
+    m: &Mechanism,
+    poses: Option<&str>,
+    tolerance: Option<f64>,
+    assemble: bool,
+) -> Result<(Configuration, Option<String>), Failure> {
+    if let Some(t) = tolerance
+        && !(t.is_finite() && t > 0.0)
+    {
+        return Err(Failure::Input(format!(
+            "error: --tolerance must be a positive length, not {t}"
+        )));
+    }
+    let scale = mbsa::position::residual::model_size(m);
+    let c = match poses {
+        Some(p) => read_poses(p, m, scale)?,
+        None => Configuration::reference(m.bodies.len()),
+    };
+    let closure =
+        mbsa::position::check_closure(m, &c, tolerance).map_err(|e| input_err(file, &e))?;
+    if !assemble {
+        match closure.status {
+            ClosureStatus::Closed => {}
+            ClosureStatus::Open => warn(&closure.message().unwrap_or_default()),
+            ClosureStatus::Broken => {
+                return Err(Failure::Input(format!(
+                    "error: {file}: {}",
+                    closure.message().unwrap_or_default()
+                )));
+            }
+        }
+        return Ok((c, None));
+    }
+    let (c2, _) = mbsa::position::assemble(m, &c, &NewtonOptions::default())
+        .map_err(|e| solve_failure(file, &e))?;
+    let after =
+        mbsa::position::check_closure(m, &c2, tolerance).map_err(|e| input_err(file, &e))?;
+    let note = format!(
+        "assembled by mbsa: largest joint residual {:.3e} before, {:.3e} after",
+        closure.max_residual, after.max_residual
+    );
+    Ok((c2, Some(note)))
+}
+
+fn toml_of(m: &Mechanism, c: &Configuration, note: Option<&str>) -> String {
+    let moved = mbsa::position::moved_mechanism(m, c);
+    let mut s = String::new();
+    if let Some(n) = note {
+        s.push_str(&format!("# {n}\n"));
+    }
+    s.push_str(&mbsa::generate::to_toml(&moved));
+    s
+}
+
+/// `mbsa assemble`.
+pub fn assemble(file: &FileArg, args: &AssembleArgs) -> Result<(), Failure> {
+    let m = load(file)?;
+    let (c, note) = start(&file.file, &m, args.poses.as_deref(), args.tolerance, true)?;
+    emit(&toml_of(&m, &c, note.as_deref()))
+}
+
+/// `mbsa solve`.
+pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
+    let original = load(file)?;
+    let name = file.file.as_str();
+    let mut m = original.clone();
+    let mut sets: Vec<(usize, Vec<Value>)> = Vec::new();
+    for s in &args.set {
+        let (j, v) = inputs::parse_set(&m, s).map_err(|e| input_err("--set", &e))?;
+        sets.retain(|(k, _)| *k != j);
+        sets.push((j, v));
+    }
+    let sweep = match &args.sweep {
+        Some(s) => Some(inputs::parse_sweep(&m, s).map_err(|e| input_err("--sweep", &e))?),
+        None => None,
+    };
+    inputs::drive(&mut m, &sets);
+    if let Some(sw) = &sweep {
+        let j = &mut m.joints[sw.joint];
+        j.driven = j.driven.max(1);
+    }
+    let model = PositionModel::new(&m).map_err(|e| input_err(name, &e))?;
+    let (config, note) = start(
+        name,
+        &m,
+        args.poses.as_deref(),
+        args.tolerance,
+        args.assemble,
+    )?;
+    let opts = NewtonOptions::default();
+    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin())
+        .map_err(|e| input_err(name, &e))?;
+    let sched = mbsa::position::schedule(&m, &a, &model);
+    let run = |sets: &[(usize, Vec<Value>)], from: &Configuration| {
+        let tg = inputs::targets(&m, &model, sets).map_err(|e| input_err("--set", &e))?;
+        let r = if args.global {
+            mbsa::position::solve_global(&m, &model, &tg, from, &opts)
+        } else {
+            mbsa::position::solve_groups(&m, &model, &sched, &tg, from, &opts)
+        };
+        Ok::<_, Failure>(r)
+    };
+    let method = if args.global { "global" } else { "groups" };
+    let Some(sw) = sweep else {
+        let sol = run(&sets, &config)?.map_err(|e| solve_failure(name, &e))?;
+        let mut report = SolveReport::new(&m, &model, &sol, method);
+        if args.finite {
+            report.finite = Some(
+                mbsa::position::finite_mobility(
+                    &m,
+                    &sol.config,
+                    &mbsa::position::FiniteOptions::default(),
+                )
+                .map_err(|e| input_err(name, &e))?,
+            );
+        }
+        return emit(&match args.format {
+            SolveFormat::Table => mbsa::report::position::solve_table(&report),
+            SolveFormat::Json => mbsa::report::json(&report),
+            SolveFormat::Toml => toml_of(&original, &sol.config, note.as_deref()),
+        });
+    };
+    sweep_run(&m, &model, &sched, &sets, &sw, config, args, &run)
+}
+
+#[derive(serde::Serialize)]
+struct SweepStep {
+    value: f64,
+    poses: Vec<mbsa::position::PoseReport>,
+    joint_values: Vec<mbsa::position::JointValues>,
+}
+
+#[derive(serde::Serialize)]
+struct SweepReport {
+    name: String,
+    joint: String,
+    steps: Vec<SweepStep>,
+    stopped: Option<String>,
+}
+
+/// Solves for given values from a configuration (the outer error is an input error).
+type Runner<'a> = dyn Fn(
+        &[(usize, Vec<Value>)],
+        &Configuration,
+    ) -> Result<Result<mbsa::position::Solution, SolveError>, Failure>
+    + 'a;
+
+#[allow(clippy::too_many_arguments)]
+fn sweep_run(
+    m: &Mechanism,
+    model: &PositionModel,
+    sched: &mbsa::position::Schedule,
+    sets: &[(usize, Vec<Value>)],
+    sw: &inputs::Sweep,
+    mut config: Configuration,
+    args: &SolveArgs,
+    run: &Runner<'_>,
+) -> Result<(), Failure> {
+    let joint = m.joints[sw.joint].id.clone();
+    let mut steps: Vec<SweepStep> = Vec::new();
+    let mut stopped = None;
+    let mut last_jump = 0.0f64;
+    let mut prev_value: Option<f64> = None;
+    let mut last_config = config.clone();
+    let mut baseline: std::collections::HashMap<String, usize> = Default::default();
+    for v in sw.values() {
+        let mut s: Vec<(usize, Vec<Value>)> = sets.to_vec();
+        match s.iter_mut().find(|(j, _)| *j == sw.joint) {
+            Some((_, vals)) => vals[0] = v,
+            None => s.push((sw.joint, vec![v])),
+        }
+        let at = |x: f64| format!("{joint}={}", x);
+        let sol = match run(&s, &config)? {
+            Ok(sol) => sol,
+            Err(e) => {
+                stopped = Some(match prev_value {
+                    Some(p) => format!(
+                        "stopped between {} and {}: a dead point or the end of the reachable range: {e}",
+                        at(p),
+                        at(v.number)
+                    ),
+                    None => format!("stopped at {}: {e}", at(v.number)),
+                });
+                break;
+            }
+        };
+        // Singular group: more nullity than at the sweep's start, or nearly so.
+        for st in &sol.steps {
+            baseline.entry(st.name.clone()).or_insert(st.nullity);
+        }
+        if let Some(st) = sol
+            .steps
+            .iter()
+            .filter(|st| st.conditioning < 1e-6 || st.nullity > baseline[&st.name])
+            .min_by(|a, b| a.conditioning.total_cmp(&b.conditioning))
+        {
+            stopped = Some(format!(
+                "dead point at {}: the equations of group {} (bodies {}) became singular (conditioning {:.1e})",
+                at(v.number),
+                st.name,
+                st.bodies.join(", "),
+                st.conditioning
+            ));
+        }
+        // Branch change: a jump far larger than the previous step's.
+        let mut jump = 0.0f64;
+        let mut worst_body = m.frame;
+        for b in 0..m.bodies.len() {
+            let (p, q) = (&last_config.poses[b], &sol.config.poses[b]);
+            let d = (p.rotation - q.rotation).norm() + (p.translation - q.translation).norm();
+            if d > jump {
+                jump = d;
+                worst_body = b;
+            }
+        }
+        if stopped.is_none() && last_jump > 1e-9 && jump > 5.0 * last_jump + 1e-6 {
+            let group = sched
+                .steps
+                .iter()
+                .find(|st| st.bodies.contains(&worst_body))
+                .map(|st| st.name.clone())
+                .unwrap_or_else(|| "?".into());
+            stopped = Some(format!(
+                "branch change between {} and {}: group {group} (body {}) jumped; the sweep passed a dead point",
+                at(prev_value.unwrap_or(v.number)),
+                at(v.number),
+                m.body_id(worst_body)
+            ));
+            break;
+        }
+        if prev_value.is_some() {
+            last_jump = jump;
+        }
+        steps.push(SweepStep {
+            value: v.number,
+            poses: mbsa::position::solve::pose_reports(m, model, &sol.config),
+            joint_values: mbsa::position::joint_values(m, model, &sol.config),
+        });
+        last_config = sol.config.clone();
+        config = sol.config;
+        prev_value = Some(v.number);
+        if stopped.is_some() {
+            break;
+        }
+    }
+    let text = match args.format {
+        SolveFormat::Json => mbsa::report::json(&SweepReport {
+            name: m.name.clone(),
+            joint: joint.clone(),
+            steps,
+            stopped: stopped.clone(),
+        }),
+        _ => {
+            let rows: Vec<(f64, Vec<mbsa::position::JointValues>)> = steps
+                .into_iter()
+                .map(|s| (s.value, s.joint_values))
+                .collect();
+            mbsa::report::position::sweep_table(&joint, &rows)
+        }
+    };
+    emit(&text)?;
+    match stopped {
+        Some(msg) => Err(failed(&msg)),
+        None => Ok(()),
+    }
+}

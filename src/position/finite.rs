@@ -1,0 +1,256 @@
+//! Finite mobility: the local dimension of the solution set at a configuration, against the
+//! first-order (instantaneous) mobility.
+//!
+//! The first-order mobility is the nullity of the constraint Jacobian (frame fixed, driven
+//! DOF not counted). To estimate the local dimension, the configuration is moved a small step
+//! along a few random first-order motions, projected back onto the constraints by
+//! Gauss–Newton, and the nullity is taken again there; the smallest nullity over the samples
+//! is the estimate (the nullity at a generic nearby point of a solution set of dimension d is
+//! d; at a singular point it is larger). Limits: a branch of dimension d through a
+//! bifurcation is found only if a sample falls near it; the samples see a neighbourhood of
+//! about `step` × model size.
+
+use super::closure::undriven;
+use super::newton::{NewtonOptions, System, Targets};
+use super::pose::Configuration;
+use super::residual::{ModelError, PositionModel};
+use crate::mechanism::Mechanism;
+use crate::rng::SplitMix64;
+use nalgebra::{DMatrix, DVector};
+use serde::Serialize;
+
+/// Options of [`finite_mobility`].
+#[derive(Clone, Copy, Debug)]
+pub struct FiniteOptions {
+    /// Number of nearby samples.
+    pub samples: usize,
+    /// Step along a first-order motion (model units, i.e. fraction of the model size).
+    pub step: f64,
+    /// Seed of the random directions.
+    pub seed: u64,
+    /// Relative singular-value threshold of the rank decisions.
+    pub rank_tolerance: f64,
+}
+
+impl Default for FiniteOptions {
+    fn default() -> Self {
+        FiniteOptions {
+            samples: 4,
+            step: 1e-3,
+            seed: 0,
+            rank_tolerance: 1e-8,
+        }
+    }
+}
+
+/// What the comparison says.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// First-order and finite mobility agree, and the count agrees with them.
+    Regular,
+    /// More first-order freedoms than finite ones: a singular configuration (toggle, dead
+    /// point, bifurcation).
+    Singular,
+    /// Moves (finite mobility above the count) with first order agreeing: overconstrained by
+    /// design but really moving (Bennett, Bricard, planar loops in space).
+    OverconstrainedMoving,
+    /// Both: overconstrained by design and at a singular configuration.
+    SingularOverconstrained,
+}
+
+/// The finite-mobility report.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct FiniteMobility {
+    /// Chebyshev–Grübler–Kutzbach count `B·Nm − Σ pairs·(B − k)`.
+    pub count: i64,
+    /// Nullity of the constraint Jacobian at the configuration.
+    pub first_order: usize,
+    /// Estimated local dimension of the solution set.
+    pub finite: usize,
+    /// Nullity at each nearby sample.
+    pub samples: Vec<usize>,
+    /// Verdict.
+    pub verdict: Verdict,
+    /// First-order freedoms that do not extend to a finite motion.
+    pub instantaneous_only: usize,
+    /// Joints that move in those instantaneous-only freedoms.
+    pub singular_joints: Vec<String>,
+    /// Joints stationary in every first-order motion here but moving at nearby
+    /// configurations: locked only at this configuration (a toggle).
+    pub locked_at_toggle: Vec<String>,
+    /// Plain-language findings.
+    pub notes: Vec<String>,
+}
+
+/// Largest mechanism (bodies) the dense test handles.
+pub const MAX_BODIES: usize = 400;
+
+/// Null-space basis (columns) of `j` and its rank threshold decisions.
+fn null_basis(j: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
+    let n = j.ncols();
+    if n == 0 {
+        return DMatrix::zeros(0, 0);
+    }
+    // Pad to at least n rows so the SVD gives a full V.
+    let rows = j.nrows().max(n);
+    let mut a = DMatrix::zeros(rows, n);
+    a.view_mut((0, 0), (j.nrows(), n)).copy_from(j);
+    if !a.iter().all(|x| x.is_finite()) {
+        return DMatrix::zeros(n, 0);
+    }
+    let Some(svd) = nalgebra::SVD::try_new(a, false, true, f64::EPSILON, 10_000) else {
+        return DMatrix::zeros(n, 0);
+    };
+    let (Some(vt), s) = (svd.v_t, svd.singular_values) else {
+        return DMatrix::zeros(n, 0);
+    };
+    let top = s.iter().copied().fold(0.0, f64::max).max(1.0);
+    let cols: Vec<usize> = (0..s.len()).filter(|&i| s[i] <= rel * top).collect();
+    DMatrix::from_fn(n, cols.len(), |r, c| vt[(cols[c], r)])
+}
+
+/// Finite against first-order mobility of `m` at `config` (driven DOF ignored).
+pub fn finite_mobility(
+    m: &Mechanism,
+    config: &Configuration,
+    opts: &FiniteOptions,
+) -> Result<FiniteMobility, ModelError> {
+    if m.bodies.len() > MAX_BODIES {
+        return Err(ModelError::TooLarge {
+            bodies: m.bodies.len(),
+            limit: MAX_BODIES,
+        });
+    }
+    let free = undriven(m);
+    let model = PositionModel::new(&free)?;
+    let b = model.b();
+    let sys = System {
+        pairs: (0..model.pairs.len()).collect(),
+        bodies: (0..m.bodies.len()).filter(|&x| x != m.frame).collect(),
+    };
+    let targets: Targets = vec![Vec::new(); model.pairs.len()];
+    let count = b as i64 * sys.bodies.len() as i64
+        - model
+            .pairs
+            .iter()
+            .map(|p| (b - m.joints[p.joint].grade().min(b as u32) as usize) as i64)
+            .sum::<i64>();
+    let (_, j0, _) = sys.evaluate(&model, &targets, config);
+    let n0 = null_basis(&j0, opts.rank_tolerance);
+    let first_order = n0.ncols();
+    let mut rng = SplitMix64::new(opts.seed ^ 0xF1_u64);
+    let mut samples = Vec::new();
+    let mut best: Option<(usize, DMatrix<f64>)> = None;
+    let newton = NewtonOptions {
+        tolerance: 1e-13,
+        max_iterations: 40,
+    };
+    if first_order > 0 {
+        for _ in 0..opts.samples {
+            let c = DVector::from_fn(first_order, |_, _| rng.next_signed());
+            let dir = &n0 * c;
+            let norm = dir.norm().max(1e-300);
+            let mut moved = config.clone();
+            for (i, &body) in sys.bodies.iter().enumerate() {
+                let t: Vec<f64> = (0..b).map(|k| dir[i * b + k] / norm * opts.step).collect();
+                moved.poses[body] = config.poses[body].moved_by(model.space, &t);
+            }
+            let out = sys.solve(&model, &targets, &mut moved, &newton);
+            if out.residual > 1e-9 {
+                continue;
+            }
+            let (_, j1, _) = sys.evaluate(&model, &targets, &moved);
+            let n1 = null_basis(&j1, opts.rank_tolerance);
+            samples.push(n1.ncols());
+            if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
+                best = Some((n1.ncols(), n1));
+            }
+        }
+    }
+    let finite = best.as_ref().map(|(k, _)| *k).unwrap_or(first_order);
+    let near = best.map(|(_, n)| n).unwrap_or_else(|| n0.clone());
+    // Relative motion of pair p over the columns of a basis.
+    let motion = |basis: &DMatrix<f64>, p: usize| -> f64 {
+        let pair = &model.pairs[p];
+        let col = |body: usize| sys.bodies.iter().position(|&x| x == body);
+        let mut worst: f64 = 0.0;
+        for c in 0..basis.ncols() {
+            let mut s = 0.0;
+            for k in 0..b {
+                let tb = col(pair.b).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
+                let ta = col(pair.a).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
+                s += (tb - ta) * (tb - ta);
+            }
+            worst = worst.max(s.sqrt());
+        }
+        worst
+    };
+    let mut singular_joints = Vec::new();
+    let mut locked_at_toggle = Vec::new();
+    let instantaneous_only = first_order.saturating_sub(finite);
+    if instantaneous_only > 0 {
+        // The part of the first-order motions far from the nearby tangent space.
+        let proj = &n0 - &near * (near.transpose() * &n0);
+        let svd = nalgebra::SVD::try_new(proj, true, false, f64::EPSILON, 10_000);
+        if let Some((Some(u), values)) = svd.map(|d| (d.u, d.singular_values)) {
+            let svd_values = values;
+            let keep: Vec<usize> = (0..svd_values.len())
+                .filter(|&i| svd_values[i] > 0.1)
+                .collect();
+            let extra = DMatrix::from_fn(u.nrows(), keep.len(), |r, c| u[(r, keep[c])]);
+            for p in 0..model.pairs.len() {
+                let id = &m.joints[model.pairs[p].joint].id;
+                if motion(&extra, p) > 1e-6 && !singular_joints.contains(id) {
+                    singular_joints.push(id.clone());
+                }
+            }
+        }
+    }
+    if first_order > 0 {
+        for p in 0..model.pairs.len() {
+            let id = &m.joints[model.pairs[p].joint].id;
+            if motion(&n0, p) < 1e-7 && motion(&near, p) > 1e-4 && !locked_at_toggle.contains(id) {
+                locked_at_toggle.push(id.clone());
+            }
+        }
+    }
+    let singular = instantaneous_only > 0;
+    let over = (finite as i64) > count;
+    let verdict = match (singular, over) {
+        (false, false) => Verdict::Regular,
+        (true, false) => Verdict::Singular,
+        (false, true) => Verdict::OverconstrainedMoving,
+        (true, true) => Verdict::SingularOverconstrained,
+    };
+    let mut notes = Vec::new();
+    if singular {
+        notes.push(format!(
+            "singular configuration: first-order mobility {first_order} but the mechanism moves with {finite} DOF; {instantaneous_only} freedom(s) are instantaneous only (joints {})",
+            singular_joints.join(", ")
+        ));
+    }
+    if over {
+        notes.push(format!(
+            "overconstrained by design but really moving: the count gives {count}, the mechanism moves with {finite} DOF ({} redundant constraint(s) hold along the motion)",
+            finite as i64 - count
+        ));
+    }
+    if !locked_at_toggle.is_empty() {
+        notes.push(format!(
+            "toggle: joint(s) {} are stationary in every first-order motion here but move at nearby configurations: locked only at this configuration",
+            locked_at_toggle.join(", ")
+        ));
+    }
+    Ok(FiniteMobility {
+        count,
+        first_order,
+        finite,
+        samples,
+        verdict,
+        instantaneous_only,
+        singular_joints,
+        locked_at_toggle,
+        notes,
+    })
+}

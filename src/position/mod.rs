@@ -1,0 +1,42 @@
+//! The position level: joint constraints at a configuration, closure check and assembly,
+//! solving the positions group by group, and finite mobility.
+//!
+//! The file's geometry is the reference configuration: every body at the identity pose, each
+//! joint's features (points, axes) attached to its bodies. A [`Configuration`] gives a pose
+//! per body (the frame stays at the identity). `docs/algorithms.md` ("Position level")
+//! describes the equations and algorithms.
+//!
+//! - [`residual`]: the equations of each joint and their Jacobians w.r.t. body twists.
+//! - [`closure`]: [`check_closure`], [`assemble`], [`moved_mechanism`].
+//! - [`solve`]: the group-by-group schedule, [`solve_groups`] and the global reference
+//!   [`solve_global`].
+//! - [`finite`]: the finite-mobility test, [`finite_mobility()`].
+//! - [`inputs`]: input values (`JOINT=30`, `JOINT=0.5rad`, sweeps).
+
+pub mod closure;
+pub mod finite;
+pub mod inputs;
+pub mod newton;
+pub mod pose;
+pub mod realize;
+pub mod residual;
+pub mod solve;
+mod track;
+
+pub use closure::{
+    Closure, ClosureStatus, JointResidual, assemble, check_closure, closure_of, moved_mechanism,
+};
+pub use finite::{FiniteMobility, FiniteOptions, Verdict, finite_mobility};
+pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
+pub use pose::{Configuration, Pose, PoseReport};
+pub use realize::with_random_geometry;
+pub use residual::{ModelError, PositionModel};
+pub use solve::{
+    JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,
+    schedule, solve_global, solve_groups,
+};
+
+/// The closure section for the file's own configuration (what other reports show).
+pub fn file_closure(m: &crate::Mechanism, tolerance: Option<f64>) -> Result<Closure, ModelError> {
+    check_closure(m, &Configuration::reference(m.bodies.len()), tolerance)
+}

@@ -1,0 +1,273 @@
+//! Gauss–Newton least squares on a set of joint equations over a set of unknown bodies.
+//!
+//! Each step is the minimum-norm least-squares solution of `J δ = −e` (SVD, singular values
+//! below `1e-10·σ_max` dropped), so redundant equations (a planar loop written in 3D) and
+//! unknowns the equations leave free are both fine: free unknowns do not move (least change).
+//! A step that does not lower `‖e‖` is halved (up to 30 times).
+
+use super::pose::{Configuration, Pose};
+use super::residual::PositionModel;
+use nalgebra::{DMatrix, DVector};
+use std::collections::HashMap;
+
+/// A system: some pairs' equations, some bodies unknown (the others held at their poses).
+#[derive(Clone, Debug)]
+pub struct System {
+    /// Pair indices (into `PositionModel::pairs`).
+    pub pairs: Vec<usize>,
+    /// Unknown bodies, in column order.
+    pub bodies: Vec<usize>,
+}
+
+/// Options of [`System::solve`].
+#[derive(Clone, Copy, Debug)]
+pub struct NewtonOptions {
+    /// Converged when every residual is at most this (model units).
+    pub tolerance: f64,
+    /// Iteration limit.
+    pub max_iterations: usize,
+}
+
+impl Default for NewtonOptions {
+    fn default() -> Self {
+        NewtonOptions {
+            tolerance: 1e-11,
+            max_iterations: 60,
+        }
+    }
+}
+
+/// The outcome of a solve.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NewtonOutcome {
+    /// Whether the residual reached the tolerance.
+    pub converged: bool,
+    /// Iterations done.
+    pub iterations: usize,
+    /// Largest residual at the end (model units).
+    pub residual: f64,
+    /// Singular values of the final Jacobian, descending.
+    pub singular_values: Vec<f64>,
+    /// Unknowns (columns).
+    pub unknowns: usize,
+    /// Equations (rows).
+    pub equations: usize,
+    /// Largest residual per pair at the end, in `System::pairs` order.
+    pub pair_residuals: Vec<f64>,
+}
+
+impl NewtonOutcome {
+    /// Nullity of the Jacobian (columns less rank, relative threshold `rel`).
+    pub fn nullity(&self, rel: f64) -> usize {
+        let top = self
+            .singular_values
+            .first()
+            .copied()
+            .unwrap_or(0.0)
+            .max(1.0);
+        let rank = self
+            .singular_values
+            .iter()
+            .filter(|&&s| s > rel * top)
+            .count();
+        self.unknowns - rank
+    }
+
+    /// Smallest singular value above `1e-9 ×` the largest, relative to the largest (at
+    /// least 1): how close the equations are to losing one more rank (1 when there are none).
+    pub fn conditioning(&self) -> f64 {
+        let top = self
+            .singular_values
+            .first()
+            .copied()
+            .unwrap_or(0.0)
+            .max(1.0);
+        self.singular_values
+            .iter()
+            .copied()
+            .filter(|&s| s > 1e-9 * top)
+            .fold(top, f64::min)
+            / top
+    }
+}
+
+/// Driven targets per pair (model units; empty = not driven).
+pub type Targets = Vec<Vec<f64>>;
+
+impl System {
+    /// Residual vector, Jacobian and per-pair maximum residual at `config`.
+    pub fn evaluate(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+    ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
+        let local: Vec<Pose> = self.bodies.iter().map(|&b| config.poses[b]).collect();
+        self.evaluate_local(model, targets, config, &local, &self.columns())
+    }
+
+    /// Column block of each unknown body.
+    fn columns(&self) -> HashMap<usize, usize> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| (b, i))
+            .collect()
+    }
+
+    /// [`System::evaluate`] with the unknown bodies at `local` (in `bodies` order) and the
+    /// others at `config`.
+    fn evaluate_local(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+        local: &[Pose],
+        col: &HashMap<usize, usize>,
+    ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
+        let b = model.b();
+        let pose = |body: usize| match col.get(&body) {
+            Some(&i) => local[i],
+            None => config.poses[body],
+        };
+        let blocks: Vec<_> = self
+            .pairs
+            .iter()
+            .map(|&p| {
+                let pair = &model.pairs[p];
+                model.pair_equations(
+                    p,
+                    &pose(pair.a),
+                    &pose(pair.b),
+                    targets.get(p).map(Vec::as_slice).unwrap_or(&[]),
+                )
+            })
+            .collect();
+        let rows: usize = blocks.iter().map(|e| e.residual.len()).sum();
+        let mut r = DVector::zeros(rows);
+        let mut j = DMatrix::zeros(rows, self.bodies.len() * b);
+        let mut per_pair = Vec::with_capacity(blocks.len());
+        let mut at = 0;
+        for (e, &p) in blocks.iter().zip(&self.pairs) {
+            let pair = &model.pairs[p];
+            let n = e.residual.len();
+            let mut worst: f64 = 0.0;
+            for i in 0..n {
+                r[at + i] = e.residual[i];
+                worst = worst.max(e.residual[i].abs());
+            }
+            per_pair.push(worst);
+            for (side, body) in [(0, pair.a), (1, pair.b)] {
+                let Some(&c) = col.get(&body) else { continue };
+                if side == 1 && pair.a == pair.b {
+                    continue;
+                }
+                for i in 0..n {
+                    for k in 0..b {
+                        j[(at + i, c * b + k)] += e.jacobian[(i, side * b + k)];
+                    }
+                }
+            }
+            at += n;
+        }
+        (r, j, per_pair)
+    }
+
+    /// Solve in place from `config` (only the unknown bodies move).
+    pub fn solve(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &mut Configuration,
+        opts: &NewtonOptions,
+    ) -> NewtonOutcome {
+        let (out, poses) = self.solve_local(model, targets, config, opts);
+        for (&b, p) in self.bodies.iter().zip(poses) {
+            config.poses[b] = p;
+        }
+        out
+    }
+
+    /// Solve from `config` without changing it: the outcome and the unknown bodies' new poses
+    /// (in `bodies` order). Reads only the poses the system's pairs touch.
+    pub fn solve_local(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+        opts: &NewtonOptions,
+    ) -> (NewtonOutcome, Vec<Pose>) {
+        let b = model.b();
+        let col = self.columns();
+        let inf = |r: &DVector<f64>| {
+            if r.iter().all(|x| x.is_finite()) {
+                r.iter().fold(0.0f64, |m, x| m.max(x.abs()))
+            } else {
+                f64::INFINITY
+            }
+        };
+        let mut local: Vec<Pose> = self.bodies.iter().map(|&x| config.poses[x]).collect();
+        let (mut r, mut j, mut per_pair) =
+            self.evaluate_local(model, targets, config, &local, &col);
+        let mut iterations = 0;
+        let mut svd_values;
+        loop {
+            if j.nrows() == 0 || j.ncols() == 0 || !j.iter().chain(r.iter()).all(|x| x.is_finite())
+            {
+                svd_values = Vec::new();
+                break;
+            }
+            // Bounded iterations: never loop on a pathological matrix.
+            let Some(svd) = nalgebra::SVD::try_new(j.clone(), true, true, f64::EPSILON, 10_000)
+            else {
+                svd_values = Vec::new();
+                break;
+            };
+            svd_values = svd.singular_values.iter().copied().collect::<Vec<_>>();
+            if inf(&r) <= opts.tolerance
+                || iterations >= opts.max_iterations
+                || !r.iter().all(|x| x.is_finite())
+            {
+                break;
+            }
+            let top = svd_values.iter().copied().fold(0.0, f64::max);
+            let step = match svd.solve(&(-&r), 1e-10 * top.max(1e-300)) {
+                Ok(s) => s,
+                Err(_) => break,
+            };
+            iterations += 1;
+            let base = local.clone();
+            let norm0 = r.norm();
+            let mut t = 1.0;
+            let mut accepted = false;
+            for _ in 0..30 {
+                for (i, p) in local.iter_mut().enumerate() {
+                    let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
+                    *p = base[i].moved_by(model.space, &tw);
+                }
+                let (r2, j2, p2) = self.evaluate_local(model, targets, config, &local, &col);
+                if r2.norm() < norm0 || inf(&r2) <= opts.tolerance {
+                    (r, j, per_pair) = (r2, j2, p2);
+                    accepted = true;
+                    break;
+                }
+                t *= 0.5;
+            }
+            if !accepted {
+                local = base;
+                break;
+            }
+        }
+        svd_values.sort_by(|a, b| b.total_cmp(a));
+        let out = NewtonOutcome {
+            converged: inf(&r) <= opts.tolerance,
+            iterations,
+            residual: inf(&r),
+            singular_values: svd_values,
+            unknowns: j.ncols(),
+            equations: j.nrows(),
+            pair_residuals: per_pair,
+        };
+        (out, local)
+    }
+}

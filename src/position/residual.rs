@@ -1,0 +1,615 @@
+//! Joint residuals at a configuration and their Jacobians with respect to the body twists.
+//!
+//! Each joint (each binary pair first → other of a multiple joint) becomes a few scalar
+//! equations `e(pose_A, pose_B) = 0` (A = first listed body, B = the other) built from the
+//! joint's features: points and directions attached to A or B at the reference configuration
+//! (`docs/algorithms.md`, "Position level", lists them). Their number is `B − k`, and at the
+//! reference configuration their Jacobian, a row per equation acting on `t_B − t_A`, spans the
+//! same space as [`crate::motion::joint_model`]'s rows. The joint values (what a driven DOF
+//! fixes) are listed in the driven-DOF order of the file format.
+//!
+//! Lengths are divided by the model size ([`PositionModel::scale`]) so that every residual is
+//! of order one: a direction error of ε radians weighs like a position error of ε times the
+//! model size.
+
+use super::pose::{Pose, embed_columns};
+use super::track::{TS, TV};
+use crate::joint::JointType;
+use crate::mechanism::{Geometry, Mechanism, Space};
+use crate::motion::perpendicular_pair;
+use nalgebra::{DMatrix, Rotation3, Vector3};
+use std::f64::consts::PI;
+
+/// Why a mechanism has no position model.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ModelError {
+    /// A geometry field the joint needs is missing.
+    #[error("joint `{joint}`: a {kind} joint needs `{field}` for the position level")]
+    MissingField {
+        /// Joint id.
+        joint: String,
+        /// Kind code.
+        kind: &'static str,
+        /// Field.
+        field: &'static str,
+    },
+    /// A direction is zero or not finite, or a number is not finite.
+    #[error("joint `{joint}`: `{field}` is zero or not finite")]
+    BadVector {
+        /// Joint id.
+        joint: String,
+        /// Field.
+        field: &'static str,
+    },
+    /// The kind has no position model (generic contact kinds, or not in this space).
+    #[error("joint `{joint}`: a {kind} joint has no position model in a {space} mechanism")]
+    NoModel {
+        /// Joint id.
+        joint: String,
+        /// Kind code.
+        kind: &'static str,
+        /// Space.
+        space: &'static str,
+    },
+    /// The mechanism is too large for a dense analysis.
+    #[error("{bodies} bodies: the dense position analysis handles at most {limit}")]
+    TooLarge {
+        /// Bodies.
+        bodies: usize,
+        /// Limit.
+        limit: usize,
+    },
+    /// Driving this kind is not supported.
+    #[error("joint `{joint}`: driving a {kind} joint is not supported by the position level")]
+    NotDrivable {
+        /// Joint id.
+        joint: String,
+        /// Kind code.
+        kind: &'static str,
+    },
+}
+
+/// The features of one joint, lengths scaled.
+#[derive(Clone, Debug)]
+struct Features {
+    o: Vector3<f64>,
+    o2: Vector3<f64>,
+    u: Vector3<f64>,
+    w: Vector3<f64>,
+    n: Vector3<f64>,
+    h: f64,
+}
+
+/// One binary pair of a joint: its equations and joint values.
+#[derive(Clone, Debug)]
+pub struct Pair {
+    /// Index of the joint in `Mechanism::joints`.
+    pub joint: usize,
+    /// Index of the pair within the joint (0 for a binary joint).
+    pub index: usize,
+    /// First body (index into `Mechanism::bodies`).
+    pub a: usize,
+    /// Other body.
+    pub b: usize,
+    /// Kind.
+    pub kind: JointType,
+    /// Driven DOF on this pair.
+    pub driven: usize,
+    f: Features,
+}
+
+/// The position model of a mechanism: every pair's equations, lengths scaled by `scale`.
+#[derive(Clone, Debug)]
+pub struct PositionModel {
+    /// Motion space.
+    pub space: Space,
+    /// Model size: lengths are divided by it (the diagonal of the box of the joint points, or
+    /// 1 when that is zero).
+    pub scale: f64,
+    /// Pairs in joint order.
+    pub pairs: Vec<Pair>,
+    /// Number of bodies.
+    pub bodies: usize,
+    /// The frame.
+    pub frame: usize,
+}
+
+fn v3(a: [f64; 3]) -> Vector3<f64> {
+    Vector3::new(a[0], a[1], a[2])
+}
+
+/// Wrap an angle difference to (−π, π].
+pub(crate) fn wrap(x: f64) -> f64 {
+    let y = x - 2.0 * PI * (x / (2.0 * PI)).round();
+    if y <= -PI { y + 2.0 * PI } else { y }
+}
+
+/// Model size of a mechanism: the diagonal of the box of every joint point (1 if zero).
+pub fn model_size(m: &Mechanism) -> f64 {
+    let mut lo = Vector3::repeat(f64::INFINITY);
+    let mut hi = Vector3::repeat(f64::NEG_INFINITY);
+    let mut any = false;
+    for j in &m.joints {
+        if let Some(o) = j.geometry.origin {
+            let o = v3(o);
+            if o.iter().all(|x| x.is_finite()) {
+                lo = lo.inf(&o);
+                hi = hi.sup(&o);
+                any = true;
+            }
+        }
+    }
+    let d = if any { (hi - lo).norm() } else { 0.0 };
+    if d > 1e-9 && d.is_finite() { d } else { 1.0 }
+}
+
+impl PositionModel {
+    /// Build the model of `m`. Errors name the joint.
+    pub fn new(m: &Mechanism) -> Result<PositionModel, ModelError> {
+        let scale = model_size(m);
+        let mut pairs = Vec::new();
+        for (ji, j) in m.joints.iter().enumerate() {
+            let f = features(m.space, j.kind, &j.geometry, scale, &j.id)?;
+            let k = j.grade() as usize;
+            let mut left = j.driven as usize;
+            for (p, &b) in j.bodies.iter().skip(1).enumerate() {
+                let d = left.min(k);
+                left -= d;
+                if d > 0 && j.kind == JointType::SPSP {
+                    return Err(ModelError::NotDrivable {
+                        joint: j.id.clone(),
+                        kind: j.kind.code(),
+                    });
+                }
+                pairs.push(Pair {
+                    joint: ji,
+                    index: p,
+                    a: j.bodies[0],
+                    b,
+                    kind: j.kind,
+                    driven: d,
+                    f: f.clone(),
+                });
+            }
+        }
+        Ok(PositionModel {
+            space: m.space,
+            scale,
+            pairs,
+            bodies: m.bodies.len(),
+            frame: m.frame,
+        })
+    }
+}
+
+fn features(
+    space: Space,
+    kind: JointType,
+    g: &Geometry,
+    scale: f64,
+    joint: &str,
+) -> Result<Features, ModelError> {
+    use JointType::*;
+    let missing = |field| ModelError::MissingField {
+        joint: joint.to_string(),
+        kind: kind.code(),
+        field,
+    };
+    let bad = |field| ModelError::BadVector {
+        joint: joint.to_string(),
+        field,
+    };
+    let no_model = || ModelError::NoModel {
+        joint: joint.to_string(),
+        kind: kind.code(),
+        space: space.name(),
+    };
+    let point = |v: Option<[f64; 3]>, field: &'static str, need: bool| match v {
+        Some(a) => {
+            let p = v3(a);
+            if p.iter().all(|x| x.is_finite()) {
+                Ok(p / scale)
+            } else {
+                Err(bad(field))
+            }
+        }
+        None if need => Err(missing(field)),
+        None => Ok(Vector3::zeros()),
+    };
+    let dir = |v: Option<[f64; 3]>, field: &'static str, default: Option<Vector3<f64>>| match v {
+        Some(a) => {
+            let d = v3(a);
+            let n = d.norm();
+            if n.is_finite() && n > 1e-300 {
+                Ok(d / n)
+            } else {
+                Err(bad(field))
+            }
+        }
+        None => default.ok_or_else(|| missing(field)),
+    };
+    let z = Some(Vector3::z());
+    let mut f = Features {
+        o: Vector3::zeros(),
+        o2: Vector3::zeros(),
+        u: Vector3::z(),
+        w: Vector3::x(),
+        n: Vector3::z(),
+        h: 0.0,
+    };
+    match space {
+        Space::Spatial => match kind {
+            R | C | ER | SC => {
+                f.o = point(g.origin, "origin", true)?;
+                f.u = dir(g.axis, "axis", None)?;
+            }
+            P => {
+                f.o = point(g.origin, "origin", false)?;
+                f.u = dir(g.axis, "axis", None)?;
+            }
+            H => {
+                f.o = point(g.origin, "origin", true)?;
+                f.u = dir(g.axis, "axis", None)?;
+                let h = g.pitch.ok_or_else(|| missing("pitch"))?;
+                if !h.is_finite() {
+                    return Err(bad("pitch"));
+                }
+                f.h = h / scale;
+            }
+            U => {
+                f.o = point(g.origin, "origin", true)?;
+                f.u = dir(g.axis, "axis", None)?;
+                f.w = dir(g.axis2, "axis2", None)?;
+                if f.u.cross(&f.w).norm() < 1e-9 {
+                    return Err(bad("axis2"));
+                }
+            }
+            S => f.o = point(g.origin, "origin", true)?,
+            PL => {
+                f.o = point(g.origin, "origin", false)?;
+                f.n = dir(g.normal, "normal", None)?;
+            }
+            FP => {
+                f.o = point(g.origin, "origin", false)?;
+                f.n = dir(g.normal, "normal", z)?;
+            }
+            F => {}
+            SP => {
+                f.o = point(g.origin, "origin", true)?;
+                f.n = dir(g.normal, "normal", None)?;
+            }
+            SPSP => {
+                f.o = point(g.origin, "origin", true)?;
+                f.o2 = point(origin2(g), "origin2", true)?;
+                if (f.o2 - f.o).norm() < 1e-12 {
+                    return Err(bad("origin2"));
+                }
+            }
+            PC | CR => {
+                f.o = point(g.origin, "origin", true)?;
+                f.u = dir(g.axis, "axis", None)?;
+                f.n = dir(g.normal, "normal", None)?;
+                if f.u.cross(&f.n).norm() < 1e-9 {
+                    return Err(bad("normal"));
+                }
+            }
+            _ => return Err(no_model()),
+        },
+        Space::Planar => match kind {
+            R => f.o = point(g.origin, "origin", true)?,
+            P => {
+                f.o = point(g.origin, "origin", false)?;
+                let a = g.axis.ok_or_else(|| missing("axis"))?;
+                f.u = dir(Some([a[0], a[1], 0.0]), "axis", None)?;
+            }
+            FP => {
+                f.o = point(g.origin, "origin", false)?;
+                f.u = Vector3::x();
+            }
+            _ => return Err(no_model()),
+        },
+        Space::Spherical => match kind {
+            R => f.u = dir(g.axis, "axis", None)?,
+            FP => f.u = Vector3::x(),
+            _ => return Err(no_model()),
+        },
+    }
+    if space == Space::Planar {
+        f.o.z = 0.0;
+    }
+    Ok(f)
+}
+
+/// The second centre of a sphere-sphere joint (on the second body).
+fn origin2(g: &Geometry) -> Option<[f64; 3]> {
+    g.origin2
+}
+
+/// The angle of B about `u` relative to A (right-hand rule), from a perpendicular pair.
+fn angle_about(pa: &Pose, pb: &Pose, u: &Vector3<f64>) -> TS {
+    let (e1, e2) = perpendicular_pair(u);
+    let (a1, a2) = (TV::dir(pa.dir(&e1), 0), TV::dir(pa.dir(&e2), 0));
+    let b1 = TV::dir(pb.dir(&e1), 1);
+    a2.dot(&b1).atan2(&a1.dot(&b1))
+}
+
+/// The two angles of a universal joint: about `u` (on A), then about `w` (on B).
+fn u_angles(pa: &Pose, pb: &Pose, u: &Vector3<f64>, w: &Vector3<f64>) -> [TS; 2] {
+    let f1 = (w - u * u.dot(w)).normalize();
+    let f2 = u.cross(&f1);
+    let wb = TV::dir(pb.dir(w), 1);
+    let phi1 = TV::dir(pa.dir(&f2), 0)
+        .dot(&wb)
+        .atan2(&TV::dir(pa.dir(&f1), 0).dot(&wb));
+    let g1 = (u - w * w.dot(u)).normalize();
+    let g2 = w.cross(&g1);
+    let ua = TV::dir(pa.dir(u), 0);
+    let phi2 = ua
+        .dot(&TV::dir(pb.dir(&g2), 1))
+        .scale(-1.0)
+        .atan2(&ua.dot(&TV::dir(pb.dir(&g1), 1)));
+    [phi1, phi2]
+}
+
+/// Component along reference direction `e` (of A) of the relative rotation vector of B; its
+/// derivative is taken at coincident orientations (exact there, approximate elsewhere).
+fn rotation_component(pa: &Pose, pb: &Pose, e: &Vector3<f64>) -> TS {
+    let rel = pa.rotation.transpose() * pb.rotation;
+    let rv = Rotation3::from_matrix_unchecked(rel).scaled_axis();
+    let mut s = TS::constant(rv.dot(e));
+    let we = pa.dir(e);
+    for k in 0..3 {
+        s.d[k] = -we[k];
+        s.d[6 + k] = we[k];
+    }
+    s
+}
+
+fn comp(t: &TV, k: usize) -> TS {
+    TS {
+        v: t.v[k],
+        d: t.d.row(k).into_owned(),
+    }
+}
+
+impl Pair {
+    fn pa(&self, pa: &Pose, x: &Vector3<f64>) -> TV {
+        TV::point(pa.point(x), 0)
+    }
+    fn pb(&self, pb: &Pose, x: &Vector3<f64>) -> TV {
+        TV::point(pb.point(x), 1)
+    }
+
+    /// The constraint equations (without driven values), spatial derivative columns.
+    fn constraints(&self, space: Space, pa: &Pose, pb: &Pose) -> Vec<TS> {
+        use JointType::*;
+        let f = &self.f;
+        let da = |u: &Vector3<f64>| TV::dir(pa.dir(u), 0);
+        let db = |u: &Vector3<f64>| TV::dir(pb.dir(u), 1);
+        let delta = self.pb(pb, &f.o).sub(&self.pa(pa, &f.o));
+        let parallel = |u: &Vector3<f64>| {
+            let (e1, e2) = perpendicular_pair(u);
+            let ub = db(u);
+            [da(&e1).dot(&ub), da(&e2).dot(&ub)]
+        };
+        let on_line = |u: &Vector3<f64>| {
+            let (e1, e2) = perpendicular_pair(u);
+            [da(&e1).dot(&delta), da(&e2).dot(&delta)]
+        };
+        let coincide = || (0..3).map(|k| comp(&delta, k)).collect::<Vec<_>>();
+        match space {
+            Space::Spatial => match self.kind {
+                R => {
+                    let mut e = coincide();
+                    e.extend(parallel(&f.u));
+                    e
+                }
+                P => {
+                    let (e1, e2) = perpendicular_pair(&f.u);
+                    let mut e = parallel(&f.u).to_vec();
+                    e.push(da(&e2).dot(&db(&e1)));
+                    e.extend(on_line(&f.u));
+                    e
+                }
+                H => {
+                    let mut e = parallel(&f.u).to_vec();
+                    e.extend(on_line(&f.u));
+                    let s = da(&f.u).dot(&delta);
+                    let phi = angle_about(pa, pb, &f.u);
+                    e.push(s.sub(&phi.scale(f.h)));
+                    e
+                }
+                C => {
+                    let mut e = parallel(&f.u).to_vec();
+                    e.extend(on_line(&f.u));
+                    e
+                }
+                ER => {
+                    let (e1, e2) = perpendicular_pair(&f.u);
+                    let mut e = coincide();
+                    e.push(da(&e2).dot(&db(&e1)));
+                    e
+                }
+                U => {
+                    let mut e = coincide();
+                    e.push(da(&f.u).dot(&db(&f.w)).sub(&TS::constant(f.u.dot(&f.w))));
+                    e
+                }
+                S => coincide(),
+                PL | FP => {
+                    let mut e = parallel(&f.n).to_vec();
+                    e.push(da(&f.n).dot(&delta));
+                    e
+                }
+                SP => vec![da(&f.n).dot(&delta)],
+                SPSP => {
+                    let d = self.pb(pb, &f.o2).sub(&self.pa(pa, &f.o));
+                    vec![d.norm().sub(&TS::constant((f.o2 - f.o).norm()))]
+                }
+                SC => on_line(&f.u).to_vec(),
+                PC => vec![
+                    da(&f.n).dot(&delta),
+                    da(&f.n).dot(&db(&f.u)).sub(&TS::constant(f.n.dot(&f.u))),
+                ],
+                CR => {
+                    let mut e = parallel(&f.u).to_vec();
+                    e.push(da(&f.n).dot(&delta));
+                    e
+                }
+                _ => Vec::new(),
+            },
+            Space::Planar => match self.kind {
+                R => vec![comp(&delta, 0), comp(&delta, 1)],
+                P => {
+                    let m = Vector3::z().cross(&f.u);
+                    vec![
+                        da(&Vector3::y()).dot(&db(&Vector3::x())),
+                        da(&m).dot(&delta),
+                    ]
+                }
+                _ => Vec::new(),
+            },
+            Space::Spherical => match self.kind {
+                R => parallel(&f.u).to_vec(),
+                _ => Vec::new(),
+            },
+        }
+    }
+
+    /// The joint values in driven-DOF order, with whether each is an angle.
+    fn values(&self, space: Space, pa: &Pose, pb: &Pose) -> Vec<(TS, bool)> {
+        use JointType::*;
+        let f = &self.f;
+        let da = |u: &Vector3<f64>| TV::dir(pa.dir(u), 0);
+        let delta = self.pb(pb, &f.o).sub(&self.pa(pa, &f.o));
+        let slide = |u: &Vector3<f64>| (da(u).dot(&delta), false);
+        let turn = |u: &Vector3<f64>| (angle_about(pa, pb, u), true);
+        let rv = |e: &Vector3<f64>| (rotation_component(pa, pb, e), true);
+        let xyz = [Vector3::x(), Vector3::y(), Vector3::z()];
+        match (space, self.kind) {
+            (Space::Planar, R) => vec![turn(&Vector3::z())],
+            (Space::Planar, P) => vec![slide(&f.u)],
+            (Space::Planar, FP) => vec![
+                slide(&Vector3::x()),
+                slide(&Vector3::y()),
+                turn(&Vector3::z()),
+            ],
+            (Space::Spherical, FP) => xyz.iter().map(rv).collect(),
+            (_, R) | (_, H) => vec![turn(&f.u)],
+            (_, P) => vec![slide(&f.u)],
+            (_, C) => vec![slide(&f.u), turn(&f.u)],
+            (_, U) => u_angles(pa, pb, &f.u, &f.w)
+                .into_iter()
+                .map(|a| (a, true))
+                .collect(),
+            (_, ER) => {
+                let (e1, e2) = perpendicular_pair(&f.u);
+                vec![rv(&e1), rv(&e2)]
+            }
+            (_, S) => xyz.iter().map(rv).collect(),
+            (_, PL) | (_, FP) => {
+                let (e1, e2) = perpendicular_pair(&f.n);
+                vec![slide(&e1), slide(&e2), turn(&f.n)]
+            }
+            (_, F) => {
+                let d0 = TV::point(pb.point(&Vector3::zeros()), 1)
+                    .sub(&TV::point(pa.point(&Vector3::zeros()), 0));
+                let mut v: Vec<(TS, bool)> = xyz.iter().map(|e| (da(e).dot(&d0), false)).collect();
+                v.extend(xyz.iter().map(rv));
+                v
+            }
+            (_, SP) => {
+                let (e1, e2) = perpendicular_pair(&f.n);
+                let mut v = vec![slide(&e1), slide(&e2)];
+                v.extend(xyz.iter().map(rv));
+                v
+            }
+            (_, SC) => {
+                let mut v = vec![slide(&f.u)];
+                v.extend(xyz.iter().map(rv));
+                v
+            }
+            (_, PC) => {
+                let (e1, e2) = perpendicular_pair(&f.n);
+                let mut v = vec![slide(&e1), slide(&e2)];
+                v.extend(u_angles(pa, pb, &f.n, &f.u).into_iter().map(|a| (a, true)));
+                v
+            }
+            (_, CR) => vec![slide(&f.u), slide(&f.n.cross(&f.u)), turn(&f.u)],
+            _ => Vec::new(),
+        }
+    }
+}
+
+/// The residual and Jacobian of one pair: `e` (rows) and `J` (rows × 2B: the first body's
+/// twist columns, then the other's).
+#[derive(Clone, Debug)]
+pub struct PairEquations {
+    /// Residual values.
+    pub residual: Vec<f64>,
+    /// Jacobian, `residual.len() × 2B`.
+    pub jacobian: DMatrix<f64>,
+    /// How many of the rows (the last ones) are driven values.
+    pub driven_rows: usize,
+}
+
+impl PositionModel {
+    /// Twist size B.
+    pub fn b(&self) -> usize {
+        self.space.b() as usize
+    }
+
+    /// Equations of pair `p` at poses `pa` (first body), `pb` (other): the constraints, then
+    /// `value − target` for the first `targets.len()` joint values (angles wrapped to
+    /// (−π, π]); targets are in model units (slides divided by [`PositionModel::scale`]).
+    pub fn pair_equations(&self, p: usize, pa: &Pose, pb: &Pose, targets: &[f64]) -> PairEquations {
+        let pair = &self.pairs[p];
+        let mut rows = pair.constraints(self.space, pa, pb);
+        let n_driven = if targets.is_empty() {
+            0
+        } else {
+            let values = pair.values(self.space, pa, pb);
+            let mut n = 0;
+            for ((v, angle), t) in values.into_iter().zip(targets) {
+                let mut r = v.sub(&TS::constant(*t));
+                if angle {
+                    r.v = wrap(r.v);
+                }
+                rows.push(r);
+                n += 1;
+            }
+            n
+        };
+        let cols = embed_columns(self.space);
+        let b = cols.len();
+        let jacobian = DMatrix::from_fn(rows.len(), 2 * b, |i, j| {
+            if j < b {
+                rows[i].d[cols[j]]
+            } else {
+                rows[i].d[6 + cols[j - b]]
+            }
+        });
+        PairEquations {
+            residual: rows.iter().map(|r| r.v).collect(),
+            jacobian,
+            driven_rows: n_driven,
+        }
+    }
+
+    /// The joint values of pair `p` (driven-DOF order; slides in model units, angles in
+    /// radians in (−π, π]).
+    pub fn pair_values(&self, p: usize, pa: &Pose, pb: &Pose) -> Vec<(f64, bool)> {
+        self.pairs[p]
+            .values(self.space, pa, pb)
+            .into_iter()
+            .map(|(v, a)| (v.v, a))
+            .collect()
+    }
+
+    /// Number of constraint equations of pair `p` (without driven values).
+    pub fn constraint_count(&self, p: usize) -> usize {
+        self.pair_equations(p, &Pose::identity(), &Pose::identity(), &[])
+            .residual
+            .len()
+    }
+}

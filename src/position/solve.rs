@@ -1,0 +1,469 @@
+//! Solving the positions for given input values: group by group in the level order of the
+//! structural analysis (groups of one level in parallel), or all at once (the reference).
+
+use super::newton::{NewtonOptions, NewtonOutcome, System, Targets};
+use super::pose::{Configuration, PoseReport};
+use super::residual::{ModelError, PositionModel};
+use crate::mechanism::Mechanism;
+use crate::structure::Analysis;
+use rayon::prelude::*;
+use serde::Serialize;
+use std::collections::HashMap;
+
+/// One step of the schedule: a structural group (or the bodies no group holds).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Step {
+    /// Group name (`SG-I`...) or `rest` for bodies outside every group.
+    pub name: String,
+    /// Solve level (groups of one level are independent); `rest` comes after all.
+    pub level: usize,
+    /// Unknown bodies (indices).
+    pub bodies: Vec<usize>,
+    /// Pairs whose equations the step solves (indices into `PositionModel::pairs`).
+    pub pairs: Vec<usize>,
+}
+
+/// The solve order.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Schedule {
+    /// Steps in order (levels ascending).
+    pub steps: Vec<Step>,
+}
+
+/// The schedule of `m` from its structural analysis: the over-determined part first (it is
+/// known with the frame: step `over`, level 0), the groups by level, then the bodies no group
+/// holds (an under-determined part) as one last step `rest`; the first step is named
+/// `overdetermined`. A pair is solved by the first
+/// step after which both its bodies are known.
+pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule {
+    let by_id: HashMap<String, usize> = (0..m.bodies.len())
+        .map(|i| (m.body_id(i).to_string(), i))
+        .collect();
+    let mut order: Vec<usize> = (0..a.groups.len()).collect();
+    order.sort_by_key(|&g| (a.groups[g].level, g));
+    let mut placed = vec![false; m.bodies.len()];
+    placed[m.frame] = true;
+    let mut steps: Vec<Step> = Vec::new();
+    let take = |ids: &[String], placed: &mut Vec<bool>| -> Vec<usize> {
+        let bodies: Vec<usize> = ids
+            .iter()
+            .filter_map(|id| by_id.get(id).copied())
+            .filter(|&b| !placed[b])
+            .collect();
+        for &b in &bodies {
+            placed[b] = true;
+        }
+        bodies
+    };
+    if let Some(over) = a.diagnosis.as_ref().and_then(|d| d.overdetermined.as_ref()) {
+        let bodies = take(&over.bodies, &mut placed);
+        if !bodies.is_empty() {
+            steps.push(Step {
+                name: "overdetermined".into(),
+                level: 0,
+                bodies,
+                pairs: Vec::new(),
+            });
+        }
+    }
+    for g in order {
+        let grp = &a.groups[g];
+        let bodies = take(&grp.bodies, &mut placed);
+        if !bodies.is_empty() {
+            steps.push(Step {
+                name: grp.name.clone(),
+                level: grp.level,
+                bodies,
+                pairs: Vec::new(),
+            });
+        }
+    }
+    let rest: Vec<usize> = (0..m.bodies.len()).filter(|&b| !placed[b]).collect();
+    if !rest.is_empty() {
+        let level = steps.iter().map(|s| s.level).max().unwrap_or(0) + 1;
+        steps.push(Step {
+            name: "rest".into(),
+            level,
+            bodies: rest,
+            pairs: Vec::new(),
+        });
+    }
+    // Step index at which each body becomes known.
+    let mut known_at = vec![0usize; m.bodies.len()];
+    for (s, step) in steps.iter().enumerate() {
+        for &b in &step.bodies {
+            known_at[b] = s;
+        }
+    }
+    for (p, pair) in model.pairs.iter().enumerate() {
+        let s = known_at[pair.a].max(known_at[pair.b]);
+        if let Some(step) = steps.get_mut(s)
+            && (step.bodies.contains(&pair.a) || step.bodies.contains(&pair.b))
+        {
+            step.pairs.push(p);
+        }
+    }
+    Schedule { steps }
+}
+
+/// Why a solve failed.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SolveError {
+    /// No position model.
+    #[error(transparent)]
+    Model(#[from] ModelError),
+    /// A step's equations have no solution near the start (a value out of reach, a
+    /// configuration that cannot be assembled).
+    #[error(
+        "group {group} (bodies {bodies}) cannot be closed: residual {residual:.3e} stays on joint(s) {joints}; an input value out of reach or a configuration that cannot be assembled"
+    )]
+    Unreachable {
+        /// Step name.
+        group: String,
+        /// Body ids.
+        bodies: String,
+        /// Joints left open.
+        joints: String,
+        /// Largest residual (file units).
+        residual: f64,
+    },
+    /// Newton ran out of iterations.
+    #[error(
+        "group {group} (bodies {bodies}) did not converge in {iterations} iterations: residual {residual:.3e} on joint(s) {joints}"
+    )]
+    NotConverged {
+        /// Step name.
+        group: String,
+        /// Body ids.
+        bodies: String,
+        /// Joints left open.
+        joints: String,
+        /// Largest residual (file units).
+        residual: f64,
+        /// Iterations done.
+        iterations: usize,
+    },
+}
+
+/// How one step went.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct StepReport {
+    /// Step name.
+    pub name: String,
+    /// Level.
+    pub level: usize,
+    /// Body ids.
+    pub bodies: Vec<String>,
+    /// Newton iterations.
+    pub iterations: usize,
+    /// Largest residual after the step (file units).
+    pub residual: f64,
+    /// Nullity of the step's Jacobian over its unknowns (relative threshold 1e-9): freedoms
+    /// the step's equations leave (an isolated spin; more at a singular configuration).
+    pub nullity: usize,
+    /// Smallest nonzero over largest singular value of the step's Jacobian (near 0: close to
+    /// a singular configuration).
+    pub conditioning: f64,
+}
+
+/// A solved configuration.
+#[derive(Clone, Debug)]
+pub struct Solution {
+    /// The poses.
+    pub config: Configuration,
+    /// Per step.
+    pub steps: Vec<StepReport>,
+    /// Largest residual over every pair (file units).
+    pub max_residual: f64,
+}
+
+fn joints_of(
+    m: &Mechanism,
+    model: &PositionModel,
+    pairs: &[usize],
+    res: &[f64],
+    tol: f64,
+) -> String {
+    let mut ids: Vec<&str> = Vec::new();
+    for (i, &p) in pairs.iter().enumerate() {
+        if res.get(i).is_some_and(|&r| r > tol) {
+            let id = m.joints[model.pairs[p].joint].id.as_str();
+            if !ids.contains(&id) {
+                ids.push(id);
+            }
+        }
+    }
+    if ids.is_empty() {
+        "(none)".into()
+    } else {
+        ids.join(", ")
+    }
+}
+
+fn body_list(m: &Mechanism, bodies: &[usize]) -> String {
+    let ids: Vec<String> = bodies.iter().map(|&b| m.body_id(b).to_string()).collect();
+    format!("{{{}}}", ids.join(", "))
+}
+
+fn outcome_error(
+    m: &Mechanism,
+    model: &PositionModel,
+    name: &str,
+    sys: &System,
+    out: &NewtonOutcome,
+    opts: &NewtonOptions,
+) -> SolveError {
+    let joints = joints_of(m, model, &sys.pairs, &out.pair_residuals, opts.tolerance);
+    let bodies = body_list(m, &sys.bodies);
+    let residual = out.residual * model.scale;
+    if out.iterations >= opts.max_iterations {
+        SolveError::NotConverged {
+            group: name.into(),
+            bodies,
+            joints,
+            residual,
+            iterations: out.iterations,
+        }
+    } else {
+        SolveError::Unreachable {
+            group: name.into(),
+            bodies,
+            joints,
+            residual,
+        }
+    }
+}
+
+fn report(m: &Mechanism, model: &PositionModel, step: &Step, out: &NewtonOutcome) -> StepReport {
+    StepReport {
+        name: step.name.clone(),
+        level: step.level,
+        bodies: step
+            .bodies
+            .iter()
+            .map(|&b| m.body_id(b).to_string())
+            .collect(),
+        iterations: out.iterations,
+        residual: out.residual * model.scale,
+        nullity: out.nullity(1e-9),
+        conditioning: out.conditioning(),
+    }
+}
+
+/// Largest residual of every pair at `config` (model units).
+pub fn max_residual(model: &PositionModel, targets: &Targets, config: &Configuration) -> f64 {
+    let all = System {
+        pairs: (0..model.pairs.len()).collect(),
+        bodies: Vec::new(),
+    };
+    let (r, _, _) = all.evaluate(model, targets, config);
+    r.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+}
+
+/// Solve group by group from `start`. Steps of one level run in parallel.
+pub fn solve_groups(
+    m: &Mechanism,
+    model: &PositionModel,
+    sched: &Schedule,
+    targets: &Targets,
+    start: &Configuration,
+    opts: &NewtonOptions,
+) -> Result<Solution, SolveError> {
+    let mut config = start.clone();
+    let mut reports = Vec::new();
+    let mut s = 0;
+    while s < sched.steps.len() {
+        let level = sched.steps[s].level;
+        let mut e = s;
+        while e < sched.steps.len() && sched.steps[e].level == level {
+            e += 1;
+        }
+        let run = |step: &Step| {
+            let sys = System {
+                pairs: step.pairs.clone(),
+                bodies: step.bodies.clone(),
+            };
+            let (out, poses) = sys.solve_local(model, targets, &config, opts);
+            (sys, out, poses)
+        };
+        let results: Vec<_> = if e - s > 1 && model.bodies > 64 {
+            sched.steps[s..e].par_iter().map(run).collect()
+        } else {
+            sched.steps[s..e].iter().map(run).collect()
+        };
+        for (step, (sys, out, poses)) in sched.steps[s..e].iter().zip(results) {
+            if !out.converged {
+                return Err(outcome_error(m, model, &step.name, &sys, &out, opts));
+            }
+            for (&b, p) in step.bodies.iter().zip(poses) {
+                config.poses[b] = p;
+            }
+            reports.push(report(m, model, step, &out));
+        }
+        s = e;
+    }
+    finish(m, model, targets, config, reports, opts)
+}
+
+fn finish(
+    m: &Mechanism,
+    model: &PositionModel,
+    targets: &Targets,
+    config: Configuration,
+    steps: Vec<StepReport>,
+    opts: &NewtonOptions,
+) -> Result<Solution, SolveError> {
+    let all = System {
+        pairs: (0..model.pairs.len()).collect(),
+        bodies: Vec::new(),
+    };
+    let (r, _, per_pair) = all.evaluate(model, targets, &config);
+    let worst = r.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    if worst > 10.0 * opts.tolerance {
+        return Err(SolveError::Unreachable {
+            group: "(all)".into(),
+            bodies: body_list(
+                m,
+                &(0..m.bodies.len())
+                    .filter(|&b| b != m.frame)
+                    .collect::<Vec<_>>(),
+            ),
+            joints: joints_of(m, model, &all.pairs, &per_pair, 10.0 * opts.tolerance),
+            residual: worst * model.scale,
+        });
+    }
+    Ok(Solution {
+        config,
+        steps,
+        max_residual: worst * model.scale,
+    })
+}
+
+/// Solve every equation at once (the reference).
+pub fn solve_global(
+    m: &Mechanism,
+    model: &PositionModel,
+    targets: &Targets,
+    start: &Configuration,
+    opts: &NewtonOptions,
+) -> Result<Solution, SolveError> {
+    let step = Step {
+        name: "global".into(),
+        level: 1,
+        bodies: (0..m.bodies.len()).filter(|&b| b != m.frame).collect(),
+        pairs: (0..model.pairs.len()).collect(),
+    };
+    let sys = System {
+        pairs: step.pairs.clone(),
+        bodies: step.bodies.clone(),
+    };
+    let mut config = start.clone();
+    let out = sys.solve(model, targets, &mut config, opts);
+    if !out.converged {
+        return Err(outcome_error(m, model, "global", &sys, &out, opts));
+    }
+    let rep = report(m, model, &step, &out);
+    finish(m, model, targets, config, vec![rep], opts)
+}
+
+/// The pose of every body, for reports.
+pub fn pose_reports(
+    m: &Mechanism,
+    model: &PositionModel,
+    config: &Configuration,
+) -> Vec<PoseReport> {
+    (0..m.bodies.len())
+        .map(|b| {
+            PoseReport::new(
+                m.body_id(b).to_string(),
+                &config.poses[b],
+                m.space,
+                model.scale,
+            )
+        })
+        .collect()
+}
+
+/// The values of one joint (driven-DOF order; all pairs of a multiple joint in turn).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct JointValues {
+    /// Joint id.
+    pub joint: String,
+    /// Values: degrees for angles, file lengths for slides.
+    pub values: Vec<f64>,
+    /// `deg` or `length` per value.
+    pub units: Vec<&'static str>,
+}
+
+/// Every joint's values at `config` (measured from the file's configuration).
+pub fn joint_values(
+    m: &Mechanism,
+    model: &PositionModel,
+    config: &Configuration,
+) -> Vec<JointValues> {
+    let mut out: Vec<JointValues> = m
+        .joints
+        .iter()
+        .map(|j| JointValues {
+            joint: j.id.clone(),
+            values: Vec::new(),
+            units: Vec::new(),
+        })
+        .collect();
+    for (p, pair) in model.pairs.iter().enumerate() {
+        let vals = model.pair_values(p, &config.poses[pair.a], &config.poses[pair.b]);
+        let o = &mut out[pair.joint];
+        for (v, angle) in vals {
+            let x = if angle {
+                // (−180, 180]: a half turn reads 180 whatever the rounding.
+                let d = v.to_degrees();
+                if d <= -180.0 + 1e-9 { d + 360.0 } else { d }
+            } else {
+                v * model.scale
+            };
+            o.values.push(super::pose::tidy(x));
+            o.units.push(if angle { "deg" } else { "length" });
+        }
+    }
+    out
+}
+
+/// A solve as reported (`mbsa solve --format json`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct SolveReport {
+    /// Mechanism name.
+    pub name: String,
+    /// How it was solved: `groups` or `global`.
+    pub method: &'static str,
+    /// The steps in solve order.
+    pub steps: Vec<StepReport>,
+    /// Largest residual over every joint (file units).
+    pub max_residual: f64,
+    /// Body poses.
+    pub poses: Vec<PoseReport>,
+    /// Joint values.
+    pub joint_values: Vec<JointValues>,
+    /// Finite against first-order mobility at the solved configuration, when asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finite: Option<super::finite::FiniteMobility>,
+}
+
+impl SolveReport {
+    /// The report of `sol`.
+    pub fn new(
+        m: &Mechanism,
+        model: &PositionModel,
+        sol: &Solution,
+        method: &'static str,
+    ) -> SolveReport {
+        SolveReport {
+            name: m.name.clone(),
+            method,
+            steps: sol.steps.clone(),
+            max_residual: super::pose::tidy(sol.max_residual),
+            poses: pose_reports(m, model, &sol.config),
+            joint_values: joint_values(m, model, &sol.config),
+            finite: None,
+        }
+    }
+}

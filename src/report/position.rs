@@ -1,0 +1,169 @@
+//! Text reports of the position level ([`crate::position`]): solved poses, sweeps, the
+//! closure section and finite mobility.
+
+use crate::position::{Closure, ClosureStatus, FiniteMobility, JointValues, SolveReport};
+use std::fmt::Write;
+
+fn num(x: f64) -> String {
+    let s = format!("{x:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" { "0".into() } else { s.to_string() }
+}
+
+fn values_text(v: &JointValues) -> String {
+    v.values
+        .iter()
+        .zip(&v.units)
+        .map(|(x, u)| {
+            if *u == "deg" {
+                format!("{}°", num(*x))
+            } else {
+                num(*x)
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" / ")
+}
+
+/// The solved poses, joint values and solve steps.
+pub fn solve_table(r: &SolveReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "{}: solved {} ({} step(s)), largest joint residual {:.1e}",
+        r.name,
+        if r.method == "groups" {
+            "group by group"
+        } else {
+            "globally"
+        },
+        r.steps.len(),
+        r.max_residual
+    );
+    let mut t = super::new_table();
+    t.set_header([
+        "step",
+        "level",
+        "bodies",
+        "iterations",
+        "nullity",
+        "conditioning",
+    ]);
+    for st in &r.steps {
+        t.add_row([
+            st.name.clone(),
+            st.level.to_string(),
+            st.bodies.join(", "),
+            st.iterations.to_string(),
+            st.nullity.to_string(),
+            format!("{:.2e}", st.conditioning),
+        ]);
+    }
+    let _ = writeln!(s, "\n{t}");
+    let mut t = super::new_table();
+    t.set_header(["body", "x", "y", "z", "angle (deg)", "axis"]);
+    for p in &r.poses {
+        t.add_row([
+            p.body.clone(),
+            num(p.translation[0]),
+            num(p.translation[1]),
+            num(p.translation[2]),
+            num(p.angle_deg),
+            format!(
+                "({}, {}, {})",
+                num(p.axis[0]),
+                num(p.axis[1]),
+                num(p.axis[2])
+            ),
+        ]);
+    }
+    let _ = writeln!(
+        s,
+        "\nBody poses (position of the body point at the file's origin; rotation from the file's configuration)\n{t}"
+    );
+    let mut t = super::new_table();
+    t.set_header(["joint", "values (from the file's configuration)"]);
+    for v in &r.joint_values {
+        if !v.values.is_empty() {
+            t.add_row([v.joint.clone(), values_text(v)]);
+        }
+    }
+    let _ = writeln!(s, "\n{t}");
+    if let Some(f) = &r.finite {
+        let _ = write!(s, "\n{}", finite_section(f));
+    }
+    s
+}
+
+/// A sweep: one row per step, the swept value and every joint's values.
+pub fn sweep_table(joint: &str, rows: &[(f64, Vec<JointValues>)]) -> String {
+    let mut t = super::new_table();
+    let mut header = vec![format!("{joint} (input)")];
+    if let Some((_, first)) = rows.first() {
+        header.extend(
+            first
+                .iter()
+                .filter(|v| !v.values.is_empty())
+                .map(|v| v.joint.clone()),
+        );
+    }
+    t.set_header(header);
+    for (x, vals) in rows {
+        let mut row = vec![num(*x)];
+        row.extend(
+            vals.iter()
+                .filter(|v| !v.values.is_empty())
+                .map(values_text),
+        );
+        t.add_row(row);
+    }
+    format!("{t}\n")
+}
+
+/// The closure section (for other reports): one line when closed, else the open joints.
+pub fn closure_section(c: &Closure) -> String {
+    let mut s = String::new();
+    match c.status {
+        ClosureStatus::Closed => {
+            let _ = writeln!(
+                s,
+                "Closure: every joint closed (largest residual {:.1e}, tolerance {:.1e})",
+                c.max_residual, c.tolerance
+            );
+        }
+        _ => {
+            let word = if c.status == ClosureStatus::Open {
+                "warning"
+            } else {
+                "error"
+            };
+            let _ = writeln!(
+                s,
+                "Closure ({word}): largest residual {:.3e} (tolerance {:.1e}, gross limit {:.1e})",
+                c.max_residual, c.tolerance, c.gross_limit
+            );
+            for j in &c.joints {
+                let _ = writeln!(s, "  joint {}: {:.3e}", j.joint, j.residual);
+            }
+        }
+    }
+    s
+}
+
+/// Finite against first-order mobility.
+pub fn finite_section(f: &FiniteMobility) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "Finite mobility: {} (first order {}, count {}; nullity at {} nearby points: {:?})",
+        f.finite,
+        f.first_order,
+        f.count,
+        f.samples.len(),
+        f.samples
+    );
+    for n in &f.notes {
+        let _ = writeln!(s, "- {n}");
+    }
+    s
+}

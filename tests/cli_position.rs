@@ -1,0 +1,229 @@
+//! `mbsa solve` and `mbsa assemble` through the real binary: outputs, sweeps that stop at a
+//! dead point, exit codes and messages for bad input, closing a configuration.
+
+use assert_cmd::Command;
+
+fn mbsa(args: &[&str]) -> (i32, String, String) {
+    let out = Command::cargo_bin("mbsa")
+        .expect("the mbsa binary is built")
+        .args(args)
+        .output()
+        .expect("mbsa runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn snapshot(name: &str, value: &str) {
+    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+        insta::assert_snapshot!(name, value);
+    });
+}
+
+#[test]
+fn slider_crank_sweep_is_the_closed_form() {
+    let (code, out, err) = mbsa(&["solve", "@slider-crank-geometry", "--sweep", "O=0..360:30"]);
+    assert_eq!(code, 0, "{err}");
+    snapshot("solve_slider-crank-geometry_sweep", &out);
+    // At O = 90 (crank at 180 degrees) the piston is at 0.2062 - 0.05 = 0.1562 from the
+    // origin: it moved by 0.2 - 0.15616 = 0.043845 toward the crank (S measures the frame
+    // relative to the piston, so positive).
+    assert!(
+        out.lines()
+            .any(|l| l.trim_start().starts_with("90 ") && l.contains("0.043845")),
+        "{out}"
+    );
+}
+
+#[test]
+fn solve_json_and_table() {
+    let (code, out, err) = mbsa(&["solve", "@slider-crank-geometry", "--set", "O=30"]);
+    assert_eq!(code, 0, "{err}");
+    snapshot("solve_slider-crank-geometry_30", &out);
+    let (code, out, _) = mbsa(&[
+        "solve",
+        "@slider-crank-geometry",
+        "--set",
+        "O=0.5236rad",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["method"], "groups");
+    assert_eq!(v["steps"].as_array().unwrap().len(), 2);
+    let slider = v["poses"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["body"] == "slider")
+        .unwrap();
+    assert!((slider["translation"][0].as_f64().unwrap() + 0.023444).abs() < 1e-5);
+}
+
+#[test]
+fn global_and_groups_agree_on_the_bennett() {
+    let (c1, g, _) = mbsa(&["solve", "@rig-bennett", "--set", "A=25", "--format", "json"]);
+    let (c2, w, _) = mbsa(&[
+        "solve",
+        "@rig-bennett",
+        "--set",
+        "A=25",
+        "--format",
+        "json",
+        "--global",
+    ]);
+    assert_eq!((c1, c2), (0, 0));
+    let pg: serde_json::Value = serde_json::from_str(&g).unwrap();
+    let pw: serde_json::Value = serde_json::from_str(&w).unwrap();
+    assert_eq!(pg["poses"], pw["poses"]);
+}
+
+#[test]
+fn sweep_stops_at_the_dead_point_naming_the_group() {
+    // The planar four-bar in 3D is a triple rocker: the crank cannot pass about 50 degrees.
+    let (code, out, err) = mbsa(&["solve", "@rig-planar-four-bar-3d", "--sweep", "A=0..90:15"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(err.contains("stopped between A=45 and A=60"), "{err}");
+    assert!(err.contains("group SG-II (bodies {3, 4})"), "{err}");
+    assert!(out.contains(" 45 "), "{out}");
+}
+
+#[test]
+fn bad_inputs_exit_2_with_the_reason() {
+    for (args, needle) in [
+        (vec!["--set", "Q=3"], "matches no joint"),
+        (vec!["--set", "O=3x"], "not a number"),
+        (vec!["--set", "S=2rad"], "is a slide"),
+        (vec!["--set", "O=1,2"], "1 DOF but 2 value(s)"),
+        (vec!["--sweep", "O=0..10:0"], "STEP is zero"),
+        (vec!["--sweep", "O=0..10"], "FROM..TO:STEP"),
+    ] {
+        let mut a = vec!["solve", "@slider-crank-geometry"];
+        a.extend(args);
+        let (code, _, err) = mbsa(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        assert!(err.contains(needle), "{a:?}: {err}");
+    }
+    let (code, _, err) = mbsa(&["solve", "@four-bar"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("needs `origin`"), "{err}");
+    // Out of reach: the rocker of the triple rocker cannot turn 120 degrees.
+    let (code, _, err) = mbsa(&["solve", "@rig-planar-four-bar-3d", "--set", "A=120"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("cannot be closed") && err.contains("joint(s)"),
+        "{err}"
+    );
+}
+
+#[test]
+fn a_configuration_missing_closure_is_reported_and_assembled() {
+    let dir = std::env::temp_dir().join(format!("mbsa-position-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // Poses of the slider-crank at O=30, then the rod displaced by 1e-4 (a keyframe that
+    // misses closure) or by 0.05 (not assembled).
+    let (_, out, _) = mbsa(&[
+        "solve",
+        "@slider-crank-geometry",
+        "--set",
+        "O=30",
+        "--format",
+        "json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    for (shift, code_without) in [(1e-4, 0), (0.05, 2)] {
+        let mut w = v.clone();
+        for p in w["poses"].as_array_mut().unwrap() {
+            if p["body"] == "rod" {
+                let y = p["translation"][1].as_f64().unwrap();
+                p["translation"][1] = serde_json::json!(y + shift);
+            }
+        }
+        let path = dir.join(format!("poses-{shift}.json"));
+        std::fs::write(&path, serde_json::to_string(&w).unwrap()).unwrap();
+        let p = path.to_str().unwrap();
+        let (code, _, err) = mbsa(&[
+            "solve",
+            "@slider-crank-geometry",
+            "--poses",
+            p,
+            "--set",
+            "O=30",
+        ]);
+        assert_eq!(code, code_without, "{err}");
+        assert!(err.contains("joint(s) A") && err.contains("B"), "{err}");
+        let (code, toml, err) = mbsa(&["assemble", "@slider-crank-geometry", "--poses", p]);
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            toml.starts_with("# assembled by mbsa: largest joint residual"),
+            "{toml}"
+        );
+        let closed = dir.join(format!("closed-{shift}.toml"));
+        std::fs::write(&closed, &toml).unwrap();
+        let c = closed.to_str().unwrap();
+        let (code, out, err) = mbsa(&["solve", c, "--set", "O=0", "--format", "json"]);
+        assert_eq!(code, 0, "{err}");
+        assert!(err.is_empty(), "closed: no warning: {err}");
+        let r: serde_json::Value = serde_json::from_str(&out).unwrap();
+        assert!(r["max_residual"].as_f64().unwrap() < 1e-9);
+        let (code, _, err) = mbsa(&["check", c]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn toml_output_is_the_mechanism_at_the_solved_configuration() {
+    let (code, toml, _) = mbsa(&[
+        "solve",
+        "@slider-crank-geometry",
+        "--set",
+        "O=90",
+        "--format",
+        "toml",
+    ]);
+    assert_eq!(code, 0);
+    // The crank pin turned from (0, 0.05) to (-0.05, 0); the piston pin to 0.15616.
+    assert!(toml.contains("origin = [-0.05, 0.0]"), "{toml}");
+    assert!(toml.contains("origin = [0.156155281281, 0.0]"), "{toml}");
+}
+
+#[test]
+fn finite_mobility_of_the_bennett() {
+    let (code, out, _) = mbsa(&[
+        "solve",
+        "@rig-bennett",
+        "--set",
+        "A=10",
+        "--finite",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert_eq!(v["finite"]["finite"], 1);
+    assert_eq!(v["finite"]["first_order"], 1);
+    assert_eq!(v["finite"]["count"], -2);
+    assert_eq!(v["finite"]["verdict"], "overconstrained_moving");
+}
+
+#[test]
+fn hostile_values_are_refused() {
+    for (args, needle) in [
+        (vec!["--set", "O=1e308"], "out of range"),
+        (vec!["--set", "S=1e300"], "out of range"),
+        (vec!["--set", "S=nan"], "not a finite number"),
+        (vec!["--sweep", "O=0..1e9:1e-9"], "at most 100000"),
+        (vec!["--tolerance=-1"], "positive length"),
+        (vec!["--set", "S=1e5"], "cannot be closed"),
+    ] {
+        let mut a = vec!["solve", "@slider-crank-geometry"];
+        a.extend(args);
+        let (code, out, err) = mbsa(&a);
+        assert_eq!(code, 2, "{a:?}: {err}");
+        assert!(out.is_empty() && err.contains(needle), "{a:?}: {err}");
+    }
+}
