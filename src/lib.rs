@@ -10,6 +10,7 @@
 pub mod budget;
 pub mod diagnostic;
 mod elimination;
+pub mod exact;
 pub mod examples;
 pub mod expect;
 pub mod format;

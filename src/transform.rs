@@ -144,7 +144,7 @@ impl TransformOptions {
 }
 
 /// Errors of the transformation options.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TransformError {
     /// An `--inputs`, `--keep` or `--exclude` spec that does not fit the mechanism.
     #[error(transparent)]
@@ -163,6 +163,9 @@ pub enum TransformError {
         /// The entry.
         text: String,
     },
+    /// The joint geometry asked for cannot be used.
+    #[error(transparent)]
+    Geometry(#[from] crate::motion::MotionError),
     /// A joint both kept and excluded.
     #[error("joint `{joint}` is both kept (--keep) and excluded (--exclude)")]
     KeepExcluded {
@@ -332,6 +335,10 @@ pub fn enumerate(
     sink: &mut dyn FnMut(Placement),
 ) -> Result<Summary, TransformError> {
     let rules = Rules::of(m, opts)?;
+    if !opts.analysis.count_only {
+        // A geometry that cannot be used is the user's error, said once, before any work.
+        crate::motion::geometries(m, opts.analysis.geometry, opts.analysis.precision)?;
+    }
     let (exps, total_exps) = expansions(m, opts.max_expansions);
     let mob = crate::mobility::mobility(m);
     let mut summary = Summary {
@@ -818,6 +825,9 @@ impl Problem {
         let mut u = vec![b; nb];
         u[m.frame] = 0;
         let mut isolated = 0u32;
+        // Constraint equations dependent at the file's configuration fix nothing: inputs take
+        // their place (a planar four-bar written in space takes one input, not none).
+        let mut set_aside = vec![0u32; m.joints.len()];
         if !opts.analysis.count_only {
             // Spins no input can drive (a bar between two spherical joints): the rank check's
             // isolated freedoms with no input at all, on bodies held by two pairs or more. A
@@ -829,8 +839,15 @@ impl Problem {
                     pairs[x] += 1;
                 }
             }
-            let a = structure::analyze(m, &opts.analysis, &Library::empty());
-            for iso in &a.isolated {
+            // The geometry was checked before the enumeration: this analysis cannot fail.
+            let a = structure::analyze(m, &opts.analysis, &Library::empty()).ok();
+            let a = a.as_ref();
+            if let Some(a) = a {
+                for (q, &n) in a.set_aside.iter().enumerate() {
+                    set_aside[q] = n;
+                }
+            }
+            for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
                 let id = crate::mechanism::BodyId::from_text(&iso.body);
                 if let Some(x) = m.body_index(&id)
                     && pairs[x] >= 2
@@ -872,7 +889,7 @@ impl Problem {
                     p.touching[z].push(q);
                 }
             }
-            cons[q] = b.saturating_sub(j.grade());
+            cons[q] = b.saturating_sub(j.grade()).saturating_sub(set_aside[q]);
             let o = e.origin[q];
             let k = j.grade();
             let ok = rules.allowed[o] && (!rules.grounded || x == m.frame || y == m.frame);
@@ -1171,8 +1188,10 @@ fn evaluate(
     for &(q, n) in w {
         mech.joints[q].driven = n;
     }
-    let a = structure::analyze(mech, opts, lib);
-    (a.status == Status::Determined).then_some(a)
+    // The geometry was checked before the enumeration: this analysis cannot fail.
+    structure::analyze(mech, opts, lib)
+        .ok()
+        .filter(|a| a.status == Status::Determined)
 }
 
 fn placement(
@@ -1306,8 +1325,8 @@ pub fn compare(
 ) -> Result<Comparison, TransformError> {
     let mut given_m = m.clone();
     given_m.apply_inputs(spec)?;
-    let fa = structure::analyze(m, &opts.analysis, lib);
-    let ga = structure::analyze(&given_m, &opts.analysis, lib);
+    let fa = structure::analyze(m, &opts.analysis, lib)?;
+    let ga = structure::analyze(&given_m, &opts.analysis, lib)?;
     let file = Evaluation::of(m, &fa);
     let given = Evaluation::of(&given_m, &ga);
     let criteria = if opts.rank.is_empty() {
