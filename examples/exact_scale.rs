@@ -75,7 +75,8 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
         count_only: true,
         ..Options::default()
     };
-    let a = structure::analyze(&m, &opts, &Library::builtin());
+    let a = structure::analyze(&m, &opts, &Library::builtin())
+        .expect("a generated mechanism has its geometry");
     let (gi, g) = a
         .groups
         .iter()
@@ -102,6 +103,7 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
     for j in &m.joints {
         let (x, y) = (j.bodies[0], j.bodies[1]);
         let (cx, cy) = (col[x] != usize::MAX, col[y] != usize::MAX);
+        #[allow(clippy::nonminimal_bool)]
         let ok = (cx && cy) || (cx && before[y]) || (cy && before[x]);
         if !ok {
             continue;

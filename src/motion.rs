@@ -475,7 +475,8 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 let c1 = origin(g)?;
                 let c2 = v3(need(kind, "origin2", g.origin2)?);
                 let d = c2 - c1;
-                if !(d.norm() > 1e-12) {
+                // Also refuses a NaN distance.
+                if d.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
                     return Err(MotionError::Degenerate {
                         kind: code,
                         reason: "`origin` and `origin2` (the two centres) coincide",
@@ -981,7 +982,7 @@ pub fn rounding_of(x: f64) -> f64 {
     let (mantissa, exp) = text.split_once('e').unwrap_or((&text, "0"));
     let exp: i32 = exp.parse().unwrap_or(0);
     let digits = mantissa.chars().filter(|c| c.is_ascii_digit()).count() as i32;
-    if digits < 4 || digits >= 15 {
+    if !(4..15).contains(&digits) {
         // Short numbers are exact; 15-17 digits is full double precision.
         return 0.0;
     }

@@ -1,7 +1,7 @@
 //! CI-sized scale smoke test (issue 16 item 6): every command on a generated 10^5-body
-//! mechanism under a memory cap (`ulimit -v`) and a time cap. A command must answer (exit 0 or
-//! 1) or stop with a clear message (exit 2); a timeout, a signal (failed allocation, abort) or
-//! a panic fails the test.
+//! mechanism under a memory cap (`ulimit -v`) and a time cap. A command must answer (exit 0
+//! or exit 1) or stop with a clear message (exit 2); a timeout, a signal (failed allocation,
+//! abort) or a panic fails the test.
 //!
 //! Release only (`.ci/run`): `cargo test --release --test scale_smoke -- --ignored`.
 //! Commands still waiting for issue 16 items 2 and 4 (transform at scale, geometric rigidity

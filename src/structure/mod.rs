@@ -598,9 +598,9 @@ fn build(
         }
     }
     let mut deps_shown: Vec<Vec<usize>> = Vec::with_capacity(raw.len());
-    for g in 0..raw.len() {
+    for r in &raw {
         let mut d: Vec<usize> = Vec::new();
-        for &x in &raw[g].deps {
+        for &x in &r.deps {
             if shown[x] != usize::MAX {
                 d.push(shown[x]);
             } else {

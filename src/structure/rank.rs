@@ -186,6 +186,7 @@ const SCREEN_MARGIN: f64 = 1e3;
 /// every needed pivot clears it (full row rank; for the over-determined block, full column
 /// rank): the SVD would find the same rank. `None` leaves the decision to the SVD, so a
 /// deficit is always found and explained by the dense path.
+#[allow(clippy::too_many_arguments)]
 fn screen(
     b: usize,
     block_eqs: &[usize],
