@@ -47,6 +47,25 @@ fn family(name: &str, n: usize) -> (SparseMatrix, String) {
             pairs.extend((2..=n).map(|i| (1, i, 5)));
             (random_pair_matrix(n + 1, 6, &pairs, 1), format!("star {n}"))
         }
+        "assurB" | "spatialB" => {
+            let groups = (n.saturating_sub(2) / 4).max(1) as u64;
+            let (m, b) = if name == "assurB" {
+                (
+                    generate::assur(2, groups, 364, Variant::B).expect("valid"),
+                    3,
+                )
+            } else {
+                (
+                    generate::assur_spatial(2, groups, 364, Variant::B).expect("valid"),
+                    6,
+                )
+            };
+            let label = format!("{name} II {} bodies (whole, inputs omitted)", m.movable());
+            (
+                random_pair_matrix(m.bodies.len(), b, &pairs_of(&m), 1),
+                label,
+            )
+        }
         "assur" => {
             let groups = (n.saturating_sub(2) / 4).max(1) as u64;
             let m = generate::assur(2, groups, 1, Variant::A).expect("valid");
@@ -76,7 +95,7 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
         ..Options::default()
     };
     let a = structure::analyze(&m, &opts, &Library::builtin())
-        .expect("a generated mechanism has its geometry");
+        .expect("generated mechanisms need no geometry");
     let (gi, g) = a
         .groups
         .iter()
@@ -103,8 +122,7 @@ fn giant(groups: u64) -> (SparseMatrix, String) {
     for j in &m.joints {
         let (x, y) = (j.bodies[0], j.bodies[1]);
         let (cx, cy) = (col[x] != usize::MAX, col[y] != usize::MAX);
-        #[allow(clippy::nonminimal_bool)]
-        let ok = (cx && cy) || (cx && before[y]) || (cy && before[x]);
+        let ok = (cx && (cy || before[y])) || (cy && before[x]);
         if !ok {
             continue;
         }
@@ -140,7 +158,25 @@ fn main() {
     let with_basis = std::env::var("BASIS").is_ok();
     for n in sizes {
         let t0 = Instant::now();
-        let (a, label) = family(&fam, n);
+        let (mut a, label) = family(&fam, n);
+        // DUP=k: k planted dependent rows, each a random combination of 10 rows spread
+        // over a window of 50 consecutive rows (a redundant loop's rows), inserted inside.
+        let dup: usize = std::env::var("DUP")
+            .ok()
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        let mut rng = SplitMix64::new(99);
+        for _ in 0..dup {
+            let m = a.nrows();
+            let start = rng.below(m.saturating_sub(50).max(1) as u64) as usize;
+            let mut e = Vec::new();
+            for _ in 0..10 {
+                let i = (start + rng.below(50) as usize).min(m - 1);
+                let k = Fp::random_nonzero(&mut rng);
+                e.extend(a.rows[i].iter().map(|&(c, v)| (c, v * k)));
+            }
+            a.push_row(e);
+        }
         let build = t0.elapsed();
         let t = Instant::now();
         let f = Factor::new(&a);
@@ -172,12 +208,44 @@ fn main() {
         }
         if with_basis {
             let t = Instant::now();
-            let mut rb = RowBasis::new(a.ncols);
+            let mut rb = RowBasis::with_column_order(&f.column_order());
             let kept = a.rows.iter().filter(|r| rb.insert(r)).count();
             print!(
-                "; row basis {:.3?} (kept {kept}, {} entries)",
+                "; row basis in factor order {:.3?} (kept {kept}, {} entries)",
                 t.elapsed(),
                 rb.entries()
+            );
+        }
+        if std::env::var("TRACK").is_ok() {
+            let t = Instant::now();
+            let mut rb = RowBasis::with_column_order(&f.column_order()).with_tracking();
+            let mut deps = 0;
+            let mut dep_entries = 0;
+            for r in &a.rows {
+                if !rb.insert(r) {
+                    deps += 1;
+                    dep_entries += rb.last_dependency().map_or(0, |y| y.len());
+                }
+            }
+            print!(
+                "; tracked row basis {:.3?} ({deps} dependent rows, {dep_entries} entries in their dependencies, {} combination entries)",
+                t.elapsed(),
+                rb.combination_entries()
+            );
+        }
+        if std::env::var("LEFT").is_ok() {
+            let t = Instant::now();
+            let ft = Factor::new(&a.transpose()); // the transpose, for comparison
+            let tt = t.elapsed();
+            let t = Instant::now();
+            let ln = ft.null_space();
+            let nnz: usize = ln.iter().map(|x| x.len()).sum();
+            print!(
+                "; transpose factor {tt:.3?} (max front {:?}, {} entries), left null space {:.3?} ({} vectors, {nnz} entries)",
+                ft.stats().max_front,
+                ft.stats().factor_entries,
+                t.elapsed(),
+                ln.len()
             );
         }
         if a.ncols <= 600 {

@@ -475,8 +475,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 let c1 = origin(g)?;
                 let c2 = v3(need(kind, "origin2", g.origin2)?);
                 let d = c2 - c1;
-                // Also refuses a NaN distance.
-                if d.norm().partial_cmp(&1e-12) != Some(std::cmp::Ordering::Greater) {
+                if d.norm().is_nan() || d.norm() <= 1e-12 {
                     return Err(MotionError::Degenerate {
                         kind: code,
                         reason: "`origin` and `origin2` (the two centres) coincide",

@@ -273,7 +273,11 @@ pub struct Summary {
     pub count: i64,
     /// Isolated DOF (spins no input can drive), from the rank check.
     pub isolated: u32,
-    /// Inputs each placement has: the count minus the isolated DOF.
+    /// Constraint equations dependent at the file's configuration (they fix nothing, so the
+    /// mechanism takes that many more inputs than its count says).
+    pub set_aside: u32,
+    /// Inputs each placement has: the count plus the equations set aside, minus the isolated
+    /// DOF (the true mobility less the isolated DOF).
     pub f: i64,
     /// Joints (binary pairs) that may be driven under the restrictions.
     pub drivable: usize,
@@ -345,6 +349,7 @@ pub fn enumerate(
         name: m.name.clone(),
         count: mob.mobility.count,
         isolated: 0,
+        set_aside: 0,
         f: mob.mobility.count,
         drivable: 0,
         expansions: exps.len(),
@@ -372,6 +377,7 @@ pub fn enumerate(
         let p = Problem::of(e, m, &rules, opts);
         if x == 0 {
             summary.isolated = p.isolated;
+            summary.set_aside = p.set_aside;
             summary.f = p.f;
             summary.drivable = p.drivable();
             if let Some(n) = &p.note {
@@ -808,6 +814,7 @@ struct Problem {
     /// Pairs that may receive inputs beyond the kept ones, in joint order.
     cand: Vec<usize>,
     isolated: u32,
+    set_aside: u32,
     f: i64,
     /// Units the search places beyond the kept ones.
     need: usize,
@@ -869,6 +876,7 @@ impl Problem {
             kept_groups: Vec::new(),
             cand: Vec::new(),
             isolated,
+            set_aside: set_aside.iter().sum(),
             f: 0,
             need: 0,
             root: None,

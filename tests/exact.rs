@@ -136,12 +136,18 @@ proptest! {
         let keep: Vec<usize> = (0..c.m).filter(|i| !deps.iter().any(|x| x.row == *i)).collect();
         let sub = DMatrix::from_fn(keep.len(), c.n, |i, j| d[(keep[i], j)]);
         prop_assert_eq!(dense::rank(&sub), r);
+        let greedy = dense::independent_rows(&d);
         for dep in &deps {
-            prop_assert!(dep.support.contains(&dep.row));
+            prop_assert!(!greedy.contains(&dep.row));
+            prop_assert_eq!(dep.support.last(), Some(&dep.row));
+            prop_assert!(is_zero(&s.left_mul_sparse(&dep.vector)));
         }
         let mut rb = RowBasis::new(c.n);
         let kept: Vec<usize> = (0..c.m).filter(|&i| rb.insert(&s.rows[i])).collect();
-        prop_assert_eq!(kept, dense::independent_rows(&d));
+        prop_assert_eq!(&kept, &dense::independent_rows(&d));
+        let mut ordered = RowBasis::with_column_order(&f.column_order());
+        let kept2: Vec<usize> = (0..c.m).filter(|&i| ordered.insert(&s.rows[i])).collect();
+        prop_assert_eq!(kept2, kept);
         // The block interface gives the same rank (one block per row).
         let mut offsets = vec![0];
         for g in &c.groups {

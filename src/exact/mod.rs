@@ -10,6 +10,7 @@
 
 pub mod dense;
 pub mod field;
+pub mod models;
 pub mod sparse;
 
 pub use field::{Fp, P};

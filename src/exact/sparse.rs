@@ -183,11 +183,18 @@ pub struct FpBlock {
     pub mat: DMatrix<Fp>,
 }
 
-/// Working block: row-major.
+/// Working block: row-major, never empty.
 struct Blk {
     groups: Vec<usize>,
     nrows: usize,
     data: Vec<Fp>,
+}
+
+impl Blk {
+    /// Its number of columns.
+    fn width(&self) -> usize {
+        self.data.len().checked_div(self.nrows).unwrap_or(0)
+    }
 }
 
 /// The eliminated rows of one group: pivots reduced to the identity on the group's columns.
@@ -303,10 +310,26 @@ impl Factor {
                     }
                 }
                 input += data.iter().filter(|x| !x.is_zero()).count();
+                // Groups in increasing order (the elimination's invariant).
+                let mut starts = Vec::with_capacity(b.groups.len());
+                let mut c = 0;
+                for &g in &b.groups {
+                    starts.push(c);
+                    c += sizes[g];
+                }
+                let mut order: Vec<usize> = (0..b.groups.len()).collect();
+                order.sort_by_key(|&k| b.groups[k]);
+                let mut sorted = Vec::with_capacity(m * n);
+                for i in 0..m {
+                    for &k in &order {
+                        let s0 = i * n + starts[k];
+                        sorted.extend_from_slice(&data[s0..s0 + sizes[b.groups[k]]]);
+                    }
+                }
                 Blk {
-                    groups: b.groups,
+                    groups: order.iter().map(|&k| b.groups[k]).collect(),
                     nrows: m,
-                    data,
+                    data: sorted,
                 }
             })
             .collect();
@@ -329,6 +352,7 @@ impl Factor {
         let mut stamp = vec![0usize; n];
         let mut clock = 0usize;
         let mut pos = vec![0usize; n];
+        let mut stamp_rescore = vec![0usize; n];
         let mut heap = BinaryHeap::with_capacity(n);
         let mut version = vec![0usize; n];
         for g in 0..n {
@@ -348,9 +372,21 @@ impl Factor {
             }
             done[g] = true;
             let mut members = pool.take(g);
+            // Neighbours to rescore: those on a narrow block of this front (a group reached
+            // only through a wide block keeps its score, a heuristic that keeps long
+            // carried rows from costing a pass over all their groups at every step).
+            clock += 1;
+            let rescore_mark = clock;
+            for b in &members {
+                if b.groups.len() <= WIDE_BLOCK {
+                    for &h in &b.groups {
+                        stamp_rescore[h] = rescore_mark;
+                    }
+                }
+            }
             // Narrow blocks first: their rows are preferred as pivots, so that the rows
             // left over (and the pivot rows kept) stay narrow.
-            members.sort_by_key(|b| b.groups.iter().map(|&h| sizes[h]).sum::<usize>());
+            members.sort_by_key(Blk::width);
             clock += 1;
             stamp[g] = clock;
             let mut others = Vec::new();
@@ -374,7 +410,7 @@ impl Factor {
             let mut front = vec![Fp::ZERO; nrows * width];
             let mut r0 = 0;
             for b in &members {
-                let bw: usize = b.groups.iter().map(|&h| sizes[h]).sum();
+                let bw = b.width();
                 for i in 0..b.nrows {
                     let src = &b.data[i * bw..(i + 1) * bw];
                     let dst = &mut front[(r0 + i) * width..(r0 + i + 1) * width];
@@ -467,6 +503,11 @@ impl Factor {
                     stats.dependent_rows += n_in - kept;
                     data.truncate(kept * bw);
                     if kept > 0 {
+                        if groups.len() <= WIDE_BLOCK {
+                            for &h in &groups {
+                                stamp_rescore[h] = rescore_mark;
+                            }
+                        }
                         pool.add(Blk {
                             groups,
                             nrows: kept,
@@ -499,7 +540,7 @@ impl Factor {
             drop(front);
             stats.factor_entries += rows.len();
             for &h in &others {
-                if !done[h] {
+                if !done[h] && stamp_rescore[h] == rescore_mark {
                     version[h] += 1;
                     let s = pool.score(h, &mut stamp, &mut clock);
                     heap.push(Reverse((s, h, version[h])));
@@ -541,6 +582,25 @@ impl Factor {
     /// Fill and front sizes of the factorization.
     pub fn stats(&self) -> FactorStats {
         self.stats
+    }
+
+    /// The columns in elimination order (group by group, each group's columns in order):
+    /// a fill-reducing order for [`RowBasis::with_column_order`].
+    pub fn column_order(&self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.ncols());
+        let mut seen = vec![false; self.sizes.len()];
+        for rec in &self.records {
+            seen[rec.group] = true;
+            let off = self.offsets[rec.group];
+            out.extend((off..off + self.sizes[rec.group]).map(|c| c as u32));
+        }
+        for (g, &s) in self.sizes.iter().enumerate() {
+            if !seen[g] {
+                let off = self.offsets[g];
+                out.extend((off..off + s).map(|c| c as u32));
+            }
+        }
+        out
     }
 
     /// The free columns (global indices), one per null-space vector, in the order of
@@ -670,6 +730,10 @@ struct Pool<'a> {
     wsum: Vec<usize>,
 }
 
+/// Blocks on more groups than this are "wide" (a carried row): the pivot order treats them
+/// approximately.
+const WIDE_BLOCK: usize = 64;
+
 /// Groups with more live blocks than this get the width bound instead of the exact union.
 const EXACT_SCORE_BLOCKS: usize = 32;
 
@@ -687,7 +751,7 @@ impl<'a> Pool<'a> {
     }
 
     fn width(&self, b: &Blk) -> usize {
-        b.groups.iter().map(|&h| self.sizes[h]).sum()
+        b.width()
     }
 
     fn add(&mut self, b: Blk) {
@@ -751,10 +815,9 @@ impl<'a> Pool<'a> {
         *clock += 1;
         let mark = *clock;
         stamp[g] = mark;
+        let mut u_groups: Vec<usize> = Vec::new();
         let mut uw = sg;
         let mut need = sg;
-        let mut width = sg;
-        let mut fill = 0;
         for &(_, nr, id) in &blocks {
             if need == 0 {
                 break;
@@ -764,38 +827,46 @@ impl<'a> Pool<'a> {
                     if stamp[h] != mark {
                         stamp[h] = mark;
                         uw += self.sizes[h];
+                        u_groups.push(h);
                     }
                 }
             }
             need = need.saturating_sub(nr);
         }
         let pivots = sg - need;
-        fill += pivots * uw;
-        // Rows left over gain the columns of U their block lacks; also count the width.
+        let mut fill = pivots * uw;
+        // Rows left over gain the columns of U their block lacks; the width counts the
+        // narrow blocks' groups exactly and the wide ones' by their width.
         let mut left = pivots;
         *clock += 1;
         let wmark = *clock;
         stamp[g] = wmark;
-        for &(_, nr, id) in &blocks {
+        let mut width = uw;
+        for &(bw, nr, id) in &blocks {
             let used = left.min(nr);
             left -= used;
             let rest = nr - used;
-            if let Some(b) = &self.store[id] {
-                let mut inside = sg;
+            let Some(b) = &self.store[id] else { continue };
+            let mut inside = sg;
+            if b.groups.len() <= WIDE_BLOCK {
                 for &h in &b.groups {
                     if stamp[h] == mark {
                         inside += self.sizes[h];
-                    }
-                    if stamp[h] != wmark && stamp[h] != mark {
+                    } else if stamp[h] != wmark {
                         stamp[h] = wmark;
                         width += self.sizes[h];
                     }
                 }
-                fill += rest * uw.saturating_sub(inside);
+            } else {
+                for &h in &u_groups {
+                    if b.groups.binary_search(&h).is_ok() {
+                        inside += self.sizes[h];
+                    }
+                }
+                width += bw - inside;
             }
+            fill += rest * uw.saturating_sub(inside);
         }
-        // Groups of U were not counted in the width pass (their stamp is `mark`).
-        width += uw - sg;
         (fill, width)
     }
 }
@@ -846,40 +917,63 @@ fn echelon(m: &mut [Fp], w: usize) -> usize {
     r
 }
 
-/// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows), by factoring the
-/// transpose.
-pub fn left_null_space(a: &SparseMatrix) -> Vec<SparseRow> {
-    Factor::new(&a.transpose()).null_space()
-}
-
-/// A row that the others make redundant, with the rows taking part in its dependency.
+/// A row that the earlier rows make redundant, with the rows taking part in its dependency.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DependentRow {
     /// The row.
     pub row: usize,
-    /// Rows (this one included) with a nonzero coefficient in the left null vector that
-    /// expresses the dependency, increasing.
+    /// Rows with a nonzero coefficient in the left null vector that expresses the
+    /// dependency (this row, coefficient one, and earlier rows), increasing.
     pub support: Vec<usize>,
+    /// That left null vector over the rows: `Σ y_i row_i = 0`.
+    pub vector: SparseRow,
 }
 
-/// A maximal set of dependent rows: removing all of them keeps the rank (the rows left are
-/// a basis of the row space), each with the support of a left null vector in which it has
-/// coefficient one and the other listed rows zero. The set follows the elimination order,
-/// not the row order; for the greedy row-order answer use [`RowBasis`].
+impl Factor {
+    /// The rows of `a` (the matrix this factor was computed from) that are combinations of
+    /// the rows before them, greedy in row order, each with its dependency. Removing them
+    /// all keeps the rank; their vectors are a basis of the left null space. Computed with
+    /// a tracked [`RowBasis`] in this factor's column order.
+    pub fn dependent_rows(&self, a: &SparseMatrix) -> Vec<DependentRow> {
+        if self.rank == a.nrows() {
+            return Vec::new();
+        }
+        let mut basis = RowBasis::with_column_order(&self.column_order()).with_tracking();
+        let mut out = Vec::new();
+        for (i, r) in a.rows.iter().enumerate() {
+            if !basis.insert(r) {
+                let vector = basis.last_dependency().cloned().unwrap_or_default();
+                out.push(DependentRow {
+                    row: i,
+                    support: vector.iter().map(|&(k, _)| k as usize).collect(),
+                    vector,
+                });
+            }
+        }
+        out
+    }
+
+    /// A basis of the left null space {y : yᵀ A = 0} of `a` (the matrix this factor was
+    /// computed from), as vectors over the rows: the dependencies of
+    /// [`Factor::dependent_rows`]. Empty at once when the rows are independent.
+    pub fn left_null_space(&self, a: &SparseMatrix) -> Vec<SparseRow> {
+        self.dependent_rows(a)
+            .into_iter()
+            .map(|d| d.vector)
+            .collect()
+    }
+}
+
+/// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows); see
+/// [`Factor::left_null_space`].
+pub fn left_null_space(a: &SparseMatrix) -> Vec<SparseRow> {
+    Factor::new(a).left_null_space(a)
+}
+
+/// The rows dependent on the rows before them, with their dependencies; see
+/// [`Factor::dependent_rows`].
 pub fn dependent_rows(a: &SparseMatrix) -> Vec<DependentRow> {
-    let f = Factor::new(&a.transpose());
-    let free = f.free_columns();
-    let mut out: Vec<DependentRow> = f
-        .null_space()
-        .into_iter()
-        .zip(free)
-        .map(|(y, r)| DependentRow {
-            row: r as usize,
-            support: y.iter().map(|&(i, _)| i as usize).collect(),
-        })
-        .collect();
-    out.sort_by_key(|d| d.row);
-    out
+    Factor::new(a).dependent_rows(a)
 }
 
 /// An incremental row basis in echelon form with respect to the column order: insert
@@ -891,12 +985,23 @@ pub fn dependent_rows(a: &SparseMatrix) -> Vec<DependentRow> {
 #[derive(Clone, Debug)]
 pub struct RowBasis {
     ncols: usize,
+    /// Position of each column in the pivot order (empty: the identity).
+    rank_of: Vec<u32>,
     /// The kept rows, reduced: leading entry 1, all other columns after it.
     rows: Vec<SparseRow>,
     /// The kept row leading at each column.
     pivot: Vec<u32>,
     acc: Vec<Fp>,
     mark: Vec<bool>,
+    /// Rows inserted so far (the next row's id).
+    inserted: u32,
+    /// Whether combinations are tracked ([`RowBasis::with_tracking`]).
+    track: bool,
+    /// Per kept row, its combination of the inserted rows (by id).
+    combos: Vec<SparseRow>,
+    cacc: Vec<Fp>,
+    cmark: Vec<bool>,
+    last_dependency: Option<SparseRow>,
 }
 
 const NO_PIVOT: u32 = u32::MAX;
@@ -906,11 +1011,57 @@ impl RowBasis {
     pub fn new(ncols: usize) -> RowBasis {
         RowBasis {
             ncols,
+            rank_of: Vec::new(),
             rows: Vec::new(),
             pivot: vec![NO_PIVOT; ncols],
             acc: vec![Fp::ZERO; ncols],
             mark: vec![false; ncols],
+            inserted: 0,
+            track: false,
+            combos: Vec::new(),
+            cacc: Vec::new(),
+            cmark: Vec::new(),
+            last_dependency: None,
         }
+    }
+
+    /// Track, for every kept row, which inserted rows it combines, so that a dependent row
+    /// comes with its dependency ([`RowBasis::last_dependency`]). Costs memory and time in
+    /// proportion to those combinations (the inverse of the triangular factor, denser than
+    /// the kept rows); call on an empty basis.
+    pub fn with_tracking(mut self) -> RowBasis {
+        self.track = true;
+        self
+    }
+
+    /// With tracking, after an [`insert`](RowBasis::insert) that returned `false`: the left
+    /// null vector over the inserted rows (by insertion index, from 0) in which the last row
+    /// has coefficient one and only rows inserted before it take part: `Σ y_i row_i = 0`.
+    /// `None` after a kept row or without tracking.
+    pub fn last_dependency(&self) -> Option<&SparseRow> {
+        self.last_dependency.as_ref()
+    }
+
+    /// An empty basis whose pivots follow the given column order (`order[k]` is the k-th
+    /// column; a permutation of `0..ncols`), for example [`Factor::column_order`]: rows
+    /// are then reduced as the factorization would eliminate them, which keeps the kept
+    /// rows short where the natural order fills in (the hub of a star numbered first).
+    ///
+    /// # Panics
+    /// If `order` is not a permutation (a caller's error).
+    pub fn with_column_order(order: &[u32]) -> RowBasis {
+        let ncols = order.len();
+        let mut rank_of = vec![u32::MAX; ncols];
+        for (k, &c) in order.iter().enumerate() {
+            assert!(
+                (c as usize) < ncols && rank_of[c as usize] == u32::MAX,
+                "column order is not a permutation"
+            );
+            rank_of[c as usize] = k as u32;
+        }
+        let mut b = RowBasis::new(ncols);
+        b.rank_of = rank_of;
+        b
     }
 
     /// The number of rows kept (the rank of the rows inserted so far).
@@ -934,9 +1085,28 @@ impl RowBasis {
     /// # Panics
     /// If a column is not below `ncols` (a caller's indexing error).
     pub fn insert(&mut self, row: &[(u32, Fp)]) -> bool {
+        let id = self.inserted;
+        self.inserted += 1;
+        self.last_dependency = None;
+        let mut ctouched: Vec<u32> = Vec::new();
+        if self.track {
+            if self.cacc.len() <= id as usize {
+                let n = (2 * self.cacc.len()).max(id as usize + 1);
+                self.cacc.resize(n, Fp::ZERO);
+                self.cmark.resize(n, false);
+            }
+            self.cacc[id as usize] = Fp::ONE;
+            self.cmark[id as usize] = true;
+            ctouched.push(id);
+        }
         let mut heap: BinaryHeap<Reverse<u32>> = BinaryHeap::with_capacity(row.len() * 2);
         let mut touched: Vec<u32> = Vec::with_capacity(row.len() * 2);
         for &(c, v) in row {
+            let c = if self.rank_of.is_empty() {
+                c
+            } else {
+                self.rank_of[c as usize]
+            };
             let cu = c as usize;
             self.acc[cu] += v;
             if !self.mark[cu] {
@@ -966,8 +1136,27 @@ impl RowBasis {
                 }
                 self.pivot[c as usize] = self.rows.len() as u32;
                 self.rows.push(new_row);
+                if self.track {
+                    ctouched.sort_unstable();
+                    let combo = ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize] * inv))
+                        .filter(|e| !e.1.is_zero())
+                        .collect();
+                    self.combos.push(combo);
+                }
                 kept = true;
                 break;
+            }
+            if self.track {
+                for &(i, w) in &self.combos[p as usize] {
+                    let iu = i as usize;
+                    self.cacc[iu] -= v * w;
+                    if !self.cmark[iu] {
+                        self.cmark[iu] = true;
+                        ctouched.push(i);
+                    }
+                }
             }
             let prow = &self.rows[p as usize];
             for &(k, w) in &prow[1..] {
@@ -985,7 +1174,28 @@ impl RowBasis {
             self.acc[c as usize] = Fp::ZERO;
             self.mark[c as usize] = false;
         }
+        if self.track {
+            ctouched.sort_unstable();
+            if !kept {
+                self.last_dependency = Some(
+                    ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize]))
+                        .filter(|e| !e.1.is_zero())
+                        .collect(),
+                );
+            }
+            for i in ctouched {
+                self.cacc[i as usize] = Fp::ZERO;
+                self.cmark[i as usize] = false;
+            }
+        }
         kept
+    }
+
+    /// Entries stored in the tracked combinations.
+    pub fn combination_entries(&self) -> usize {
+        self.combos.iter().map(|r| r.len()).sum()
     }
 }
 
@@ -1048,6 +1258,11 @@ mod tests {
         }
         let deps = dependent_rows(a);
         assert_eq!(deps.len(), a.nrows() - r);
+        let greedy = dense::independent_rows(&d);
+        for dep in &deps {
+            assert!(!greedy.contains(&dep.row));
+            assert_eq!(dep.support.last(), Some(&dep.row));
+        }
         let keep: Vec<usize> = (0..a.nrows())
             .filter(|i| !deps.iter().any(|d| d.row == *i))
             .collect();
@@ -1058,6 +1273,24 @@ mod tests {
             .filter(|&i| basis.insert(&a.rows[i]))
             .collect();
         assert_eq!(kept, dense::independent_rows(&d));
+        let mut ordered = RowBasis::with_column_order(&f.column_order());
+        let kept2: Vec<usize> = (0..a.nrows())
+            .filter(|&i| ordered.insert(&a.rows[i]))
+            .collect();
+        assert_eq!(kept2, kept);
+        let mut tracked = RowBasis::with_column_order(&f.column_order()).with_tracking();
+        for i in 0..a.nrows() {
+            let k = tracked.insert(&a.rows[i]);
+            assert_eq!(k, kept.contains(&i));
+            match tracked.last_dependency() {
+                Some(y) => {
+                    assert!(!k);
+                    assert_eq!(y.last(), Some(&(i as u32, Fp::ONE)));
+                    assert!(a.left_mul_sparse(y).iter().all(|v| v.is_zero()));
+                }
+                None => assert!(k),
+            }
+        }
     }
 
     #[test]

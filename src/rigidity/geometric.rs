@@ -135,6 +135,9 @@ pub struct Numeric {
     /// Warning when a decision lies within a factor 100 of the threshold.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// At a random realization: the rank was decided exactly (over GF(2^61 − 1)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exact: Option<String>,
 }
 
 /// The result of [`analyze`].
@@ -539,11 +542,16 @@ pub fn analyze(m: &Mechanism, opts: &GeometricOptions) -> Result<GeometricReport
         None => motion::configure(&free).unwrap_or_default(),
     };
     let full_twists: Vec<DMatrix<f64>> = full_models.into_iter().map(|jm| jm.twists).collect();
+    let exact_rank = real
+        .used
+        .seed
+        .map(|seed| crate::exact::models::jacobian_rank(m, seed).0);
     Ok(analyze_models(
         m,
         &real.models,
         &full_twists,
         real.used,
+        exact_rank,
         opts.check_finite,
     ))
 }
@@ -577,6 +585,7 @@ fn analyze_models(
     models: &[JointModel],
     full_twists: &[DMatrix<f64>],
     used: GeometryUsed,
+    exact_rank: Option<usize>,
     check_finite: bool,
 ) -> GeometricReport {
     let geometry = match used.seed {
@@ -700,9 +709,40 @@ fn analyze_models(
         });
     }
     let smax = sigma_max(&sizes, &offsets, &blocks);
-    let (tol, abs_tol) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
-    let elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
-    let rank = elim.rank;
+    let (mut tol, mut abs_tol) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
+    let mut elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+    // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating point
+    // cannot tell a large, badly conditioned full-rank system from a deficient one at every
+    // size and seed. The pivoted elimination (which gives the motions and self-stresses) is
+    // then run at a threshold that keeps exactly that many pivots.
+    let mut exact_note = None;
+    if let Some(target) = exact_rank {
+        let mut tries = 0;
+        while elim.rank != target && tries < 16 {
+            tries += 1;
+            abs_tol = if elim.rank > target {
+                elim.kept_min * (1.0 + 1e-9)
+            } else {
+                elim.dropped_max * (1.0 - 1e-9)
+            };
+            elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+        }
+        tol = abs_tol / smax.max(f64::MIN_POSITIVE);
+        exact_note = Some(if elim.rank == target {
+            "rank decided exactly over GF(2^61 - 1) at a random realization".to_string()
+        } else {
+            format!(
+                "rank decided exactly over GF(2^61 - 1): {target}; the floating-point motions \
+                 below come from a rank-{} elimination and may be approximate",
+                elim.rank
+            )
+        });
+    }
+    let rank = if let Some(target) = exact_rank {
+        target
+    } else {
+        elim.rank
+    };
     let fully: usize = (0..nb)
         .filter(|&x| x != frame)
         .map(|x| iso[x].ncols())
@@ -1085,8 +1125,9 @@ fn analyze_models(
     let smallest_kept = elim.kept_min.is_finite().then(|| rel(elim.kept_min));
     let largest_dropped = (elim.dropped_max > 0.0).then(|| rel(elim.dropped_max));
     let mut warning = None;
-    if smallest_kept.is_some_and(|k| k < tol * 1e2)
-        || largest_dropped.is_some_and(|x| x > tol / 1e2)
+    if exact_note.is_none()
+        && (smallest_kept.is_some_and(|k| k < tol * 1e2)
+            || largest_dropped.is_some_and(|x| x > tol / 1e2))
     {
         warning = Some(format!(
             "ill-conditioned: a rank decision lies within a factor 100 of the threshold {:.1e} \
@@ -1142,6 +1183,7 @@ fn analyze_models(
             smallest_kept: smallest_kept.map(sig),
             largest_dropped: largest_dropped.map(sig),
             warning,
+            exact: exact_note,
         },
     }
 }

@@ -365,10 +365,19 @@ fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis
     let mut unchecked = Vec::new();
     let mut geometry = None;
     let mut set_aside = vec![0; m.joints.len()];
+    // Joint motions at the file's configuration, for the spatiality of group types.
+    let mut twists: Option<Vec<nalgebra::DMatrix<f64>>> = None;
     let mut dec = if opts.count_only {
         count::decompose(m, &eqs, &u)
     } else {
         let (geoms, used) = motion::geometries(m, opts.geometry, opts.precision)?;
+        if used.is_file() && m.space == crate::mechanism::Space::Spatial {
+            twists = Some(
+                (0..m.joints.len())
+                    .map(|j| motion::pair_model(m, j, &geoms[j], 0).twists)
+                    .collect(),
+            );
+        }
         let r = rank::check(m, &geoms, &used, &mut eqs, &mut u);
         geometry = Some(used);
         isolated = r.isolated;
@@ -388,7 +397,16 @@ fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis
         }
     };
     let mut a = build(
-        m, &eqs, &dec, groups, unsolved, isolated, redundant, opts, lib,
+        m,
+        &eqs,
+        &dec,
+        groups,
+        unsolved,
+        isolated,
+        redundant,
+        opts,
+        lib,
+        twists.as_deref(),
     );
     a.unchecked = unchecked;
     a.geometry = geometry;
@@ -407,6 +425,7 @@ fn build(
     redundant: Vec<Redundancy>,
     opts: &Options,
     lib: &Library,
+    twists: Option<&[nalgebra::DMatrix<f64>]>,
 ) -> Analysis {
     let nb = eqs.nodes;
     let id = |b: usize| m.body_id(b).to_string();
@@ -463,10 +482,13 @@ fn build(
         let mut to: Vec<(usize, usize, usize)> = Vec::new();
         let mut kinds: Vec<(JointType, usize)> = Vec::new();
         let mut inputs = 0u32;
-        let mut add_kind = |jt: JointType, n: usize| {
+        let mut active_joints: Vec<usize> = Vec::new();
+        let mut add_kind = |ji: usize, n: usize| {
             if n == 0 {
                 return;
             }
+            active_joints.push(ji);
+            let jt = m.joints[ji].kind;
             match kinds.iter_mut().find(|(k, _)| *k == jt) {
                 Some((_, c)) => *c += n,
                 None => kinds.push((jt, n)),
@@ -508,7 +530,7 @@ fn build(
                     false
                 };
                 if active {
-                    add_kind(m.joints[eqs.joint[e]].kind, 1);
+                    add_kind(eqs.joint[e], 1);
                     inputs += eqs.driven[e];
                 }
             }
@@ -519,7 +541,7 @@ fn build(
         elements.sort_unstable();
         elements.dedup();
         for v in elements {
-            let jt = m.joints[eqs.element_joint(v)].kind;
+            let jt = eqs.element_joint(v);
             let mut inside: Vec<(usize, usize)> = Vec::new();
             let mut before: Vec<(usize, usize)> = Vec::new();
             let mut after: Vec<(usize, usize)> = Vec::new();
@@ -572,7 +594,19 @@ fn build(
         for (k, n) in &kinds {
             let _ = write!(kind, "{n}{}", k.code());
         }
-        kind.push_str(m.space.suffix());
+        // A spatial group that closes a loop whose joints move in a space of 3 dimensions at
+        // the file's configuration (a planar or spherical loop written in space) is typed by
+        // the spatiality it really has.
+        let pairs: usize = kinds.iter().map(|&(_, n)| n).sum();
+        let real = grp.bodies.iter().filter(|&&x| !eqs.is_element(x)).count();
+        let planar_here = twists.is_some_and(|tw| {
+            pairs > real && {
+                active_joints.sort_unstable();
+                active_joints.dedup();
+                spatiality(active_joints.iter().map(|&j| &tw[j])) <= 3
+            }
+        });
+        kind.push_str(if planar_here { "2D" } else { m.space.suffix() });
         (
             kind,
             render(&mut from),
@@ -598,9 +632,9 @@ fn build(
         }
     }
     let mut deps_shown: Vec<Vec<usize>> = Vec::with_capacity(raw.len());
-    for r in &raw {
+    for grp in &raw {
         let mut d: Vec<usize> = Vec::new();
-        for &x in &r.deps {
+        for &x in &grp.deps {
             if shown[x] != usize::MAX {
                 d.push(shown[x]);
             } else {
@@ -724,6 +758,18 @@ fn build(
         notes,
         set_aside: vec![0; m.joints.len()],
     }
+}
+
+/// The dimension of the span of joint motions (columns of `twists`, normalized), at a relative
+/// tolerance of 1e-6: 3 for a planar or spherical loop, 6 for a general spatial one.
+fn spatiality<'a>(twists: impl Iterator<Item = &'a nalgebra::DMatrix<f64>>) -> usize {
+    let cols: Vec<nalgebra::DVector<f64>> = twists
+        .flat_map(|t| t.column_iter().map(|c| c.normalize()).collect::<Vec<_>>())
+        .collect();
+    if cols.is_empty() {
+        return 0;
+    }
+    nalgebra::DMatrix::from_columns(&cols).rank(1e-6)
 }
 
 /// The over- and under-determined parts in words and lists.
