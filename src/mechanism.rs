@@ -309,20 +309,24 @@ impl Mechanism {
     /// Replace every joint's driven DOF by the placement `spec`.
     pub fn apply_inputs(&mut self, spec: &InputSpec) -> Result<(), InputSpecError> {
         let resolved = spec.resolve(self)?;
-        for j in &mut self.joints {
-            j.driven = 0;
-        }
+        // Summed in 64 bits: `A:4294967295,A:2` must not wrap a u32 to 1.
+        let mut driven = vec![0u64; self.joints.len()];
         for (j, n) in resolved {
-            self.joints[j].driven += n;
+            driven[j] = driven[j].saturating_add(u64::from(n));
         }
-        for j in &self.joints {
-            if j.driven > j.grade() * j.pairs() {
+        for (j, &d) in self.joints.iter().zip(&driven) {
+            let max = j.grade().saturating_mul(j.pairs());
+            if d > u64::from(max) {
                 return Err(InputSpecError::AboveGrade {
                     joint: j.id.clone(),
-                    driven: j.driven,
-                    grade: j.grade() * j.pairs(),
+                    driven: d,
+                    grade: max,
                 });
             }
+        }
+        for (j, d) in self.joints.iter_mut().zip(driven) {
+            // At most the grade times the pairs (checked above), so it fits.
+            j.driven = u32::try_from(d).unwrap_or(u32::MAX);
         }
         Ok(())
     }
@@ -429,14 +433,28 @@ impl Mechanism {
                     .then_with(|| joints[a].id.cmp(&joints[b].id))
             });
         }
+        // A suffixed id may be another joint's own id (the second `[1, 2]` and a `[1, "2#2"]`
+        // both give `1-2#2`): the suffix then skips to the next free number, so that ids stay
+        // unique (the reader reports that case as an error before calling this).
         let mut renamed = false;
+        let mut used: Option<std::collections::HashSet<String>> = None;
         let mut k = 0;
         while k < order.len() {
             let mut n = 1;
+            let mut suffix = 1;
             while k + n < order.len() && joints[order[k + n]].id == joints[order[k]].id {
+                let used =
+                    used.get_or_insert_with(|| joints.iter().map(|j| j.id.clone()).collect());
                 let j = &mut joints[order[k + n]];
                 n += 1;
-                j.id = format!("{}#{n}", j.id);
+                suffix = suffix.max(n);
+                let mut id = format!("{}#{suffix}", j.id);
+                while used.contains(&id) {
+                    suffix += 1;
+                    id = format!("{}#{suffix}", j.id);
+                }
+                used.insert(id.clone());
+                j.id = id;
                 renamed = true;
             }
             k += n;
@@ -506,8 +524,8 @@ pub enum InputSpecError {
     AboveGrade {
         /// Joint id.
         joint: String,
-        /// Requested driven DOF.
-        driven: u32,
+        /// Requested driven DOF (the sum of the spec's entries for this joint).
+        driven: u64,
         /// Its grade.
         grade: u32,
     },

@@ -283,7 +283,8 @@ pub struct Summary {
     pub drivable: usize,
     /// Binary expansions of the multiple joints explored.
     pub expansions: usize,
-    /// Binary expansions there are (saturating).
+    /// Binary expansions there are (saturating: `u64::MAX` means more than 10^19, and the
+    /// notes say so in words).
     pub expansions_total: u64,
     /// Count-valid placements examined by the full analysis.
     pub count_valid: usize,
@@ -364,7 +365,7 @@ pub fn enumerate(
         summary.notes.push(format!(
             "explored {} of {} binary expansions of the multiple joints (raise --max-expansions)",
             exps.len(),
-            total_exps
+            crate::budget::count_in_words(total_exps)
         ));
     }
 
@@ -576,7 +577,7 @@ impl Rules {
                 if keep[j] > max {
                     return Err(InputSpecError::AboveGrade {
                         joint: joint.id.clone(),
-                        driven: keep[j],
+                        driven: u64::from(keep[j]),
                         grade: max,
                     }
                     .into());

@@ -79,8 +79,15 @@ impl StructureArgs {
         match &self.library {
             None => Ok(Library::builtin()),
             Some(path) => {
-                let text = std::fs::read_to_string(path).map_err(|e| {
-                    Failure::Input(format!("error: cannot read library `{path}`: {e}"))
+                let what = format!("library `{path}`");
+                let bytes = super::budget()
+                    .read_file(std::path::Path::new(path))
+                    .map_err(|e| super::input::read_failure(&what, e))?;
+                let text = String::from_utf8(bytes).map_err(|e| {
+                    Failure::Input(format!(
+                        "error: cannot read {what}: not UTF-8 text (invalid byte at offset {})",
+                        e.utf8_error().valid_up_to()
+                    ))
                 })?;
                 Library::from_toml(&text)
                     .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(path, &e)))

@@ -69,6 +69,17 @@ pub enum VariantArg {
 
 /// Run a generator and print the TOML file.
 pub fn run(family: &Family) -> Result<(), Failure> {
+    let size = match *family {
+        Family::Assur { class, groups, .. } => generate::Size::Assur { class, groups },
+        Family::Random { bodies, planar, .. } => generate::Size::Random { bodies, planar },
+        Family::Stewart { stages } => generate::Size::Stewart { stages },
+    };
+    let joints = generate::estimated_joints(size);
+    super::budget()
+        .check_memory(joints.saturating_mul(generate::BYTES_PER_JOINT), || {
+            format!("generating {joints} joints")
+        })
+        .map_err(|e| super::budget_failure(&e))?;
     let m = match *family {
         Family::Assur {
             class,

@@ -2,8 +2,8 @@
 
 use super::Failure;
 use clap::{Args, ValueEnum};
+use mbsa::budget::ReadError;
 use mbsa::format::Format;
-use std::io::Read;
 use std::path::Path;
 
 /// The FILE argument shared by the analysis commands.
@@ -57,7 +57,7 @@ pub fn load_path(
         };
         Format::sniff(valid)
     });
-    mbsa::format::load_bytes(&name, &bytes, format)
+    mbsa::format::load_bytes_within(&name, &bytes, format, &super::budget())
         .map_err(|e| Failure::Input(mbsa::diagnostic::render(&e, super::color_stderr())))
 }
 
@@ -67,10 +67,9 @@ fn read(
     input_format: Option<InputFormat>,
 ) -> Result<(String, Vec<u8>, Option<Format>), Failure> {
     if file == "-" {
-        let mut buf = Vec::new();
-        std::io::stdin()
-            .read_to_end(&mut buf)
-            .map_err(|e| Failure::Input(format!("error: cannot read standard input: {e}")))?;
+        let buf = super::budget()
+            .read_to_end(std::io::stdin().lock(), "standard input")
+            .map_err(|e| read_failure("standard input", e))?;
         return Ok(("<stdin>".into(), buf, input_format.map(Into::into)));
     }
     if let Some(name) = file.strip_prefix('@') {
@@ -97,10 +96,19 @@ fn read(
         };
     }
     let path = Path::new(file);
-    let bytes = std::fs::read(path)
-        .map_err(|e| Failure::Input(format!("error: cannot read `{file}`: {e}")))?;
+    let bytes = super::budget()
+        .read_file(path)
+        .map_err(|e| read_failure(&format!("`{file}`"), e))?;
     let format = input_format
         .map(Into::into)
         .or_else(|| Format::from_path(path));
     Ok((file.to_string(), bytes, format))
+}
+
+/// Render a failed bounded read: the operating system's error, or the input limit.
+pub fn read_failure(what: &str, e: ReadError) -> Failure {
+    match e {
+        ReadError::Io(e) => Failure::Input(format!("error: cannot read {what}: {e}")),
+        ReadError::TooLarge(e) => super::budget_failure(&e),
+    }
 }

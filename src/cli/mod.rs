@@ -10,6 +10,7 @@ mod position;
 mod transform;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use mbsa::budget::Budget;
 use std::io::{IsTerminal, Write};
 use std::process::ExitCode;
 
@@ -25,6 +26,61 @@ pub use input::{FileArg, load};
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
+    #[command(flatten)]
+    budget: BudgetArgs,
+}
+
+/// The budget flags, accepted by every command (`mbsa::budget`, docs/reliability.md).
+#[derive(clap::Args, Debug, Clone)]
+pub struct BudgetArgs {
+    /// Scale every limit of the budget (input size, work, memory) by X, e.g. `--budget 10`.
+    #[arg(long, global = true, value_name = "X", value_parser = parse_scale)]
+    budget: Option<f64>,
+    /// Largest input file accepted, in bytes (default 268435456 = 256 MiB).
+    #[arg(long, global = true, value_name = "N")]
+    max_input_bytes: Option<u64>,
+    /// Most work units one analysis may spend (default 10^11, minutes of work).
+    #[arg(long, global = true, value_name = "N")]
+    max_work: Option<u64>,
+    /// Largest memory estimate one step may allocate, in bytes (default 4294967296 = 4 GiB).
+    #[arg(long, global = true, value_name = "N")]
+    max_memory: Option<u64>,
+}
+
+fn parse_scale(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+        _ => Err(format!("`{s}` is not a positive number")),
+    }
+}
+
+impl BudgetArgs {
+    /// The budget the flags give.
+    pub fn budget(&self) -> Budget {
+        let mut b = Budget::DEFAULT.scaled(self.budget.unwrap_or(1.0));
+        if let Some(n) = self.max_input_bytes {
+            b.max_input_bytes = n;
+        }
+        if let Some(n) = self.max_work {
+            b.max_work = n;
+        }
+        if let Some(n) = self.max_memory {
+            b.max_memory_bytes = n;
+        }
+        b
+    }
+}
+
+static BUDGET: std::sync::OnceLock<Budget> = std::sync::OnceLock::new();
+
+/// The budget of this run (the flags', else the default).
+pub fn budget() -> Budget {
+    BUDGET.get().copied().unwrap_or_default()
+}
+
+/// Render a budget error (exit code 2).
+pub fn budget_failure(e: &mbsa::budget::BudgetExceeded) -> Failure {
+    Failure::Input(format!("error: {e}\n  help: {}", e.help()))
 }
 
 #[derive(Subcommand, Debug)]
@@ -230,6 +286,7 @@ pub fn main() -> ExitCode {
 }
 
 fn run(cli: Cli) -> Result<(), Failure> {
+    let _ = BUDGET.set(cli.budget.budget());
     match cli.command {
         Command::Analyze {
             file,

@@ -34,7 +34,8 @@ pub enum ErrorKind {
     MissingField,
     /// A value of the wrong type (a string where a number is expected, ...).
     WrongType,
-    /// A number too large for the reader (integer beyond 64 bits).
+    /// A number too large for the reader (an integer beyond 64 bits, a geometry number beyond
+    /// 1e100 in magnitude).
     NumberOutOfRange,
     /// An empty string used as an id.
     EmptyId,
@@ -75,6 +76,9 @@ pub enum ErrorKind {
     /// Two points with the same id.
     DuplicatePointId,
 }
+
+/// Most source lines a label's span covers in a rendered snippet; longer spans are cut.
+pub(crate) const MAX_SPAN_LINES: usize = 3;
 
 /// One labelled span of the source.
 #[derive(Clone, Debug)]
@@ -124,6 +128,14 @@ impl LoadError {
             // Keep spans on char boundaries inside the text so that rendering never fails.
             l.span.start = floor_boundary(text, l.span.start.min(text_len));
             l.span.end = floor_boundary(text, l.span.end.clamp(l.span.start, text_len));
+            // A span over a long value (a 200,000-line array) would echo every line: keep
+            // its first lines only.
+            if let Some((cut, _)) = text[l.span.start..l.span.end]
+                .match_indices('\n')
+                .nth(MAX_SPAN_LINES - 1)
+            {
+                l.span.end = l.span.start + cut;
+            }
         }
         self.0.line_col = self.0.labels.first().map(|l| line_col(text, l.span.start));
         self.0.source = Some(NamedSource::new(name, text.to_string()));

@@ -12,12 +12,13 @@ mod tree;
 pub use error::{ErrorKind, LoadError};
 pub use schema::schema;
 
+use crate::budget::Budget;
 use crate::mechanism::Mechanism;
 use error::Label;
 use std::path::Path;
 
-/// Largest input accepted, in bytes.
-pub const MAX_INPUT_BYTES: usize = 256 * 1024 * 1024;
+/// Largest input accepted by default, in bytes ([`crate::budget::Budget::DEFAULT`]).
+pub const MAX_INPUT_BYTES: usize = crate::budget::Budget::DEFAULT.max_input_bytes as usize;
 
 /// An input format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
@@ -94,20 +95,36 @@ impl Format {
 }
 
 /// Read a mechanism from text. `source_name` (a path, `<stdin>`, ...) names the file in
-/// diagnostics and gives the default `name` (its file stem).
+/// diagnostics and gives the default `name` (its file stem). Text over the default input
+/// limit ([`MAX_INPUT_BYTES`]) is refused.
 pub fn load(source_name: &str, text: &str, format: Format) -> Result<Mechanism, LoadError> {
+    if text.len() > MAX_INPUT_BYTES {
+        return Err(too_large(text.len() as u64, &Budget::DEFAULT).with_source(source_name, ""));
+    }
     load_inner(source_name, text, format).map_err(|e| e.with_source(source_name, text))
 }
 
 /// Read a mechanism from raw bytes: like [`load`], after checking the size limit
 /// ([`MAX_INPUT_BYTES`]) and that the bytes are UTF-8 (a leading byte-order mark is skipped).
 pub fn load_bytes(source_name: &str, bytes: &[u8], format: Format) -> Result<Mechanism, LoadError> {
-    if bytes.len() > MAX_INPUT_BYTES {
-        return Err(too_large(bytes.len()).with_source(source_name, ""));
+    load_bytes_within(source_name, bytes, format, &Budget::DEFAULT)
+}
+
+/// [`load_bytes`] with the input limit of `budget` instead of the default.
+pub fn load_bytes_within(
+    source_name: &str,
+    bytes: &[u8],
+    format: Format,
+    budget: &Budget,
+) -> Result<Mechanism, LoadError> {
+    if bytes.len() as u64 > budget.max_input_bytes {
+        return Err(too_large(bytes.len() as u64, budget).with_source(source_name, ""));
     }
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     match std::str::from_utf8(bytes) {
-        Ok(text) => load(source_name, text, format),
+        Ok(text) => {
+            load_inner(source_name, text, format).map_err(|e| e.with_source(source_name, text))
+        }
         Err(e) => {
             let valid = e.valid_up_to();
             // Show the text with the bad bytes replaced (U+FFFD, same offsets before them).
@@ -129,23 +146,26 @@ pub fn load_bytes(source_name: &str, bytes: &[u8], format: Format) -> Result<Mec
     }
 }
 
-fn too_large(len: usize) -> LoadError {
+fn too_large(len: u64, budget: &Budget) -> LoadError {
+    let e = budget
+        .check_input(len, || "the file".to_string())
+        .err()
+        .unwrap_or(crate::budget::BudgetExceeded {
+            limit: crate::budget::Limit::InputBytes,
+            what: "the file".into(),
+            needed: len,
+            at_least: false,
+            allowed: budget.max_input_bytes,
+        });
     LoadError::new(
         ErrorKind::TooLarge,
-        format!(
-            "the file is {} MiB; the reader accepts at most {} MiB",
-            len / (1024 * 1024),
-            MAX_INPUT_BYTES / (1024 * 1024)
-        ),
+        e.to_string(),
         Vec::new(),
-        None,
+        Some(e.help()),
     )
 }
 
 fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism, LoadError> {
-    if text.len() > MAX_INPUT_BYTES {
-        return Err(too_large(text.len()));
-    }
     if text.trim().is_empty() {
         return Err(model::empty_document());
     }

@@ -113,7 +113,12 @@ fn as_int(node: &Node, what: &str) -> Result<i64, LoadError> {
     }
 }
 
-/// A finite number (integers accepted).
+/// Largest magnitude of a geometry number. Beyond it the analyses would overflow: the norm
+/// of `[1e308, 1e308, 1e308]` is infinite, and products of coordinates (moments, squared
+/// norms, elimination) must stay finite.
+pub(crate) const MAX_GEOMETRY_NUMBER: f64 = 1e100;
+
+/// A finite geometry number (integers accepted), at most [`MAX_GEOMETRY_NUMBER`] in magnitude.
 fn as_number(node: &Node, what: &str) -> Result<f64, LoadError> {
     let x = match &node.value {
         Value::Int(i) => *i as f64,
@@ -128,6 +133,18 @@ fn as_number(node: &Node, what: &str) -> Result<f64, LoadError> {
             &node.span,
             "not finite",
             Some("geometry takes ordinary numbers; NaN and infinity have no position".into()),
+        ));
+    }
+    if x.abs() > MAX_GEOMETRY_NUMBER {
+        return Err(err(
+            ErrorKind::NumberOutOfRange,
+            format!("{what} is {x:e}, too large: geometry numbers are at most 1e100 in magnitude"),
+            &node.span,
+            "too large",
+            Some(
+                "the analyses square and multiply coordinates; scale the model to ordinary units"
+                    .into(),
+            ),
         ));
     }
     Ok(x)
@@ -468,8 +485,7 @@ fn build_joints(
         return Err(no_joints(&joints.value.span, "empty list"));
     }
     // (spec without final id, explicit id and its span, span of the joint for later errors)
-    let mut specs: Vec<(JointSpec, Option<Range<usize>>, Range<usize>)> =
-        Vec::with_capacity(list.len());
+    let mut specs: Vec<ReadJoint> = Vec::with_capacity(list.len());
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
     for j in list {
         let es = as_map(j, "a joint")?;
@@ -639,16 +655,28 @@ fn build_joints(
         return Err(frame_not_in_joint(&frame, frame_node));
     }
     // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too). Without
-    // explicit ids, the n-th joint of a body list gets `#n`: `Mechanism::from_parts` does that.
+    // explicit ids, the n-th joint of a body list gets `#n` (as `Mechanism::from_parts` does),
+    // and a default that another joint's body list gives too is an error naming both.
+    if explicit.is_empty() {
+        return default_joint_ids(&mut specs).map(|()| {
+            let extra: Vec<Body> = declared
+                .unwrap_or_default()
+                .into_iter()
+                .map(|(id, (label, _))| Body { id, label })
+                .collect();
+            Mechanism::from_parts(
+                name,
+                space,
+                frame,
+                extra,
+                specs.into_iter().map(|(s, ..)| s).collect(),
+            )
+        });
+    }
     let mut taken: HashSet<String> = explicit.keys().cloned().collect();
     for (s, ..) in &mut specs {
-        if s.id.is_none() && !explicit.is_empty() {
-            let mut base = String::new();
-            for (i, b) in s.bodies.iter().enumerate() {
-                let sep = if i == 0 { "" } else { "-" };
-                // Writing into a String cannot fail.
-                let _ = write!(base, "{sep}{b}");
-            }
+        if s.id.is_none() {
+            let base = joined_ids(&s.bodies);
             let mut id = base.clone();
             let mut n = 1;
             while taken.contains(&id) {
@@ -671,6 +699,66 @@ fn build_joints(
         extra,
         specs.into_iter().map(|(s, ..)| s).collect(),
     ))
+}
+
+/// A joint as read: its spec (id not yet defaulted), the span of its explicit id, and the
+/// span that locates the joint in later errors.
+type ReadJoint = (JointSpec, Option<Range<usize>>, Range<usize>);
+
+/// `a-b-c` for a joint's body list.
+fn joined_ids(bodies: &[BodyId]) -> String {
+    let mut base = String::new();
+    for (i, b) in bodies.iter().enumerate() {
+        let sep = if i == 0 { "" } else { "-" };
+        // Writing into a String cannot fail.
+        let _ = write!(base, "{sep}{b}");
+    }
+    base
+}
+
+/// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
+/// `a-b#n` (the first plain `a-b`). A default that two joints would get (the second `[1, 2]`
+/// and a `[1, "2#2"]` both give `1-2#2`) is an error naming both.
+fn default_joint_ids(specs: &mut [ReadJoint]) -> Result<(), LoadError> {
+    let mut seen: std::collections::HashMap<String, usize> =
+        std::collections::HashMap::with_capacity(specs.len());
+    let mut ids: Vec<String> = Vec::with_capacity(specs.len());
+    for (s, ..) in specs.iter() {
+        let base = joined_ids(&s.bodies);
+        let n = seen.entry(base.clone()).or_insert(0);
+        *n += 1;
+        ids.push(if *n == 1 { base } else { format!("{base}#{n}") });
+    }
+    let mut owner: std::collections::HashMap<&str, usize> =
+        std::collections::HashMap::with_capacity(ids.len());
+    for (k, id) in ids.iter().enumerate() {
+        if let Some(&first) = owner.get(id.as_str()) {
+            let (a, b) = (first.min(k), first.max(k));
+            return Err(LoadError::new(
+                ErrorKind::DuplicateJointId,
+                format!(
+                    "two joints get the default id `{id}`: joint {} (bodies {}) and joint {} (bodies {})",
+                    a + 1,
+                    joined_ids(&specs[a].0.bodies),
+                    b + 1,
+                    joined_ids(&specs[b].0.bodies)
+                ),
+                vec![
+                    label(&specs[a].2, format!("joint {} gets `{id}`", a + 1)),
+                    label(&specs[b].2, format!("joint {} gets `{id}` too", b + 1)),
+                ],
+                Some(
+                    "give one of them an explicit `id`; `--inputs` and reports name joints by id"
+                        .into(),
+                ),
+            ));
+        }
+        owner.insert(id, k);
+    }
+    for ((s, ..), id) in specs.iter_mut().zip(ids) {
+        s.id = Some(id);
+    }
+    Ok(())
 }
 
 fn c_name(code: &str) -> &'static str {

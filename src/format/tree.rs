@@ -101,13 +101,42 @@ fn duplicate_key(key: &str, first: Range<usize>, again: Range<usize>) -> LoadErr
 }
 
 /// Push an entry, rejecting duplicate keys (YAML and JSON parsers allow them; TOML does not).
-fn push_entry(entries: &mut Vec<Entry>, entry: Entry) -> Result<(), LoadError> {
-    if let Some(prev) = entries.iter().find(|e| e.key == entry.key) {
+/// Maps up to this many keys are checked for duplicates by a scan; larger ones by a hash index.
+const SCAN_KEYS: usize = 8;
+
+/// Add `entry` to a map, refusing a key already present. Linear over the whole map: a scan
+/// while the map is small, then a hash index of the keys (`index`, built once the map grows
+/// past [`SCAN_KEYS`]; a 300,000-key object was quadratic before).
+fn push_entry(
+    entries: &mut Vec<Entry>,
+    index: &mut Option<std::collections::HashMap<String, usize>>,
+    entry: Entry,
+) -> Result<(), LoadError> {
+    let prev = match index {
+        Some(ix) => ix.get(&entry.key).copied(),
+        None => entries.iter().position(|e| e.key == entry.key),
+    };
+    if let Some(prev) = prev {
         return Err(duplicate_key(
             &entry.key,
-            prev.key_span.clone(),
+            entries[prev].key_span.clone(),
             entry.key_span.clone(),
         ));
+    }
+    match index {
+        Some(ix) => {
+            ix.insert(entry.key.clone(), entries.len());
+        }
+        None if entries.len() >= SCAN_KEYS => {
+            let mut ix: std::collections::HashMap<String, usize> = entries
+                .iter()
+                .enumerate()
+                .map(|(i, e)| (e.key.clone(), i))
+                .collect();
+            ix.insert(entry.key.clone(), entries.len());
+            *index = Some(ix);
+        }
+        None => {}
     }
     entries.push(entry);
     Ok(())
@@ -438,6 +467,7 @@ impl<'a> YamlReader<'a> {
                     return Err(unsupported_tag(&t, span));
                 }
                 let mut entries = Vec::new();
+                let mut index = None;
                 loop {
                     let next = self.next()?;
                     let key_span = next.1.clone();
@@ -467,6 +497,7 @@ impl<'a> YamlReader<'a> {
                     let value = self.node(value_ev, depth + 1)?;
                     push_entry(
                         &mut entries,
+                        &mut index,
                         Entry {
                             key,
                             key_span,
@@ -694,6 +725,7 @@ impl JsonParser<'_> {
                 Some(b'{') => {
                     self.pos += 1;
                     let mut entries = Vec::new();
+                    let mut index = None;
                     self.ws();
                     if self.bytes.get(self.pos) == Some(&b'}') {
                         self.pos += 1;
@@ -709,6 +741,7 @@ impl JsonParser<'_> {
                             let value = self.value(depth + 1)?;
                             push_entry(
                                 &mut entries,
+                                &mut index,
                                 Entry {
                                     key,
                                     key_span,

@@ -21,18 +21,22 @@ pub enum LibraryError {
     Syntax(String),
     /// An entry that is not an SG type string.
     #[error(
-        "`{text}` is not an SG type (expected counts and joint codes ending in 2D or 3D, like `1P1U1S3D`)"
+        "line {line}, column {column}: `{text}` is not an SG type (expected counts and joint codes ending in 2D or 3D, like `1P1U1S3D`)"
     )]
     BadType {
         /// The offending entry.
         text: String,
+        /// Its line in the file (1-based).
+        line: usize,
+        /// Its column in the line (1-based, in characters).
+        column: usize,
     },
 }
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 struct LibraryFile {
-    types: Vec<String>,
+    types: Vec<toml::Spanned<String>>,
 }
 
 impl Library {
@@ -72,9 +76,17 @@ impl Library {
             toml::from_str(text).map_err(|e| LibraryError::Syntax(e.to_string()))?;
         let mut types = BTreeSet::new();
         for t in file.types {
-            let t = t.trim().to_string();
+            let start = t.span().start;
+            let t = t.into_inner().trim().to_string();
             if !valid_type(&t) {
-                return Err(LibraryError::BadType { text: t });
+                let before = text.get(..start).unwrap_or(text);
+                let line = before.matches('\n').count() + 1;
+                let column = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
+                return Err(LibraryError::BadType {
+                    text: t,
+                    line,
+                    column,
+                });
             }
             types.insert(t);
         }
@@ -146,5 +158,19 @@ mod tests {
             Err(LibraryError::Syntax(_))
         ));
         assert!(Library::builtin().contains("1R1U1S3D"));
+    }
+
+    #[test]
+    fn bad_types_are_located() {
+        let e = Library::from_toml("# mine\ntypes = [\n  \"1R3D\",\n  \"XYZ\",\n]\n").unwrap_err();
+        assert_eq!(
+            e,
+            LibraryError::BadType {
+                text: "XYZ".into(),
+                line: 4,
+                column: 3
+            }
+        );
+        assert!(e.to_string().starts_with("line 4, column 3: `XYZ`"));
     }
 }
