@@ -840,6 +840,8 @@ impl<'d> Ctx<'d> {
             let mut p = poses[b.parent] * b.local;
             let mut js = Vec::with_capacity(b.joints.len());
             for j in &b.joints {
+                // MuJoCo's xanchor: before the joint's own motion (it only matters for slides).
+                let anchor = (p * nalgebra::Point3::from(j.pos)).coords;
                 let q = |k: usize| qpos.map(|v| v[j.qposadr + k]);
                 let about = |p: Pose, r: UnitQuaternion<f64>| -> Pose {
                     p * Translation3::from(j.pos) * r * Translation3::from(-j.pos)
@@ -880,10 +882,12 @@ impl<'d> Ctx<'d> {
                         }
                     }
                 }
-                js.push((
-                    (p * nalgebra::Point3::from(j.pos)).coords,
-                    p.rotation * j.axis,
-                ));
+                let anchor = if j.kind == Kind::Slide {
+                    anchor
+                } else {
+                    (p * nalgebra::Point3::from(j.pos)).coords
+                };
+                js.push((anchor, p.rotation * j.axis));
             }
             joints.push(js);
             poses.push(p);

@@ -142,7 +142,8 @@ impl Import {
             return String::new();
         }
         let mut out = format!(
-            "warning: {} element(s) of the {} file not imported or not representable:\n",
+            "warning: {} {} import warning(s): elements left out or not representable, loops \
+             not closed at the configuration:\n",
             self.warnings.len(),
             self.format.name()
         );
@@ -224,12 +225,12 @@ pub fn import_str(
         return Err(src
             .err(
                 root,
-                format!("expected a <{}> root element", format.root()),
+                format!("not <{}>", format.root()),
                 format!(
-                    "the root element is <{}>, not <{}> ({})",
-                    root.tag_name().name(),
+                    "expected a <{}> root element ({}), found <{}>",
                     format.root(),
-                    format.name()
+                    format.name(),
+                    root.tag_name().name()
                 ),
             )
             .with_help(
@@ -354,6 +355,11 @@ impl<'a> Src<'a> {
                 what.clone(),
                 format!("`{attr}` of <{}>: {what}", n.tag_name().name()),
             )
+            .with_help(if len > 0 {
+                format!("`{attr}` takes {len} numbers separated by spaces")
+            } else {
+                format!("`{attr}` takes numbers separated by spaces")
+            })
         })
     }
 

@@ -20,3 +20,273 @@ fn sniff_roots() {
     );
     assert_eq!(SourceFormat::sniff("name = 'x'"), None);
 }
+
+fn mjcf(text: &str) -> Import {
+    import_str("t.xml", text, None, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+fn mjcf_key(text: &str, key: &str) -> Import {
+    let o = ImportOptions {
+        keyframe: Some(key.into()),
+        ..ImportOptions::default()
+    };
+    import_str("t.xml", text, None, &o).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+fn geom<'a>(i: &'a Import, id: &str) -> &'a crate::Geometry {
+    &i.mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == id)
+        .unwrap_or_else(|| panic!("no joint {id}: {}", i.toml))
+        .geometry
+}
+
+fn close(a: [f64; 3], b: [f64; 3]) -> bool {
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6)
+}
+
+#[track_caller]
+fn assert_axis(i: &Import, id: &str, axis: [f64; 3], origin: [f64; 3]) {
+    let g = geom(i, id);
+    let a = g.axis.expect("axis");
+    let o = g.origin.expect("origin");
+    assert!(
+        close(a, axis),
+        "{id}: axis {a:?}, expected {axis:?}\n{}",
+        i.toml
+    );
+    assert!(
+        close(o, origin),
+        "{id}: origin {o:?}, expected {origin:?}\n{}",
+        i.toml
+    );
+}
+
+/// One body per orientation form, each rotating the local x axis onto world y (at pos 1 0 0).
+#[test]
+fn mjcf_orientation_forms() {
+    let i = mjcf(
+        r#"<mujoco><worldbody>
+        <body name="q" pos="1 0 0" quat="0.70710678 0 0 0.70710678"><joint name="q" axis="1 0 0"/></body>
+        <body name="aa" pos="1 0 0" axisangle="0 0 1 90"><joint name="aa" axis="1 0 0"/></body>
+        <body name="eu" pos="1 0 0" euler="0 0 90"><joint name="eu" axis="1 0 0"/></body>
+        <body name="xy" pos="1 0 0" xyaxes="0 1 0 -1 0 0"><joint name="xy" axis="1 0 0"/></body>
+        <body name="z" pos="1 0 0" zaxis="0 1 0"><joint name="z" axis="0 0 1"/></body>
+        </worldbody></mujoco>"#,
+    );
+    for id in ["q", "aa", "eu", "xy", "z"] {
+        assert_axis(&i, id, [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]);
+    }
+}
+
+#[test]
+fn mjcf_euler_sequences_and_radians() {
+    // Intrinsic xyz (moving axes): Rx(90) Ry(90) maps x to y.
+    let i = mjcf(
+        r#"<mujoco><compiler angle="radian"/><worldbody>
+        <body name="b" euler="1.5707963267948966 1.5707963267948966 0"><joint name="j" axis="1 0 0"/></body>
+        </worldbody></mujoco>"#,
+    );
+    assert_axis(&i, "j", [0.0, 1.0, 0.0], [0.0; 3]);
+    // Extrinsic XYZ (fixed axes): Ry(90) Rx(90) maps x to -z.
+    let i = mjcf(
+        r#"<mujoco><compiler eulerseq="XYZ"/><worldbody>
+        <body name="b" euler="90 90 0"><joint name="j" axis="1 0 0"/></body>
+        </worldbody></mujoco>"#,
+    );
+    assert_axis(&i, "j", [0.0, 0.0, -1.0], [0.0; 3]);
+}
+
+#[test]
+fn mjcf_frames_compose_down_the_tree() {
+    let i = mjcf(
+        r#"<mujoco><worldbody>
+        <body name="a" pos="0 0 1" euler="0 0 90"><joint name="a" pos="1 0 0" axis="1 0 0"/>
+          <body name="b" pos="2 0 0"><joint name="b" axis="0 1 0"/>
+            <frame pos="0 0 1" euler="90 0 0"><body name="c"><joint name="c" pos="0 1 0" axis="0 1 0"/></body></frame>
+          </body>
+        </body>
+        </worldbody></mujoco>"#,
+    );
+    assert_axis(&i, "a", [0.0, 1.0, 0.0], [0.0, 1.0, 1.0]);
+    assert_axis(&i, "b", [-1.0, 0.0, 0.0], [0.0, 2.0, 1.0]);
+    // c's frame: a's rotation (z 90) then x 90; joint pos (0,1,0) -> local (0,0,1) -> world (0,0,1).
+    assert_axis(&i, "c", [0.0, 0.0, 1.0], [0.0, 2.0, 3.0]);
+}
+
+#[test]
+fn mjcf_defaults_childclass_and_joint_kinds() {
+    let i = mjcf(
+        r#"<mujoco><default>
+          <joint axis="0 1 0"/>
+          <default class="slider"><joint type="slide" axis="1 0 0"/>
+            <default class="sub"><joint axis="0 0 1"/></default></default>
+        </default><worldbody>
+        <body name="a"><joint name="a"/>
+          <body name="s" childclass="slider"><joint name="s"/>
+            <body name="t"><joint name="t" class="sub"/><joint name="h" type="hinge" class="main"/></body>
+          </body>
+          <body name="ball"><joint name="ball" type="ball" pos="0 0 2"/></body>
+          <body name="free"><freejoint name="free"/></body>
+          <body name="welded"/>
+        </body>
+        </worldbody></mujoco>"#,
+    );
+    let m = &i.mechanism;
+    let kind = |id: &str| m.joints.iter().find(|j| j.id == id).map(|j| j.kind);
+    assert_eq!(kind("a"), Some(JointType::R));
+    assert_axis(&i, "a", [0.0, 1.0, 0.0], [0.0; 3]);
+    assert_eq!(kind("s"), Some(JointType::P));
+    assert_axis(&i, "s", [1.0, 0.0, 0.0], [0.0; 3]);
+    assert_eq!(kind("t"), Some(JointType::P));
+    assert_axis(&i, "t", [0.0, 0.0, 1.0], [0.0; 3]);
+    assert_eq!(kind("h"), Some(JointType::R));
+    assert_axis(&i, "h", [0.0, 1.0, 0.0], [0.0; 3]);
+    assert_eq!(kind("ball"), Some(JointType::S));
+    assert!(close(
+        geom(&i, "ball").origin.expect("origin"),
+        [0.0, 0.0, 2.0]
+    ));
+    assert_eq!(kind("free"), Some(JointType::F));
+    // Two joints in body t: a chain through a virtual body.
+    let t = m.joints.iter().find(|j| j.id == "t").expect("t");
+    assert_eq!(m.body_id(t.bodies[1]).to_string(), "t~1");
+    // The body without joints is welded to its parent.
+    assert!(m.bodies.iter().all(|b| b.id.to_string() != "welded"));
+    assert!(i.notes.iter().any(|n| n.contains("`welded` welded to `a`")));
+}
+
+#[test]
+fn mjcf_keyframes_and_ref() {
+    let text = r#"<mujoco><worldbody>
+        <body name="a"><joint name="a" axis="0 0 1" ref="90"/>
+          <body name="b" pos="1 0 0"><joint name="b" axis="0 1 0"/>
+            <body name="c" pos="0 0 1"><joint name="c" type="slide" axis="1 0 0"/>
+              <body name="d" pos="1 0 0"><joint name="d" axis="1 0 0"/></body></body></body>
+        </body></worldbody>
+        <keyframe><key name="zero" qpos="1.5707963267948966 0 0 0"/><key name="turned" qpos="3.141592653589793 0 0.5 0"/></keyframe>
+        </mujoco>"#;
+    let i0 = mjcf(text);
+    assert_axis(&i0, "b", [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]);
+    let z = mjcf_key(text, "zero");
+    assert_axis(&z, "b", [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]);
+    // qpos - ref = 90 degrees about z; the slide moves d by 0.5 along c's x (now world y).
+    let t = mjcf_key(text, "turned");
+    assert_axis(&t, "b", [-1.0, 0.0, 0.0], [0.0, 1.0, 0.0]);
+    assert_axis(&t, "c", [0.0, 1.0, 0.0], [0.0, 1.0, 1.0]);
+    assert_axis(&t, "d", [0.0, 1.0, 0.0], [0.0, 2.5, 1.0]);
+    // By index too; unknown names list the keys.
+    let by_index = mjcf_key(text, "1");
+    assert_eq!(
+        by_index.toml.lines().skip(2).collect::<Vec<_>>(),
+        t.toml.lines().skip(2).collect::<Vec<_>>()
+    );
+    let o = ImportOptions {
+        keyframe: Some("nope".into()),
+        ..ImportOptions::default()
+    };
+    let e = import_str("t.xml", text, None, &o).unwrap_err();
+    assert!(e.hint().unwrap_or("").contains("`zero`, `turned`"), "{e:?}");
+}
+
+#[test]
+fn mjcf_equality_and_actuators() {
+    let text = r#"<mujoco><worldbody>
+        <body name="crank" pos="0 0 0"><joint name="crank"/>
+          <body name="rod" pos="1 0 0"><joint name="rod"/><site name="s1" pos="2 0 0"/></body></body>
+        <body name="rocker" pos="3 0 0"><joint name="rocker"/><site name="s2" pos="0 0 0"/></body>
+        <body name="lid" pos="0 0 5"><joint name="lid" type="slide"/></body>
+        <body name="cap" pos="0 0 6"><freejoint/></body>
+        </worldbody>
+        <equality>
+          <connect name="loop" body1="rod" body2="rocker" anchor="2 0 0"/>
+          <connect site1="s1" site2="s2"/>
+          <weld body1="cap" body2="lid"/>
+          <joint joint1="crank" joint2="rocker"/>
+        </equality>
+        <actuator><motor joint="crank"/><position name="p" joint="lid"/><motor tendon="t"/></actuator>
+        </mujoco>"#;
+    let i = mjcf(text);
+    let m = &i.mechanism;
+    let lp = m.joints.iter().find(|j| j.id == "loop").expect("loop");
+    assert_eq!(lp.kind, JointType::S);
+    assert!(close(lp.geometry.origin.expect("origin"), [3.0, 0.0, 0.0]));
+    assert!(m.joints.iter().any(|j| j.id == "connect:rod-rocker"));
+    // The free joint of `cap` went with the weld: cap and lid are one body.
+    let free = m
+        .joints
+        .iter()
+        .find(|j| j.id == "cap:free")
+        .expect("cap:free");
+    assert_eq!(m.body_id(free.bodies[1]).to_string(), "cap");
+    let lid = m.joints.iter().find(|j| j.id == "lid").expect("lid");
+    assert_eq!(m.body_id(lid.bodies[1]).to_string(), "cap");
+    assert!(
+        i.warnings
+            .iter()
+            .any(|w| w.contains("<joint> equality coupling: not representable"))
+    );
+    assert!(i.warnings.iter().any(|w| w.contains("acts through tendon")));
+    assert_eq!(m.inputs(), 2);
+    // The four-bar crank-rod-rocker is planar: count 1 - 3 (redundant) with the second connect.
+    assert!(i.toml.contains("# driven by <position name=\"p\">"));
+}
+
+#[test]
+fn mjcf_errors_are_located() {
+    let e = import_str(
+        "t.xml",
+        "<mujoco><worldbody>\n<body name=\"a\" quat=\"1 0 0\"/></worldbody></mujoco>",
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_err();
+    assert_eq!(e.location().map(|l| (l.1, l.2)), Some((2, 22)), "{e:?}");
+    assert!(e.message().contains("expected 4 numbers"));
+    let e = import_str(
+        "t.xml",
+        "<mujoco>\n  <worldbody>\n</mujoco>",
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.message().starts_with("malformed XML"), "{e:?}");
+    assert_eq!(e.location().map(|l| l.1), Some(3));
+    let e = import_str(
+        "t.xml",
+        "<mujoco><worldbody><body name=\"a\"><joint name=\"j\" type=\"hing\"/></body></worldbody></mujoco>",
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.message().contains("unknown joint type `hing`"));
+    let e = import_str(
+        "t.xml",
+        "<mujoco><worldbody><body name=\"a\"><joint/></body></worldbody><actuator><motor joint=\"x\"/></actuator></mujoco>",
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_err();
+    assert!(e.message().contains("names joint `x`"), "{e:?}");
+    let e = import_str(
+        "t.xml",
+        "<robot name='r'/>",
+        None,
+        &ImportOptions {
+            format: Some(SourceFormat::Mjcf),
+            ..ImportOptions::default()
+        },
+    )
+    .unwrap_err();
+    assert!(e.message().contains("expected a <mujoco> root"), "{e:?}");
+}
+
+#[test]
+fn numbers_are_written_short() {
+    assert_eq!(num(0.1 + 0.2), "0.3");
+    assert_eq!(num(6.123e-17), "0");
+    assert_eq!(num(-1e-12), "0");
+    assert_eq!(num(-0.5), "-0.5");
+    assert_eq!(num(2.0), "2");
+}
