@@ -188,3 +188,24 @@ fn import_errors_are_located_with_exit_code_2() {
         snapshot(&format!("import_error_{}", name.replace('.', "_")), &shown);
     }
 }
+
+// ------------------------------------------------------------------------------------------
+// URDF
+
+#[test]
+fn ur5_is_a_six_dof_serial_arm() {
+    // A tree: every joint needs its input; the fixed joints merge world/base_link and link6/ee_link.
+    assert_eq!(numbers(&fixture("ur5.urdf"), &[]), (6, 6, 0));
+    let toml = round_trip(&fixture("ur5.urdf"), &[]);
+    snapshot("import_ur5", &toml);
+}
+
+#[test]
+fn gazebo_four_bar_urdf_closed_by_a_gazebo_joint() {
+    // The tutorial's four-bar split at E and welded back: 1 DOF, written in 3D.
+    assert_eq!(
+        numbers(&fixture("four_bar_split_fixed.urdf"), &[]),
+        (-2, 1, 3)
+    );
+    round_trip(&fixture("four_bar_split_fixed.urdf"), &[]);
+}

@@ -290,3 +290,86 @@ fn numbers_are_written_short() {
     assert_eq!(num(-0.5), "-0.5");
     assert_eq!(num(2.0), "2");
 }
+
+fn urdf(text: &str) -> Import {
+    import_str("t.urdf", text, None, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+#[test]
+fn urdf_joint_kinds_transmissions_mimic_and_ball_constraints() {
+    let i = urdf(
+        r#"<robot name="r" xmlns:drake="http://drake.mit.edu">
+        <link name="base"/><link name="a"/><link name="b"/><link name="c"/><link name="d"/><link name="e"/><link name="f"/>
+        <joint name="ja" type="revolute"><parent link="base"/><child link="a"/>
+          <origin xyz="0 0 1" rpy="0 0 1.5707963267948966"/><axis xyz="1 0 0"/></joint>
+        <joint name="jb" type="prismatic"><parent link="a"/><child link="b"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>
+        <joint name="jc" type="fixed"><parent link="b"/><child link="c"/><origin xyz="0 0 5"/></joint>
+        <joint name="jd" type="planar"><parent link="c"/><child link="d"/><axis xyz="0 0 1"/></joint>
+        <joint name="je" type="floating"><parent link="base"/><child link="e"/></joint>
+        <joint name="jf" type="continuous"><parent link="e"/><child link="f"/><mimic joint="ja" multiplier="2"/></joint>
+        <transmission name="t1"><type>transmission_interface/SimpleTransmission</type>
+          <joint name="ja"><hardwareInterface>EffortJointInterface</hardwareInterface></joint>
+          <actuator name="m1"/></transmission>
+        <transmission name="t2"><joint name="jc"/></transmission>
+        <drake:ball_constraint>
+          <drake:ball_constraint_body_A name="d"/><drake:ball_constraint_p_AP value="0 0 0"/>
+          <drake:ball_constraint_body_B name="f"/><drake:ball_constraint_p_BQ value="0 1 0"/>
+        </drake:ball_constraint>
+        </robot>"#,
+    );
+    let m = &i.mechanism;
+    let kind = |id: &str| m.joints.iter().find(|j| j.id == id).map(|j| j.kind);
+    assert_eq!(kind("ja"), Some(JointType::R));
+    assert_axis(&i, "ja", [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]);
+    assert_eq!(kind("jb"), Some(JointType::P));
+    assert_axis(&i, "jb", [0.0, 0.0, 1.0], [0.0, 1.0, 1.0]);
+    assert_eq!(kind("jc"), None);
+    assert_eq!(kind("jd"), Some(JointType::PL));
+    let jd = m.joints.iter().find(|j| j.id == "jd").expect("jd");
+    assert_eq!(
+        m.body_id(jd.bodies[0]).to_string(),
+        "b",
+        "c is welded into b"
+    );
+    assert!(close(jd.geometry.normal.expect("normal"), [0.0, 0.0, 1.0]));
+    assert!(close(jd.geometry.origin.expect("origin"), [0.0, 1.0, 6.0]));
+    assert_eq!(kind("je"), Some(JointType::F));
+    assert_eq!(kind("ball:d-f"), Some(JointType::S));
+    assert_eq!(m.inputs(), 1);
+    assert!(
+        i.warnings.iter().any(|w| w.contains("mimics `ja`")),
+        "{:?}",
+        i.warnings
+    );
+    assert!(
+        i.warnings
+            .iter()
+            .any(|w| w.contains("names joint `jc`, which is fixed"))
+    );
+    assert!(
+        i.warnings
+            .iter()
+            .any(|w| w.contains("ball_constraint between `d` and `f` is not closed"))
+    );
+}
+
+#[test]
+fn urdf_errors() {
+    let err = |t: &str| import_str("t.urdf", t, None, &ImportOptions::default()).unwrap_err();
+    let e = err(r#"<robot name="r"><link name="a"/><link name="b"/>
+        <joint name="j" type="hinge"><parent link="a"/><child link="b"/></joint></robot>"#);
+    assert!(e.message().contains("unknown type `hinge`"), "{e:?}");
+    let e = err(r#"<robot name="r"><link name="a"/><link name="b"/>
+        <joint name="j" type="revolute"><parent link="a"/><child link="c"/></joint></robot>"#);
+    assert!(
+        e.message().contains("link `c`, which is not defined"),
+        "{e:?}"
+    );
+    assert_eq!(e.location().map(|l| l.1), Some(2));
+    let e = err(
+        r#"<robot name="r"><link name="a"/><link name="b"/><link name="c"/>
+        <joint name="j" type="revolute"><parent link="a"/><child link="b"/></joint>
+        <joint name="k" type="revolute"><parent link="c"/><child link="b"/></joint></robot>"#,
+    );
+    assert!(e.message().contains("child of joints `j` and `k`"), "{e:?}");
+}
