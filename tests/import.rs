@@ -209,3 +209,32 @@ fn gazebo_four_bar_urdf_closed_by_a_gazebo_joint() {
     );
     round_trip(&fixture("four_bar_split_fixed.urdf"), &[]);
 }
+
+// ------------------------------------------------------------------------------------------
+// SDFormat
+
+#[test]
+fn gazebo_four_bar_sdf_has_1_dof_count_minus_2_and_3_redundant() {
+    assert_eq!(numbers(&fixture("four_bar.sdf"), &[]), (-2, 1, 3));
+    let toml = round_trip(&fixture("four_bar.sdf"), &[]);
+    snapshot("import_four_bar_sdf", &toml);
+}
+
+#[test]
+fn merge_pins_turns_two_coaxial_joints_into_one_multiple_joint() {
+    let file = fixture("triple_pin.sdf");
+    let (code, out, err) = mbsa(&["import", &file, "--merge-pins"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("1 pin joint(s) merged"), "{err}");
+    assert!(
+        out.contains("bodies = [\"link_BC\", \"link_CD\", \"link_CE\"]"),
+        "{out}"
+    );
+    let (code, out, _) = mbsa(&["import", &file]);
+    assert_eq!(code, 0);
+    assert_eq!(out.matches("[[joint]]").count(), 7);
+    // A planar Watt six-bar written in 3D: 1 DOF either way.
+    assert_eq!(numbers(&file, &[]), (-5, 1, 6));
+    assert_eq!(numbers(&file, &["--merge-pins"]), (-5, 1, 6));
+    round_trip(&file, &["--merge-pins"]);
+}

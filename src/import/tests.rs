@@ -373,3 +373,112 @@ fn urdf_errors() {
     );
     assert!(e.message().contains("child of joints `j` and `k`"), "{e:?}");
 }
+
+fn sdf(text: &str) -> Import {
+    import_str("t.sdf", text, None, &ImportOptions::default()).unwrap_or_else(|e| panic!("{e:?}"))
+}
+
+/// The same model under the pre-1.7 rules: link poses in the model frame, the joint pose in
+/// the child link's frame, the axis in the model frame (1.4) or the joint frame (1.5, 1.6,
+/// unless use_parent_model_frame).
+fn old_sdf(version: &str, upm: bool) -> String {
+    format!(
+        r#"<sdf version="{version}"><model name="m">
+        <pose>0 0 1 0 0 1.5707963267948966</pose>
+        <link name="L"><pose>1 0 0 0 0 1.5707963267948966</pose></link>
+        <joint name="J" type="revolute"><pose>0 0 0.5 0 0 0</pose><parent>world</parent><child>L</child>
+          <axis><xyz>1 0 0</xyz>{}</axis></joint>
+        </model></sdf>"#,
+        if upm {
+            "<use_parent_model_frame>true</use_parent_model_frame>"
+        } else {
+            ""
+        }
+    )
+}
+
+#[test]
+fn sdf_pre_1_7_frame_rules() {
+    assert_axis(
+        &sdf(&old_sdf("1.4", false)),
+        "J",
+        [0.0, 1.0, 0.0],
+        [0.0, 1.0, 1.5],
+    );
+    assert_axis(
+        &sdf(&old_sdf("1.5", false)),
+        "J",
+        [-1.0, 0.0, 0.0],
+        [0.0, 1.0, 1.5],
+    );
+    assert_axis(
+        &sdf(&old_sdf("1.6", true)),
+        "J",
+        [0.0, 1.0, 0.0],
+        [0.0, 1.0, 1.5],
+    );
+}
+
+#[test]
+fn sdf_1_7_relative_to_frames_and_expressed_in() {
+    let i = sdf(r#"<sdf version="1.7"><model name="m">
+        <frame name="F" attached_to="__model__"><pose>0 0 2 0 0 0</pose></frame>
+        <link name="L"><pose relative_to="F">1 0 0 0 0 1.5707963267948966</pose></link>
+        <link name="L2"/>
+        <joint name="J1" type="revolute"><pose>1 0 0 0 0 0</pose><parent>world</parent><child>L</child>
+          <axis><xyz>1 0 0</xyz></axis></joint>
+        <joint name="J2" type="prismatic"><pose relative_to="__model__">0 0 0 0 0 0</pose><parent>L</parent><child>L2</child>
+          <axis><xyz expressed_in="__model__">1 0 0</xyz></axis></joint>
+        <joint name="J3" type="universal"><pose relative_to="F"/><parent>L</parent><child>L2</child>
+          <axis><xyz expressed_in="L">1 0 0</xyz></axis><axis2><xyz>0 0 1</xyz></axis2></joint>
+        </model></sdf>"#);
+    assert_axis(&i, "J1", [0.0, 1.0, 0.0], [1.0, 1.0, 2.0]);
+    assert_axis(&i, "J2", [1.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    assert_axis(&i, "J3", [0.0, 1.0, 0.0], [0.0, 0.0, 2.0]);
+    assert!(close(geom(&i, "J3").axis2.expect("axis2"), [0.0, 0.0, 1.0]));
+}
+
+#[test]
+fn sdf_1_9_degrees_and_quaternions_free_and_static_models() {
+    let i = sdf(r#"<sdf version="1.9"><world name="w">
+        <model name="a"><link name="L"><pose degrees="true">0 0 0 0 0 90</pose></link>
+          <link name="K"><pose rotation_format="quat_xyzw">1 0 0 0 0 0.70710678 0.70710678</pose></link>
+          <joint name="J" type="revolute"><parent>L</parent><child>K</child><axis><xyz>1 0 0</xyz></axis></joint>
+        </model>
+        <model name="b"><static>true</static><link name="L"/><link name="K"/>
+          <joint name="J" type="ball"><parent>L</parent><child>K</child></joint></model>
+        </world></sdf>"#);
+    assert_axis(&i, "a::J", [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]);
+    let m = &i.mechanism;
+    let free = m
+        .joints
+        .iter()
+        .find(|j| j.id == "a::L:free")
+        .expect("model a floats");
+    assert_eq!(free.kind, JointType::F);
+    // Model b is static: its links are welded to the world, so its joint joins welded bodies.
+    assert!(
+        i.warnings
+            .iter()
+            .any(|w| w.contains("`b::J` joins bodies welded together")),
+        "{:?}",
+        i.warnings
+    );
+}
+
+#[test]
+fn sdf_errors() {
+    let err = |t: &str| import_str("t.sdf", t, None, &ImportOptions::default()).unwrap_err();
+    let e = err(r#"<sdf version="2.0"><model name="m"/></sdf>"#);
+    assert!(e.message().contains("unknown SDFormat version"), "{e:?}");
+    let e = err(
+        "<sdf version=\"1.7\"><model name=\"m\"><link name=\"L\"/>\n<joint name=\"J\" type=\"revolute\"><parent>world</parent><child>X</child></joint></model></sdf>",
+    );
+    assert!(e.message().contains("names `X`"), "{e:?}");
+    assert_eq!(e.location().map(|l| l.1), Some(2));
+    let e = err(
+        r#"<sdf version="1.7"><model name="m"><link name="L"><pose relative_to="L">0 0 0 0 0 0</pose></link>
+        <joint name="J" type="revolute"><parent>world</parent><child>L</child><axis><xyz>0 0 1</xyz></axis></joint></model></sdf>"#,
+    );
+    assert!(e.message().contains("cycle"), "{e:?}");
+}
