@@ -238,3 +238,34 @@ fn merge_pins_turns_two_coaxial_joints_into_one_multiple_joint() {
     assert_eq!(numbers(&file, &["--merge-pins"]), (-5, 1, 6));
     round_trip(&file, &["--merge-pins"]);
 }
+
+// ------------------------------------------------------------------------------------------
+// OpenSim
+
+#[test]
+fn opensim_double_pendulum_is_two_driven_pins() {
+    assert_eq!(numbers(&fixture("double_pendulum.osim"), &[]), (2, 2, 0));
+    let toml = round_trip(&fixture("double_pendulum.osim"), &[]);
+    assert_eq!(toml.matches("driven = 1").count(), 2, "{toml}");
+    snapshot("import_double_pendulum_osim", &toml);
+}
+
+#[test]
+fn opensim_four_bar_closed_by_a_point_constraint_has_1_dof() {
+    // Planar four-bar written in 3D with an S closure: count 0, 1 DOF, 1 redundant.
+    assert_eq!(
+        numbers(&fixture("four_bar_point_constraint.osim"), &[]),
+        (0, 1, 1)
+    );
+    let (code, out, err) = mbsa(&["import", &fixture("four_bar_point_constraint.osim")]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("# <PointConstraint name=\"C\"> (loop closure)"),
+        "{out}"
+    );
+    assert!(
+        err.contains("CoordinateCouplerConstraint `couple` couples coordinates: not representable"),
+        "{err}"
+    );
+    round_trip(&fixture("four_bar_point_constraint.osim"), &[]);
+}

@@ -482,3 +482,52 @@ fn sdf_errors() {
     );
     assert!(e.message().contains("cycle"), "{e:?}");
 }
+
+#[test]
+fn osim_coupled_custom_joint_is_reported_and_mapped_to_its_independent_coordinate() {
+    let i = import_str(
+        "t.osim",
+        r#"<OpenSimDocument Version="30000"><Model name="knee"><BodySet><objects>
+        <Body name="ground"><Joint/></Body>
+        <Body name="femur"><Joint><CustomJoint name="hip"><parent_body>ground</parent_body>
+          <location_in_parent>0 1 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent>
+          <location>0 0 0</location><orientation>0 0 0</orientation>
+          <SpatialTransform>
+            <TransformAxis name="rotation1"><coordinates>hip_flex</coordinates><axis>0 0 1</axis><function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></function></TransformAxis>
+            <TransformAxis name="rotation2"><coordinates>hip_add</coordinates><axis>1 0 0</axis><function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></function></TransformAxis>
+            <TransformAxis name="rotation3"><coordinates>hip_rot</coordinates><axis>0 1 0</axis><function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></function></TransformAxis>
+          </SpatialTransform>
+          <CoordinateSet><objects><Coordinate name="hip_flex"/><Coordinate name="hip_add"/><Coordinate name="hip_rot"/></objects></CoordinateSet>
+        </CustomJoint></Joint></Body>
+        <Body name="tibia"><Joint><CustomJoint name="knee"><parent_body>femur</parent_body>
+          <location_in_parent>0 -0.4 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent>
+          <location>0 0 0</location><orientation>0 0 0</orientation>
+          <SpatialTransform>
+            <TransformAxis name="rotation1"><coordinates>knee_angle</coordinates><axis>0 0 1</axis><function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></function></TransformAxis>
+            <TransformAxis name="translation1"><coordinates>knee_angle</coordinates><axis>1 0 0</axis>
+              <function><SimmSpline><x>-2 0</x><y>-0.01 0.005</y></SimmSpline></function></TransformAxis>
+          </SpatialTransform>
+          <CoordinateSet><objects><Coordinate name="knee_angle"><default_value>0</default_value></Coordinate></objects></CoordinateSet>
+        </CustomJoint></Joint></Body>
+        </objects></BodySet>
+        <ForceSet><objects><CoordinateActuator name="k"><coordinate>knee_angle</coordinate></CoordinateActuator>
+          <TorqueActuator name="h"><body_A>ground</body_A><body_B>femur</body_B></TorqueActuator></objects></ForceSet>
+        </Model></OpenSimDocument>"#,
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"));
+    let m = &i.mechanism;
+    let kind = |id: &str| m.joints.iter().find(|j| j.id == id).map(|j| j.kind);
+    assert_eq!(kind("hip"), Some(JointType::S));
+    assert_eq!(kind("knee"), Some(JointType::R));
+    assert_axis(&i, "knee", [0.0, 0.0, 1.0], [0.005, 0.6, 0.0]);
+    assert!(
+        i.warnings
+            .iter()
+            .any(|w| w.contains("coupled coordinates (knee_angle)")),
+        "{:?}",
+        i.warnings
+    );
+    assert_eq!(m.inputs(), 2);
+}
