@@ -12,6 +12,13 @@ use std::path::{Path, PathBuf};
 /// Deepest include nesting accepted.
 const MAX_INCLUDE_DEPTH: usize = 16;
 
+/// Deepest nesting of `<frame>` elements (and of default classes) accepted.
+const MAX_FRAME_DEPTH: usize = 64;
+
+/// A body element still to read: the element, its parent body, the frames between them, the
+/// childclass it inherits.
+type Pending<'d> = (E<'d>, usize, Pose, Option<String>);
+
 /// An element and the index of the file that holds it.
 #[derive(Clone, Copy)]
 struct E<'d> {
@@ -42,7 +49,6 @@ struct MBody<'d> {
     parent: usize,
     local: Pose,
     joints: Vec<MJoint<'d>>,
-    e: Option<E<'d>>,
 }
 
 struct Ctx<'d> {
@@ -73,10 +79,7 @@ pub(super) fn read(
     let mut seen: Vec<PathBuf> = Vec::new();
     let mut file_index = 0usize;
     while let Some((name, text, depth)) = scan.pop() {
-        let s = Src {
-            name: &name,
-            text: &text,
-        };
+        let s = Src::new(&name, &text);
         let doc = s.parse()?;
         for n in doc.descendants().filter(|n| n.has_tag_name("include")) {
             let Some(file) = n.attribute("file") else {
@@ -132,10 +135,7 @@ pub(super) fn read(
         let _ = &pending;
     }
     // `texts` is in scan order: file i of `inc_paths` refers to texts[i].
-    let srcs: Vec<Src> = texts
-        .iter()
-        .map(|(n, t)| Src { name: n, text: t })
-        .collect();
+    let srcs: Vec<Src> = texts.iter().map(|(n, t)| Src::new(n, t)).collect();
     let docs: Vec<roxmltree::Document> =
         srcs.iter().map(|s| s.parse()).collect::<Result<_, _>>()?;
     let mut inc = HashMap::new();
@@ -205,17 +205,16 @@ pub(super) fn read(
         }
     }
     for e in top.iter().filter(|e| e.n.has_tag_name("default")) {
-        cx.defaults(*e, None, &docs);
+        cx.defaults(*e, None, &docs, 0);
     }
     cx.bodies.push(MBody {
         name: "world".into(),
         parent: 0,
         local: Pose::identity(),
         joints: Vec::new(),
-        e: None,
     });
     for e in top.iter().filter(|e| e.n.has_tag_name("worldbody")) {
-        cx.walk(*e, 0, Pose::identity(), None, &docs)?;
+        cx.walk(*e, &docs)?;
     }
     for e in &top {
         let tag = e.n.tag_name().name();
@@ -419,8 +418,8 @@ fn stem(name: &str) -> String {
 type Fk = (Vec<Pose>, Vec<Vec<(Vector3<f64>, Vector3<f64>)>>);
 
 impl<'d> Ctx<'d> {
-    fn src(&self, e: E) -> Src<'d> {
-        self.srcs[e.f]
+    fn src(&self, e: E) -> &Src<'d> {
+        &self.srcs[e.f]
     }
 
     /// Child elements, `<include>` replaced by the children of the included file's root.
@@ -442,7 +441,20 @@ impl<'d> Ctx<'d> {
         out
     }
 
-    fn defaults(&mut self, e: E<'d>, parent: Option<String>, docs: &'d [roxmltree::Document<'d>]) {
+    fn defaults(
+        &mut self,
+        e: E<'d>,
+        parent: Option<String>,
+        docs: &'d [roxmltree::Document<'d>],
+        depth: usize,
+    ) {
+        if depth > MAX_FRAME_DEPTH {
+            let loc = self.src(e).loc(e.n);
+            self.unsupported.push(format!(
+                "{loc}: default classes nested deeper than {MAX_FRAME_DEPTH}: this one and deeper ones ignored"
+            ));
+            return;
+        }
         let class =
             e.n.attribute("class")
                 .map(str::to_string)
@@ -461,7 +473,7 @@ impl<'d> Ctx<'d> {
             .collect();
         self.classes.insert(class.clone(), (parent, joints));
         for k in kids.into_iter().filter(|k| k.n.has_tag_name("default")) {
-            self.defaults(k, Some(class.clone()), docs);
+            self.defaults(k, Some(class.clone()), docs, depth + 1);
         }
     }
 
@@ -600,47 +612,77 @@ impl<'d> Ctx<'d> {
     /// `rel` the frames between that body and `e`'s children.
     fn walk(
         &mut self,
+        root: E<'d>,
+        docs: &'d [roxmltree::Document<'d>],
+    ) -> Result<(), ImportError> {
+        // Depth first with an explicit stack (deep body chains must not overflow the call
+        // stack); bodies are numbered in preorder, as MuJoCo numbers them (qpos order).
+        let mut found: Vec<Pending<'d>> = Vec::new();
+        self.walk_children(root, 0, Pose::identity(), None, docs, &mut found, 0)?;
+        let mut stack: Vec<Pending<'d>> = found.drain(..).rev().collect();
+        while let Some((k, parent, rel, childclass)) = stack.pop() {
+            let s = self.src(k);
+            let local = rel * self.pose_of(k)?;
+            let idx = self.bodies.len();
+            let name = match k.n.attribute("name") {
+                Some(n) if !n.is_empty() => n.to_string(),
+                _ => format!("body{idx}"),
+            };
+            if name == "world" {
+                return Err(s
+                    .err_attr(k.n, "name", "reserved", "a body named `world`")
+                    .with_help("`world` is MuJoCo's world body; rename this one"));
+            }
+            let cc =
+                k.n.attribute("childclass")
+                    .map(str::to_string)
+                    .or(childclass);
+            self.bodies.push(MBody {
+                name,
+                parent,
+                local,
+                joints: Vec::new(),
+            });
+            self.walk_children(k, idx, Pose::identity(), cc, docs, &mut found, 0)?;
+            stack.extend(found.drain(..).rev());
+        }
+        Ok(())
+    }
+
+    /// The children of a body (or the worldbody, or a frame) `e`: joints and sites go to
+    /// `body`, child bodies to `found` (in document order); `rel` is the pose of the frames
+    /// between `body` and `e`'s children.
+    #[allow(clippy::too_many_arguments)]
+    fn walk_children(
+        &mut self,
         e: E<'d>,
         body: usize,
         rel: Pose,
         childclass: Option<String>,
         docs: &'d [roxmltree::Document<'d>],
+        found: &mut Vec<Pending<'d>>,
+        frame_depth: usize,
     ) -> Result<(), ImportError> {
         for k in self.kids(e, docs) {
             let s = self.src(k);
             match k.n.tag_name().name() {
-                "body" => {
-                    let local = rel * self.pose_of(k)?;
-                    let idx = self.bodies.len();
-                    let name = match k.n.attribute("name") {
-                        Some(n) if !n.is_empty() => n.to_string(),
-                        _ => format!("body{idx}"),
-                    };
-                    if name == "world" {
-                        return Err(s
-                            .err_attr(k.n, "name", "reserved", "a body named `world`")
-                            .with_help("`world` is MuJoCo's world body; rename this one"));
-                    }
-                    let cc =
-                        k.n.attribute("childclass")
-                            .map(str::to_string)
-                            .or_else(|| childclass.clone());
-                    self.bodies.push(MBody {
-                        name,
-                        parent: body,
-                        local,
-                        joints: Vec::new(),
-                        e: Some(k),
-                    });
-                    self.walk(k, idx, Pose::identity(), cc, docs)?;
-                }
+                "body" => found.push((k, body, rel, childclass.clone())),
                 "frame" => {
+                    if frame_depth >= MAX_FRAME_DEPTH {
+                        return Err(s
+                            .err(
+                                k.n,
+                                "too deep",
+                                format!("<frame> elements nested deeper than {MAX_FRAME_DEPTH}"),
+                            )
+                            .with_help("flatten the frames: compose their poses"));
+                    }
                     let f = rel * self.pose_of(k)?;
                     let cc =
                         k.n.attribute("childclass")
                             .map(str::to_string)
                             .or_else(|| childclass.clone());
-                    self.walk(k, body, f, cc, docs)?;
+                    self.walk_children(k, body, f, cc, docs, found, frame_depth + 1)?;
                 }
                 "joint" | "freejoint" => {
                     if body == 0 {

@@ -206,7 +206,7 @@ pub fn import_str(
                 )
             })?,
     };
-    let src = Src { name, text };
+    let src = Src::new(name, text);
     if Path::new(name)
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("xacro"))
@@ -251,15 +251,24 @@ pub fn import_str(
 // XML helpers
 
 /// One source file: its display name and text (for located errors).
-#[derive(Clone, Copy)]
 pub(crate) struct Src<'a> {
     pub name: &'a str,
     pub text: &'a str,
+    /// Byte offsets of the line starts (for `file:line:col` in warnings and comments).
+    lines: Vec<usize>,
 }
 
 pub(crate) type Node<'a> = roxmltree::Node<'a, 'a>;
 
 impl<'a> Src<'a> {
+    /// A source file.
+    pub fn new(name: &'a str, text: &'a str) -> Src<'a> {
+        let lines = std::iter::once(0)
+            .chain(text.match_indices('\n').map(|(i, _)| i + 1))
+            .collect();
+        Src { name, text, lines }
+    }
+
     /// Parse the text (DTDs allowed, entities expanded by roxmltree's limits).
     pub fn parse(&self) -> Result<roxmltree::Document<'a>, ImportError> {
         let opts = roxmltree::ParsingOptions {
@@ -282,12 +291,19 @@ impl<'a> Src<'a> {
 
     /// `file:line:col` of an element.
     pub fn loc(&self, n: Node) -> String {
-        let p = n.document().text_pos_at(n.range().start);
+        let at = n.range().start.min(self.text.len());
+        let line = self.lines.partition_point(|&s| s <= at).max(1);
+        let start = self.lines[line - 1];
+        // Columns count characters; on very long lines (minified files) bytes, to stay linear.
+        let col = match self.text.get(start..at) {
+            Some(t) if t.len() <= 4096 => t.chars().count() + 1,
+            _ => at - start + 1,
+        };
         let file = Path::new(self.name)
             .file_name()
             .and_then(|f| f.to_str())
             .unwrap_or(self.name);
-        format!("{file}:{}:{}", p.row, p.col)
+        format!("{file}:{line}:{col}")
     }
 
     /// The span of an element's start tag name (`<joint`).
@@ -807,20 +823,42 @@ fn merge_pins(joints: &mut Vec<JointRec>) -> usize {
     };
     let mut merged = 0;
     let mut alive = vec![true; joints.len()];
+    // The joints on each body (only pairs sharing a body can merge).
+    let mut on: HashMap<usize, Vec<usize>> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        if j.kind == JointType::R {
+            for &b in &j.bodies {
+                on.entry(b).or_default().push(k);
+            }
+        }
+    }
     loop {
         let mut changed = false;
         for i in 0..joints.len() {
             if !alive[i] || joints[i].kind != JointType::R {
                 continue;
             }
-            for k in 0..joints.len() {
-                if k == i || !alive[k] || joints[k].kind != JointType::R {
+            let mut candidates: Vec<usize> = joints[i]
+                .bodies
+                .iter()
+                .flat_map(|b| on.get(b).map(Vec::as_slice).unwrap_or(&[]))
+                .copied()
+                .filter(|&k| k != i && alive[k])
+                .collect();
+            candidates.sort_unstable();
+            candidates.dedup();
+            let mut members: std::collections::HashSet<usize> =
+                joints[i].bodies.iter().copied().collect();
+            // A worklist: joints on bodies that merging brings in are candidates too.
+            let mut queue = candidates;
+            while let Some(k) = queue.pop() {
+                if k == i || !alive[k] {
                     continue;
                 }
-                let shared = joints[i]
+                let shared = joints[k]
                     .bodies
                     .iter()
-                    .filter(|b| joints[k].bodies.contains(b))
+                    .filter(|b| members.contains(b))
                     .count();
                 if shared != 1 || !coaxial(&joints[i].geometry, &joints[k].geometry) {
                     continue;
@@ -829,8 +867,13 @@ fn merge_pins(joints: &mut Vec<JointRec>) -> usize {
                     .bodies
                     .iter()
                     .copied()
-                    .filter(|b| !joints[i].bodies.contains(b))
+                    .filter(|b| !members.contains(b))
                     .collect();
+                for &b in &extra {
+                    queue.extend(on.get(&b).map(Vec::as_slice).unwrap_or(&[]).iter().copied());
+                    on.entry(b).or_default().push(i);
+                    members.insert(b);
+                }
                 let other = joints[k].clone();
                 let j = &mut joints[i];
                 j.bodies.extend(extra);

@@ -102,6 +102,10 @@ fn eval(src: &Src, f: Node, x: f64) -> Result<Option<(f64, bool)>, ImportError> 
     })
 }
 
+/// A joint's motion at the default coordinates, its kind and geometry, and its independent
+/// coordinates (`["weld"]` for a weld).
+type Motion = (Pose, JointType, Geometry, Vec<String>);
+
 struct Axis<'a> {
     rotation: bool,
     coords: Vec<String>,
@@ -280,8 +284,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     // World poses, down the tree.
     let mut world: HashMap<String, Pose> = HashMap::new();
     world.insert(ground.clone(), Pose::identity());
-    let mut motion: Vec<Option<(Pose, JointType, Geometry, Vec<String>)>> =
-        (0..joints.len()).map(|_| None).collect();
+    let mut motion: Vec<Option<Motion>> = (0..joints.len()).map(|_| None).collect();
     let mut coord_joint: HashMap<String, usize> = HashMap::new();
     let mut progress = true;
     while progress {
@@ -606,7 +609,7 @@ fn custom(
     name: &str,
     coords: &[(String, f64)],
     f: Pose,
-) -> Result<(Pose, JointType, Geometry, Vec<String>), ImportError> {
+) -> Result<Motion, ImportError> {
     let loc = src.loc(j);
     let Some(st) = child(j, "SpatialTransform") else {
         return Err(src
