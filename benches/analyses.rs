@@ -84,6 +84,7 @@ mod geometric_rigidity {
     const FILE: GeometricOptions = GeometricOptions {
         geometry: GeometrySource::File,
         check_finite: false,
+        precision: None,
     };
 
     #[divan::bench]

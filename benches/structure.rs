@@ -95,7 +95,7 @@ fn options(count_only: bool, method: Method) -> Options {
     Options {
         count_only,
         method,
-        seed: 0,
+        ..Options::default()
     }
 }
 
@@ -195,7 +195,7 @@ fn probe_child(spec: &str) {
     };
     let m = case.mechanism();
     let start = Instant::now();
-    let a = structure::analyze(&m, &options(true, Method::Exhaustive), library());
+    let a = structure::analyze(&m, &options(true, Method::Exhaustive), library()).unwrap();
     let secs = start.elapsed().as_secs_f64();
     println!("{secs} {}", a.groups.len());
 }
@@ -205,8 +205,8 @@ fn print_table16_check() {
     println!("Table 16 check (seed {SEED}): case, bodies, SGs ours/paper, largest SG, status");
     for case in Case::all() {
         let m = case.mechanism();
-        let counted = structure::analyze(&m, &options(true, Method::Flow), library());
-        let ranked = structure::analyze(&m, &options(false, Method::Flow), library());
+        let counted = structure::analyze(&m, &options(true, Method::Flow), library()).unwrap();
+        let ranked = structure::analyze(&m, &options(false, Method::Flow), library()).unwrap();
         let (a, b) = PAPER_SGS[case.index];
         let paper = match case.variant {
             Variant::A => Some(a),
@@ -252,14 +252,14 @@ mod table16 {
     fn count_only(bencher: Bencher, case: Case) {
         let m = case.mechanism();
         let opts = options(true, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 
     #[divan::bench(args = Case::all())]
     fn rank_check(bencher: Bencher, case: Case) {
         let m = case.mechanism();
         let opts = options(false, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 }
 
@@ -282,7 +282,7 @@ mod exhaustive {
     fn count_only(bencher: Bencher, case: Case) {
         let m = case.mechanism();
         let opts = options(true, Method::Exhaustive);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 }
 
@@ -401,14 +401,14 @@ mod scale {
     fn count_only(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(true, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 
     #[divan::bench(args = scaled_ranked(&SIZES), sample_size = 1, sample_count = 3)]
     fn rank_check(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(false, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 }
 
@@ -434,21 +434,21 @@ mod pipeline {
     fn analyze_count_only(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(true, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 
     #[divan::bench(args = scaled_ranked(&[BODIES]))]
     fn analyze_rank_check(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
         let opts = options(false, Method::Flow);
-        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()));
+        bencher.bench_local(|| structure::analyze(black_box(&m), &opts, library()).unwrap());
     }
 
     /// Serialization of the default-mode analysis.
     #[divan::bench(args = families())]
     fn json(bencher: Bencher, s: Scaled) {
         let m = s.family.mechanism(s.bodies);
-        let a = structure::analyze(&m, &options(false, Method::Flow), library());
+        let a = structure::analyze(&m, &options(false, Method::Flow), library()).unwrap();
         bencher.bench_local(|| mbsa::report::json(black_box(&a)));
     }
 }

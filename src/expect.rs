@@ -25,9 +25,14 @@ fn outcome<T: PartialEq + ToString>(key: &'static str, expected: T, actual: T) -
     }
 }
 
-/// Compare every expectation present in `m.expect` with the analyses. Analyses whose keys are
-/// absent are not run.
-pub fn evaluate(m: &Mechanism) -> Vec<Outcome> {
+/// Compare every expectation present in `m.expect` with the analyses, at the geometry
+/// `geometry` asks for. Analyses whose keys are absent are not run. Every key means what the
+/// command that prints it means (`true_mobility`: `mbsa rigid`, inputs not counted;
+/// `uncontrolled`: `mbsa analyze`, the DOF the inputs leave free).
+pub fn evaluate(
+    m: &Mechanism,
+    geometry: &crate::rigidity::geometric::GeometricOptions,
+) -> Vec<Outcome> {
     let e = &m.expect;
     let mut out = Vec::new();
     if e.mobility.is_some() || e.inputs.is_some() {
@@ -39,21 +44,33 @@ pub fn evaluate(m: &Mechanism) -> Vec<Outcome> {
             out.push(outcome("inputs", x, r.mobility.inputs));
         }
     }
-    if e.groups.is_some() || e.levels.is_some() || e.determined.is_some() {
-        let a = crate::structure::analyze(
-            m,
-            &crate::structure::Options::default(),
-            &crate::structure::Library::builtin(),
-        );
-        if let Some(x) = e.groups {
-            out.push(outcome("groups", x, a.groups.len() as u64));
-        }
-        if let Some(x) = e.levels {
-            out.push(outcome("levels", x, a.levels as u64));
-        }
-        if let Some(x) = e.determined {
-            let determined = a.status == crate::structure::Status::Determined;
-            out.push(outcome("determined", x, determined));
+    if e.groups.is_some()
+        || e.levels.is_some()
+        || e.determined.is_some()
+        || e.uncontrolled.is_some()
+    {
+        let opts = crate::structure::Options {
+            geometry: geometry.geometry,
+            precision: geometry.precision,
+            ..Default::default()
+        };
+        match crate::structure::analyze(m, &opts, &crate::structure::Library::builtin()) {
+            Ok(a) => {
+                if let Some(x) = e.groups {
+                    out.push(outcome("groups", x, a.groups.len() as u64));
+                }
+                if let Some(x) = e.levels {
+                    out.push(outcome("levels", x, a.levels as u64));
+                }
+                if let Some(x) = e.determined {
+                    let determined = a.status == crate::structure::Status::Determined;
+                    out.push(outcome("determined", x, determined));
+                }
+                if let Some(x) = e.uncontrolled {
+                    out.push(outcome("uncontrolled", x, a.uncontrolled));
+                }
+            }
+            Err(err) => out.push(geometry_failed(err)),
         }
     }
     if let Some(x) = e.generic_dof {
@@ -65,7 +82,12 @@ pub fn evaluate(m: &Mechanism) -> Vec<Outcome> {
         || e.redundant.is_some()
         || e.rigid_parts.is_some()
     {
-        match crate::rigidity::geometric::analyze(m, &Default::default()) {
+        // As `mbsa rigid` prints them: the chain alone, inputs not counted.
+        let mut chain = m.clone();
+        for j in &mut chain.joints {
+            j.driven = 0;
+        }
+        match crate::rigidity::geometric::analyze(&chain, geometry) {
             Ok(r) => {
                 if let Some(x) = e.true_mobility {
                     out.push(outcome("true_mobility", x, r.mobility as i64));
@@ -80,13 +102,17 @@ pub fn evaluate(m: &Mechanism) -> Vec<Outcome> {
                     out.push(outcome("rigid_parts", x, r.rigid.len() as u64));
                 }
             }
-            Err(err) => out.push(Outcome {
-                key: "geometry",
-                expected: "a geometric analysis".into(),
-                actual: err.to_string(),
-                ok: false,
-            }),
+            Err(err) => out.push(geometry_failed(err)),
         }
     }
     out
+}
+
+fn geometry_failed(err: crate::motion::MotionError) -> Outcome {
+    Outcome {
+        key: "geometry",
+        expected: "a geometric analysis".into(),
+        actual: err.to_string(),
+        ok: false,
+    }
 }

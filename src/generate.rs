@@ -442,11 +442,14 @@ pub fn to_toml(m: &Mechanism) -> String {
             origin,
             axis,
             axis2,
+            origin2,
             normal,
             pitch,
         } = &j.geometry;
-        if let Some(v) = origin {
-            let _ = writeln!(out, "origin = {}", toml_vec(v, planar));
+        for (key, v) in [("origin", origin), ("origin2", origin2)] {
+            if let Some(v) = v {
+                let _ = writeln!(out, "{key} = {}", toml_vec(v, planar));
+            }
         }
         for (key, v) in [("axis", axis), ("axis2", axis2), ("normal", normal)] {
             if let Some(v) = v {

@@ -9,6 +9,7 @@
 
 pub mod diagnostic;
 mod elimination;
+pub mod exact;
 pub mod examples;
 pub mod expect;
 pub mod format;

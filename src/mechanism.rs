@@ -118,6 +118,9 @@ pub struct Geometry {
     /// Second axis of a universal joint.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub axis2: Option<[f64; 3]>,
+    /// Second point: the centre on the second body of a sphere-sphere (SPSP) contact.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin2: Option<[f64; 3]>,
     /// Plane normal of a planar joint.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub normal: Option<[f64; 3]>,
@@ -183,9 +186,13 @@ pub struct Expect {
     /// Generic DOF by the pebble game (frame fixed).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub generic_dof: Option<i64>,
-    /// True (instantaneous) mobility, frame fixed.
+    /// True (instantaneous) mobility: frame fixed, driven inputs not counted (as `mbsa rigid`
+    /// prints it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub true_mobility: Option<i64>,
+    /// DOF the driven inputs leave free (as `mbsa analyze` reports it; 0 when determined).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncontrolled: Option<u64>,
     /// Isolated DOF.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub isolated: Option<u64>,

@@ -112,10 +112,17 @@ pub enum MotionError {
 /// realization.
 pub fn is_contact(kind: JointType) -> bool {
     use JointType::*;
-    matches!(
-        kind,
-        CPEP | L | EO | EPI | CTEP | RP | RD | CR | CTRP | SC | PC | CBIP | SP | SPSP
-    )
+    matches!(kind, CPEP | L | EO | EPI | CTEP | RP | RD | CTRP | CBIP)
+}
+
+/// Whether a kind has a geometric model in this motion space: contact kinds with geometry
+/// (SP, SPSP, SC, PC, CR) have one in space only; the count-only kinds ([`is_contact`]) never.
+fn modelled(kind: JointType, space: Space) -> bool {
+    use JointType::*;
+    match kind {
+        SP | SPSP | SC | PC | CR => space == Space::Spatial,
+        k => !is_contact(k),
+    }
 }
 
 fn v3(a: [f64; 3]) -> Vector3<f64> {
@@ -163,6 +170,29 @@ fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vec<f64> {
 
 fn spatial_trans(u: &Vector3<f64>) -> Vec<f64> {
     vec![0.0, 0.0, 0.0, u.x, u.y, u.z]
+}
+
+/// The rotations about the world x, y, z axes through `c` (the turns of a ball).
+fn world_turns(c: &Vector3<f64>) -> [Vec<f64>; 3] {
+    [Vector3::x(), Vector3::y(), Vector3::z()].map(|e| spatial_rot(&e, c))
+}
+
+/// The unit component of `v` perpendicular to unit `n` (geometry written to a few decimals is
+/// not exactly perpendicular); an error when `v` is (nearly) parallel to `n`.
+fn in_plane(
+    kind: JointType,
+    v: &Vector3<f64>,
+    n: &Vector3<f64>,
+    reason: &'static str,
+) -> Result<Vector3<f64>, MotionError> {
+    let w = v - n * n.dot(v);
+    if w.norm() < 1e-3 {
+        return Err(MotionError::Degenerate {
+            kind: kind.code(),
+            reason,
+        });
+    }
+    Ok(w / w.norm())
 }
 
 fn columns(b: usize, cols: &[Vec<f64>]) -> DMatrix<f64> {
@@ -357,6 +387,8 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
     let code = kind.code();
     let origin = |g: &Geometry| need(kind, "origin", g.origin).map(v3);
     let axis = |g: &Geometry| need(kind, "axis", g.axis).and_then(|a| unit(kind, "axis", a));
+    let normal =
+        |g: &Geometry| need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
     match space {
         Space::Spatial => Ok(match kind {
             R => vec![spatial_rot(&axis(g)?, &origin(g)?)],
@@ -387,13 +419,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 let u2 = unit(kind, "axis2", need(kind, "axis2", g.axis2)?)?;
                 vec![spatial_rot(&u, &p), spatial_rot(&u2, &p)]
             }
-            S => {
-                let p = origin(g)?;
-                [Vector3::x(), Vector3::y(), Vector3::z()]
-                    .iter()
-                    .map(|e| spatial_rot(e, &p))
-                    .collect()
-            }
+            S => world_turns(&origin(g)?).to_vec(),
             PL | FP => {
                 let n = match (kind, g.normal) {
                     (_, Some(n)) => unit(kind, "normal", n)?,
@@ -403,6 +429,65 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
                 let (e1, e2) = perpendicular_pair(&n);
                 vec![spatial_trans(&e1), spatial_trans(&e2), spatial_rot(&n, &p)]
+            }
+            SP => {
+                // Sphere (second body) on a plane (first body): slides in the plane, then the
+                // three turns about the centre.
+                let (c, n) = (origin(g)?, normal(g)?);
+                let (e1, e2) = perpendicular_pair(&n);
+                let mut out = vec![spatial_trans(&e1), spatial_trans(&e2)];
+                out.extend(world_turns(&c));
+                out
+            }
+            SC => {
+                // Sphere centre kept on the cylinder axis: the slide, then the three turns.
+                let (c, u) = (origin(g)?, axis(g)?);
+                let mut out = vec![spatial_trans(&u)];
+                out.extend(world_turns(&c));
+                out
+            }
+            PC => {
+                // Cylinder on a plane: two slides in the plane, turn about the normal, turn
+                // about the cylinder axis (its component in the plane).
+                let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
+                let u = in_plane(kind, &u, &n, "`axis` must not be parallel to `normal`")?;
+                let (e1, e2) = perpendicular_pair(&n);
+                vec![
+                    spatial_trans(&e1),
+                    spatial_trans(&e2),
+                    spatial_rot(&n, &p),
+                    spatial_rot(&u, &p),
+                ]
+            }
+            CR => {
+                // Cylinder in a slot: slide along the axis, slide across the slot, turn about
+                // the axis.
+                let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
+                let n = in_plane(kind, &n, &u, "`normal` must not be parallel to `axis`")?;
+                vec![
+                    spatial_trans(&u),
+                    spatial_trans(&n.cross(&u)),
+                    spatial_rot(&u, &p),
+                ]
+            }
+            SPSP => {
+                // One force along the line of centres; the allowed motions are its annihilator.
+                let c1 = origin(g)?;
+                let c2 = v3(need(kind, "origin2", g.origin2)?);
+                let d = c2 - c1;
+                if d.norm().is_nan() || d.norm() <= 1e-12 {
+                    return Err(MotionError::Degenerate {
+                        kind: code,
+                        reason: "`origin` and `origin2` (the two centres) coincide",
+                    });
+                }
+                let d = d / d.norm();
+                let m = c1.cross(&d);
+                let row = DMatrix::from_row_slice(1, 6, &[m.x, m.y, m.z, d.x, d.y, d.z]);
+                let t = complement_rows(&row.transpose());
+                (0..t.nrows())
+                    .map(|i| t.row(i).iter().copied().collect())
+                    .collect()
             }
             F => {
                 let mut out = Vec::new();
@@ -485,7 +570,7 @@ pub fn joint_model(
             grade,
         });
     }
-    if is_contact(kind) {
+    if !modelled(kind, space) {
         let rows = contact_rows(kind, g, space);
         if rows.nrows() != b - grade as usize {
             return Err(MotionError::Degenerate {
@@ -524,6 +609,7 @@ pub fn random_geometry(kind: JointType, space: Space, rng: &mut SplitMix64) -> G
     let axis2: [f64; 3] = random_unit(rng).into();
     let normal: [f64; 3] = random_unit(rng).into();
     let pitch = rng.next_signed();
+    let origin2 = [rng.next_signed(), rng.next_signed(), rng.next_signed()];
     match space {
         Space::Spatial => {}
         Space::Planar => {
@@ -544,6 +630,7 @@ pub fn random_geometry(kind: JointType, space: Space, rng: &mut SplitMix64) -> G
         origin: Some(origin),
         axis: Some(axis),
         axis2: Some(axis2),
+        origin2: Some(origin2),
         normal: Some(normal),
         pitch: Some(pitch),
     }
@@ -586,14 +673,207 @@ pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
     })
 }
 
-/// One model per joint at the file geometry. Count-only kinds without geometry get the generic
+/// Where the joint geometry of an analysis comes from (what the user asked for).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometrySource {
+    /// The file's `origin`/`axis`/... fields (an error names a joint lacking one).
+    File,
+    /// A random generic realization of the joint types, seeded.
+    Random {
+        /// The seed.
+        seed: u64,
+    },
+    /// The file's geometry when every joint has it, else a random realization with this seed.
+    Auto {
+        /// The seed of the random realization, if one is used.
+        seed: u64,
+    },
+}
+
+impl Default for GeometrySource {
+    fn default() -> GeometrySource {
+        GeometrySource::Auto { seed: 0 }
+    }
+}
+
+/// The geometry an analysis used, as every report states it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct GeometryUsed {
+    /// `file` or `random`.
+    pub mode: &'static str,
+    /// The seed of a random realization.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<u64>,
+    /// The configuration analysed, in words.
+    pub configuration: String,
+    /// Why this geometry, and which joints lack theirs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// File geometry: how precisely its numbers are known (±, from the digits written or
+    /// `--tolerance`); 0 when every number is exact.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precision: Option<f64>,
+}
+
+impl GeometryUsed {
+    /// Whether the file's geometry was used.
+    pub fn is_file(&self) -> bool {
+        self.mode == "file"
+    }
+
+    /// One line for table reports.
+    pub fn line(&self) -> String {
+        let mut s = match self.seed {
+            Some(seed) => format!("geometry: random (seed {seed}), {}", self.configuration),
+            None => format!("geometry: file, {}", self.configuration),
+        };
+        if let Some(p) = self.precision.filter(|&p| p > 0.0) {
+            s.push_str(&format!("; numbers known to ±{p:.0e}"));
+        }
+        if let Some(n) = &self.note {
+            s.push_str(&format!(" ({n})"));
+        }
+        s
+    }
+}
+
+/// The joint models of a mechanism at the chosen geometry, and what was chosen.
+#[derive(Clone, Debug)]
+pub struct Realization {
+    /// One model per joint (driven DOF removed), in joint order.
+    pub models: Vec<JointModel>,
+    /// The geometry used.
+    pub used: GeometryUsed,
+}
+
+/// The joint models at `source` (with `precision` overriding the written digits in file
+/// mode). `Auto` takes the file geometry when every joint has the fields its kind needs
+/// ([`lacking`] is empty), else a random realization with a note naming the joints.
+pub fn realization(
+    m: &Mechanism,
+    source: GeometrySource,
+    precision: Option<f64>,
+) -> Result<Realization, MotionError> {
+    let random = |seed: u64, note: Option<String>| Realization {
+        models: realize(m, seed),
+        used: GeometryUsed {
+            mode: "random",
+            seed: Some(seed),
+            configuration: "a random generic realization of the joint types".into(),
+            note,
+            precision: None,
+        },
+    };
+    let file = |note: Option<String>| -> Result<Realization, MotionError> {
+        Ok(Realization {
+            models: configure(m)?,
+            used: GeometryUsed {
+                mode: "file",
+                seed: None,
+                configuration: "the configuration written in the file".into(),
+                note,
+                precision: Some(precision.unwrap_or_else(|| written_precision(m))),
+            },
+        })
+    };
+    let lack = lacking(m);
+    match source {
+        GeometrySource::Random { seed } => Ok(random(seed, None)),
+        GeometrySource::File => {
+            let modelled_all = lack.iter().all(|l| l.no_model);
+            if !modelled_all {
+                // The first joint lacking a field, as the error.
+                configure(m)?;
+            }
+            let note = (!lack.is_empty()).then(|| {
+                format!(
+                    "no geometric model for {}: generic contact lines used",
+                    lack.iter()
+                        .map(|l| l.describe())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            });
+            file(note)
+        }
+        GeometrySource::Auto { seed } if lack.is_empty() => {
+            match file(Some("every joint has its geometry".into())) {
+                Ok(r) => Ok(r),
+                Err(e) => Ok(random(
+                    seed,
+                    Some(format!(
+                        "file geometry unusable ({e}); random realization used"
+                    )),
+                )),
+            }
+        }
+        GeometrySource::Auto { seed } => {
+            const SHOWN: usize = 5;
+            let mut names: Vec<String> = lack.iter().take(SHOWN).map(|l| l.describe()).collect();
+            if lack.len() > SHOWN {
+                names.push(format!("{} more", lack.len() - SHOWN));
+            }
+            Ok(random(
+                seed,
+                Some(format!(
+                    "{} joint(s) lack geometry: {}; `--geometry file` needs it",
+                    lack.len(),
+                    names.join(", ")
+                )),
+            ))
+        }
+    }
+}
+
+/// The geometry of every joint at `source` (see [`realization`]): the file's, or a random
+/// generic realization drawn per (seed, joint index) as [`realize`] does. Analyses that build
+/// models per binary pair with their own driven share ([`pair_model`]) start from these.
+pub fn geometries(
+    m: &Mechanism,
+    source: GeometrySource,
+    precision: Option<f64>,
+) -> Result<(Vec<Geometry>, GeometryUsed), MotionError> {
+    let real = realization(m, source, precision)?;
+    let geoms = match real.used.seed {
+        Some(seed) => (0..m.joints.len())
+            .map(|i| {
+                let j = &m.joints[i];
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(seed, i)))
+            })
+            .collect(),
+        None => m
+            .joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| {
+                if !modelled(j.kind, m.space) && j.geometry.is_empty() {
+                    random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+                } else {
+                    j.geometry.clone()
+                }
+            })
+            .collect(),
+    };
+    Ok((geoms, real.used))
+}
+
+/// The model of one binary pair of joint `index` of `m` at geometry `g` with `driven` of its
+/// DOF fixed; a joint no model fits (the reader rejects such files) gets a generic model of
+/// its grade, so analyses of mechanisms built in code never fail here.
+pub fn pair_model(m: &Mechanism, index: usize, g: &Geometry, driven: u32) -> JointModel {
+    let j = &m.joints[index];
+    joint_model(j.kind, g, m.space, driven)
+        .unwrap_or_else(|_| fallback_model(j.kind, m.space, driven, joint_seed(0, index)))
+}
+
+/// One model per joint at the file geometry. Kinds without a geometric model get the generic
 /// contact model seeded by the joint index. Errors name the joint.
 pub fn configure(m: &Mechanism) -> Result<Vec<JointModel>, MotionError> {
     m.joints
         .iter()
         .enumerate()
         .map(|(i, j)| {
-            let g = if is_contact(j.kind) && j.geometry.is_empty() {
+            let g = if !modelled(j.kind, m.space) && j.geometry.is_empty() {
                 random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
             } else {
                 j.geometry.clone()
@@ -606,20 +886,107 @@ pub fn configure(m: &Mechanism) -> Result<Vec<JointModel>, MotionError> {
         .collect()
 }
 
-/// Whether every joint has the geometry fields its kind needs (count-only kinds need none).
-pub fn has_geometry(m: &Mechanism) -> bool {
-    m.joints.iter().all(|j| {
-        j.kind.info().geometry.iter().all(|f| match *f {
-            "origin" => j.geometry.origin.is_some() || m.space == Space::Spherical,
-            "axis" => {
-                j.geometry.axis.is_some() || (m.space == Space::Planar && j.kind == JointType::R)
-            }
-            "axis2" => j.geometry.axis2.is_some(),
-            "normal" => j.geometry.normal.is_some(),
-            "pitch" => j.geometry.pitch.is_some(),
-            _ => true,
+/// A joint without the geometry its kind needs.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Lacking {
+    /// Joint id.
+    pub joint: String,
+    /// Its kind's code.
+    pub kind: &'static str,
+    /// The missing fields (empty when the kind has no geometric model at all).
+    pub fields: Vec<&'static str>,
+    /// The kind has no geometric model in this space (cams, gears, rolling, point contacts).
+    pub no_model: bool,
+}
+
+impl Lacking {
+    /// `A (S: origin)` or `G (EO: no geometric model)`.
+    pub fn describe(&self) -> String {
+        if self.no_model {
+            format!("{} ({}: no geometric model)", self.joint, self.kind)
+        } else {
+            format!("{} ({}: {})", self.joint, self.kind, self.fields.join(", "))
+        }
+    }
+}
+
+/// The joints that lack geometry fields their kind needs, and those whose kind has no
+/// geometric model: a mechanism has its geometry only when this is empty.
+pub fn lacking(m: &Mechanism) -> Vec<Lacking> {
+    m.joints
+        .iter()
+        .filter_map(|j| {
+            let g = &j.geometry;
+            let fields: Vec<&'static str> = j
+                .kind
+                .info()
+                .geometry
+                .iter()
+                .copied()
+                .filter(|f| match *f {
+                    "origin" => g.origin.is_none() && m.space != Space::Spherical,
+                    "origin2" => g.origin2.is_none(),
+                    "axis" => {
+                        g.axis.is_none() && !(m.space == Space::Planar && j.kind == JointType::R)
+                    }
+                    "axis2" => g.axis2.is_none(),
+                    "normal" => g.normal.is_none(),
+                    "pitch" => g.pitch.is_none(),
+                    _ => false,
+                })
+                .collect();
+            let no_model = !modelled(j.kind, m.space) && j.kind != JointType::FP;
+            (no_model || !fields.is_empty()).then(|| Lacking {
+                joint: j.id.clone(),
+                kind: j.kind.code(),
+                fields,
+                no_model,
+            })
         })
-    })
+        .collect()
+}
+
+/// Whether every joint has the geometry fields its kind needs ([`lacking`] is empty).
+pub fn has_geometry(m: &Mechanism) -> bool {
+    lacking(m).is_empty()
+}
+
+/// How precisely the file's geometry numbers are known: the largest rounding uncertainty of a
+/// written number. A number shown with 4 or more significant digits and d decimals is known
+/// to ±0.5·10^−d (CAD exports round so); a shorter one (`2.5`, `0`, `1`) is taken as exact.
+/// Numbers are judged by their shortest round-trip decimal form.
+pub fn written_precision(m: &Mechanism) -> f64 {
+    let mut worst: f64 = 0.0;
+    for j in &m.joints {
+        let g = &j.geometry;
+        let vectors = [g.origin, g.origin2, g.axis, g.axis2, g.normal];
+        let numbers = vectors
+            .iter()
+            .flatten()
+            .flat_map(|v| v.iter().copied())
+            .chain(g.pitch);
+        for x in numbers {
+            worst = worst.max(rounding_of(x));
+        }
+    }
+    worst
+}
+
+/// The rounding uncertainty of one number as written (see [`written_precision`]).
+pub fn rounding_of(x: f64) -> f64 {
+    if !x.is_finite() || x == 0.0 {
+        return 0.0;
+    }
+    let text = format!("{:e}", x.abs());
+    let (mantissa, exp) = text.split_once('e').unwrap_or((&text, "0"));
+    let exp: i32 = exp.parse().unwrap_or(0);
+    let digits = mantissa.chars().filter(|c| c.is_ascii_digit()).count() as i32;
+    if !(4..15).contains(&digits) {
+        // Short numbers are exact; 15-17 digits is full double precision.
+        return 0.0;
+    }
+    // The last significant digit sits at 10^(exp − digits + 1).
+    0.5 * 10f64.powi(exp - digits + 1)
 }
 
 #[cfg(test)]

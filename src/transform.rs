@@ -144,7 +144,7 @@ impl TransformOptions {
 }
 
 /// Errors of the transformation options.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum TransformError {
     /// An `--inputs`, `--keep` or `--exclude` spec that does not fit the mechanism.
     #[error(transparent)]
@@ -163,6 +163,9 @@ pub enum TransformError {
         /// The entry.
         text: String,
     },
+    /// The joint geometry asked for cannot be used.
+    #[error(transparent)]
+    Geometry(#[from] crate::motion::MotionError),
     /// A joint both kept and excluded.
     #[error("joint `{joint}` is both kept (--keep) and excluded (--exclude)")]
     KeepExcluded {
@@ -270,7 +273,11 @@ pub struct Summary {
     pub count: i64,
     /// Isolated DOF (spins no input can drive), from the rank check.
     pub isolated: u32,
-    /// Inputs each placement has: the count minus the isolated DOF.
+    /// Constraint equations dependent at the file's configuration (they fix nothing, so the
+    /// mechanism takes that many more inputs than its count says).
+    pub set_aside: u32,
+    /// Inputs each placement has: the count plus the equations set aside, minus the isolated
+    /// DOF (the true mobility less the isolated DOF).
     pub f: i64,
     /// Joints (binary pairs) that may be driven under the restrictions.
     pub drivable: usize,
@@ -331,12 +338,17 @@ pub fn enumerate(
     sink: &mut dyn FnMut(Placement),
 ) -> Result<Summary, TransformError> {
     let rules = Rules::of(m, opts)?;
+    if !opts.analysis.count_only {
+        // A geometry that cannot be used is the user's error, said once, before any work.
+        crate::motion::geometries(m, opts.analysis.geometry, opts.analysis.precision)?;
+    }
     let (exps, total_exps) = expansions(m, opts.max_expansions);
     let mob = crate::mobility::mobility(m);
     let mut summary = Summary {
         name: m.name.clone(),
         count: mob.mobility.count,
         isolated: 0,
+        set_aside: 0,
         f: mob.mobility.count,
         drivable: 0,
         expansions: exps.len(),
@@ -364,6 +376,7 @@ pub fn enumerate(
         let p = Problem::of(e, m, &rules, opts);
         if x == 0 {
             summary.isolated = p.isolated;
+            summary.set_aside = p.set_aside;
             summary.f = p.f;
             summary.drivable = p.drivable();
             if let Some(n) = &p.note {
@@ -800,6 +813,7 @@ struct Problem {
     /// Pairs that may receive inputs beyond the kept ones, in joint order.
     cand: Vec<usize>,
     isolated: u32,
+    set_aside: u32,
     f: i64,
     /// Units the search places beyond the kept ones.
     need: usize,
@@ -817,6 +831,9 @@ impl Problem {
         let mut u = vec![b; nb];
         u[m.frame] = 0;
         let mut isolated = 0u32;
+        // Constraint equations dependent at the file's configuration fix nothing: inputs take
+        // their place (a planar four-bar written in space takes one input, not none).
+        let mut set_aside = vec![0u32; m.joints.len()];
         if !opts.analysis.count_only {
             // Spins no input can drive (a bar between two spherical joints): the rank check's
             // isolated freedoms with no input at all, on bodies held by two pairs or more. A
@@ -828,8 +845,15 @@ impl Problem {
                     pairs[x] += 1;
                 }
             }
-            let a = structure::analyze(m, &opts.analysis, &Library::empty());
-            for iso in &a.isolated {
+            // The geometry was checked before the enumeration: this analysis cannot fail.
+            let a = structure::analyze(m, &opts.analysis, &Library::empty()).ok();
+            let a = a.as_ref();
+            if let Some(a) = a {
+                for (q, &n) in a.set_aside.iter().enumerate() {
+                    set_aside[q] = n;
+                }
+            }
+            for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
                 let id = crate::mechanism::BodyId::from_text(&iso.body);
                 if let Some(x) = m.body_index(&id)
                     && pairs[x] >= 2
@@ -851,6 +875,7 @@ impl Problem {
             kept_groups: Vec::new(),
             cand: Vec::new(),
             isolated,
+            set_aside: set_aside.iter().sum(),
             f: 0,
             need: 0,
             root: None,
@@ -871,7 +896,7 @@ impl Problem {
                     p.touching[z].push(q);
                 }
             }
-            cons[q] = b.saturating_sub(j.grade());
+            cons[q] = b.saturating_sub(j.grade()).saturating_sub(set_aside[q]);
             let o = e.origin[q];
             let k = j.grade();
             let ok = rules.allowed[o] && (!rules.grounded || x == m.frame || y == m.frame);
@@ -1170,8 +1195,10 @@ fn evaluate(
     for &(q, n) in w {
         mech.joints[q].driven = n;
     }
-    let a = structure::analyze(mech, opts, lib);
-    (a.status == Status::Determined).then_some(a)
+    // The geometry was checked before the enumeration: this analysis cannot fail.
+    structure::analyze(mech, opts, lib)
+        .ok()
+        .filter(|a| a.status == Status::Determined)
 }
 
 fn placement(
@@ -1305,8 +1332,8 @@ pub fn compare(
 ) -> Result<Comparison, TransformError> {
     let mut given_m = m.clone();
     given_m.apply_inputs(spec)?;
-    let fa = structure::analyze(m, &opts.analysis, lib);
-    let ga = structure::analyze(&given_m, &opts.analysis, lib);
+    let fa = structure::analyze(m, &opts.analysis, lib)?;
+    let ga = structure::analyze(&given_m, &opts.analysis, lib)?;
     let file = Evaluation::of(m, &fa);
     let given = Evaluation::of(&given_m, &ga);
     let criteria = if opts.rank.is_empty() {

@@ -30,7 +30,10 @@ fn snapshot(name: &str, value: &str) {
 
 #[test]
 fn every_bundled_mechanism_meets_its_expectations() {
-    let (code, out, err) = mbsa(&["check", "@all"]);
+    let files: Vec<String> = names().iter().map(|n| format!("@{n}")).collect();
+    let mut args = vec!["check"];
+    args.extend(files.iter().map(String::as_str));
+    let (code, out, err) = mbsa(&args);
     assert_eq!(code, 0, "{out}{err}");
     assert_eq!(
         out.lines().filter(|l| l.starts_with("ok")).count(),

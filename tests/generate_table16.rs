@@ -37,7 +37,7 @@ fn table16_equivalents_have_the_published_counts() {
             let m = assur(class, groups, 364, variant).unwrap();
             assert_eq!(m.bodies.len(), bodies, "{}", m.name);
             for opts in both_modes() {
-                let a = analyze(&m, &opts, &lib);
+                let a = analyze(&m, &opts, &lib).unwrap();
                 assert_eq!(a.status, Status::Determined, "{}", m.name);
                 assert_eq!(
                     a.groups.len(),
@@ -68,7 +68,7 @@ fn spatial_assur_linkages_are_determined() {
             let m = assur_spatial(class, groups, 364, variant).unwrap();
             assert_eq!(m.bodies.len(), bodies, "{}", m.name);
             for opts in both_modes() {
-                let a = analyze(&m, &opts, &lib);
+                let a = analyze(&m, &opts, &lib).unwrap();
                 assert_eq!(a.status, Status::Determined, "{}", m.name);
                 assert!(
                     a.redundant.is_empty() && a.isolated.is_empty(),

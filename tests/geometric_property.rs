@@ -41,6 +41,7 @@ proptest! {
         let r = analyze(&m, &GeometricOptions {
             geometry: GeometrySource::Random { seed },
             check_finite: false,
+            precision: None,
         }).expect("random geometry always works");
         prop_assert_eq!(r.mobility as i64, g.dof);
         prop_assert_eq!(r.redundant as u64, g.redundant);

@@ -15,6 +15,7 @@ fn random_framework_is_rigid_with_spins() {
             &GeometricOptions {
                 geometry: GeometrySource::File,
                 check_finite: false,
+                precision: None,
             },
         )
         .expect("geometry given");
@@ -39,6 +40,7 @@ fn timing_thousand_bars() {
         &GeometricOptions {
             geometry: GeometrySource::File,
             check_finite: false,
+            precision: None,
         },
     )
     .expect("geometry given");

@@ -96,7 +96,7 @@ proptest! {
                     let _ = mbsa::mobility::mobility(&m);
                     if m.bodies.len() <= 40 {
                         let opts = mbsa::structure::Options { count_only: true, ..Default::default() };
-                        let _ = mbsa::structure::analyze(&m, &opts, &mbsa::structure::Library::builtin());
+                        let _ = mbsa::structure::analyze(&m, &opts, &mbsa::structure::Library::builtin()).unwrap();
                         let _ = mbsa::rigidity::pebble::analyze(&m, &Default::default());
                     }
                 }

@@ -42,7 +42,7 @@ fn snap(name: &str, value: String) {
 
 fn both_methods_agree(m: &Mechanism, opts: Options) -> Analysis {
     let lib = Library::builtin();
-    let a = analyze(m, &opts, &lib);
+    let a = analyze(m, &opts, &lib).unwrap();
     let b = analyze(
         m,
         &Options {
@@ -50,7 +50,8 @@ fn both_methods_agree(m: &Mechanism, opts: Options) -> Analysis {
             ..opts
         },
         &lib,
-    );
+    )
+    .unwrap();
     assert_eq!(summary(&a), summary(&b), "flow and exhaustive differ");
     a
 }
@@ -186,7 +187,7 @@ fn four_bar_groups() {
     let a = both_methods_agree(&four_bar(), count_only());
     assert_eq!(summary(&a), "L1 {2} 1R3D\nL2 {3,4} 1P1C1S3D");
     assert_eq!(a.status, Status::Determined);
-    let a = analyze(&four_bar(), &Options::default(), &Library::builtin());
+    let a = analyze(&four_bar(), &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(a.status, Status::Determined);
     snap("structure_four_bar", mbsa::report::structure::table(&a));
 }
@@ -198,7 +199,7 @@ fn nine_bar_groups() {
         summary(&a),
         "L1 {2} 1R2D\nL1 {9} 1R2D\nL2 {3} 1R2D\nL3 {4} 1R2D\nL4 {5,6} 3R2D\nL5 {7,8} 3R2D"
     );
-    let a = analyze(&nine_bar(), &Options::default(), &Library::builtin());
+    let a = analyze(&nine_bar(), &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(a.status, Status::Determined);
     assert!(a.redundant.is_empty() && a.isolated.is_empty());
     snap("structure_nine_bar", mbsa::report::structure::table(&a));
@@ -223,7 +224,7 @@ fn rotor_set_1() {
         .map(|t| t.kind.as_str())
         .collect();
     assert_eq!(uncovered, ["1R1P1U1S3D", "2R1U1S3D"]);
-    let full = analyze(&rotor(1), &Options::default(), &Library::builtin());
+    let full = analyze(&rotor(1), &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(summary(&full), summary(&a));
     assert_eq!(full.status, Status::Determined);
     snap(
@@ -242,7 +243,7 @@ fn rotor_set_2() {
          L3 {5,8} 1R1U1S3D\nL4 {12,16} 1R1U1S3D\nL5 {11,14} 1R1U1S3D\nL6 {4,7} 1P1U1S3D"
     );
     assert!(a.types.iter().all(|t| t.in_library));
-    let full = analyze(&rotor(2), &Options::default(), &Library::builtin());
+    let full = analyze(&rotor(2), &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(full.status, Status::Determined);
     snap(
         "structure_rotor_set2",
@@ -267,7 +268,7 @@ fn micro_manipulator_count_only() {
 
 #[test]
 fn micro_manipulator_rank_check() {
-    let a = analyze(&micro(), &Options::default(), &Library::builtin());
+    let a = analyze(&micro(), &Options::default(), &Library::builtin()).unwrap();
     assert_ne!(a.status, Status::Determined);
     assert_eq!(a.redundant.len(), 1);
     let r = &a.redundant[0];
@@ -295,7 +296,7 @@ fn stewart_original_and_ik() {
          L2 {8,9} 1P1U1S3D\nL2 {10,11} 1P1U1S3D\nL2 {12,13} 1P1U1S3D"
     );
     for ik in [false, true] {
-        let full = analyze(&stewart(ik), &Options::default(), &Library::builtin());
+        let full = analyze(&stewart(ik), &Options::default(), &Library::builtin()).unwrap();
         assert_eq!(full.status, Status::Determined, "ik = {ik}");
         let name = if ik {
             "structure_stewart_ik"
@@ -308,7 +309,7 @@ fn stewart_original_and_ik() {
 
 #[test]
 fn hexapod_rod_spins_are_isolated() {
-    let a = analyze(&hexapod(), &Options::default(), &Library::builtin());
+    let a = analyze(&hexapod(), &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(a.status, Status::Determined);
     assert_eq!(a.isolated.len(), 6);
     assert!(a.redundant.is_empty());
@@ -318,7 +319,7 @@ fn hexapod_rod_spins_are_isolated() {
          L2 {3,5,7,9,11,13,14} 12S3D"
     );
     // Counting alone sees six undriven DOF.
-    let c = analyze(&hexapod(), &count_only(), &Library::builtin());
+    let c = analyze(&hexapod(), &count_only(), &Library::builtin()).unwrap();
     assert_eq!(c.status, Status::Underdetermined);
     snap("structure_hexapod", mbsa::report::structure::table(&a));
 }
@@ -342,7 +343,7 @@ fn badly_placed_inputs_are_mixed() {
             (R, 8, 1, 0),
         ],
     );
-    let a = analyze(&m, &count_only(), &Library::builtin());
+    let a = analyze(&m, &count_only(), &Library::builtin()).unwrap();
     assert_eq!(a.mobility.count, 3);
     assert_eq!(a.mobility.inputs, 3);
     assert_eq!(a.status, Status::Mixed);
@@ -350,7 +351,7 @@ fn badly_placed_inputs_are_mixed() {
     assert_eq!(d.overdetermined.as_ref().map(|o| o.excess), Some(1));
     assert_eq!(d.underdetermined.as_ref().map(|u| u.missing), Some(1));
     assert_eq!(summary(&a), "L1 {5} 1R2D");
-    let full = analyze(&m, &Options::default(), &Library::builtin());
+    let full = analyze(&m, &Options::default(), &Library::builtin()).unwrap();
     assert_eq!(full.status, Status::Mixed);
     snap(
         "structure_misplaced_inputs",

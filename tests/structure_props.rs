@@ -69,14 +69,14 @@ fn random_mechanism(n: usize, planar: bool, seed: u64, multi: bool) -> Option<Me
             }
         }
         joints.push(spec);
-        let a = analyze(&build(space, &joints), &count_only(), &lib);
+        let a = analyze(&build(space, &joints), &count_only(), &lib).unwrap();
         if over(&a) > 0 {
             joints.pop();
         }
     }
     // Inputs: try joints in random order, keep an input when it fixes a missing DOF.
     loop {
-        let a = analyze(&build(space, &joints), &count_only(), &lib);
+        let a = analyze(&build(space, &joints), &count_only(), &lib).unwrap();
         let miss = missing(&a);
         if miss == 0 {
             return (a.status == Status::Determined).then(|| build(space, &joints));
@@ -90,7 +90,7 @@ fn random_mechanism(n: usize, planar: bool, seed: u64, multi: bool) -> Option<Me
                 continue;
             }
             joints[j].driven += 1;
-            let b = analyze(&build(space, &joints), &count_only(), &lib);
+            let b = analyze(&build(space, &joints), &count_only(), &lib).unwrap();
             if over(&b) == 0 && missing(&b) < miss {
                 placed = true;
                 break;
@@ -123,8 +123,8 @@ proptest! {
             return Ok(());
         };
         let lib = Library::empty();
-        let flow = analyze(&m, &count_only(), &lib);
-        let ex = analyze(&m, &Options { method: Method::Exhaustive, ..count_only() }, &lib);
+        let flow = analyze(&m, &count_only(), &lib).unwrap();
+        let ex = analyze(&m, &Options { method: Method::Exhaustive, ..count_only() }, &lib).unwrap();
         prop_assert_eq!(flow.status, Status::Determined);
         prop_assert_eq!(groups(&flow), groups(&ex));
         // The canonical order and the rendered strings agree too.
@@ -182,9 +182,9 @@ proptest! {
         let Some(m) = random_mechanism(n, planar, seed, false) else {
             return Ok(());
         };
-        let opts = Options { seed: seed ^ 0x5eed, ..Options::default() };
-        let a = analyze(&m, &opts, &Library::empty());
-        let (rank, nrows, nunk) = global_rank(&m, opts.seed);
+        let opts = Options { geometry: mbsa::motion::GeometrySource::Random { seed: seed ^ 0x5eed }, ..Options::default() };
+        let a = analyze(&m, &opts, &Library::empty()).unwrap();
+        let (rank, nrows, nunk) = global_rank(&m, seed ^ 0x5eed);
         let iso: usize = a.isolated.iter().map(|i| i.dimension as usize).sum();
         let red: usize = a.redundant.iter().map(|r| r.count as usize).sum();
         let determined = rank == nrows && rank + iso == nunk && iso == 0;

@@ -95,9 +95,10 @@ fn determined_count_equals_brute_force() {
             for (j, &x) in mm.joints.iter_mut().zip(w) {
                 j.driven = x;
             }
-            let count = structure::analyze(&mm, &count_opts, &lib).status == Status::Determined;
-            let full =
-                (structure::analyze(&mm, &opts, &lib).status == Status::Determined).then(|| {
+            let count =
+                structure::analyze(&mm, &count_opts, &lib).unwrap().status == Status::Determined;
+            let full = (structure::analyze(&mm, &opts, &lib).unwrap().status == Status::Determined)
+                .then(|| {
                     let mut v: Vec<String> = mm
                         .joints
                         .iter()

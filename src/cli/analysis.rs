@@ -21,9 +21,47 @@ pub struct StructureArgs {
     /// Library of solvable group types: a TOML file `types = ["1R3D", ...]` (default: the built-in library).
     #[arg(long, value_name = "FILE")]
     pub library: Option<String>,
-    /// Seed of the random joint geometry used by the rank check.
+    #[command(flatten)]
+    pub geometry: GeometryArgs,
+}
+
+/// Which joint geometry the analyses use: shared by every command that analyses.
+#[derive(Args, Debug, Clone)]
+pub struct GeometryArgs {
+    /// Joint geometry: `auto` (the file's when every joint has it, else random), `file` (the
+    /// configuration written in the file), or `random` (a seeded generic realization of the
+    /// joint types).
+    #[arg(long, value_enum, default_value_t = GeometryArg::Auto)]
+    pub geometry: GeometryArg,
+    /// Seed of the random realization (used when the geometry is random).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// File geometry: how precisely its numbers are known, e.g. 1e-4 for ±1e-4 (default: from
+    /// the digits written: 0.7071 is known to ±5e-5; short numbers such as 2.5 are exact).
+    #[arg(long, value_name = "DELTA")]
+    pub tolerance: Option<f64>,
+}
+
+impl GeometryArgs {
+    /// The geometry source these options ask for.
+    pub fn source(&self) -> mbsa::motion::GeometrySource {
+        use mbsa::motion::GeometrySource;
+        match self.geometry {
+            GeometryArg::Auto => GeometrySource::Auto { seed: self.seed },
+            GeometryArg::File => GeometrySource::File,
+            GeometryArg::Random => GeometrySource::Random { seed: self.seed },
+        }
+    }
+
+    /// `--tolerance`, checked.
+    pub fn precision(&self) -> Result<Option<f64>, Failure> {
+        match self.tolerance {
+            Some(t) if !(t.is_finite() && t >= 0.0) => Err(Failure::Input(format!(
+                "error: --tolerance must be a finite number >= 0, not {t}"
+            ))),
+            t => Ok(t),
+        }
+    }
 }
 
 /// `--method` values.
@@ -51,15 +89,16 @@ impl StructureArgs {
     }
 
     /// The analysis options.
-    pub fn options(&self) -> structure::Options {
-        structure::Options {
+    pub fn options(&self) -> Result<structure::Options, Failure> {
+        Ok(structure::Options {
             count_only: self.count_only,
             method: match self.method {
                 MethodArg::Flow => Method::Flow,
                 MethodArg::Exhaustive => Method::Exhaustive,
             },
-            seed: self.seed,
-        }
+            geometry: self.geometry.source(),
+            precision: self.geometry.precision()?,
+        })
     }
 }
 
@@ -67,7 +106,7 @@ impl StructureArgs {
 pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Result<(), Failure> {
     let m = load_with_inputs(file, args.inputs.as_deref())?;
     let lib = args.library()?;
-    let a = structure::analyze(&m, &args.options(), &lib);
+    let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
     let out = emit(&match format {
         OutputFormat::Table => mbsa::report::structure::table(&a),
         OutputFormat::Json => mbsa::report::json(&a),
@@ -93,12 +132,16 @@ pub enum ViewArg {
 pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Failure> {
     let m = load_with_inputs(file, args.inputs.as_deref())?;
     if view == ViewArg::Rigid {
-        let r = geometric::analyze(&m, &geometric::GeometricOptions::default())
-            .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e)))?;
+        let opts = geometric::GeometricOptions {
+            geometry: args.geometry.source(),
+            precision: args.geometry.precision()?,
+            check_finite: false,
+        };
+        let r = geometric::analyze(&m, &opts).map_err(|e| input_error(file, e))?;
         return emit(&mbsa::report::dot::rigid(&m, &r));
     }
     let lib = args.library()?;
-    let a = structure::analyze(&m, &args.options(), &lib);
+    let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
     let view = match view {
         ViewArg::Diagram => View::Diagram,
         ViewArg::Structure => View::Structure,
@@ -130,13 +173,8 @@ pub struct RigidArgs {
     /// Count driven inputs as constraints (default: analyse the chain alone).
     #[arg(long)]
     pub with_inputs: bool,
-    /// Geometry for the geometric analysis: `auto` (the file's when every joint has it, else
-    /// random), `file`, or `random` (a seeded generic realization of the joint types).
-    #[arg(long, value_enum, default_value_t = GeometryArg::Auto)]
-    pub geometry: GeometryArg,
-    /// Seed of the random realization.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    #[command(flatten)]
+    pub geometry: GeometryArgs,
     /// Replace the file's driven inputs (with `--with-inputs`).
     #[arg(long, value_name = "SPEC")]
     pub inputs: Option<String>,
@@ -151,6 +189,11 @@ pub enum GeometryArg {
     File,
     /// A random generic realization of the joint types.
     Random,
+}
+
+/// A joint-model error of FILE, rendered (exit 2).
+pub fn input_error(file: &FileArg, e: mbsa::motion::MotionError) -> Failure {
+    Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e))
 }
 
 /// Both rigidity reports, for `--format json` with `--method both`.
@@ -177,21 +220,12 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
         )
     });
     let geometric = if matches!(args.method, RigidMethod::Both | RigidMethod::Geometric) {
-        let source = match args.geometry {
-            GeometryArg::Auto if args.seed == 0 => geometric::GeometrySource::Auto,
-            GeometryArg::Auto | GeometryArg::Random => {
-                geometric::GeometrySource::Random { seed: args.seed }
-            }
-            GeometryArg::File => geometric::GeometrySource::File,
-        };
         let opts = geometric::GeometricOptions {
-            geometry: source,
+            geometry: args.geometry.source(),
+            precision: args.geometry.precision()?,
             check_finite: false,
         };
-        Some(
-            geometric::analyze(&m, &opts)
-                .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e)))?,
-        )
+        Some(geometric::analyze(&m, &opts).map_err(|e| input_error(file, e))?)
     } else {
         None
     };

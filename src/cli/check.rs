@@ -4,7 +4,16 @@ use super::{Failure, emit, input};
 use std::fmt::Write;
 
 /// Check every file; exit 2 if any cannot be read, else 1 if any expectation fails.
-pub fn run(files: &[String], input_format: Option<input::InputFormat>) -> Result<(), Failure> {
+pub fn run(
+    files: &[String],
+    input_format: Option<input::InputFormat>,
+    geometry: &super::analysis::GeometryArgs,
+) -> Result<(), Failure> {
+    let opts = mbsa::rigidity::geometric::GeometricOptions {
+        geometry: geometry.source(),
+        precision: geometry.precision()?,
+        check_finite: false,
+    };
     let mut names: Vec<String> = Vec::new();
     for f in files {
         if f == "@all" {
@@ -23,7 +32,7 @@ pub fn run(files: &[String], input_format: Option<input::InputFormat>) -> Result
             }
             Err(Failure::Check) => unreachable!("loading never fails a check"),
         };
-        let outcomes = mbsa::expect::evaluate(&m);
+        let outcomes = mbsa::expect::evaluate(&m, &opts);
         let mut text = String::new();
         let bad = outcomes.iter().filter(|o| !o.ok).count();
         if bad == 0 {

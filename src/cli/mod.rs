@@ -159,6 +159,8 @@ enum Command {
         /// Format of standard input (default: sniffed).
         #[arg(long, value_enum)]
         input_format: Option<input::InputFormat>,
+        #[command(flatten)]
+        geometry: analysis::GeometryArgs,
     },
     /// List the bundled example mechanisms (use them as `@name`).
     #[command(after_help = "Example:\n  mbsa examples\n  mbsa mobility @stewart")]
@@ -287,7 +289,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Check {
             files,
             input_format,
-        } => check::run(&files, input_format),
+            geometry,
+        } => check::run(&files, input_format, &geometry),
         Command::Examples => {
             let width = mbsa::examples::names().map(str::len).max().unwrap_or(0) + 1;
             let mut text = String::new();

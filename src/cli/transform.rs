@@ -84,7 +84,7 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         inputs: spec(&structure.inputs, "--inputs")?,
         max_expansions: args.max_expansions,
         limit: args.limit,
-        analysis: structure.options(),
+        analysis: structure.options()?,
     };
     if let Some(given) = &opts.inputs {
         let c = transform::compare(&m, given, &opts, &lib).map_err(|e| bad("--inputs", &e))?;

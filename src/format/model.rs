@@ -26,7 +26,7 @@ const TOP_KEYS: &[&str] = &[
     "$schema",
 ];
 const JOINT_KEYS: &[&str] = &[
-    "id", "type", "bodies", "driven", "origin", "axis", "axis2", "normal", "pitch",
+    "id", "type", "bodies", "driven", "origin", "origin2", "axis", "axis2", "normal", "pitch",
 ];
 const BODY_KEYS: &[&str] = &["id", "label"];
 const POINT_KEYS: &[&str] = &["id", "at"];
@@ -735,6 +735,7 @@ fn parse_geometry(es: &[Entry], space: Space) -> Result<Geometry, LoadError> {
     for e in es {
         match e.key.as_str() {
             "origin" => g.origin = Some(parse_vector(e, space, false)?),
+            "origin2" => g.origin2 = Some(parse_vector(e, space, false)?),
             "axis" => g.axis = Some(parse_vector(e, space, true)?),
             "axis2" => g.axis2 = Some(parse_vector(e, space, true)?),
             "normal" => g.normal = Some(parse_vector(e, space, true)?),

@@ -98,7 +98,11 @@ struct JointDoc {
     #[serde(default)]
     #[schemars(schema_with = "point_schema")]
     origin: Option<Vec<f64>>,
-    /// Joint axis (R, P, H, C, ER, first axis of U); non-zero.
+    /// Second point ([x, y, z]): the centre on the second body of a sphere-sphere contact (SPSP).
+    #[serde(default)]
+    #[schemars(schema_with = "point_schema")]
+    origin2: Option<Vec<f64>>,
+    /// Joint axis (R, P, H, C, ER, first axis of U; cylinder axis of SC, PC, CR); non-zero.
     #[serde(default)]
     #[schemars(schema_with = "vector_schema")]
     axis: Option<Vec<f64>>,
@@ -106,7 +110,8 @@ struct JointDoc {
     #[serde(default)]
     #[schemars(schema_with = "vector_schema")]
     axis2: Option<Vec<f64>>,
-    /// Plane normal of a planar joint; non-zero.
+    /// Plane normal of a planar joint (PL), of the plane of a sphere-plane (SP) or plane-cylinder
+    /// (PC) contact, of the slot plane of a slotted cylindrical joint (CR); non-zero.
     #[serde(default)]
     #[schemars(schema_with = "vector_schema")]
     normal: Option<Vec<f64>>,

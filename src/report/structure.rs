@@ -32,6 +32,9 @@ pub fn table(a: &Analysis) -> String {
         status,
         if a.count_only { " (count only)" } else { "" }
     );
+    if let Some(g) = &a.geometry {
+        let _ = writeln!(out, "{}", g.line());
+    }
     if !a.groups.is_empty() {
         let mut t = super::new_table();
         t.set_header(vec![
@@ -99,15 +102,8 @@ pub fn table(a: &Analysis) -> String {
             let _ = writeln!(out, "- {n}");
         }
     } else {
-        for r in &a.redundant {
-            let _ = writeln!(
-                out,
-                "- group {{{}}}: joints {} carry {} redundant equation(s); {}",
-                r.bodies.join(", "),
-                r.joints.join(", "),
-                r.count,
-                r.freedom
-            );
+        for n in &a.notes {
+            let _ = writeln!(out, "- {n}");
         }
     }
     out

@@ -56,21 +56,19 @@ fn coverage(covered: usize, groups: usize) -> String {
 /// The counts and notes above the table.
 pub fn summary(s: &Summary) -> String {
     let mut out = String::new();
+    // Where the count is not the mobility, say both: "count -2, true mobility 1: 1 input".
+    let mut why = format!("count {}", s.count);
+    if s.set_aside > 0 {
+        let _ = write!(why, ", true mobility {}", s.count + s.set_aside as i64);
+    }
+    if s.isolated > 0 {
+        let _ = write!(why, ", minus {} isolated", s.isolated);
+    }
     let _ = writeln!(
         out,
-        "{}: {} input(s) to place (mobility {}{}); {} count-valid placement(s) examined, {} \
-         excluded by the rank check, {} determined",
-        s.name,
-        s.f,
-        s.count,
-        if s.isolated > 0 {
-            format!(", minus {} isolated", s.isolated)
-        } else {
-            String::new()
-        },
-        s.count_valid,
-        s.excluded_by_rank,
-        s.determined
+        "{}: {}: {} input(s) to place; {} count-valid placement(s) examined, {} excluded by \
+         the rank check, {} determined",
+        s.name, why, s.f, s.count_valid, s.excluded_by_rank, s.determined
     );
     for n in &s.notes {
         let _ = writeln!(out, "note: {n}");

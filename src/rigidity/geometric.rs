@@ -14,7 +14,7 @@
 //!    pivoting on that body's columns decides its rank, the remaining rows become a new row
 //!    block on its neighbours. A pivot is kept when it exceeds `tol · σ_max` with
 //!    `tol = 1e-9 · max(rows, cols)` and `σ_max` from a power iteration; the smallest kept and
-//!    the largest dropped pivot give the gap, and a decision within a factor 1e3 of the
+//!    the largest dropped pivot give the gap, and a decision within a factor 100 of the
 //!    threshold is reported as ill-conditioned. The left null space (self-stresses) comes from
 //!    the same elimination on the transpose, with the pairs as unknowns.
 //! 4. Rigid clusters: bodies whose twists agree for every motion of the reduced null space.
@@ -29,31 +29,21 @@
 
 use crate::elimination::{Block, Elimination, sigma_max};
 use crate::mechanism::{Mechanism, Space};
-use crate::motion::{self, JointModel, MotionError};
+use crate::motion::{self, GeometryUsed, JointModel, MotionError};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::collections::{BTreeMap, BTreeSet};
 
-/// Where the joint geometry comes from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum GeometrySource {
-    /// The file's `origin`/`axis`/... fields (an error names the joint lacking one).
-    File,
-    /// A random generic realization of the joint types, seeded.
-    Random {
-        /// The seed.
-        seed: u64,
-    },
-    /// The file geometry if every joint has its fields, else a random realization (seed 0).
-    #[default]
-    Auto,
-}
+pub use crate::motion::GeometrySource;
 
 /// Options of [`analyze`].
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct GeometricOptions {
     /// Geometry source.
     pub geometry: GeometrySource,
+    /// File geometry: how precisely its numbers are known (±); default: from the digits
+    /// written ([`crate::motion::written_precision`]).
+    pub precision: Option<f64>,
     /// Tell finite from instantaneous mobility (not implemented yet: reported as skipped).
     pub check_finite: bool,
 }
@@ -142,9 +132,12 @@ pub struct Numeric {
     /// Largest pivot dropped, relative to σ_max.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub largest_dropped: Option<f64>,
-    /// Warning when a decision lies within a factor 1e3 of the threshold.
+    /// Warning when a decision lies within a factor 100 of the threshold.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub warning: Option<String>,
+    /// At a random realization: the rank was decided exactly (over GF(2^61 − 1)).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exact: Option<String>,
 }
 
 /// The result of [`analyze`].
@@ -163,6 +156,8 @@ pub struct GeometricReport {
     /// Why this geometry (for `Auto`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub geometry_note: Option<String>,
+    /// The geometry and configuration analysed, in full.
+    pub geometry_used: GeometryUsed,
     /// Number of bodies (frame included).
     pub bodies: usize,
     /// Constraint rows.
@@ -536,70 +531,68 @@ fn walk(cycle: &[usize], edges: &[(usize, usize)]) -> Vec<usize> {
 
 /// The geometric rigidity analysis of `m`.
 pub fn analyze(m: &Mechanism, opts: &GeometricOptions) -> Result<GeometricReport, MotionError> {
-    let (models, geometry, geometry_note) = match opts.geometry {
-        GeometrySource::File => (motion::configure(m)?, "file".to_string(), None),
-        GeometrySource::Random { seed } => (
-            motion::realize(m, seed),
-            format!("random (seed {seed})"),
-            None,
-        ),
-        GeometrySource::Auto => {
-            if motion::has_geometry(m) {
-                match motion::configure(m) {
-                    Ok(ms) => (
-                        ms,
-                        "file".to_string(),
-                        Some("every joint has its geometry fields".to_string()),
-                    ),
-                    Err(e) => (
-                        motion::realize(m, 0),
-                        "random (seed 0)".to_string(),
-                        Some(format!(
-                            "file geometry unusable ({e}); random realization used"
-                        )),
-                    ),
-                }
-            } else {
-                (
-                    motion::realize(m, 0),
-                    "random (seed 0)".to_string(),
-                    Some(
-                        "some joints lack geometry; random realization of the joint types used"
-                            .into(),
-                    ),
-                )
-            }
-        }
-    };
+    let real = motion::realization(m, opts.geometry, opts.precision)?;
     // Full (undriven) twists for loop spatiality, at the same geometry.
     let mut free = m.clone();
     for j in &mut free.joints {
         j.driven = 0;
     }
-    let full_models = match opts.geometry {
-        GeometrySource::Random { seed } => motion::realize(&free, seed),
-        _ if geometry == "file" => motion::configure(&free).unwrap_or_default(),
-        _ => motion::realize(&free, 0),
+    let full_models = match real.used.seed {
+        Some(seed) => motion::realize(&free, seed),
+        None => motion::configure(&free).unwrap_or_default(),
     };
     let full_twists: Vec<DMatrix<f64>> = full_models.into_iter().map(|jm| jm.twists).collect();
+    let exact_rank = real
+        .used
+        .seed
+        .map(|seed| crate::exact::models::jacobian_rank(m, seed).0);
     Ok(analyze_models(
         m,
-        &models,
+        &real.models,
         &full_twists,
-        geometry,
-        geometry_note,
+        real.used,
+        exact_rank,
         opts.check_finite,
     ))
+}
+
+/// Factor of the precision-derived threshold: a number rounded to ±δ on coordinates of size up
+/// to L moves a joint's unit rows by about δ·(1 + L), and an exact zero singular value by
+/// about as much (the Bennett linkage rounded to 4 decimals: 1.3e-5 for δ = 5e-5); twice that
+/// is the threshold, and a decision within a factor 100 of it is flagged.
+pub(crate) const FILE_TOL_FACTOR: f64 = 2.0;
+
+/// Rank threshold of the analysis: relative to σ_max at random geometry; at the file's
+/// geometry also the perturbation its rounded numbers allow ([`FILE_TOL_FACTOR`]).
+fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f64) {
+    let rel = 1e-9 * n.max(1) as f64;
+    let mut abs = rel * smax.max(f64::MIN_POSITIVE);
+    if let Some(delta) = used.precision.filter(|&d| d > 0.0) {
+        let lever = m
+            .joints
+            .iter()
+            .flat_map(|j| [j.geometry.origin, j.geometry.origin2])
+            .flatten()
+            .flat_map(|p| p.into_iter())
+            .fold(0.0f64, |a, x| a.max(x.abs()));
+        abs = abs.max(FILE_TOL_FACTOR * delta * (1.0 + lever));
+    }
+    (abs / smax.max(f64::MIN_POSITIVE), abs)
 }
 
 fn analyze_models(
     m: &Mechanism,
     models: &[JointModel],
     full_twists: &[DMatrix<f64>],
-    geometry: String,
-    geometry_note: Option<String>,
+    used: GeometryUsed,
+    exact_rank: Option<usize>,
     check_finite: bool,
 ) -> GeometricReport {
+    let geometry = match used.seed {
+        Some(seed) => format!("random (seed {seed})"),
+        None => "file".to_string(),
+    };
+    let geometry_note = used.note.clone();
     let b = m.b() as usize;
     let nb = m.bodies.len();
     let frame = m.frame;
@@ -623,7 +616,27 @@ fn analyze_models(
     let local_rel = 1e-9 * b as f64 * 10.0;
     let mut iso: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
     let mut comp: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, 0); nb];
+    // Isolated means undrivable: a motion across a cut of two or more joints that constrain
+    // (a body on one joint moves by that joint's own DOF, which an input drives; an F joint
+    // constrains nothing). The frame never moves.
+    let cut: Vec<usize> = (0..nb)
+        .map(|body| {
+            let mut js: Vec<usize> = incident[body]
+                .iter()
+                .map(|&pi| pairs[pi].joint)
+                .filter(|&j| models[j].rows.nrows() > 0)
+                .collect();
+            js.sort_unstable();
+            js.dedup();
+            js.len()
+        })
+        .collect();
     for body in 0..nb {
+        if cut[body] < 2 {
+            iso[body] = DMatrix::zeros(b, 0);
+            comp[body] = DMatrix::identity(b, b);
+            continue;
+        }
         let rows: usize = incident[body]
             .iter()
             .map(|&pi| models[pairs[pi].joint].rows.nrows())
@@ -642,10 +655,6 @@ fn analyze_models(
         };
         comp[body] = complement(&iso[body], b);
     }
-    // The frame's own isolated motions (its spin relative to the rest) appear, frame fixed, as
-    // every other body moving by the same twist; they are counted as fully isolated of the
-    // frame and set aside like the others.
-    let frame_iso = iso[frame].clone();
 
     // 3. Reduced Jacobian blocks; groups = movable bodies with a non-empty complement.
     let mut group_of: Vec<Option<usize>> = vec![None; nb];
@@ -700,20 +709,52 @@ fn analyze_models(
         });
     }
     let smax = sigma_max(&sizes, &offsets, &blocks);
-    let tol = 1e-9 * (rows_total.max(b * m.movable())).max(1) as f64;
-    let abs_tol = tol * smax.max(f64::MIN_POSITIVE);
-    let elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
-    let rank = elim.rank;
-    let fully_bodies: usize = (0..nb)
+    let (mut tol, mut abs_tol) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
+    let mut elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+    // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating point
+    // cannot tell a large, badly conditioned full-rank system from a deficient one at every
+    // size and seed. The pivoted elimination (which gives the motions and self-stresses) is
+    // then run at a threshold that keeps exactly that many pivots.
+    let mut exact_note = None;
+    if let Some(target) = exact_rank {
+        let mut tries = 0;
+        while elim.rank != target && tries < 16 {
+            tries += 1;
+            abs_tol = if elim.rank > target {
+                elim.kept_min * (1.0 + 1e-9)
+            } else {
+                elim.dropped_max * (1.0 - 1e-9)
+            };
+            elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+        }
+        tol = abs_tol / smax.max(f64::MIN_POSITIVE);
+        exact_note = Some(if elim.rank == target {
+            "rank decided exactly over GF(2^61 - 1) at a random realization".to_string()
+        } else {
+            format!(
+                "rank decided exactly over GF(2^61 - 1): {target}; the floating-point motions \
+                 below come from a rank-{} elimination and may be approximate",
+                elim.rank
+            )
+        });
+    }
+    let rank = if let Some(target) = exact_rank {
+        target
+    } else {
+        elim.rank
+    };
+    let fully: usize = (0..nb)
         .filter(|&x| x != frame)
         .map(|x| iso[x].ncols())
         .sum();
-    let mobility = fully_bodies + (reduced_cols - rank);
+    let mobility = fully + (reduced_cols - rank);
     let redundant = rows_total - rank;
 
-    // Null basis of the reduced system, orthonormalized. The frame's isolated motions are in
-    // it (every other body moving by −s); they are set aside by comparing bodies modulo
-    // their own isolated motions, the frame's included.
+    // The frame never moves. When it is itself held by two joints or more with a spin of its
+    // own (a frame bar between two S joints), that spin appears, frame fixed, as every other
+    // body turning about the same axis: a structurally isolated motion of the rest, set aside
+    // like the others (bodies are compared modulo it below).
+    let frame_iso = iso[frame].clone();
     let frame_motions: Vec<DVector<f64>> = frame_iso
         .column_iter()
         .map(|s| {
@@ -725,9 +766,8 @@ fn analyze_models(
             z
         })
         .collect();
-    let frame_set = orthonormalize(frame_motions);
-    let frame_fully = frame_set.len();
-    let fully = fully_bodies + frame_fully;
+    let frame_spin = orthonormalize(frame_motions).len();
+
     let null_red: Vec<DVector<f64>> = orthonormalize(elim.null_space());
     let body_twist = |body: usize, x: &DVector<f64>| -> DVector<f64> {
         match group_of[body] {
@@ -891,19 +931,6 @@ fn analyze_models(
         set.into_iter().map(|j| m.joints[j].id.clone()).collect()
     };
     let mut isolated_motions = Vec::new();
-    if frame_fully > 0 {
-        isolated_motions.push(IsolatedMotion {
-            kind: "fully".into(),
-            bodies: vec![id(frame)],
-            joints: joint_ids(&mut incident[frame].iter().copied()),
-            dof: frame_fully,
-            axis: if frame_fully == 1 {
-                axis_of(m.space, frame_iso.column(0).as_slice())
-            } else {
-                None
-            },
-        });
-    }
     for body in 0..nb {
         let k = iso[body].ncols();
         if body == frame || k == 0 {
@@ -922,6 +949,25 @@ fn analyze_models(
         });
     }
     let mut structurally = 0;
+    if frame_spin > 0 {
+        structurally += frame_spin;
+        let comps = crate::mobility::Components::of(m);
+        let frame_root = comps.root(frame);
+        isolated_motions.push(IsolatedMotion {
+            kind: "structurally".into(),
+            bodies: (0..nb)
+                .filter(|&x| x != frame && comps.root(x) == frame_root)
+                .map(id)
+                .collect(),
+            joints: joint_ids(&mut incident[frame].iter().copied()),
+            dof: frame_spin,
+            axis: if frame_spin == 1 {
+                axis_of(m.space, frame_iso.column(0).as_slice())
+            } else {
+                None
+            },
+        });
+    }
     for c in clusters.values() {
         if c.len() < 2 || c.contains(&frame) {
             continue;
@@ -930,6 +976,18 @@ fn analyze_models(
         let boundary: Vec<usize> = (0..pairs.len())
             .filter(|&pi| inside.contains(&pairs[pi].hub) != inside.contains(&pairs[pi].other))
             .collect();
+        // Isolated only across a cut of two or more constraining joints (one joint's own DOF
+        // is driven by an input on it).
+        let mut cut_joints: Vec<usize> = boundary
+            .iter()
+            .map(|&pi| pairs[pi].joint)
+            .filter(|&j| models[j].rows.nrows() > 0)
+            .collect();
+        cut_joints.sort_unstable();
+        cut_joints.dedup();
+        if cut_joints.len() < 2 {
+            continue;
+        }
         let rows: usize = boundary
             .iter()
             .map(|&pi| models[pairs[pi].joint].rows.nrows())
@@ -1067,11 +1125,12 @@ fn analyze_models(
     let smallest_kept = elim.kept_min.is_finite().then(|| rel(elim.kept_min));
     let largest_dropped = (elim.dropped_max > 0.0).then(|| rel(elim.dropped_max));
     let mut warning = None;
-    if smallest_kept.is_some_and(|k| k < tol * 1e3)
-        || largest_dropped.is_some_and(|x| x > tol / 1e3)
+    if exact_note.is_none()
+        && (smallest_kept.is_some_and(|k| k < tol * 1e2)
+            || largest_dropped.is_some_and(|x| x > tol / 1e2))
     {
         warning = Some(format!(
-            "ill-conditioned: a rank decision lies within a factor 1e3 of the threshold {:.1e} \
+            "ill-conditioned: a rank decision lies within a factor 100 of the threshold {:.1e} \
              (smallest kept {:.1e}, largest dropped {:.1e}); the configuration may be near a \
              singularity",
             tol,
@@ -1096,6 +1155,7 @@ fn analyze_models(
         frame: id(frame),
         geometry,
         geometry_note,
+        geometry_used: used,
         bodies: nb,
         rows: rows_total,
         columns: b * m.movable(),
@@ -1123,6 +1183,7 @@ fn analyze_models(
             smallest_kept: smallest_kept.map(sig),
             largest_dropped: largest_dropped.map(sig),
             warning,
+            exact: exact_note,
         },
     }
 }

@@ -5,13 +5,17 @@
 use super::flow::{INF, Network};
 use crate::mechanism::Mechanism;
 
-/// The equation nodes: one per binary pair (a multiple joint of n bodies gives n − 1 pairs,
-/// hub first), each carrying `B − k` constraint equations plus its share of the driven DOF.
+/// The equation nodes. A binary joint is one pair carrying `B − k` constraint equations plus
+/// its driven DOF. A multiple joint of n ≥ 3 bodies is modelled symmetrically, so that nothing
+/// depends on the order in which it lists its bodies: an *element node* (index `nb + i`, the
+/// shared pin, axis or centre; `B − k` unknowns, its pose less the joint's own motion) and n
+/// pairs element→body of `B − k` equations each; its driven DOF are *input pairs* between its
+/// first listed body and the others in order (at most k each), carrying only the inputs.
 #[derive(Clone, Debug)]
 pub(crate) struct Equations {
     /// Joint index of each pair.
     pub joint: Vec<usize>,
-    /// Hub body index.
+    /// First node (a body, or the element node of a multiple joint).
     pub hub: Vec<usize>,
     /// Other body index.
     pub other: Vec<usize>,
@@ -19,38 +23,110 @@ pub(crate) struct Equations {
     pub cap: Vec<u32>,
     /// Driven DOF carried by this pair.
     pub driven: Vec<u32>,
+    /// Whether the pair carries only a multiple joint's inputs (no constraint equations).
+    pub input_only: Vec<bool>,
+    /// Body nodes and element nodes: `bodies + elements.len()`.
+    pub nodes: usize,
+    /// The joint of each element node (node `bodies + i` is the element of `elements[i]`).
+    pub elements: Vec<usize>,
+    /// Number of bodies (element nodes come after them).
+    pub bodies: usize,
 }
 
 impl Equations {
-    /// The pairs of `m`. A multiple joint's driven DOF fill its pairs in order, at most `k` each.
+    /// The pairs of `m`.
     pub fn of(m: &Mechanism) -> Equations {
         let b = m.b();
+        let nb = m.bodies.len();
         let mut e = Equations {
             joint: Vec::new(),
             hub: Vec::new(),
             other: Vec::new(),
             cap: Vec::new(),
             driven: Vec::new(),
+            input_only: Vec::new(),
+            nodes: nb,
+            elements: Vec::new(),
+            bodies: nb,
         };
         for (ji, j) in m.joints.iter().enumerate() {
             let k = j.grade();
-            let mut left = j.driven;
-            let Some((&hub, others)) = j.bodies.split_first() else {
+            let Some((&first, others)) = j.bodies.split_first() else {
                 continue;
             };
+            if others.len() == 1 {
+                e.push(
+                    ji,
+                    first,
+                    others[0],
+                    b.saturating_sub(k) + j.driven,
+                    j.driven,
+                    false,
+                );
+                continue;
+            }
+            let node = e.nodes;
+            e.nodes += 1;
+            e.elements.push(ji);
+            for &x in &j.bodies {
+                e.push(ji, node, x, b.saturating_sub(k), 0, false);
+            }
+            // Inputs between the first listed body and the others in order; the last pair
+            // takes whatever is left so no driven DOF is lost.
+            let mut left = j.driven;
             let n = others.len();
             for (p, &o) in others.iter().enumerate() {
-                // The last pair takes whatever is left so no driven DOF is lost.
+                if left == 0 {
+                    break;
+                }
                 let share = if p + 1 == n { left } else { left.min(k) };
                 left -= share;
-                e.joint.push(ji);
-                e.hub.push(hub);
-                e.other.push(o);
-                e.cap.push(b.saturating_sub(k) + share);
-                e.driven.push(share);
+                e.push(ji, first, o, share, share, true);
             }
         }
         e
+    }
+
+    fn push(&mut self, joint: usize, hub: usize, other: usize, cap: u32, driven: u32, input: bool) {
+        self.joint.push(joint);
+        self.hub.push(hub);
+        self.other.push(other);
+        self.cap.push(cap);
+        self.driven.push(driven);
+        self.input_only.push(input);
+    }
+
+    /// Unknowns of every node before the rank check: B per movable body, 0 for the frame,
+    /// `B − k` per element node.
+    pub fn unknowns(&self, m: &Mechanism) -> Vec<u32> {
+        let b = m.b();
+        let mut u = vec![b; self.nodes];
+        if let Some(f) = u.get_mut(m.frame) {
+            *f = 0;
+        }
+        for (i, &ji) in self.elements.iter().enumerate() {
+            u[self.bodies + i] = b.saturating_sub(m.joints[ji].grade());
+        }
+        u
+    }
+
+    /// Whether node `x` is an element node (not a body).
+    pub fn is_element(&self, x: usize) -> bool {
+        x >= self.bodies
+    }
+
+    /// The joint whose element node `x` is.
+    pub fn element_joint(&self, x: usize) -> usize {
+        self.elements[x - self.bodies]
+    }
+
+    /// A node's name: the body id, or `<J>` for the element of joint J.
+    pub fn node_name(&self, m: &Mechanism, x: usize) -> String {
+        if self.is_element(x) {
+            format!("<{}>", m.joints[self.element_joint(x)].id)
+        } else {
+            m.body_id(x).to_string()
+        }
     }
 
     /// Number of pairs.
@@ -106,7 +182,7 @@ pub(crate) struct Decomposition {
 /// Decompose `m` with equation counts `eqs.cap` and body unknown counts `u` (per body index).
 pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposition {
     let ne = eqs.len();
-    let nb = m.bodies.len();
+    let nb = eqs.nodes;
     let (src, sink) = (0usize, 1usize);
     let eq_node = |e: usize| 2 + e;
     let body_node = |b: usize| 2 + ne + b;
@@ -147,8 +223,14 @@ pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposit
         }
     }
     let mut body_missing = vec![0u32; nb];
+    let mut touched = vec![false; nb];
+    for e in 0..ne {
+        for x in eqs.bodies(e) {
+            touched[x] = true;
+        }
+    }
     for (b, miss) in body_missing.iter_mut().enumerate() {
-        if b == m.frame {
+        if b == m.frame || !touched[b] {
             continue;
         }
         for a in net.edges(body_node(b)) {
@@ -173,6 +255,12 @@ pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposit
     };
     let mut body_part: Vec<Part> = (0..nb).map(|b| classify(body_node(b))).collect();
     body_part[m.frame] = Part::Frame;
+    // Bodies no joint names are not part of the mechanism: no group, no missing DOF.
+    for b in 0..nb {
+        if !touched[b] {
+            body_part[b] = Part::Frame;
+        }
+    }
     let mut eq_part: Vec<Part> = (0..ne).map(|e| classify(eq_node(e))).collect();
     drop(net);
 
@@ -216,20 +304,23 @@ pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposit
             comp[b] = c;
         }
     }
+    // A component of element nodes only (a shared pin fixed by one solved body) is no group
+    // of bodies: it adds no level (its level is its dependencies').
     let mut level = vec![1usize; sccs.len()];
     let mut cdeps: Vec<Vec<usize>> = vec![Vec::new(); sccs.len()];
     for (c, s) in sccs.iter().enumerate() {
-        let mut lv = 1;
+        let base = usize::from(s.iter().any(|&x| !eqs.is_element(x)));
+        let mut lv = 0;
         for &b in s {
             for &y in &adj[deg[b]..deg[b + 1]] {
                 let d = comp[y as usize];
                 if d != c {
-                    lv = lv.max(level[d] + 1);
+                    lv = lv.max(level[d]);
                     cdeps[c].push(d);
                 }
             }
         }
-        level[c] = lv;
+        level[c] = base + lv;
     }
     let groups = canonical(sccs, level, cdeps);
     for (g, grp) in groups.iter().enumerate() {

@@ -19,7 +19,7 @@ pub(crate) struct Search {
 
 /// Run the smallest-first search with equation counts `eqs.cap` and body unknowns `u`.
 pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
-    let nb = m.bodies.len();
+    let nb = eqs.nodes;
     let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nb];
     for e in 0..eqs.len() {
         let [a, b] = eqs.bodies(e);
@@ -44,6 +44,12 @@ pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
 
     let mut solved = vec![false; nb];
     solved[m.frame] = true;
+    // Bodies no joint names are not part of the mechanism (reported as disconnected).
+    for (b, t) in touching.iter().enumerate() {
+        if t.is_empty() {
+            solved[b] = true;
+        }
+    }
     let mut found: Vec<Vec<usize>> = Vec::new();
     let mut group_of = vec![usize::MAX; nb];
     loop {
@@ -87,9 +93,11 @@ pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
         }
         deps[ga.max(gb)].push(ga.min(gb));
     }
+    // As the flow method: a group of element nodes only adds no level.
     let mut level = vec![1usize; found.len()];
     for g in 0..found.len() {
-        level[g] = deps[g].iter().map(|&d| level[d] + 1).max().unwrap_or(1);
+        let base = usize::from(found[g].iter().any(|&x| !eqs.is_element(x)));
+        level[g] = base + deps[g].iter().map(|&d| level[d]).max().unwrap_or(0);
     }
     Search {
         groups: canonical(found, level, deps),

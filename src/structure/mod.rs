@@ -19,6 +19,7 @@ pub use library::{Library, LibraryError};
 
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
+use crate::motion::{self, GeometrySource, GeometryUsed, MotionError};
 use count::{Decomposition, Equations, Part, RawGroup};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -36,14 +37,17 @@ pub enum Method {
 }
 
 /// Analysis options.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Options {
     /// Skip the rank check: pure counting, as the paper does.
     pub count_only: bool,
     /// Decomposition algorithm.
     pub method: Method,
-    /// Seed of the random joint geometry used by the rank check.
-    pub seed: u64,
+    /// The joint geometry of the rank check: the file's configuration or a seeded random
+    /// realization ([`GeometrySource`]).
+    pub geometry: GeometrySource,
+    /// File geometry: how precisely its numbers are known (default: from the digits written).
+    pub precision: Option<f64>,
 }
 
 /// Whether the inputs determine the mechanism.
@@ -127,10 +131,14 @@ pub struct Redundancy {
     pub joints: Vec<String>,
     /// Number of redundant equations.
     pub count: u32,
-    /// The joint whose equation count was lowered to go on.
+    /// The joint(s) whose equation count was lowered to go on.
     pub lowered: String,
     /// What the redundancy means, in words.
     pub freedom: String,
+    /// True for constraints dependent at the file's configuration (consistent there: they fix
+    /// nothing and are set aside before the decomposition); false for a deficit the rank check
+    /// found in a group (equations too many for the freedom they hide).
+    pub configuration: bool,
 }
 
 /// A pair with more equations than the flow could use.
@@ -205,7 +213,7 @@ pub struct Unchecked {
 }
 
 /// The full structural analysis.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Analysis {
     /// Mechanism name.
     pub name: String,
@@ -221,6 +229,14 @@ pub struct Analysis {
     pub mobility: CountSummary,
     /// The verdict.
     pub status: Status,
+    /// The joint geometry of the rank check (absent with `count_only`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<GeometryUsed>,
+    /// DOF the inputs leave free (missing DOF of the under-determined part); 0 when determined.
+    pub uncontrolled: u64,
+    /// Bodies that no joint names (not part of the mechanism; never a group).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub disconnected: Vec<String>,
     /// Number of solve levels.
     pub levels: usize,
     /// Structural groups in canonical order.
@@ -239,26 +255,135 @@ pub struct Analysis {
     pub unchecked: Vec<Unchecked>,
     /// Present unless the mechanism is determined.
     pub diagnosis: Option<Diagnosis>,
+    /// At the file's configuration: what generic geometry gives, when it differs.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub generic: Option<GenericAnswer>,
+    /// Findings worth saying when the mechanism is determined (redundant constraints set
+    /// aside, the comparison with generic geometry).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub notes: Vec<String>,
+    /// Constraint equations set aside at the file's configuration, per joint index (for the
+    /// transformations: they fix nothing, so inputs take their place).
+    #[serde(skip)]
+    pub set_aside: Vec<u32>,
 }
 
-/// Analyse the structure of `m`.
-pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Analysis {
-    let b = m.b();
-    let mut eqs = Equations::of(m);
-    let mut u: Vec<u32> = vec![b; m.bodies.len()];
-    if let Some(f) = u.get_mut(m.frame) {
-        *f = 0;
+/// The structural answer at generic (random) geometry, when it differs from the answer at the
+/// file's configuration.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct GenericAnswer {
+    /// The verdict at generic geometry.
+    pub status: Status,
+    /// Its number of groups.
+    pub groups: usize,
+    /// Its uncontrolled DOF.
+    pub uncontrolled: u64,
+    /// Why the two differ.
+    pub why: String,
+}
+
+/// Analyse the structure of `m`. Errors: the file geometry asked for (`--geometry file`) is
+/// missing or unusable (a joint model cannot be built).
+pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
+    let mut a = analyze_once(m, opts, lib)?;
+    // At the file's configuration, say what generic geometry would give when it differs.
+    if let Some(used) = &a.geometry
+        && used.is_file()
+        && m.bodies.len() <= GENERIC_COMPARISON_BODIES
+    {
+        let generic = Options {
+            geometry: GeometrySource::Random { seed: 0 },
+            ..*opts
+        };
+        let g = analyze_once(m, &generic, lib)?;
+        let differs = g.status != a.status
+            || g.groups.len() != a.groups.len()
+            || g.uncontrolled != a.uncontrolled;
+        if differs {
+            let special: Vec<&Redundancy> =
+                a.redundant.iter().filter(|r| r.configuration).collect();
+            let why = if special.is_empty() {
+                "the file's configuration is special (a singular or degenerate pose)".to_string()
+            } else {
+                let n: u32 = special.iter().map(|r| r.count).sum();
+                let joints: Vec<&str> = special
+                    .iter()
+                    .flat_map(|r| r.joints.iter().map(String::as_str))
+                    .collect();
+                format!(
+                    "at the file's configuration joints {} carry {n} redundant constraint(s) that \
+                     generic geometry would not have",
+                    joints.join(", ")
+                )
+            };
+            a.generic = Some(GenericAnswer {
+                status: g.status,
+                groups: g.groups.len(),
+                uncontrolled: g.uncontrolled,
+                why: why.clone(),
+            });
+            if let Some(d) = a.diagnosis.as_mut() {
+                d.notes.push(generic_note(&g, &why));
+            } else {
+                a.notes.push(generic_note(&g, &why));
+            }
+        }
     }
+    Ok(a)
+}
+
+/// Mechanisms up to this size also get the comparison with generic geometry.
+const GENERIC_COMPARISON_BODIES: usize = 10_000;
+
+fn generic_note(g: &Analysis, why: &str) -> String {
+    format!(
+        "at generic (random) geometry the answer would differ: {} with {} group(s){}; {why}",
+        status_word(g.status),
+        g.groups.len(),
+        if g.uncontrolled > 0 {
+            format!(", {} DOF not fixed by the inputs", g.uncontrolled)
+        } else {
+            String::new()
+        }
+    )
+}
+
+fn status_word(s: Status) -> &'static str {
+    match s {
+        Status::Determined => "determined",
+        Status::Overdetermined => "over-determined",
+        Status::Underdetermined => "under-determined",
+        Status::Mixed => "mixed (over- and under-determined)",
+    }
+}
+
+fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
+    let mut eqs = Equations::of(m);
+    let mut u = eqs.unknowns(m);
     let mut isolated = Vec::new();
     let mut redundant = Vec::new();
     let mut unchecked = Vec::new();
+    let mut geometry = None;
+    let mut set_aside = vec![0; m.joints.len()];
+    // Joint motions at the file's configuration, for the spatiality of group types.
+    let mut twists: Option<Vec<nalgebra::DMatrix<f64>>> = None;
     let mut dec = if opts.count_only {
         count::decompose(m, &eqs, &u)
     } else {
-        let r = rank::check(m, opts.seed, &mut eqs, &mut u);
+        let (geoms, used) = motion::geometries(m, opts.geometry, opts.precision)?;
+        if used.is_file() && m.space == crate::mechanism::Space::Spatial {
+            twists = Some(
+                (0..m.joints.len())
+                    .map(|j| motion::pair_model(m, j, &geoms[j], 0).twists)
+                    .collect(),
+            );
+        }
+        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u);
+        geometry = Some(used);
         isolated = r.isolated;
         redundant = r.redundant;
         unchecked = r.unchecked;
+        set_aside = r.set_aside;
         r.decomposition
     };
     let mut unsolved = Vec::new();
@@ -272,10 +397,21 @@ pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Analysis {
         }
     };
     let mut a = build(
-        m, &eqs, &dec, groups, unsolved, isolated, redundant, opts, lib,
+        m,
+        &eqs,
+        &dec,
+        groups,
+        unsolved,
+        isolated,
+        redundant,
+        opts,
+        lib,
+        twists.as_deref(),
     );
     a.unchecked = unchecked;
-    a
+    a.geometry = geometry;
+    a.set_aside = set_aside;
+    Ok(a)
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -289,8 +425,9 @@ fn build(
     redundant: Vec<Redundancy>,
     opts: &Options,
     lib: &Library,
+    twists: Option<&[nalgebra::DMatrix<f64>]>,
 ) -> Analysis {
-    let nb = m.bodies.len();
+    let nb = eqs.nodes;
     let id = |b: usize| m.body_id(b).to_string();
     // Solve-order key of every body: frame and over-determined part are known first, groups in
     // canonical order, the under-determined part (or unsolved bodies) last.
@@ -345,10 +482,39 @@ fn build(
         let mut to: Vec<(usize, usize, usize)> = Vec::new();
         let mut kinds: Vec<(JointType, usize)> = Vec::new();
         let mut inputs = 0u32;
+        let mut active_joints: Vec<usize> = Vec::new();
+        let mut add_kind = |ji: usize, n: usize| {
+            if n == 0 {
+                return;
+            }
+            active_joints.push(ji);
+            let jt = m.joints[ji].kind;
+            match kinds.iter_mut().find(|(k, _)| *k == jt) {
+                Some((_, c)) => *c += n,
+                None => kinds.push((jt, n)),
+            }
+        };
+        // Element nodes of multiple joints met by this group (rendered per joint below).
+        let mut elements: Vec<usize> = Vec::new();
         for &x in &grp.bodies {
+            if eqs.is_element(x) {
+                elements.push(x);
+                continue;
+            }
             for &e in &touch[start[x]..start[x + 1]] {
                 let [a, c] = eqs.bodies(e);
                 let y = if a == x { c } else { a };
+                if eqs.is_element(y) {
+                    elements.push(y);
+                    continue;
+                }
+                if eqs.input_only[e] {
+                    // A multiple joint's inputs: counted, not listed (its pairs are below).
+                    if key[y] < gk || (key[y] == gk && x == a) {
+                        inputs += eqs.driven[e];
+                    }
+                    continue;
+                }
                 let active = if key[y] == gk {
                     // Count an internal pair once, from its hub's side.
                     if x != a {
@@ -364,12 +530,52 @@ fn build(
                     false
                 };
                 if active {
-                    let jt = m.joints[eqs.joint[e]].kind;
-                    match kinds.iter_mut().find(|(k, _)| *k == jt) {
-                        Some((_, n)) => *n += 1,
-                        None => kinds.push((jt, 1)),
-                    }
+                    add_kind(eqs.joint[e], 1);
                     inputs += eqs.driven[e];
+                }
+            }
+        }
+        // A multiple joint as the binary pairs it stands for: with its element in the group,
+        // one body of the joint in the group is its hub; with the element solved before, each
+        // body of the group hangs on a body solved before that holds the element.
+        elements.sort_unstable();
+        elements.dedup();
+        for v in elements {
+            let jt = eqs.element_joint(v);
+            let mut inside: Vec<(usize, usize)> = Vec::new();
+            let mut before: Vec<(usize, usize)> = Vec::new();
+            let mut after: Vec<(usize, usize)> = Vec::new();
+            for &e in &touch[start[v]..start[v + 1]] {
+                let y = eqs.other[e];
+                match key[y].cmp(&gk) {
+                    std::cmp::Ordering::Equal => inside.push((y, e)),
+                    std::cmp::Ordering::Less => before.push((y, e)),
+                    std::cmp::Ordering::Greater => after.push((y, e)),
+                }
+            }
+            if key[v] == gk {
+                let Some(&(hub, _)) = inside.first() else {
+                    continue;
+                };
+                for &(y, e) in &inside[1..] {
+                    internal.push((hub, y, e));
+                }
+                for &(y, e) in &before {
+                    from.push((hub, y, e));
+                }
+                for &(y, e) in &after {
+                    to.push((hub, y, e));
+                }
+                add_kind(jt, inside.len() - 1 + before.len());
+            } else if key[v] < gk {
+                let holder = before.first().map(|&(y, _)| y).unwrap_or(m.frame);
+                for &(x, e) in &inside {
+                    from.push((x, holder, e));
+                }
+                add_kind(jt, inside.len());
+            } else if let Some(&(holder, _)) = after.first() {
+                for &(x, e) in &inside {
+                    to.push((x, holder, e));
                 }
             }
         }
@@ -388,7 +594,19 @@ fn build(
         for (k, n) in &kinds {
             let _ = write!(kind, "{n}{}", k.code());
         }
-        kind.push_str(m.space.suffix());
+        // A spatial group that closes a loop whose joints move in a space of 3 dimensions at
+        // the file's configuration (a planar or spherical loop written in space) is typed by
+        // the spatiality it really has.
+        let pairs: usize = kinds.iter().map(|&(_, n)| n).sum();
+        let real = grp.bodies.iter().filter(|&&x| !eqs.is_element(x)).count();
+        let planar_here = twists.is_some_and(|tw| {
+            pairs > real && {
+                active_joints.sort_unstable();
+                active_joints.dedup();
+                spatiality(active_joints.iter().map(|&j| &tw[j])) <= 3
+            }
+        });
+        kind.push_str(if planar_here { "2D" } else { m.space.suffix() });
         (
             kind,
             render(&mut from),
@@ -401,7 +619,36 @@ fn build(
     // Types in order of first appearance, with their counts and library membership.
     let mut type_order: Vec<(String, usize, bool)> = Vec::new();
     let mut type_index: BTreeMap<String, usize> = BTreeMap::new();
+    // Groups of element nodes only (a shared pin fixed by one solved body) are not shown:
+    // shown groups are numbered in order, and a dependency on a hidden group is one on what
+    // that group depends on.
+    let real = |g: usize| raw[g].bodies.iter().any(|&x| !eqs.is_element(x));
+    let mut shown = vec![usize::MAX; raw.len()];
+    let mut n_shown = 0;
+    for (g, slot) in shown.iter_mut().enumerate() {
+        if real(g) {
+            *slot = n_shown;
+            n_shown += 1;
+        }
+    }
+    let mut deps_shown: Vec<Vec<usize>> = Vec::with_capacity(raw.len());
+    for grp in &raw {
+        let mut d: Vec<usize> = Vec::new();
+        for &x in &grp.deps {
+            if shown[x] != usize::MAX {
+                d.push(shown[x]);
+            } else {
+                d.extend(deps_shown[x].iter().copied());
+            }
+        }
+        d.sort_unstable();
+        d.dedup();
+        deps_shown.push(d);
+    }
     for (g, (grp, (kind, from, internal, to, inputs))) in raw.iter().zip(rendered).enumerate() {
+        if shown[g] == usize::MAX {
+            continue;
+        }
         let t = match type_index.get(&kind) {
             Some(&t) => t,
             None => {
@@ -412,15 +659,21 @@ fn build(
             }
         };
         type_order[t].1 += 1;
+        let bodies: Vec<String> = grp
+            .bodies
+            .iter()
+            .filter(|&&x| !eqs.is_element(x))
+            .map(|&b| id(b))
+            .collect();
         groups.push(Group {
-            name: format!("SG-{}", roman(g + 1)),
-            bodies: grp.bodies.iter().map(|&b| id(b)).collect(),
-            nm: grp.bodies.len(),
+            name: format!("SG-{}", roman(shown[g] + 1)),
+            nm: bodies.len(),
+            bodies,
             level: grp.level,
             inputs,
             in_library: type_order[t].2,
             kind,
-            depends_on: grp.deps.clone(),
+            depends_on: std::mem::take(&mut deps_shown[g]),
             from,
             internal,
             to,
@@ -435,16 +688,45 @@ fn build(
         })
         .collect();
 
-    let diag = diagnose(m, eqs, dec, unsolved, &redundant);
+    let mut diag = diagnose(m, eqs, dec, unsolved, &redundant);
     let over = diag.overdetermined.is_some();
     let under = diag.underdetermined.is_some();
-    let status = match (over, under) {
-        (false, false) => Status::Determined,
-        (true, false) => Status::Overdetermined,
-        (false, true) => Status::Underdetermined,
-        (true, true) => Status::Mixed,
+    // Mixed whenever redundant equations (by count or found by the rank check, wherever the
+    // listing puts them) and uncontrolled DOF coexist.
+    let redundant_eqs = over || !redundant.is_empty();
+    let status = if under && redundant_eqs {
+        Status::Mixed
+    } else if under {
+        Status::Underdetermined
+    } else if over {
+        Status::Overdetermined
+    } else {
+        Status::Determined
     };
     let mob = crate::mobility::mobility(m);
+    let uncontrolled = diag.underdetermined.as_ref().map_or(0, |u| u.missing);
+    let mut touched = vec![false; m.bodies.len()];
+    for j in &m.joints {
+        for &x in &j.bodies {
+            touched[x] = true;
+        }
+    }
+    let disconnected: Vec<String> = (0..m.bodies.len())
+        .filter(|&x| !touched[x] && x != m.frame)
+        .map(id)
+        .collect();
+    if !disconnected.is_empty() {
+        diag.notes.push(format!(
+            "bodies {{{}}} are named by no joint: not part of the mechanism",
+            disconnected.join(", ")
+        ));
+    }
+    // Notes for a determined mechanism: the redundant constraints set aside.
+    let notes = if status == Status::Determined {
+        std::mem::take(&mut diag.notes)
+    } else {
+        Vec::new()
+    };
     Analysis {
         name: m.name.clone(),
         space: m.space.name(),
@@ -456,7 +738,15 @@ fn build(
             inputs: mob.mobility.inputs,
         },
         status,
-        levels: raw.iter().map(|g| g.level).max().unwrap_or(0),
+        geometry: None,
+        uncontrolled,
+        disconnected,
+        levels: raw
+            .iter()
+            .filter(|g| g.bodies.iter().any(|&x| !eqs.is_element(x)))
+            .map(|g| g.level)
+            .max()
+            .unwrap_or(0),
         groups,
         types,
         library: lib.name.clone(),
@@ -464,7 +754,22 @@ fn build(
         redundant,
         unchecked: Vec::new(),
         diagnosis: (status != Status::Determined || !diag.unsolved.is_empty()).then_some(diag),
+        generic: None,
+        notes,
+        set_aside: vec![0; m.joints.len()],
     }
+}
+
+/// The dimension of the span of joint motions (columns of `twists`, normalized), at a relative
+/// tolerance of 1e-6: 3 for a planar or spherical loop, 6 for a general spatial one.
+fn spatiality<'a>(twists: impl Iterator<Item = &'a nalgebra::DMatrix<f64>>) -> usize {
+    let cols: Vec<nalgebra::DVector<f64>> = twists
+        .flat_map(|t| t.column_iter().map(|c| c.normalize()).collect::<Vec<_>>())
+        .collect();
+    if cols.is_empty() {
+        return 0;
+    }
+    nalgebra::DMatrix::from_columns(&cols).rank(1e-6)
 }
 
 /// The over- and under-determined parts in words and lists.
@@ -478,7 +783,7 @@ fn diagnose(
     let id = |b: usize| m.body_id(b).to_string();
     let pair_label = |e: usize| {
         let [a, c] = eqs.bodies(e);
-        format!("{}-{}", id(a), id(c))
+        format!("{}-{}", eqs.node_name(m, a), eqs.node_name(m, c))
     };
     let joint_ids = |mut js: Vec<usize>| {
         js.sort_unstable();
@@ -488,7 +793,7 @@ fn diagnose(
             .collect::<Vec<_>>()
     };
     let mut d = Diagnosis {
-        unsolved: unsolved.iter().map(|&b| id(b)).collect(),
+        unsolved: unsolved.iter().map(|&b| eqs.node_name(m, b)).collect(),
         ..Diagnosis::default()
     };
     let over_eqs: Vec<usize> = (0..eqs.len()).filter(|&e| dec.eq_excess[e] > 0).collect();
@@ -509,9 +814,16 @@ fn diagnose(
                 excess: dec.eq_excess[e],
             })
             .collect();
+        let with_inputs = over_eqs.iter().any(|&e| eqs.driven[e] > 0)
+            || part_eqs.iter().any(|&e| eqs.driven[e] > 0);
+        let remedy = if with_inputs {
+            "remove an input there or free a joint"
+        } else {
+            "the joints over-constrain these bodies for generic dimensions: free a joint"
+        };
         d.notes.push(format!(
             "{excess} equation(s) too many: {} {} more than the bodies {{{}}} can satisfy; \
-             remove an input there or free a joint",
+             {remedy}",
             if unsaturated.len() == 1 {
                 "joint"
             } else {
@@ -531,16 +843,17 @@ fn diagnose(
             bodies,
         });
     }
-    let short: Vec<Missing> = (0..m.bodies.len())
+    // Element nodes (`<J>`: the shared pin of multiple joint J) can miss DOF too.
+    let short: Vec<Missing> = (0..eqs.nodes)
         .filter(|&b| b != m.frame && dec.body_missing[b] > 0)
         .map(|b| Missing {
-            body: id(b),
+            body: eqs.node_name(m, b),
             missing: dec.body_missing[b],
         })
         .collect();
     if !short.is_empty() {
         let missing: u64 = short.iter().map(|s| s.missing as u64).sum();
-        let in_part: Vec<bool> = (0..m.bodies.len())
+        let in_part: Vec<bool> = (0..eqs.nodes)
             .map(|b| dec.body_part[b] == Part::Under)
             .collect();
         let bodies: Vec<String> = (0..m.bodies.len())
@@ -550,7 +863,12 @@ fn diagnose(
         let mut cands: Vec<usize> = Vec::new();
         for (ji, j) in m.joints.iter().enumerate() {
             let spare = j.driven < j.grade() * j.pairs();
-            if spare && j.bodies.iter().any(|&b| in_part[b]) {
+            let element_in = eqs
+                .elements
+                .iter()
+                .position(|&x| x == ji)
+                .is_some_and(|i| in_part[eqs.bodies + i]);
+            if spare && (element_in || j.bodies.iter().any(|&b| in_part[b])) {
                 cands.push(ji);
             }
         }
@@ -569,13 +887,23 @@ fn diagnose(
         });
     }
     for r in redundant {
-        d.notes.push(format!(
-            "group {{{}}}: joints {} carry {} redundant equation(s); {}",
-            r.bodies.join(", "),
-            r.joints.join(", "),
-            r.count,
-            r.freedom
-        ));
+        d.notes.push(if r.configuration {
+            format!(
+                "bodies {{{}}}: {} redundant constraint(s) set aside (lowered on {}); {}",
+                r.bodies.join(", "),
+                r.count,
+                r.lowered,
+                r.freedom
+            )
+        } else {
+            format!(
+                "group {{{}}}: joints {} carry {} redundant equation(s); {}",
+                r.bodies.join(", "),
+                r.joints.join(", "),
+                r.count,
+                r.freedom
+            )
+        });
     }
     d
 }

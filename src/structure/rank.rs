@@ -22,14 +22,16 @@ use super::count::{Decomposition, Equations, Part, decompose};
 use super::{Isolated, Redundancy, Unchecked};
 use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
-use crate::mechanism::Mechanism;
-use crate::motion;
+use crate::mechanism::{Geometry, Mechanism};
+use crate::motion::{self, GeometryUsed};
 use nalgebra::{DMatrix, DMatrixViewMut};
 use std::collections::HashSet;
 
 /// What the rank check found, with the final decomposition.
 pub(crate) struct RankResult {
     pub decomposition: Decomposition,
+    /// Constraint equations set aside at the file's configuration, per joint.
+    pub set_aside: Vec<u32>,
     pub isolated: Vec<Isolated>,
     pub redundant: Vec<Redundancy>,
     pub unchecked: Vec<Unchecked>,
@@ -50,6 +52,26 @@ pub(crate) const MAX_DENSE_UNKNOWNS: usize = 1200;
 /// 10^3 bodies has `σ_min / σ_max` below 1e-6, which a tolerance of 1e-9 took for a deficit.
 const REL_TOL: f64 = 1e-12;
 
+/// The rank threshold of one analysis: singular values at most `max(rel · n · σ_max, abs)`
+/// count as zero. Random geometry: `rel` = [`REL_TOL`],
+/// `abs` = 0. File geometry: `rel` = 1e-9 (its numbers are decimals rounded to double
+/// precision) and `abs` the perturbation its written precision allows (see
+/// `docs/algorithms.md`, "Tolerance").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Tol {
+    pub rel: f64,
+    pub abs: f64,
+}
+
+impl Tol {
+    /// The threshold for a matrix of size `n` whose largest singular value is `smax`.
+    fn cut(&self, smax: f64, n: usize) -> f64 {
+        (smax * n.max(1) as f64 * self.rel)
+            .max(self.abs)
+            .max(1e-300)
+    }
+}
+
 /// Singular values and vectors of `a` padded with zeros to a square matrix, so that the thin
 /// SVD holds full bases of both null spaces.
 struct Svd {
@@ -60,9 +82,9 @@ struct Svd {
 
 impl Svd {
     /// Full SVD (singular values and both bases).
-    fn of(a: &DMatrix<f64>) -> Svd {
+    fn of(a: &DMatrix<f64>, t: &Tol) -> Svd {
         // V as before, although unused: the deficit path stays exactly the original SVD.
-        let (sv, tol, u, _) = svd_parts(a, true, true);
+        let (sv, tol, u, _) = svd_parts(a, true, true, t);
         Svd {
             sv,
             u: u.expect("requested U"),
@@ -83,6 +105,7 @@ fn svd_parts(
     a: &DMatrix<f64>,
     compute_u: bool,
     compute_v: bool,
+    t: &Tol,
 ) -> (Vec<f64>, f64, Option<DMatrix<f64>>, Option<DMatrix<f64>>) {
     let n = a.nrows().max(a.ncols()).max(1);
     let p = if a.nrows() == n && a.ncols() == n {
@@ -95,16 +118,16 @@ fn svd_parts(
     let svd = p.svd(compute_u, compute_v);
     let sv: Vec<f64> = svd.singular_values.iter().copied().collect();
     let max = sv.iter().copied().fold(0.0, f64::max);
-    let tol = (max * n as f64 * REL_TOL).max(1e-300);
+    let tol = t.cut(max, n);
     (sv, tol, svd.u, svd.v_t)
 }
 
 /// Numerical rank (same decision as `Svd::of(a).rank()`), without the singular vectors.
-fn rank_of(a: &DMatrix<f64>) -> usize {
+fn rank_of(a: &DMatrix<f64>, t: &Tol) -> usize {
     if a.nrows() == 0 || a.ncols() == 0 {
         return 0;
     }
-    let (sv, tol, _, _) = svd_parts(a, false, false);
+    let (sv, tol, _, _) = svd_parts(a, false, false, t);
     sv.iter().filter(|&&s| s > tol).count()
 }
 
@@ -119,12 +142,13 @@ fn rank_of(a: &DMatrix<f64>) -> usize {
 fn reduced_basis<'a>(
     b: usize,
     rows: impl Iterator<Item = &'a DMatrix<f64>> + Clone,
+    t: &Tol,
 ) -> Option<DMatrix<f64>> {
     let total: usize = rows.clone().map(|r| r.nrows()).sum();
     if total == 0 {
         return Some(DMatrix::zeros(b, 0));
     }
-    if total >= b && surely_full_rank(b, rows.clone()) {
+    if total >= b && t.abs == 0.0 && surely_full_rank(b, rows.clone()) {
         return None;
     }
     let mut s = DMatrix::<f64>::zeros(total, b);
@@ -134,7 +158,7 @@ fn reduced_basis<'a>(
         r0 += r.nrows();
     }
     // Only V is needed: skipping U leaves V and the singular values unchanged.
-    let (sv, tol, _, v_t) = svd_parts(&s, false, true);
+    let (sv, tol, _, v_t) = svd_parts(&s, false, true, t);
     let v_t = v_t.expect("requested V^T");
     let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
     let mut qb = DMatrix::<f64>::zeros(b, keep.len());
@@ -162,6 +186,7 @@ const SCREEN_MARGIN: f64 = 1e3;
 /// every needed pivot clears it (full row rank; for the over-determined block, full column
 /// rank): the SVD would find the same rank. `None` leaves the decision to the SVD, so a
 /// deficit is always found and explained by the dense path.
+#[allow(clippy::too_many_arguments)]
 fn screen(
     b: usize,
     block_eqs: &[usize],
@@ -170,7 +195,12 @@ fn screen(
     rows: &[DMatrix<f64>],
     q: &[Option<DMatrix<f64>>],
     part: Part,
+    t: &Tol,
 ) -> Option<usize> {
+    if t.abs > 0.0 {
+        // A precision-derived threshold is not a multiple of σ_max: the SVD decides.
+        return None;
+    }
     let sizes: Vec<usize> = bodies.iter().map(|&x| width(b, q, x)).collect();
     let ncols: usize = sizes.iter().sum();
     if ncols <= SCREEN_UNKNOWNS {
@@ -212,7 +242,7 @@ fn screen(
         blocks.push(Block { groups, mat });
     }
     let n = nrows.max(ncols);
-    let tol = SCREEN_MARGIN * frob2.sqrt() * n as f64 * REL_TOL;
+    let tol = SCREEN_MARGIN * frob2.sqrt() * n as f64 * t.rel;
     let rank = Elimination::run(&sizes, blocks, tol).rank;
     let needed = if part == Part::Over { ncols } else { nrows };
     (rank >= needed).then_some(rank)
@@ -274,10 +304,35 @@ fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) 
 }
 
 /// Run the check; `eqs.cap` and `u` are lowered in place.
-pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]) -> RankResult {
+pub(crate) fn check(
+    m: &Mechanism,
+    geoms: &[Geometry],
+    used: &GeometryUsed,
+    eqs: &mut Equations,
+    u: &mut [u32],
+) -> RankResult {
     let b = m.b() as usize;
-    let nb = m.bodies.len();
-    let mut rows = pair_rows(m, seed, eqs);
+    let nb = eqs.nodes;
+    let (mut rows, free) = pair_rows(m, geoms, eqs);
+    let tol = match used.precision {
+        Some(delta) => Tol {
+            rel: 1e-9,
+            abs: crate::rigidity::geometric::FILE_TOL_FACTOR * delta * (1.0 + lever(m)),
+        },
+        None => Tol {
+            rel: REL_TOL,
+            abs: 0.0,
+        },
+    };
+    // At the file's configuration, constraints that are dependent there (a planar loop written
+    // in space, a Bennett or Bricard linkage) are set aside first: the configuration satisfies
+    // them, so they fix nothing, and the decomposition runs on what remains.
+    let mut set_aside = vec![0u32; m.joints.len()];
+    let configuration = if used.is_file() {
+        redundant_at_configuration(m, eqs, &mut rows, &free, &tol, &mut set_aside)
+    } else {
+        Vec::new()
+    };
     for (e, r) in rows.iter().enumerate() {
         eqs.cap[e] = r.nrows() as u32;
     }
@@ -309,19 +364,47 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     drop(fill);
 
     // (a) Isolated freedoms and reduced unknowns (each body on its own, in parallel).
+    // The first pin pair of every element node.
+    let mut pin_pair = vec![usize::MAX; eqs.elements.len()];
+    for e in (0..eqs.len()).rev() {
+        if eqs.is_element(eqs.hub[e]) && !eqs.input_only[e] {
+            pin_pair[eqs.hub[e] - eqs.bodies] = e;
+        }
+    }
     let bases: Vec<Option<DMatrix<f64>>> = crate::par::map(nb, |body| {
         if body == m.frame {
             return Some(DMatrix::zeros(b, 0));
         }
+        if eqs.is_element(body) {
+            // The shared element moves only across its joint's constraint directions: its
+            // unknowns are the row space of the joint's rows (orthonormal, so their transpose).
+            let e = pin_pair[body - eqs.bodies];
+            return Some(
+                free.get(e)
+                    .map_or_else(|| DMatrix::zeros(b, 0), |r| r.transpose()),
+            );
+        }
         let mine = &touch[start[body]..start[body + 1]];
-        reduced_basis(b, mine.iter().map(|&e| &rows[e]))
+        // Isolated means undrivable: a motion across a cut of two or more constraining joints.
+        // A body on one joint moves by that joint's own DOF, which an input drives.
+        let mut joints: Vec<usize> = mine
+            .iter()
+            .filter(|&&e| rows[e].nrows() > 0)
+            .map(|&e| eqs.joint[e])
+            .collect();
+        joints.sort_unstable();
+        joints.dedup();
+        if joints.len() < 2 {
+            return None;
+        }
+        reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol)
     });
     let mut q: Vec<Option<DMatrix<f64>>> = Vec::with_capacity(nb);
     let mut isolated = Vec::new();
     for (body, basis) in bases.into_iter().enumerate() {
         let kept = basis.as_ref().map_or(b, |x| x.ncols());
         let iso = b - kept;
-        if body != m.frame && iso > 0 {
+        if body != m.frame && iso > 0 && !eqs.is_element(body) {
             isolated.push(Isolated {
                 body: m.body_id(body).to_string(),
                 dimension: iso as u32,
@@ -334,7 +417,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     drop(start);
 
     // (b)-(c) Decompose, check every block, lower, repeat.
-    let mut redundant = Vec::new();
+    let mut redundant = configuration;
     let mut unchecked: Vec<Unchecked> = Vec::new();
     // Blocks already found sound, keyed by their bodies and their pairs with row counts (a
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
@@ -426,8 +509,9 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
         // deficient one in order is then explained and lowered, as a serial pass would.
         let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
             let (block_eqs, bodies, part, ..) = &todo[i];
-            screen(b, block_eqs, bodies, eqs, &rows, &q, *part)
-                .unwrap_or_else(|| rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q)))
+            screen(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol).unwrap_or_else(|| {
+                rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q), &tol)
+            })
         });
         let mut changed = false;
         for ((block_eqs, bodies, part, signature, (nrows, ncols)), rank) in
@@ -446,7 +530,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
                 continue;
             }
             let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
-            let svd = Svd::of(&a);
+            let svd = Svd::of(&a, &tol);
             debug_assert_eq!(
                 svd.rank(),
                 rank,
@@ -474,7 +558,9 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             let mut lowered = usize::MAX;
             let mut removed = 0;
             for &(e, _) in &order {
-                removed = drop_rows(b, e, deficit, block_eqs, bodies, eqs, &mut rows, &q, rank);
+                removed = drop_rows(
+                    b, e, deficit, block_eqs, bodies, eqs, &mut rows, &q, rank, &tol,
+                );
                 if removed > 0 {
                     lowered = e;
                     break;
@@ -490,11 +576,12 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             joints.sort_unstable();
             joints.dedup();
             redundant.push(Redundancy {
-                bodies: bodies.iter().map(|&x| m.body_id(x).to_string()).collect(),
-                freedom: describe(m, bodies, &joints, removed),
+                bodies: body_names(m, eqs, bodies),
+                freedom: describe(m, eqs, bodies, &joints, removed),
                 joints: joints.iter().map(|&j| m.joints[j].id.clone()).collect(),
                 count: removed as u32,
                 lowered: m.joints[eqs.joint[lowered]].id.clone(),
+                configuration: false,
             });
             // Later blocks were checked with this one assumed nonsingular: decompose again.
             break;
@@ -505,6 +592,7 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
             unchecked.dedup();
             return RankResult {
                 decomposition: dec,
+                set_aside,
                 isolated,
                 redundant,
                 unchecked,
@@ -513,35 +601,295 @@ pub(crate) fn check(m: &Mechanism, seed: u64, eqs: &mut Equations, u: &mut [u32]
     }
 }
 
-/// Constraint rows of every pair at the seeded random geometry. A pair of a multiple joint
-/// whose driven share differs from the joint's gets the same geometry with its own share.
-fn pair_rows(m: &Mechanism, seed: u64, eqs: &Equations) -> Vec<DMatrix<f64>> {
-    let mut base = motion::realize(m, seed);
-    (0..eqs.len())
-        .map(|e| {
-            let ji = eqs.joint[e];
-            let j = &m.joints[ji];
-            // A joint's pairs are consecutive: its last pair may take the rows instead of
-            // copying them.
-            let last = e + 1 == eqs.len() || eqs.joint[e + 1] != ji;
-            let own = |base: &mut Vec<motion::JointModel>| {
-                if last {
-                    std::mem::replace(&mut base[ji].rows, DMatrix::zeros(0, 0))
-                } else {
-                    base[ji].rows.clone()
+/// Rows of every pair at the given joint geometry: its constraint rows with its share of the
+/// driven DOF fixed, and its constraint rows alone (no input).
+fn pair_rows(
+    m: &Mechanism,
+    geoms: &[Geometry],
+    eqs: &Equations,
+) -> (Vec<DMatrix<f64>>, Vec<DMatrix<f64>>) {
+    // One model per joint with its own driven DOF and one without, in parallel.
+    let base: Vec<(DMatrix<f64>, DMatrix<f64>)> = crate::par::map(m.joints.len(), |ji| {
+        let j = &m.joints[ji];
+        let free = motion::pair_model(m, ji, &geoms[ji], 0).rows;
+        let own = if j.driven == 0 {
+            free.clone()
+        } else {
+            motion::pair_model(m, ji, &geoms[ji], j.driven).rows
+        };
+        (own, free)
+    });
+    let b = m.b() as usize;
+    let mut rows = Vec::with_capacity(eqs.len());
+    let mut free = Vec::with_capacity(eqs.len());
+    for e in 0..eqs.len() {
+        let ji = eqs.joint[e];
+        let (own, f) = &base[ji];
+        if eqs.input_only[e] {
+            // A multiple joint's inputs between two of its bodies: the driven rows alone.
+            let driven = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
+            rows.push(input_rows(&driven, f));
+            free.push(DMatrix::zeros(0, b));
+        } else if eqs.driven[e] == 0 {
+            rows.push(f.clone());
+            free.push(f.clone());
+        } else if eqs.driven[e] == m.joints[ji].driven {
+            rows.push(own.clone());
+            free.push(f.clone());
+        } else {
+            rows.push(motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows);
+            free.push(f.clone());
+        }
+    }
+    (rows, free)
+}
+
+/// The largest coordinate of a joint point: the lever arm that turns an uncertainty in an axis
+/// into one in the constraint rows.
+fn lever(m: &Mechanism) -> f64 {
+    m.joints
+        .iter()
+        .flat_map(|j| [j.geometry.origin, j.geometry.origin2])
+        .flatten()
+        .flat_map(|p| p.into_iter())
+        .fold(0.0f64, |a, x| a.max(x.abs()))
+}
+
+/// Set aside the constraint equations that are dependent at the file's configuration, keeping
+/// those nearest the frame: constraint rows are taken pair by pair in order of distance from
+/// the frame (then pair order), each kept when it is independent of the rows kept before it,
+/// within its biconnected block of the body graph (a dependency never spans two blocks: a
+/// self-stress restricted to one block is one). The pairs' input rows are kept. Returns the
+/// redundancies found, one per block.
+fn redundant_at_configuration(
+    m: &Mechanism,
+    eqs: &Equations,
+    rows: &mut [DMatrix<f64>],
+    free: &[DMatrix<f64>],
+    tol: &Tol,
+    set_aside: &mut [u32],
+) -> Vec<Redundancy> {
+    let b = m.b() as usize;
+    let nb = eqs.nodes;
+    let blocks = biconnected_blocks(nb, eqs, m.frame);
+    // Distance of every body from the frame (breadth first over pairs).
+    let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nb];
+    for e in 0..eqs.len() {
+        let [h, o] = eqs.bodies(e);
+        adj[h].push(o);
+        adj[o].push(h);
+    }
+    let mut depth = vec![usize::MAX; nb];
+    depth[m.frame] = 0;
+    let mut queue = std::collections::VecDeque::from([m.frame]);
+    while let Some(x) = queue.pop_front() {
+        for &y in &adj[x] {
+            if depth[y] == usize::MAX {
+                depth[y] = depth[x] + 1;
+                queue.push_back(y);
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for block in blocks {
+        if block.len() < 2 {
+            continue;
+        }
+        let mut bodies: Vec<usize> = block
+            .iter()
+            .flat_map(|&e| eqs.bodies(e))
+            .filter(|&x| x != m.frame)
+            .collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        let ncols = b * bodies.len();
+        if ncols > MAX_DENSE_UNKNOWNS {
+            continue;
+        }
+        let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
+        let mut order = block.clone();
+        order.sort_by_key(|&e| {
+            let [h, o] = eqs.bodies(e);
+            (depth[h].max(depth[o]), e)
+        });
+        // Greedy independent rows: Gram-Schmidt against the kept rows, a row kept when its
+        // residual exceeds the threshold (relative to the rows' unit norm).
+        let nrows: usize = block.iter().map(|&e| free[e].nrows()).sum();
+        let cut = tol.cut(1.0, nrows.max(ncols));
+        let mut basis: Vec<Vec<f64>> = Vec::new();
+        let mut kept: Vec<(usize, Vec<usize>)> = Vec::new();
+        let mut dropped = 0usize;
+        for &e in &order {
+            let [h, o] = eqs.bodies(e);
+            let r = &free[e];
+            let mut mine = Vec::new();
+            for i in 0..r.nrows() {
+                let mut v = vec![0.0; ncols];
+                for (x, sign) in [(h, -1.0), (o, 1.0)] {
+                    if let Some(c) = col(x) {
+                        for k in 0..b {
+                            v[c + k] += sign * r[(i, k)];
+                        }
+                    }
                 }
-            };
-            if eqs.driven[e] == j.driven {
-                return own(&mut base);
+                let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                for _ in 0..2 {
+                    for q in &basis {
+                        let d: f64 = q.iter().zip(&v).map(|(a, c)| a * c).sum();
+                        for (x, qk) in v.iter_mut().zip(q) {
+                            *x -= d * qk;
+                        }
+                    }
+                }
+                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if n > cut * n0.max(1.0) {
+                    basis.push(v.iter().map(|x| x / n).collect());
+                    mine.push(i);
+                } else {
+                    dropped += 1;
+                }
             }
-            let mut rng = motion::SplitMix64::new(motion::joint_seed(seed, ji));
-            let g = motion::random_geometry(j.kind, m.space, &mut rng);
-            match motion::joint_model(j.kind, &g, m.space, eqs.driven[e]) {
-                Ok(jm) => jm.rows,
-                Err(_) => own(&mut base),
+            kept.push((e, mine));
+        }
+        if dropped == 0 {
+            continue;
+        }
+        // Replace each pair's rows by its kept constraint rows plus its input rows.
+        let mut lowered: Vec<usize> = Vec::new();
+        for (e, mine) in &kept {
+            if mine.len() == free[*e].nrows() {
+                continue;
             }
-        })
-        .collect()
+            lowered.push(eqs.joint[*e]);
+            set_aside[eqs.joint[*e]] += (free[*e].nrows() - mine.len()) as u32;
+            let inputs = input_rows(&rows[*e], &free[*e]);
+            let mut r = DMatrix::<f64>::zeros(mine.len() + inputs.nrows(), b);
+            for (k, &i) in mine.iter().enumerate() {
+                r.set_row(k, &free[*e].row(i));
+            }
+            for i in 0..inputs.nrows() {
+                r.set_row(mine.len() + i, &inputs.row(i));
+            }
+            rows[*e] = r;
+        }
+        let mut joints: Vec<usize> = block.iter().map(|&e| eqs.joint[e]).collect();
+        joints.sort_unstable();
+        joints.dedup();
+        lowered.sort_unstable();
+        lowered.dedup();
+        let ids =
+            |js: &[usize]| -> Vec<String> { js.iter().map(|&j| m.joints[j].id.clone()).collect() };
+        out.push(Redundancy {
+            bodies: body_names(m, eqs, &bodies),
+            joints: ids(&joints),
+            count: dropped as u32,
+            lowered: ids(&lowered).join(", "),
+            freedom: format!(
+                "at the file's configuration the joints {} constrain only {} of their {} \
+                 equations independently (special geometry: parallel or concurrent axes, a \
+                 planar or spherical loop written in space); the configuration satisfies the \
+                 other {dropped}, so they fix nothing",
+                ids(&joints).join(", "),
+                nrows - dropped,
+                nrows
+            ),
+            configuration: true,
+        });
+    }
+    out
+}
+
+/// The rows of `own` (a pair's rows with its driven DOF fixed) outside the span of `free` (its
+/// rows with no input): its input rows, orthonormal.
+fn input_rows(own: &DMatrix<f64>, free: &DMatrix<f64>) -> DMatrix<f64> {
+    let b = own.ncols();
+    let mut basis: Vec<Vec<f64>> = (0..free.nrows())
+        .map(|i| free.row(i).iter().copied().collect())
+        .collect();
+    let base = basis.len();
+    for i in 0..own.nrows() {
+        let mut v: Vec<f64> = own.row(i).iter().copied().collect();
+        for _ in 0..2 {
+            for q in &basis {
+                let d: f64 = q.iter().zip(&v).map(|(a, c)| a * c).sum();
+                for (x, qk) in v.iter_mut().zip(q) {
+                    *x -= d * qk;
+                }
+            }
+        }
+        let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if n > 1e-8 {
+            basis.push(v.iter().map(|x| x / n).collect());
+        }
+    }
+    let extra = basis.len() - base;
+    DMatrix::from_fn(extra, b, |i, k| basis[base + i][k])
+}
+
+/// The pairs of every biconnected block of the body graph (pairs as edges; Hopcroft–Tarjan,
+/// iterative), each block's pairs ascending, blocks ordered by their first pair.
+fn biconnected_blocks(nb: usize, eqs: &Equations, root: usize) -> Vec<Vec<usize>> {
+    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nb];
+    for e in 0..eqs.len() {
+        let [h, o] = eqs.bodies(e);
+        if h != o {
+            adj[h].push((o, e));
+            adj[o].push((h, e));
+        }
+    }
+    let mut disc = vec![usize::MAX; nb];
+    let mut low = vec![0usize; nb];
+    let mut time = 0;
+    let mut estack: Vec<usize> = Vec::new();
+    let mut blocks: Vec<Vec<usize>> = Vec::new();
+    let starts = std::iter::once(root).chain(0..nb);
+    for s in starts {
+        if disc[s] != usize::MAX {
+            continue;
+        }
+        disc[s] = time;
+        low[s] = time;
+        time += 1;
+        // (node, edge it was entered by, next neighbour index)
+        let mut stack: Vec<(usize, usize, usize)> = vec![(s, usize::MAX, 0)];
+        while let Some(&mut (v, via, ref mut next)) = stack.last_mut() {
+            if *next < adj[v].len() {
+                let (w, e) = adj[v][*next];
+                *next += 1;
+                if e == via {
+                    continue;
+                }
+                if disc[w] == usize::MAX {
+                    estack.push(e);
+                    disc[w] = time;
+                    low[w] = time;
+                    time += 1;
+                    stack.push((w, e, 0));
+                } else if disc[w] < disc[v] {
+                    estack.push(e);
+                    low[v] = low[v].min(disc[w]);
+                }
+            } else {
+                stack.pop();
+                if let Some(&(p, _, _)) = stack.last() {
+                    low[p] = low[p].min(low[v]);
+                    if low[v] >= disc[p] {
+                        let mut block = Vec::new();
+                        while let Some(e) = estack.pop() {
+                            block.push(e);
+                            if e == via {
+                                break;
+                            }
+                        }
+                        block.sort_unstable();
+                        blocks.push(block);
+                    }
+                }
+            }
+        }
+    }
+    blocks.sort();
+    blocks
 }
 
 /// Rows and columns of the block's matrix ([`block_matrix`]) without building it.
@@ -634,6 +982,7 @@ fn drop_rows(
     rows: &mut [DMatrix<f64>],
     q: &[Option<DMatrix<f64>>],
     rank: usize,
+    t: &Tol,
 ) -> usize {
     let mut removed = 0;
     let mut r = rows[e].nrows();
@@ -642,7 +991,7 @@ fn drop_rows(
         let saved = rows[e].clone();
         rows[e] = saved.clone().remove_row(r);
         let a = block_matrix(b, block_eqs, bodies, eqs, rows, q);
-        if rank_of(&a) == rank {
+        if rank_of(&a, t) == rank {
             removed += 1;
         } else {
             rows[e] = saved;
@@ -651,11 +1000,26 @@ fn drop_rows(
     removed
 }
 
+/// The ids of the bodies among `nodes` (element nodes left out).
+fn body_names(m: &Mechanism, eqs: &Equations, nodes: &[usize]) -> Vec<String> {
+    nodes
+        .iter()
+        .filter(|&&x| !eqs.is_element(x))
+        .map(|&x| m.body_id(x).to_string())
+        .collect()
+}
+
 /// The freedom a redundancy hides, in words.
-fn describe(m: &Mechanism, bodies: &[usize], joints: &[usize], count: usize) -> String {
-    let ids: Vec<String> = bodies.iter().map(|&x| m.body_id(x).to_string()).collect();
+fn describe(
+    m: &Mechanism,
+    eqs: &Equations,
+    bodies: &[usize],
+    joints: &[usize],
+    count: usize,
+) -> String {
+    let ids = body_names(m, eqs, bodies);
     let all_s = joints.iter().all(|&j| m.joints[j].kind == JointType::S);
-    if bodies.len() == 1 && joints.len() == 2 && all_s {
+    if ids.len() == 1 && bodies.len() == 1 && joints.len() == 2 && all_s {
         return format!(
             "body {} turns about the line through the centres of the spherical joints {} and {}, \
              a freedom no input controls",

@@ -1,0 +1,254 @@
+//! Joint models over GF(p) at a random realization: the exact counterpart of
+//! [`crate::motion::realize`], for rank decisions that do not depend on size or conditioning.
+//!
+//! Each joint gets random field elements for its points and directions (drawn per (seed,
+//! joint index)), and the same twist structure as [`crate::motion`]: a revolute about `u`
+//! through `p` allows `(u; p × u)`, a slide `(0; u)`, and so on; directions need no
+//! normalization (twist spaces are spans). Its constraint rows are an exact basis of the
+//! annihilator of the twists left once its driven DOF are fixed. Count-only kinds get `B − k`
+//! random rows (generic contact lines in general position). With p = 2^61 − 1 a random
+//! realization has the generic rank except with probability below (degree)/p.
+
+use super::dense::complement_rows;
+use super::field::Fp;
+use super::sparse::{Factor, SparseMatrix};
+use crate::joint::JointType;
+use crate::mechanism::{Mechanism, Space};
+use crate::motion::joint_seed;
+use crate::rng::SplitMix64;
+use nalgebra::DMatrix;
+
+type V3 = [Fp; 3];
+
+fn cross(a: &V3, b: &V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn rand3(rng: &mut SplitMix64) -> V3 {
+    [
+        Fp::random_nonzero(rng),
+        Fp::random_nonzero(rng),
+        Fp::random_nonzero(rng),
+    ]
+}
+
+fn rot(u: &V3, p: &V3) -> Vec<Fp> {
+    let m = cross(p, u);
+    vec![u[0], u[1], u[2], m[0], m[1], m[2]]
+}
+
+fn trans(u: &V3) -> Vec<Fp> {
+    let z = Fp::from_u64(0);
+    vec![z, z, z, u[0], u[1], u[2]]
+}
+
+fn unit(i: usize) -> V3 {
+    let (z, o) = (Fp::from_u64(0), Fp::from_u64(1));
+    let mut v = [z, z, z];
+    v[i] = o;
+    v
+}
+
+/// The allowed twists of `kind` in driven-DOF order, or `None` for a kind without a model
+/// (it gets random constraint rows).
+fn twists(kind: JointType, space: Space, rng: &mut SplitMix64) -> Option<Vec<Vec<Fp>>> {
+    use JointType::*;
+    let (p, u, v, n) = (rand3(rng), rand3(rng), rand3(rng), rand3(rng));
+    let (z, o) = (Fp::from_u64(0), Fp::from_u64(1));
+    // Two directions perpendicular to n (and to each other up to a scale).
+    let e1 = cross(&n, &v);
+    let e2 = cross(&n, &e1);
+    let turns = |c: &V3| (0..3).map(|i| rot(&unit(i), c)).collect::<Vec<_>>();
+    match space {
+        Space::Spatial => Some(match kind {
+            R => vec![rot(&u, &p)],
+            P => vec![trans(&u)],
+            H => {
+                let h = Fp::random_nonzero(rng);
+                let m = cross(&p, &u);
+                vec![vec![
+                    u[0],
+                    u[1],
+                    u[2],
+                    m[0] + h * u[0],
+                    m[1] + h * u[1],
+                    m[2] + h * u[2],
+                ]]
+            }
+            C => vec![trans(&u), rot(&u, &p)],
+            ER => {
+                let a = cross(&u, &v);
+                let b = cross(&u, &a);
+                vec![rot(&a, &p), rot(&b, &p)]
+            }
+            U => vec![rot(&u, &p), rot(&v, &p)],
+            S => turns(&p),
+            PL | FP => vec![trans(&e1), trans(&e2), rot(&n, &p)],
+            F => {
+                let mut t: Vec<Vec<Fp>> = (0..3).map(|i| trans(&unit(i))).collect();
+                t.extend((0..3).map(|i| rot(&unit(i), &[z, z, z])));
+                t
+            }
+            SP => {
+                let mut t = vec![trans(&e1), trans(&e2)];
+                t.extend(turns(&p));
+                t
+            }
+            SC => {
+                let mut t = vec![trans(&u)];
+                t.extend(turns(&p));
+                t
+            }
+            PC => {
+                // The cylinder axis in the plane perpendicular to n.
+                let a = e1;
+                vec![trans(&e1), trans(&e2), rot(&n, &p), rot(&a, &p)]
+            }
+            CR => {
+                let w = cross(&u, &v);
+                vec![trans(&u), trans(&w), rot(&u, &p)]
+            }
+            SPSP => {
+                // One force along the line of centres p → q; the rest is allowed.
+                let q = rand3(rng);
+                let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
+                let m = cross(&p, &d);
+                let row = DMatrix::from_row_slice(1, 6, &[m[0], m[1], m[2], d[0], d[1], d[2]]);
+                let t = complement_rows(&row.transpose());
+                return Some(
+                    (0..t.nrows())
+                        .map(|i| t.row(i).iter().copied().collect())
+                        .collect(),
+                );
+            }
+            _ => return None,
+        }),
+        Space::Planar => Some(match kind {
+            // (ω; v_x, v_y) with v the velocity of the point at the origin.
+            R => vec![vec![o, p[1], z - p[0]]],
+            P => vec![vec![z, u[0], u[1]]],
+            FP => vec![vec![z, o, z], vec![z, z, o], vec![o, p[1], z - p[0]]],
+            _ => return None,
+        }),
+        Space::Spherical => Some(match kind {
+            R => vec![u.to_vec()],
+            FP => (0..3).map(|i| unit(i).to_vec()).collect(),
+            _ => return None,
+        }),
+    }
+}
+
+/// The constraint rows (B − k + driven) × B of joint `index` of `m` with `driven` DOF fixed, at
+/// the random realization `seed`.
+pub fn joint_rows(m: &Mechanism, index: usize, seed: u64, driven: u32) -> DMatrix<Fp> {
+    let j = &m.joints[index];
+    let b = m.b() as usize;
+    let k = (j.kind.grade() as usize).min(b);
+    let d = (driven as usize).min(k);
+    // Its own stream, distinct from the floating-point realization's.
+    let mut rng = SplitMix64::new(joint_seed(seed ^ 0xE4AC_7F1E_1D00_0000, index));
+    let all: Vec<Vec<Fp>> = match twists(j.kind, m.space, &mut rng) {
+        Some(t) if t.len() == k => t,
+        _ => {
+            // Generic contact lines: B − k random rows; the allowed motions are their
+            // annihilator.
+            let rows = DMatrix::from_fn(b - k, b, |_, _| Fp::random_nonzero(&mut rng));
+            let t = complement_rows(&rows.transpose());
+            (0..t.nrows())
+                .map(|i| t.row(i).iter().copied().collect())
+                .collect()
+        }
+    };
+    let kept = &all[d.min(all.len())..];
+    let tw = DMatrix::from_fn(b, kept.len(), |r, c| kept[c][r]);
+    complement_rows(&tw)
+}
+
+/// The exact rank of the constraint Jacobian of `m` (every binary pair hub→other of every
+/// joint, frame fixed, B columns per movable body) at the random realization `seed`, with its
+/// number of rows and columns.
+pub fn jacobian_rank(m: &Mechanism, seed: u64) -> (usize, usize, usize) {
+    let b = m.b() as usize;
+    let nb = m.bodies.len();
+    let mut col = vec![usize::MAX; nb];
+    let mut ncols = 0;
+    for (x, c) in col.iter_mut().enumerate() {
+        if x != m.frame {
+            *c = ncols;
+            ncols += b;
+        }
+    }
+    let mut a = SparseMatrix::with_groups(vec![b; nb.saturating_sub(1)]);
+    for (ji, j) in m.joints.iter().enumerate() {
+        let rows = joint_rows(m, ji, seed, j.driven);
+        let Some((&hub, others)) = j.bodies.split_first() else {
+            continue;
+        };
+        for &o in others {
+            for r in 0..rows.nrows() {
+                let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+                for (x, sign) in [(hub, true), (o, false)] {
+                    if col[x] == usize::MAX {
+                        continue;
+                    }
+                    for k in 0..b {
+                        let v = rows[(r, k)];
+                        entries.push((
+                            (col[x] + k) as u32,
+                            if sign { Fp::from_u64(0) - v } else { v },
+                        ));
+                    }
+                }
+                a.push_row(entries);
+            }
+        }
+    }
+    let rows = a.nrows();
+    let rank = Factor::new(&a).rank();
+    (rank, rows, ncols)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mechanism::{BodyId, JointSpec};
+
+    #[test]
+    fn every_kind_has_its_number_of_rows() {
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                if kind.grade() as usize > b {
+                    continue;
+                }
+                let m = Mechanism::from_parts(
+                    "t",
+                    space,
+                    BodyId::Int(1),
+                    vec![],
+                    vec![JointSpec::new(kind, 1, 2, 0)],
+                );
+                let r = joint_rows(&m, 0, 7, 0);
+                assert_eq!(r.nrows(), b - kind.grade() as usize, "{kind:?} {space:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn planar_four_bar_in_space_has_generic_redundancy() {
+        let j = |a, b| JointSpec::new(JointType::R, a, b, 0);
+        let m = Mechanism::from_parts(
+            "4R",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![j(1, 2), j(2, 3), j(3, 4), j(4, 1)],
+        );
+        // Generic spatial 4R: 20 rows, 18 unknowns, rank 18.
+        assert_eq!(jacobian_rank(&m, 3), (18, 20, 18));
+    }
+}

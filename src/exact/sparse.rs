@@ -1,0 +1,1360 @@
+//! Sparse exact elimination over GF(p) for large block-structured matrices.
+//!
+//! The columns are grouped in consecutive blocks (a body's B columns); rows are sparse. A
+//! [`Factor`] eliminates one column group at a time (multifrontal Gaussian elimination): the
+//! rows touching the group are gathered into a dense front, its columns are eliminated with
+//! any nonzero pivot (exact, so pivot choice is only about sparsity), and the remaining rows,
+//! compressed to echelon form, become a new block on the group's neighbours. The next group
+//! is the one with the smallest front (greedy minimum degree over the groups, ties by
+//! index), as in the floating-point elimination of the rank check.
+//!
+//! [`RowBasis`] is the incremental counterpart for greedy redundancy removal: insert sparse
+//! rows one at a time and learn whether each is independent of the rows kept so far.
+//!
+//! Everything is deterministic: no hash maps, ties broken by index.
+
+use super::field::{Fp, axpy_sub, scale};
+use crate::rng::SplitMix64;
+use nalgebra::DMatrix;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+/// A sparse row: `(column, value)` pairs, columns increasing, values nonzero.
+pub type SparseRow = Vec<(u32, Fp)>;
+
+/// A sparse matrix by rows, with its columns grouped in consecutive blocks.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SparseMatrix {
+    /// Number of columns.
+    pub ncols: usize,
+    /// The rows (normalized by [`SparseMatrix::push_row`]: columns increasing, no zeros).
+    pub rows: Vec<SparseRow>,
+    /// Sizes of the consecutive column groups (summing to `ncols`); empty means one group
+    /// per column.
+    pub group_sizes: Vec<usize>,
+}
+
+impl SparseMatrix {
+    /// An empty matrix (no rows) with `ncols` columns, one group per column.
+    pub fn new(ncols: usize) -> SparseMatrix {
+        SparseMatrix {
+            ncols,
+            rows: Vec::new(),
+            group_sizes: Vec::new(),
+        }
+    }
+
+    /// An empty matrix whose columns are grouped in consecutive blocks of the given sizes
+    /// (for a mechanism, B columns per movable body).
+    pub fn with_groups(group_sizes: Vec<usize>) -> SparseMatrix {
+        SparseMatrix {
+            ncols: group_sizes.iter().sum(),
+            rows: Vec::new(),
+            group_sizes,
+        }
+    }
+
+    /// Number of rows.
+    pub fn nrows(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Append a row given as `(column, value)` pairs in any order; repeated columns are
+    /// added, zeros dropped.
+    ///
+    /// # Panics
+    /// If a column is not below `ncols` (a caller's indexing error).
+    pub fn push_row(&mut self, entries: impl IntoIterator<Item = (u32, Fp)>) {
+        let mut row: SparseRow = entries.into_iter().collect();
+        assert!(
+            row.iter().all(|&(c, _)| (c as usize) < self.ncols),
+            "sparse row column out of range"
+        );
+        row.sort_by_key(|e| e.0);
+        let mut out: SparseRow = Vec::with_capacity(row.len());
+        for (c, v) in row {
+            match out.last_mut() {
+                Some(last) if last.0 == c => last.1 += v,
+                _ => out.push((c, v)),
+            }
+        }
+        out.retain(|e| !e.1.is_zero());
+        self.rows.push(out);
+    }
+
+    /// The sizes of the column groups (one per column when none were given).
+    pub fn groups(&self) -> Vec<usize> {
+        if self.group_sizes.is_empty() {
+            vec![1; self.ncols]
+        } else {
+            self.group_sizes.clone()
+        }
+    }
+
+    /// `A x` for a dense `x` of length `ncols`.
+    pub fn mul_dense(&self, x: &[Fp]) -> Vec<Fp> {
+        self.rows
+            .iter()
+            .map(|r| r.iter().map(|&(c, v)| v * x[c as usize]).sum())
+            .collect()
+    }
+
+    /// `A x` for a sparse `x`.
+    pub fn mul_sparse(&self, x: &[(u32, Fp)]) -> Vec<Fp> {
+        let mut d = vec![Fp::ZERO; self.ncols];
+        for &(c, v) in x {
+            d[c as usize] = v;
+        }
+        self.mul_dense(&d)
+    }
+
+    /// `yᵀ A` for a sparse `y` over the rows.
+    pub fn left_mul_sparse(&self, y: &[(u32, Fp)]) -> Vec<Fp> {
+        let mut out = vec![Fp::ZERO; self.ncols];
+        for &(r, w) in y {
+            for &(c, v) in &self.rows[r as usize] {
+                out[c as usize] += w * v;
+            }
+        }
+        out
+    }
+
+    /// The transpose. Its column groups are the maximal runs of consecutive rows touching
+    /// the same set of column groups (a joint's rows over its two bodies), so that
+    /// factoring it is again block-structured.
+    pub fn transpose(&self) -> SparseMatrix {
+        let sizes = self.groups();
+        let mut group_of = Vec::with_capacity(self.ncols);
+        for (g, &s) in sizes.iter().enumerate() {
+            group_of.extend(std::iter::repeat_n(g as u32, s));
+        }
+        let mut row_groups: Vec<usize> = Vec::new();
+        let mut prev: Option<Vec<u32>> = None;
+        for r in &self.rows {
+            let mut set: Vec<u32> = r.iter().map(|&(c, _)| group_of[c as usize]).collect();
+            set.dedup();
+            match (&prev, row_groups.last_mut()) {
+                (Some(p), Some(last)) if *p == set => *last += 1,
+                _ => row_groups.push(1),
+            }
+            prev = Some(set);
+        }
+        let mut cols: Vec<SparseRow> = vec![Vec::new(); self.ncols];
+        for (i, r) in self.rows.iter().enumerate() {
+            for &(c, v) in r {
+                cols[c as usize].push((i as u32, v));
+            }
+        }
+        SparseMatrix {
+            ncols: self.rows.len(),
+            rows: cols,
+            group_sizes: row_groups,
+        }
+    }
+
+    /// The dense matrix (for tests and small cases).
+    pub fn to_dense(&self) -> DMatrix<Fp> {
+        let mut m = DMatrix::zeros(self.rows.len(), self.ncols);
+        for (i, r) in self.rows.iter().enumerate() {
+            for &(c, v) in r {
+                m[(i, c as usize)] = v;
+            }
+        }
+        m
+    }
+
+    /// The sparse matrix of a dense one, one group per column.
+    pub fn from_dense(a: &DMatrix<Fp>) -> SparseMatrix {
+        let mut s = SparseMatrix::new(a.ncols());
+        for i in 0..a.nrows() {
+            s.push_row((0..a.ncols()).map(|j| (j as u32, a[(i, j)])));
+        }
+        s
+    }
+}
+
+/// A dense block of rows over some column groups, side by side in the order of `groups`
+/// (the exact counterpart of the floating-point elimination's block).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FpBlock {
+    /// The column groups, distinct.
+    pub groups: Vec<usize>,
+    /// The rows: the groups' columns side by side.
+    pub mat: DMatrix<Fp>,
+}
+
+/// Working block: row-major, never empty.
+struct Blk {
+    groups: Vec<usize>,
+    nrows: usize,
+    data: Vec<Fp>,
+}
+
+impl Blk {
+    /// Its number of columns.
+    fn width(&self) -> usize {
+        self.data.len().checked_div(self.nrows).unwrap_or(0)
+    }
+}
+
+/// The eliminated rows of one group: pivots reduced to the identity on the group's columns.
+#[derive(Clone, Debug)]
+struct Record {
+    group: usize,
+    /// Local columns of the pivots, in the order of the rows.
+    pivots: Vec<usize>,
+    /// Local columns left free (each gives a null vector).
+    free: Vec<usize>,
+    /// The other groups of the front, in column order after the group's own.
+    others: Vec<usize>,
+    /// `pivots.len() × width` row-major, width = the group's size + the others' sizes.
+    rows: Vec<Fp>,
+    width: usize,
+}
+
+/// Sizes measured during a factorization.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FactorStats {
+    /// Largest front (rows, columns).
+    pub max_front: (usize, usize),
+    /// Entries kept in the factor (the eliminated rows), the fill measure.
+    pub factor_entries: usize,
+    /// Entries of the input.
+    pub input_entries: usize,
+    /// Rows found dependent (dropped as zero rows) during the elimination.
+    pub dependent_rows: usize,
+}
+
+/// An exact sparse factorization of a matrix over GF(p): its rank and a null-space basis.
+#[derive(Clone, Debug)]
+pub struct Factor {
+    sizes: Vec<usize>,
+    offsets: Vec<usize>,
+    records: Vec<Record>,
+    rank: usize,
+    stats: FactorStats,
+}
+
+impl Factor {
+    /// Factor a sparse matrix, eliminating by its column groups. Rows touching the same
+    /// set of groups are merged into one block first.
+    pub fn new(a: &SparseMatrix) -> Factor {
+        let sizes = a.groups();
+        let mut offsets = Vec::with_capacity(sizes.len());
+        let mut group_of = Vec::with_capacity(a.ncols);
+        let mut acc = 0;
+        for (g, &s) in sizes.iter().enumerate() {
+            offsets.push(acc);
+            acc += s;
+            group_of.extend(std::iter::repeat_n(g, s));
+        }
+        // Rows by their group set (sorted, deterministic).
+        let mut keyed: Vec<(Vec<usize>, usize)> = a
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| !r.is_empty())
+            .map(|(i, r)| {
+                let mut set: Vec<usize> = r.iter().map(|&(c, _)| group_of[c as usize]).collect();
+                set.dedup();
+                (set, i)
+            })
+            .collect();
+        keyed.sort();
+        let mut blocks = Vec::new();
+        let mut i = 0;
+        let mut local = vec![0usize; sizes.len()];
+        while i < keyed.len() {
+            let mut j = i;
+            while j < keyed.len() && keyed[j].0 == keyed[i].0 {
+                j += 1;
+            }
+            let groups = keyed[i].0.clone();
+            let mut width = 0;
+            for &g in &groups {
+                local[g] = width;
+                width += sizes[g];
+            }
+            let mut data = vec![Fp::ZERO; (j - i) * width];
+            for (k, (_, ri)) in keyed[i..j].iter().enumerate() {
+                for &(c, v) in &a.rows[*ri] {
+                    let g = group_of[c as usize];
+                    data[k * width + local[g] + c as usize - offsets[g]] = v;
+                }
+            }
+            blocks.push(Blk {
+                groups,
+                nrows: j - i,
+                data,
+            });
+            i = j;
+        }
+        let input = a.rows.iter().map(|r| r.len()).sum();
+        Factor::run(sizes, blocks, input)
+    }
+
+    /// Factor a matrix given as dense blocks over column groups of the given sizes (the
+    /// interface of the floating-point elimination). Groups repeated within a block, or
+    /// out of range, are a caller's error.
+    pub fn from_blocks(sizes: &[usize], blocks: Vec<FpBlock>) -> Factor {
+        let mut input = 0;
+        let blks = blocks
+            .into_iter()
+            .filter(|b| !b.groups.is_empty() && b.mat.nrows() > 0)
+            .map(|b| {
+                let (m, n) = b.mat.shape();
+                let mut data = Vec::with_capacity(m * n);
+                for i in 0..m {
+                    for j in 0..n {
+                        data.push(b.mat[(i, j)]);
+                    }
+                }
+                input += data.iter().filter(|x| !x.is_zero()).count();
+                // Groups in increasing order (the elimination's invariant).
+                let mut starts = Vec::with_capacity(b.groups.len());
+                let mut c = 0;
+                for &g in &b.groups {
+                    starts.push(c);
+                    c += sizes[g];
+                }
+                let mut order: Vec<usize> = (0..b.groups.len()).collect();
+                order.sort_by_key(|&k| b.groups[k]);
+                let mut sorted = Vec::with_capacity(m * n);
+                for i in 0..m {
+                    for &k in &order {
+                        let s0 = i * n + starts[k];
+                        sorted.extend_from_slice(&data[s0..s0 + sizes[b.groups[k]]]);
+                    }
+                }
+                Blk {
+                    groups: order.iter().map(|&k| b.groups[k]).collect(),
+                    nrows: m,
+                    data: sorted,
+                }
+            })
+            .collect();
+        Factor::run(sizes.to_vec(), blks, input)
+    }
+
+    fn run(sizes: Vec<usize>, blocks: Vec<Blk>, input_entries: usize) -> Factor {
+        let n = sizes.len();
+        let mut offsets = Vec::with_capacity(n);
+        let mut acc = 0;
+        for &s in &sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        let mut pool = Pool::new(&sizes, blocks.len() * 2);
+        for b in blocks {
+            pool.add(b);
+        }
+        // Scratch: a stamp per group (dedup) and the front column of each group.
+        let mut stamp = vec![0usize; n];
+        let mut clock = 0usize;
+        let mut pos = vec![0usize; n];
+        let mut stamp_rescore = vec![0usize; n];
+        let mut heap = BinaryHeap::with_capacity(n);
+        let mut version = vec![0usize; n];
+        for g in 0..n {
+            let s = pool.score(g, &mut stamp, &mut clock);
+            heap.push(Reverse((s, g, 0usize)));
+        }
+        let mut done = vec![false; n];
+        let mut records = Vec::with_capacity(n);
+        let mut rank = 0;
+        let mut stats = FactorStats {
+            input_entries,
+            ..FactorStats::default()
+        };
+        while let Some(Reverse((_, g, ver))) = heap.pop() {
+            if done[g] || ver != version[g] {
+                continue;
+            }
+            done[g] = true;
+            let mut members = pool.take(g);
+            // Neighbours to rescore: those on a narrow block of this front (a group reached
+            // only through a wide block keeps its score, a heuristic that keeps long
+            // carried rows from costing a pass over all their groups at every step).
+            clock += 1;
+            let rescore_mark = clock;
+            for b in &members {
+                if b.groups.len() <= WIDE_BLOCK {
+                    for &h in &b.groups {
+                        stamp_rescore[h] = rescore_mark;
+                    }
+                }
+            }
+            // Narrow blocks first: their rows are preferred as pivots, so that the rows
+            // left over (and the pivot rows kept) stay narrow.
+            members.sort_by_key(Blk::width);
+            clock += 1;
+            stamp[g] = clock;
+            let mut others = Vec::new();
+            for b in &members {
+                for &h in &b.groups {
+                    if stamp[h] != clock {
+                        stamp[h] = clock;
+                        others.push(h);
+                    }
+                }
+            }
+            others.sort_unstable();
+            let sg = sizes[g];
+            pos[g] = 0;
+            let mut width = sg;
+            for &h in &others {
+                pos[h] = width;
+                width += sizes[h];
+            }
+            let nrows: usize = members.iter().map(|b| b.nrows).sum();
+            let mut front = vec![Fp::ZERO; nrows * width];
+            let mut r0 = 0;
+            for b in &members {
+                let bw = b.width();
+                for i in 0..b.nrows {
+                    let src = &b.data[i * bw..(i + 1) * bw];
+                    let dst = &mut front[(r0 + i) * width..(r0 + i + 1) * width];
+                    let mut c0 = 0;
+                    for &h in &b.groups {
+                        let s = sizes[h];
+                        dst[pos[h]..pos[h] + s].copy_from_slice(&src[c0..c0 + s]);
+                        c0 += s;
+                    }
+                }
+                r0 += b.nrows;
+            }
+            drop(members);
+            stats.max_front = (stats.max_front.0.max(nrows), stats.max_front.1.max(width));
+            // Eliminate the group's columns: reduced echelon on them among the pivot rows.
+            let mut pivots = Vec::new();
+            let mut free = Vec::new();
+            let mut r = 0;
+            for c in 0..sg {
+                let Some(p) = (r..nrows).find(|&i| !front[i * width + c].is_zero()) else {
+                    free.push(c);
+                    continue;
+                };
+                // Keep the row order otherwise (narrow rows stay first).
+                front[r * width..(p + 1) * width].rotate_right(width);
+                let inv = front[r * width + c].inv();
+                scale(&mut front[r * width + c..(r + 1) * width], inv);
+                for i in 0..nrows {
+                    if i == r {
+                        continue;
+                    }
+                    let f = front[i * width + c];
+                    if !f.is_zero() {
+                        let (dst, src) = two_rows(&mut front, width, i, r);
+                        axpy_sub(&mut dst[c..], f, &src[c..]);
+                    }
+                }
+                pivots.push(c);
+                r += 1;
+            }
+            rank += r;
+            // Which of the others' groups each row touches.
+            let words = others.len().div_ceil(64);
+            let mut masks = vec![0u64; nrows * words];
+            for i in 0..nrows {
+                let row = &front[i * width..(i + 1) * width];
+                for (k, &h) in others.iter().enumerate() {
+                    if row[pos[h]..pos[h] + sizes[h]].iter().any(|x| !x.is_zero()) {
+                        masks[i * words + k / 64] |= 1 << (k % 64);
+                    }
+                }
+            }
+            // The rest: rows r.. split by the groups they touch, each part compressed.
+            if r < nrows {
+                let mut order: Vec<usize> = (r..nrows).collect();
+                order.sort_by(|&a, &b| {
+                    masks[a * words..(a + 1) * words].cmp(&masks[b * words..(b + 1) * words])
+                });
+                let mut i = 0;
+                while i < order.len() {
+                    let key = &masks[order[i] * words..(order[i] + 1) * words];
+                    let mut j = i;
+                    while j < order.len() && masks[order[j] * words..(order[j] + 1) * words] == *key
+                    {
+                        j += 1;
+                    }
+                    let groups: Vec<usize> = (0..others.len())
+                        .filter(|&k| key[k / 64] >> (k % 64) & 1 == 1)
+                        .map(|k| others[k])
+                        .collect();
+                    let bw: usize = groups.iter().map(|&h| sizes[h]).sum();
+                    let n_in = j - i;
+                    if bw == 0 {
+                        stats.dependent_rows += n_in;
+                        i = j;
+                        continue;
+                    }
+                    let mut data = Vec::with_capacity(n_in * bw);
+                    for &ri in &order[i..j] {
+                        let row = &front[ri * width..(ri + 1) * width];
+                        for &h in &groups {
+                            data.extend_from_slice(&row[pos[h]..pos[h] + sizes[h]]);
+                        }
+                    }
+                    let kept = if n_in > bw {
+                        echelon(&mut data, bw)
+                    } else {
+                        n_in
+                    };
+                    stats.dependent_rows += n_in - kept;
+                    data.truncate(kept * bw);
+                    if kept > 0 {
+                        if groups.len() <= WIDE_BLOCK {
+                            for &h in &groups {
+                                stamp_rescore[h] = rescore_mark;
+                            }
+                        }
+                        pool.add(Blk {
+                            groups,
+                            nrows: kept,
+                            data,
+                        });
+                    }
+                    i = j;
+                }
+            }
+            // The pivot rows, over the group's columns and the others they touch.
+            let mut used = vec![0u64; words];
+            for i in 0..r {
+                for w in 0..words {
+                    used[w] |= masks[i * words + w];
+                }
+            }
+            let rec_others: Vec<usize> = (0..others.len())
+                .filter(|&k| used[k / 64] >> (k % 64) & 1 == 1)
+                .map(|k| others[k])
+                .collect();
+            let rec_width = sg + rec_others.iter().map(|&h| sizes[h]).sum::<usize>();
+            let mut rows = Vec::with_capacity(r * rec_width);
+            for i in 0..r {
+                let row = &front[i * width..(i + 1) * width];
+                rows.extend_from_slice(&row[..sg]);
+                for &h in &rec_others {
+                    rows.extend_from_slice(&row[pos[h]..pos[h] + sizes[h]]);
+                }
+            }
+            drop(front);
+            stats.factor_entries += rows.len();
+            for &h in &others {
+                if !done[h] && stamp_rescore[h] == rescore_mark {
+                    version[h] += 1;
+                    let s = pool.score(h, &mut stamp, &mut clock);
+                    heap.push(Reverse((s, h, version[h])));
+                }
+            }
+            records.push(Record {
+                group: g,
+                pivots,
+                free,
+                others: rec_others,
+                rows,
+                width: rec_width,
+            });
+        }
+        Factor {
+            sizes,
+            offsets,
+            records,
+            rank,
+            stats,
+        }
+    }
+
+    /// The rank.
+    pub fn rank(&self) -> usize {
+        self.rank
+    }
+
+    /// The number of columns.
+    pub fn ncols(&self) -> usize {
+        self.sizes.iter().sum()
+    }
+
+    /// The dimension of the null space, `ncols − rank`.
+    pub fn nullity(&self) -> usize {
+        self.ncols() - self.rank
+    }
+
+    /// Fill and front sizes of the factorization.
+    pub fn stats(&self) -> FactorStats {
+        self.stats
+    }
+
+    /// The columns in elimination order (group by group, each group's columns in order):
+    /// a fill-reducing order for [`RowBasis::with_column_order`].
+    pub fn column_order(&self) -> Vec<u32> {
+        let mut out = Vec::with_capacity(self.ncols());
+        let mut seen = vec![false; self.sizes.len()];
+        for rec in &self.records {
+            seen[rec.group] = true;
+            let off = self.offsets[rec.group];
+            out.extend((off..off + self.sizes[rec.group]).map(|c| c as u32));
+        }
+        for (g, &s) in self.sizes.iter().enumerate() {
+            if !seen[g] {
+                let off = self.offsets[g];
+                out.extend((off..off + s).map(|c| c as u32));
+            }
+        }
+        out
+    }
+
+    /// The free columns (global indices), one per null-space vector, in the order of
+    /// [`Factor::null_space`]: vector k is 1 on free column k and 0 on the other free
+    /// columns.
+    pub fn free_columns(&self) -> Vec<u32> {
+        self.records
+            .iter()
+            .flat_map(|rec| {
+                rec.free
+                    .iter()
+                    .map(|&f| (self.offsets[rec.group] + f) as u32)
+            })
+            .collect()
+    }
+
+    /// A basis of the null space {x : A x = 0}: `nullity()` sparse vectors, by back
+    /// substitution from each free column through the groups it reaches. The vectors are
+    /// as dense as the motions they describe (a serial chain's are long), so the cost is
+    /// that of the output.
+    pub fn null_space(&self) -> Vec<SparseRow> {
+        let n = self.sizes.len();
+        let total = self.ncols();
+        // Records whose front used group h as a neighbour (those are solved after h).
+        let mut users: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut rec_of = vec![usize::MAX; n];
+        for (ri, rec) in self.records.iter().enumerate() {
+            rec_of[rec.group] = ri;
+            for &h in &rec.others {
+                users[h].push(ri);
+            }
+        }
+        let mut x = vec![Fp::ZERO; total];
+        let mut touched_groups: Vec<usize> = Vec::new();
+        let mut group_seen = vec![false; n];
+        let mut queued = vec![false; self.records.len()];
+        let mut out = Vec::with_capacity(self.nullity());
+        for (ri, rec) in self.records.iter().enumerate() {
+            for &f in &rec.free {
+                let col = self.offsets[rec.group] + f;
+                x[col] = Fp::ONE;
+                let mut heap: BinaryHeap<usize> = BinaryHeap::new();
+                heap.push(ri);
+                queued[ri] = true;
+                let mut queued_list = vec![ri];
+                let mark = |g: usize, seen: &mut Vec<bool>, list: &mut Vec<usize>| {
+                    if !seen[g] {
+                        seen[g] = true;
+                        list.push(g);
+                    }
+                };
+                mark(rec.group, &mut group_seen, &mut touched_groups);
+                while let Some(hi) = heap.pop() {
+                    let h = &self.records[hi];
+                    let off = self.offsets[h.group];
+                    let mut any = false;
+                    for (i, &pc) in h.pivots.iter().enumerate() {
+                        let row = &h.rows[i * h.width..(i + 1) * h.width];
+                        let mut s = Fp::ZERO;
+                        for &q in &h.free {
+                            let v = x[off + q];
+                            if !v.is_zero() {
+                                s += row[q] * v;
+                            }
+                        }
+                        let mut c = self.sizes[h.group];
+                        for &o in &h.others {
+                            let so = self.sizes[o];
+                            let xo = &x[self.offsets[o]..self.offsets[o] + so];
+                            for (k, &v) in xo.iter().enumerate() {
+                                if !v.is_zero() {
+                                    s += row[c + k] * v;
+                                }
+                            }
+                            c += so;
+                        }
+                        let val = -s;
+                        x[off + pc] = val;
+                        any |= !val.is_zero();
+                    }
+                    if any {
+                        mark(h.group, &mut group_seen, &mut touched_groups);
+                    }
+                    if any || hi == ri {
+                        for &u in &users[h.group] {
+                            if !queued[u] {
+                                queued[u] = true;
+                                queued_list.push(u);
+                                heap.push(u);
+                            }
+                        }
+                    }
+                }
+                touched_groups.sort_unstable();
+                let mut v: SparseRow = Vec::new();
+                for &g in &touched_groups {
+                    let off = self.offsets[g];
+                    for (k, e) in x[off..off + self.sizes[g]].iter_mut().enumerate() {
+                        if !e.is_zero() {
+                            v.push(((off + k) as u32, *e));
+                            *e = Fp::ZERO;
+                        }
+                    }
+                    group_seen[g] = false;
+                }
+                touched_groups.clear();
+                for q in queued_list {
+                    queued[q] = false;
+                }
+                out.push(v);
+            }
+        }
+        out
+    }
+}
+
+/// The live blocks of an elimination, indexed by group, with per-group row and width sums
+/// kept up to date for the pivot order.
+struct Pool<'a> {
+    sizes: &'a [usize],
+    store: Vec<Option<Blk>>,
+    /// Block ids per group (dead ids pruned lazily).
+    of_group: Vec<Vec<usize>>,
+    /// Live blocks, their rows and the sum of their widths, per group.
+    nblk: Vec<usize>,
+    rsum: Vec<usize>,
+    wsum: Vec<usize>,
+}
+
+/// Blocks on more groups than this are "wide" (a carried row): the pivot order treats them
+/// approximately.
+const WIDE_BLOCK: usize = 64;
+
+/// Groups with more live blocks than this get the width bound instead of the exact union.
+const EXACT_SCORE_BLOCKS: usize = 32;
+
+impl<'a> Pool<'a> {
+    fn new(sizes: &'a [usize], cap: usize) -> Pool<'a> {
+        let n = sizes.len();
+        Pool {
+            sizes,
+            store: Vec::with_capacity(cap),
+            of_group: vec![Vec::new(); n],
+            nblk: vec![0; n],
+            rsum: vec![0; n],
+            wsum: vec![0; n],
+        }
+    }
+
+    fn width(&self, b: &Blk) -> usize {
+        b.width()
+    }
+
+    fn add(&mut self, b: Blk) {
+        let id = self.store.len();
+        let w = self.width(&b);
+        for &g in &b.groups {
+            self.of_group[g].push(id);
+            self.nblk[g] += 1;
+            self.rsum[g] += b.nrows;
+            self.wsum[g] += w;
+        }
+        self.store.push(Some(b));
+    }
+
+    /// Remove and return the live blocks on group `g`.
+    fn take(&mut self, g: usize) -> Vec<Blk> {
+        let ids = std::mem::take(&mut self.of_group[g]);
+        let mut out = Vec::with_capacity(ids.len());
+        for id in ids {
+            if let Some(b) = self.store[id].take() {
+                let w = self.width(&b);
+                for &h in &b.groups {
+                    self.nblk[h] -= 1;
+                    self.rsum[h] -= b.nrows;
+                    self.wsum[h] -= w;
+                }
+                out.push(b);
+            }
+        }
+        out
+    }
+
+    /// The cost of eliminating `g` now, as (estimated new entries, front width). The
+    /// estimate takes the pivots from the narrowest blocks (as the elimination does), lets
+    /// `U` be the columns those pivot rows span, and counts the pivot rows (`|U|` each) and,
+    /// for every row left over, the columns of `U` its block lacks (its fill). A group whose
+    /// front has no more rows than columns leaves nothing behind (a tip of a chain, a leaf
+    /// of a star, the last body of a determined group); a row crossing many groups that is
+    /// only carried along adds little. Groups on more than [`EXACT_SCORE_BLOCKS`] blocks
+    /// get a bound instead (they go late).
+    fn score(&mut self, g: usize, stamp: &mut [usize], clock: &mut usize) -> (usize, usize) {
+        let sg = self.sizes[g];
+        let ids = &mut self.of_group[g];
+        if ids.len() > 2 * self.nblk[g] + 8 {
+            let store = &self.store;
+            ids.retain(|&id| store[id].is_some());
+        }
+        if self.nblk[g] > EXACT_SCORE_BLOCKS {
+            let width = (self.wsum[g] + sg).saturating_sub(self.nblk[g] * sg);
+            return (self.rsum[g].saturating_mul(width), width);
+        }
+        let mut blocks: Vec<(usize, usize, usize)> = self.of_group[g]
+            .iter()
+            .filter_map(|&id| {
+                let b = self.store[id].as_ref()?;
+                Some((self.width(b), b.nrows, id))
+            })
+            .collect();
+        blocks.sort_unstable();
+        // U: the union of the narrowest blocks supplying sg rows.
+        *clock += 1;
+        let mark = *clock;
+        stamp[g] = mark;
+        let mut u_groups: Vec<usize> = Vec::new();
+        let mut uw = sg;
+        let mut need = sg;
+        for &(_, nr, id) in &blocks {
+            if need == 0 {
+                break;
+            }
+            if let Some(b) = &self.store[id] {
+                for &h in &b.groups {
+                    if stamp[h] != mark {
+                        stamp[h] = mark;
+                        uw += self.sizes[h];
+                        u_groups.push(h);
+                    }
+                }
+            }
+            need = need.saturating_sub(nr);
+        }
+        let pivots = sg - need;
+        let mut fill = pivots * uw;
+        // Rows left over gain the columns of U their block lacks; the width counts the
+        // narrow blocks' groups exactly and the wide ones' by their width.
+        let mut left = pivots;
+        *clock += 1;
+        let wmark = *clock;
+        stamp[g] = wmark;
+        let mut width = uw;
+        for &(bw, nr, id) in &blocks {
+            let used = left.min(nr);
+            left -= used;
+            let rest = nr - used;
+            let Some(b) = &self.store[id] else { continue };
+            let mut inside = sg;
+            if b.groups.len() <= WIDE_BLOCK {
+                for &h in &b.groups {
+                    if stamp[h] == mark {
+                        inside += self.sizes[h];
+                    } else if stamp[h] != wmark {
+                        stamp[h] = wmark;
+                        width += self.sizes[h];
+                    }
+                }
+            } else {
+                for &h in &u_groups {
+                    if b.groups.binary_search(&h).is_ok() {
+                        inside += self.sizes[h];
+                    }
+                }
+                width += bw - inside;
+            }
+            fill += rest * uw.saturating_sub(inside);
+        }
+        (fill, width)
+    }
+}
+
+fn swap_rows(m: &mut [Fp], w: usize, i: usize, k: usize) {
+    if i != k {
+        let (a, b) = (i.min(k), i.max(k));
+        let (lo, hi) = m.split_at_mut(b * w);
+        lo[a * w..(a + 1) * w].swap_with_slice(&mut hi[..w]);
+    }
+}
+
+/// Row `i` (mutable) and row `k` (shared) of a row-major matrix of width `w`, `i != k`.
+fn two_rows(m: &mut [Fp], w: usize, i: usize, k: usize) -> (&mut [Fp], &[Fp]) {
+    if i < k {
+        let (lo, hi) = m.split_at_mut(k * w);
+        (&mut lo[i * w..(i + 1) * w], &hi[..w])
+    } else {
+        let (lo, hi) = m.split_at_mut(i * w);
+        (&mut hi[..w], &lo[k * w..(k + 1) * w])
+    }
+}
+
+/// Row echelon form in place (row-major, width `w`); returns the rank (rows `0..rank` span
+/// the row space).
+fn echelon(m: &mut [Fp], w: usize) -> usize {
+    let nr = m.len() / w;
+    let mut r = 0;
+    for c in 0..w {
+        if r == nr {
+            break;
+        }
+        let Some(p) = (r..nr).find(|&i| !m[i * w + c].is_zero()) else {
+            continue;
+        };
+        swap_rows(m, w, r, p);
+        let inv = m[r * w + c].inv();
+        scale(&mut m[r * w + c..(r + 1) * w], inv);
+        for i in r + 1..nr {
+            let f = m[i * w + c];
+            if !f.is_zero() {
+                let (dst, src) = two_rows(m, w, i, r);
+                axpy_sub(&mut dst[c..], f, &src[c..]);
+            }
+        }
+        r += 1;
+    }
+    r
+}
+
+/// A row that the earlier rows make redundant, with the rows taking part in its dependency.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DependentRow {
+    /// The row.
+    pub row: usize,
+    /// Rows with a nonzero coefficient in the left null vector that expresses the
+    /// dependency (this row, coefficient one, and earlier rows), increasing.
+    pub support: Vec<usize>,
+    /// That left null vector over the rows: `Σ y_i row_i = 0`.
+    pub vector: SparseRow,
+}
+
+impl Factor {
+    /// The rows of `a` (the matrix this factor was computed from) that are combinations of
+    /// the rows before them, greedy in row order, each with its dependency. Removing them
+    /// all keeps the rank; their vectors are a basis of the left null space. Computed with
+    /// a tracked [`RowBasis`] in this factor's column order.
+    pub fn dependent_rows(&self, a: &SparseMatrix) -> Vec<DependentRow> {
+        if self.rank == a.nrows() {
+            return Vec::new();
+        }
+        let mut basis = RowBasis::with_column_order(&self.column_order()).with_tracking();
+        let mut out = Vec::new();
+        for (i, r) in a.rows.iter().enumerate() {
+            if !basis.insert(r) {
+                let vector = basis.last_dependency().cloned().unwrap_or_default();
+                out.push(DependentRow {
+                    row: i,
+                    support: vector.iter().map(|&(k, _)| k as usize).collect(),
+                    vector,
+                });
+            }
+        }
+        out
+    }
+
+    /// A basis of the left null space {y : yᵀ A = 0} of `a` (the matrix this factor was
+    /// computed from), as vectors over the rows: the dependencies of
+    /// [`Factor::dependent_rows`]. Empty at once when the rows are independent.
+    pub fn left_null_space(&self, a: &SparseMatrix) -> Vec<SparseRow> {
+        self.dependent_rows(a)
+            .into_iter()
+            .map(|d| d.vector)
+            .collect()
+    }
+}
+
+/// A basis of the left null space {y : yᵀ A = 0} (vectors over the rows); see
+/// [`Factor::left_null_space`].
+pub fn left_null_space(a: &SparseMatrix) -> Vec<SparseRow> {
+    Factor::new(a).left_null_space(a)
+}
+
+/// The rows dependent on the rows before them, with their dependencies; see
+/// [`Factor::dependent_rows`].
+pub fn dependent_rows(a: &SparseMatrix) -> Vec<DependentRow> {
+    Factor::new(a).dependent_rows(a)
+}
+
+/// An incremental row basis in echelon form with respect to the column order: insert
+/// sparse rows one at a time; each is reduced by the kept rows and kept iff something
+/// remains. Inserting the rows of a matrix in order keeps exactly the rows independent of
+/// the earlier ones (greedy redundancy removal). Number the columns so that rows of
+/// neighbouring bodies have nearby columns (for a mechanism, bodies in a breadth-first
+/// order) to keep the kept rows short.
+#[derive(Clone, Debug)]
+pub struct RowBasis {
+    ncols: usize,
+    /// Position of each column in the pivot order (empty: the identity).
+    rank_of: Vec<u32>,
+    /// The kept rows, reduced: leading entry 1, all other columns after it.
+    rows: Vec<SparseRow>,
+    /// The kept row leading at each column.
+    pivot: Vec<u32>,
+    acc: Vec<Fp>,
+    mark: Vec<bool>,
+    /// Rows inserted so far (the next row's id).
+    inserted: u32,
+    /// Whether combinations are tracked ([`RowBasis::with_tracking`]).
+    track: bool,
+    /// Per kept row, its combination of the inserted rows (by id).
+    combos: Vec<SparseRow>,
+    cacc: Vec<Fp>,
+    cmark: Vec<bool>,
+    last_dependency: Option<SparseRow>,
+}
+
+const NO_PIVOT: u32 = u32::MAX;
+
+impl RowBasis {
+    /// An empty basis over `ncols` columns.
+    pub fn new(ncols: usize) -> RowBasis {
+        RowBasis {
+            ncols,
+            rank_of: Vec::new(),
+            rows: Vec::new(),
+            pivot: vec![NO_PIVOT; ncols],
+            acc: vec![Fp::ZERO; ncols],
+            mark: vec![false; ncols],
+            inserted: 0,
+            track: false,
+            combos: Vec::new(),
+            cacc: Vec::new(),
+            cmark: Vec::new(),
+            last_dependency: None,
+        }
+    }
+
+    /// Track, for every kept row, which inserted rows it combines, so that a dependent row
+    /// comes with its dependency ([`RowBasis::last_dependency`]). Costs memory and time in
+    /// proportion to those combinations (the inverse of the triangular factor, denser than
+    /// the kept rows); call on an empty basis.
+    pub fn with_tracking(mut self) -> RowBasis {
+        self.track = true;
+        self
+    }
+
+    /// With tracking, after an [`insert`](RowBasis::insert) that returned `false`: the left
+    /// null vector over the inserted rows (by insertion index, from 0) in which the last row
+    /// has coefficient one and only rows inserted before it take part: `Σ y_i row_i = 0`.
+    /// `None` after a kept row or without tracking.
+    pub fn last_dependency(&self) -> Option<&SparseRow> {
+        self.last_dependency.as_ref()
+    }
+
+    /// An empty basis whose pivots follow the given column order (`order[k]` is the k-th
+    /// column; a permutation of `0..ncols`), for example [`Factor::column_order`]: rows
+    /// are then reduced as the factorization would eliminate them, which keeps the kept
+    /// rows short where the natural order fills in (the hub of a star numbered first).
+    ///
+    /// # Panics
+    /// If `order` is not a permutation (a caller's error).
+    pub fn with_column_order(order: &[u32]) -> RowBasis {
+        let ncols = order.len();
+        let mut rank_of = vec![u32::MAX; ncols];
+        for (k, &c) in order.iter().enumerate() {
+            assert!(
+                (c as usize) < ncols && rank_of[c as usize] == u32::MAX,
+                "column order is not a permutation"
+            );
+            rank_of[c as usize] = k as u32;
+        }
+        let mut b = RowBasis::new(ncols);
+        b.rank_of = rank_of;
+        b
+    }
+
+    /// The number of rows kept (the rank of the rows inserted so far).
+    pub fn rank(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// The number of columns.
+    pub fn ncols(&self) -> usize {
+        self.ncols
+    }
+
+    /// Entries stored in the kept rows (the fill measure).
+    pub fn entries(&self) -> usize {
+        self.rows.iter().map(|r| r.len()).sum()
+    }
+
+    /// Insert a row (`(column, value)` pairs, any order, repeats added); returns whether it
+    /// was independent of the rows inserted before (then it is kept).
+    ///
+    /// # Panics
+    /// If a column is not below `ncols` (a caller's indexing error).
+    pub fn insert(&mut self, row: &[(u32, Fp)]) -> bool {
+        let id = self.inserted;
+        self.inserted += 1;
+        self.last_dependency = None;
+        let mut ctouched: Vec<u32> = Vec::new();
+        if self.track {
+            if self.cacc.len() <= id as usize {
+                let n = (2 * self.cacc.len()).max(id as usize + 1);
+                self.cacc.resize(n, Fp::ZERO);
+                self.cmark.resize(n, false);
+            }
+            self.cacc[id as usize] = Fp::ONE;
+            self.cmark[id as usize] = true;
+            ctouched.push(id);
+        }
+        let mut heap: BinaryHeap<Reverse<u32>> = BinaryHeap::with_capacity(row.len() * 2);
+        let mut touched: Vec<u32> = Vec::with_capacity(row.len() * 2);
+        for &(c, v) in row {
+            let c = if self.rank_of.is_empty() {
+                c
+            } else {
+                self.rank_of[c as usize]
+            };
+            let cu = c as usize;
+            self.acc[cu] += v;
+            if !self.mark[cu] {
+                self.mark[cu] = true;
+                touched.push(c);
+                heap.push(Reverse(c));
+            }
+        }
+        let mut kept = false;
+        while let Some(Reverse(c)) = heap.pop() {
+            let v = self.acc[c as usize];
+            if v.is_zero() {
+                continue;
+            }
+            let p = self.pivot[c as usize];
+            if p == NO_PIVOT {
+                // Independent: the remainder (columns ≥ c) becomes a kept row leading at c.
+                let inv = v.inv();
+                let mut new_row: SparseRow = vec![(c, Fp::ONE)];
+                let mut rest: Vec<u32> = heap.into_iter().map(|r| r.0).collect();
+                rest.sort_unstable();
+                for k in rest {
+                    let w = self.acc[k as usize];
+                    if !w.is_zero() {
+                        new_row.push((k, w * inv));
+                    }
+                }
+                self.pivot[c as usize] = self.rows.len() as u32;
+                self.rows.push(new_row);
+                if self.track {
+                    ctouched.sort_unstable();
+                    let combo = ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize] * inv))
+                        .filter(|e| !e.1.is_zero())
+                        .collect();
+                    self.combos.push(combo);
+                }
+                kept = true;
+                break;
+            }
+            if self.track {
+                for &(i, w) in &self.combos[p as usize] {
+                    let iu = i as usize;
+                    self.cacc[iu] -= v * w;
+                    if !self.cmark[iu] {
+                        self.cmark[iu] = true;
+                        ctouched.push(i);
+                    }
+                }
+            }
+            let prow = &self.rows[p as usize];
+            for &(k, w) in &prow[1..] {
+                let ku = k as usize;
+                self.acc[ku] -= v * w;
+                if !self.mark[ku] {
+                    self.mark[ku] = true;
+                    touched.push(k);
+                    heap.push(Reverse(k));
+                }
+            }
+            self.acc[c as usize] = Fp::ZERO;
+        }
+        for c in touched {
+            self.acc[c as usize] = Fp::ZERO;
+            self.mark[c as usize] = false;
+        }
+        if self.track {
+            ctouched.sort_unstable();
+            if !kept {
+                self.last_dependency = Some(
+                    ctouched
+                        .iter()
+                        .map(|&i| (i, self.cacc[i as usize]))
+                        .filter(|e| !e.1.is_zero())
+                        .collect(),
+                );
+            }
+            for i in ctouched {
+                self.cacc[i as usize] = Fp::ZERO;
+                self.cmark[i as usize] = false;
+            }
+        }
+        kept
+    }
+
+    /// Entries stored in the tracked combinations.
+    pub fn combination_entries(&self) -> usize {
+        self.combos.iter().map(|r| r.len()).sum()
+    }
+}
+
+/// The constraint Jacobian pattern of a mechanism with random entries, for tests and
+/// benchmarks: bodies `0..nbodies` with body 0 the fixed frame (no columns), `b` columns per
+/// movable body (grouped), and for each pair `(i, j, rows)` that many rows with random
+/// entries over the two bodies' columns (the frame's side omitted).
+pub fn random_pair_matrix(
+    nbodies: usize,
+    b: usize,
+    pairs: &[(usize, usize, usize)],
+    seed: u64,
+) -> SparseMatrix {
+    let mut rng = SplitMix64::new(seed);
+    let mut a = SparseMatrix::with_groups(vec![b; nbodies.saturating_sub(1)]);
+    for &(i, j, rows) in pairs {
+        for _ in 0..rows {
+            let mut e = Vec::with_capacity(2 * b);
+            for body in [i, j] {
+                if body > 0 {
+                    let off = (body - 1) * b;
+                    for k in 0..b {
+                        e.push(((off + k) as u32, Fp::random_nonzero(&mut rng)));
+                    }
+                }
+            }
+            a.push_row(e);
+        }
+    }
+    a
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::dense;
+    use super::*;
+
+    fn check(a: &SparseMatrix) {
+        let d = a.to_dense();
+        let f = Factor::new(a);
+        let r = dense::rank(&d);
+        assert_eq!(f.rank(), r);
+        let ns = f.null_space();
+        assert_eq!(ns.len(), a.ncols - r);
+        for x in &ns {
+            assert!(a.mul_sparse(x).iter().all(|v| v.is_zero()));
+        }
+        // Independence: the free columns carry an identity.
+        let free = f.free_columns();
+        for (k, x) in ns.iter().enumerate() {
+            for (l, &fc) in free.iter().enumerate() {
+                let v = x.iter().find(|e| e.0 == fc).map_or(Fp::ZERO, |e| e.1);
+                assert_eq!(v, if k == l { Fp::ONE } else { Fp::ZERO });
+            }
+        }
+        let ln = left_null_space(a);
+        assert_eq!(ln.len(), a.nrows() - r);
+        for y in &ln {
+            assert!(a.left_mul_sparse(y).iter().all(|v| v.is_zero()));
+        }
+        let deps = dependent_rows(a);
+        assert_eq!(deps.len(), a.nrows() - r);
+        let greedy = dense::independent_rows(&d);
+        for dep in &deps {
+            assert!(!greedy.contains(&dep.row));
+            assert_eq!(dep.support.last(), Some(&dep.row));
+        }
+        let keep: Vec<usize> = (0..a.nrows())
+            .filter(|i| !deps.iter().any(|d| d.row == *i))
+            .collect();
+        let sub = DMatrix::from_fn(keep.len(), a.ncols, |i, j| d[(keep[i], j)]);
+        assert_eq!(dense::rank(&sub), r);
+        let mut basis = RowBasis::new(a.ncols);
+        let kept: Vec<usize> = (0..a.nrows())
+            .filter(|&i| basis.insert(&a.rows[i]))
+            .collect();
+        assert_eq!(kept, dense::independent_rows(&d));
+        let mut ordered = RowBasis::with_column_order(&f.column_order());
+        let kept2: Vec<usize> = (0..a.nrows())
+            .filter(|&i| ordered.insert(&a.rows[i]))
+            .collect();
+        assert_eq!(kept2, kept);
+        let mut tracked = RowBasis::with_column_order(&f.column_order()).with_tracking();
+        for i in 0..a.nrows() {
+            let k = tracked.insert(&a.rows[i]);
+            assert_eq!(k, kept.contains(&i));
+            match tracked.last_dependency() {
+                Some(y) => {
+                    assert!(!k);
+                    assert_eq!(y.last(), Some(&(i as u32, Fp::ONE)));
+                    assert!(a.left_mul_sparse(y).iter().all(|v| v.is_zero()));
+                }
+                None => assert!(k),
+            }
+        }
+    }
+
+    #[test]
+    fn chain_and_loop() {
+        // Planar: 4 movable bodies on R joints (2 rows per pair), a chain to the frame.
+        let chain = [(0, 1, 2), (1, 2, 2), (2, 3, 2), (3, 4, 2)];
+        let a = random_pair_matrix(5, 3, &chain, 1);
+        check(&a);
+        assert_eq!(Factor::new(&a).nullity(), 4);
+        // Close the loop twice over: a redundant pair.
+        let looped = [(0, 1, 2), (1, 2, 2), (2, 0, 2), (1, 2, 2)];
+        let a = random_pair_matrix(3, 3, &looped, 2);
+        check(&a);
+        let f = Factor::new(&a);
+        assert_eq!(f.rank(), 6);
+        assert_eq!(f.stats().dependent_rows, 2);
+    }
+
+    #[test]
+    fn planted_dependencies() {
+        let mut rng = SplitMix64::new(5);
+        let mut a = SparseMatrix::with_groups(vec![2, 3, 1, 2]);
+        for _ in 0..5 {
+            let mut e: Vec<(u32, Fp)> = Vec::new();
+            for c in 0..8 {
+                if rng.below(3) == 0 {
+                    e.push((c, Fp::random(&mut rng)));
+                }
+            }
+            a.push_row(e);
+        }
+        let (r0, r1) = (a.rows[0].clone(), a.rows[1].clone());
+        let k = Fp::from_i64(-3);
+        a.push_row(r0.iter().map(|&(c, v)| (c, v * k)).chain(r1));
+        a.push_row(vec![]);
+        check(&a);
+        check(&a.transpose());
+    }
+
+    #[test]
+    fn blocks_interface() {
+        let mut rng = SplitMix64::new(4);
+        let mat = DMatrix::from_fn(2, 6, |_, _| Fp::random(&mut rng));
+        let f = Factor::from_blocks(
+            &[3, 3],
+            vec![FpBlock {
+                groups: vec![1, 0],
+                mat,
+            }],
+        );
+        assert_eq!(f.rank(), 2);
+        assert_eq!(f.null_space().len(), 4);
+    }
+
+    #[test]
+    fn row_basis_greedy() {
+        let mut b = RowBasis::new(4);
+        let one = Fp::ONE;
+        assert!(b.insert(&[(1, one), (2, one)]));
+        assert!(!b.insert(&[(2, Fp::from_i64(2)), (1, Fp::from_i64(2))]));
+        assert!(b.insert(&[(2, one), (3, one)]));
+        assert!(!b.insert(&[(1, one), (3, -one)]));
+        assert!(!b.insert(&[]));
+        assert!(b.insert(&[(0, one), (0, one)]));
+        assert_eq!(b.rank(), 3);
+    }
+}
