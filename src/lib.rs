@@ -15,6 +15,7 @@ pub mod examples;
 pub mod expect;
 pub mod format;
 pub mod generate;
+pub mod import;
 pub mod joint;
 pub mod mechanism;
 pub mod mobility;

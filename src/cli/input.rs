@@ -15,6 +15,58 @@ pub struct FileArg {
     /// Format of standard input (default: sniffed from the content).
     #[arg(long, value_enum)]
     pub input_format: Option<InputFormat>,
+    #[command(flatten)]
+    pub import: ImportArgs,
+}
+
+/// Options for model files of other programs (MJCF, SDFormat, URDF, OpenSim).
+#[derive(Args, Debug, Clone, Default)]
+pub struct ImportArgs {
+    /// Read FILE as this simulator format (default: from the root element and extension).
+    #[arg(long, value_enum, value_name = "FORMAT")]
+    pub from: Option<FromFormat>,
+    /// MJCF: the keyframe (name or index) whose qpos is the configuration (default: qpos0).
+    #[arg(long, value_name = "NAME")]
+    pub keyframe: Option<String>,
+    /// Merge coincident coaxial revolute joints that share a body into multiple joints.
+    #[arg(long)]
+    pub merge_pins: bool,
+}
+
+impl ImportArgs {
+    /// The library's import options.
+    pub fn options(&self) -> mbsa::import::ImportOptions {
+        mbsa::import::ImportOptions {
+            format: self.from.map(Into::into),
+            keyframe: self.keyframe.clone(),
+            merge_pins: self.merge_pins,
+        }
+    }
+}
+
+/// Simulator formats on the command line.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum FromFormat {
+    /// MuJoCo MJCF.
+    Mjcf,
+    /// SDFormat (Gazebo).
+    Sdf,
+    /// URDF.
+    Urdf,
+    /// OpenSim .osim.
+    Osim,
+}
+
+impl From<FromFormat> for mbsa::import::SourceFormat {
+    fn from(f: FromFormat) -> Self {
+        use mbsa::import::SourceFormat as S;
+        match f {
+            FromFormat::Mjcf => S::Mjcf,
+            FromFormat::Sdf => S::Sdf,
+            FromFormat::Urdf => S::Urdf,
+            FromFormat::Osim => S::Osim,
+        }
+    }
 }
 
 /// Input format names on the command line.
@@ -40,7 +92,38 @@ impl From<InputFormat> for Format {
 
 /// Read and parse a FILE argument. Errors are rendered diagnostics (exit code 2).
 pub fn load(arg: &FileArg) -> Result<mbsa::Mechanism, Failure> {
+    let xml = arg.import.from.is_some()
+        || mbsa::import::SourceFormat::from_path(Path::new(&arg.file)).is_some();
+    if xml && arg.input_format.is_none() {
+        return import(&arg.file, &arg.import).map(|i| i.mechanism);
+    }
     load_path(&arg.file, arg.input_format)
+}
+
+/// Import a simulator model file (`-` reads standard input); the warnings go to standard
+/// error as one block.
+pub fn import(file: &str, args: &ImportArgs) -> Result<mbsa::import::Import, Failure> {
+    let (name, bytes, _) = read(file, None)?;
+    import_read(file, &name, &bytes, args)
+}
+
+/// Import bytes already read from FILE.
+fn import_read(
+    file: &str,
+    name: &str,
+    bytes: &[u8],
+    args: &ImportArgs,
+) -> Result<mbsa::import::Import, Failure> {
+    let base = (file != "-" && !file.starts_with('@'))
+        .then(|| Path::new(file).parent())
+        .flatten();
+    let result = mbsa::import::import_bytes(name, bytes, base, &args.options())
+        .map_err(|e| Failure::Input(mbsa::diagnostic::render(&e, super::color_stderr())))?;
+    let block = result.warning_block();
+    if !block.is_empty() {
+        eprint!("{block}");
+    }
+    Ok(result)
 }
 
 /// Read and parse `file` (path, `-` or `@name`).
@@ -49,6 +132,11 @@ pub fn load_path(
     input_format: Option<InputFormat>,
 ) -> Result<mbsa::Mechanism, Failure> {
     let (name, bytes, format) = read(file, input_format)?;
+    // Simulator models (MJCF, SDFormat, URDF, OpenSim) sniffed by their root element.
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
+    if format.is_none() && mbsa::import::SourceFormat::sniff(&head).is_some() {
+        return import_read(file, &name, &bytes, &ImportArgs::default()).map(|i| i.mechanism);
+    }
     // Sniff on the valid UTF-8 prefix; load_bytes reports any bad byte at its location.
     let format = format.unwrap_or_else(|| {
         let valid = match std::str::from_utf8(&bytes) {

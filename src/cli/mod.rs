@@ -194,6 +194,26 @@ enum Command {
         #[command(flatten)]
         args: position::AssembleArgs,
     },
+    /// Convert a simulator model (MJCF, SDFormat, URDF, OpenSim) into a mechanism file.
+    ///
+    /// Writes a format-v1 TOML file: the bodies (bodies welded together merged), the joints
+    /// with their origins and axes in one world frame at the chosen configuration, the driven
+    /// DOF from the actuators, and comments that point back to the source elements. What is
+    /// not representable is listed in one warning block on standard error. The analysing
+    /// commands also read these model files directly (`mbsa analyze robot.urdf`).
+    #[command(
+        after_help = "Examples:\n  mbsa import cassie.xml -o cassie.toml\n  mbsa import cassie.xml --keyframe home\n  mbsa import four_bar.sdf --merge-pins\n  mbsa import model.txt --from urdf"
+    )]
+    Import {
+        /// Model file (.xml/.mjcf, .sdf/.world, .urdf, .osim) or `-` for standard input.
+        #[arg(value_name = "FILE")]
+        file: String,
+        /// Write the mechanism file here (default: standard output).
+        #[arg(short, long, value_name = "OUT.toml")]
+        output: Option<std::path::PathBuf>,
+        #[command(flatten)]
+        import: input::ImportArgs,
+    },
     /// Write a generated mechanism file (benchmark families) to standard output.
     #[command(subcommand)]
     Generate(generate::Family),
@@ -311,6 +331,38 @@ fn run(cli: Cli) -> Result<(), Failure> {
         Command::Solve { file, args } => position::solve(&file, &args),
         Command::Assemble { file, args } => position::assemble(&file, &args),
         Command::Generate(family) => generate::run(&family),
+        Command::Import {
+            file,
+            output,
+            import,
+        } => {
+            let result = input::import(&file, &import)?;
+            let m = &result.mechanism;
+            let mut summary = format!(
+                "imported {} ({}): {} bodies, {} joints, {} driven DOF",
+                file,
+                result.format.name(),
+                m.bodies.len(),
+                m.joints.len(),
+                m.inputs()
+            );
+            if import.merge_pins {
+                summary.push_str(&format!("; {} pin joint(s) merged", result.merged_pins));
+            }
+            match output {
+                Some(path) => {
+                    std::fs::write(&path, &result.toml).map_err(|e| {
+                        Failure::Input(format!("error: cannot write `{}`: {e}", path.display()))
+                    })?;
+                    eprintln!("{summary}; written to {}", path.display());
+                    Ok(())
+                }
+                None => {
+                    eprintln!("{summary}");
+                    emit(&result.toml)
+                }
+            }
+        }
         Command::Mobility {
             file,
             inputs,

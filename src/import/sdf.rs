@@ -1,0 +1,578 @@
+//! SDFormat reader (1.4 to 1.10): models (in `<sdf>` or a `<world>`), links, frames and joints
+//! with each version's frame rules. Before 1.7 a link pose is relative to the model and a joint
+//! pose to its child link; the joint axis is in the joint frame (1.5, 1.6) unless
+//! `use_parent_model_frame`, in the model frame (1.4). From 1.7, `relative_to`, `<frame>`,
+//! `attached_to` and `expressed_in` name the frames (defaults: model for links, child link for
+//! joints, joint for axes).
+
+use super::{
+    Builder, ImportError, JointRec, Node, Pose, Src, arr, child, children, pose, rpy, unit,
+};
+use crate::joint::JointType;
+use crate::mechanism::Geometry;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use std::collections::HashMap;
+
+/// Read an SDFormat document.
+pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, ImportError> {
+    let root = doc.root_element();
+    let version = match root.attribute("version") {
+        Some(v) => parse_version(v).ok_or_else(|| {
+            src.err_attr(
+                root,
+                "version",
+                "not a version",
+                format!("unknown SDFormat version `{v}`"),
+            )
+            .with_help("the importer reads SDFormat 1.4 to 1.10 (version=\"1.x\")")
+        })?,
+        None => {
+            return Err(src
+                .err(root, "no version", "<sdf> without a `version`")
+                .with_help("write <sdf version=\"1.7\"> (1.4 to 1.10 are read)"));
+        }
+    };
+    if !(4..=10).contains(&version) {
+        return Err(src
+            .err_attr(
+                root,
+                "version",
+                "unsupported",
+                format!("SDFormat 1.{version} is not supported"),
+            )
+            .with_help("the importer reads SDFormat 1.4 to 1.10"));
+    }
+    let mut models: Vec<(Node, Pose)> = Vec::new();
+    for m in children(root, "model") {
+        models.push((m, Pose::identity()));
+    }
+    for w in children(root, "world") {
+        for m in children(w, "model") {
+            models.push((m, Pose::identity()));
+        }
+        for inc in children(w, "include") {
+            let _ = inc;
+        }
+    }
+    let Some(first) = models.first() else {
+        return Err(src
+            .err(root, "no model", "no <model> in the file")
+            .with_help("the importer reads the <model> elements of <sdf> or of its <world>"));
+    };
+    let name = if models.len() == 1 {
+        first.0.attribute("name").unwrap_or("model").to_string()
+    } else {
+        root.children()
+            .find(|c| c.has_tag_name("world"))
+            .and_then(|w| w.attribute("name"))
+            .unwrap_or("world")
+            .to_string()
+    };
+    let mut b = Builder::new(&name, "world", "the SDFormat world");
+    b.configuration = "every joint at position 0 (the poses as written)".into();
+    let scoped = models.len() > 1;
+    for (m, _) in &models {
+        read_model(src, *m, version, scoped, &mut b)?;
+    }
+    for w in children(root, "world") {
+        for inc in children(w, "include") {
+            let loc = src.loc(inc);
+            b.warn(format!(
+                "{loc}: <include> of a model by URI not resolved: not imported"
+            ));
+        }
+    }
+    b.notes.push(format!("SDFormat 1.{version} frame rules"));
+    Ok(b)
+}
+
+fn parse_version(v: &str) -> Option<u32> {
+    let (major, minor) = v.trim().split_once('.')?;
+    (major == "1").then_some(())?;
+    minor.parse().ok()
+}
+
+/// A pose element: `x y z roll pitch yaw` (or 1.9+ `rotation_format="quat_xyzw"`, `degrees`).
+fn parse_pose(src: &Src, p: Node) -> Result<Pose, ImportError> {
+    let text = p.text().unwrap_or("").trim();
+    if text.is_empty() {
+        return Ok(Pose::identity());
+    }
+    if p.attribute("rotation_format") == Some("quat_xyzw") {
+        let v = src.nums_text(p, 7)?;
+        let q = Quaternion::new(v[6], v[3], v[4], v[5]);
+        if q.norm() < 1e-12 {
+            return Err(src
+                .err_text(p, "zero quaternion", "a zero quaternion")
+                .with_help("quat_xyzw poses are x y z qx qy qz qw"));
+        }
+        return Ok(pose([v[0], v[1], v[2]], UnitQuaternion::from_quaternion(q)));
+    }
+    let v = src.nums_text(p, 6)?;
+    let k = if p.attribute("degrees") == Some("true") {
+        std::f64::consts::PI / 180.0
+    } else {
+        1.0
+    };
+    Ok(pose([v[0], v[1], v[2]], rpy(v[3] * k, v[4] * k, v[5] * k)))
+}
+
+/// A frame's pose: relative to `relative_to` (None: the element's default frame).
+struct FrameDef<'a> {
+    pose: Pose,
+    relative_to: Option<String>,
+    default: String,
+    n: Node<'a>,
+}
+
+#[allow(clippy::too_many_lines)]
+fn read_model(
+    src: &Src,
+    m: Node,
+    version: u32,
+    scoped: bool,
+    b: &mut Builder,
+) -> Result<(), ImportError> {
+    let mname = m.attribute("name").unwrap_or("model");
+    let scope = |n: &str| {
+        if scoped && n != "world" {
+            format!("{mname}::{n}")
+        } else {
+            n.to_string()
+        }
+    };
+    let model_pose = match child(m, "pose") {
+        Some(p) => parse_pose(src, p)?,
+        None => Pose::identity(),
+    };
+    let is_static = child(m, "static")
+        .and_then(|s| s.text())
+        .map(|t| t.trim() == "true" || t.trim() == "1")
+        .unwrap_or(false);
+    for nested in children(m, "model") {
+        let loc = src.loc(nested);
+        b.warn(format!(
+            "{loc}: nested <model> `{}` not supported: not imported",
+            nested.attribute("name").unwrap_or("")
+        ));
+    }
+    // Frames of the model (1.7+ semantics; earlier versions use the fixed defaults).
+    let mut frames: HashMap<String, FrameDef> = HashMap::new();
+    let rel = |n: Node| -> Option<String> {
+        if version >= 7 {
+            child(n, "pose")
+                .and_then(|p| p.attribute("relative_to"))
+                .filter(|s| !s.is_empty())
+                .map(str::to_string)
+        } else {
+            None
+        }
+    };
+    let own_pose = |n: Node| -> Result<Pose, ImportError> {
+        match child(n, "pose") {
+            Some(p) => {
+                if version < 7 && p.attribute("frame").is_some_and(|f| !f.is_empty()) {
+                    return Err(src
+                        .err_attr(
+                            p,
+                            "frame",
+                            "not supported",
+                            "<pose frame=...> (SDFormat 1.5/1.6) is not supported",
+                        )
+                        .with_help(
+                            "use SDFormat 1.7 relative_to, or poses relative to the default frames",
+                        ));
+                }
+                parse_pose(src, p)
+            }
+            None => Ok(Pose::identity()),
+        }
+    };
+    let mut links: Vec<(String, Node)> = Vec::new();
+    for l in children(m, "link") {
+        let Some(name) = l.attribute("name") else {
+            return Err(src
+                .err(l, "no name", "<link> without a `name`")
+                .with_help("every link has a unique name"));
+        };
+        links.push((name.to_string(), l));
+        frames.insert(
+            name.to_string(),
+            FrameDef {
+                pose: own_pose(l)?,
+                relative_to: rel(l),
+                default: "__model__".into(),
+                n: l,
+            },
+        );
+    }
+    if version >= 7 {
+        for f in children(m, "frame") {
+            let Some(name) = f.attribute("name") else {
+                return Err(src
+                    .err(f, "no name", "<frame> without a `name`")
+                    .with_help("every frame has a unique name"));
+            };
+            let attached = f
+                .attribute("attached_to")
+                .filter(|s| !s.is_empty())
+                .unwrap_or("__model__");
+            frames.insert(
+                name.to_string(),
+                FrameDef {
+                    pose: own_pose(f)?,
+                    relative_to: rel(f),
+                    default: attached.to_string(),
+                    n: f,
+                },
+            );
+        }
+    }
+    struct SJoint<'a> {
+        n: Node<'a>,
+        name: String,
+        kind: String,
+        parent: String,
+        child: String,
+    }
+    let mut joints: Vec<SJoint> = Vec::new();
+    for j in children(m, "joint") {
+        let Some(name) = j.attribute("name") else {
+            return Err(src
+                .err(j, "no name", "<joint> without a `name`")
+                .with_help("every joint has a unique name"));
+        };
+        let kind = j.attribute("type").unwrap_or("").to_string();
+        let link = |tag: &str| -> Result<String, ImportError> {
+            let Some(n) = child(j, tag) else {
+                return Err(src
+                    .err(
+                        j,
+                        format!("no <{tag}>"),
+                        format!("joint `{name}` has no <{tag}>"),
+                    )
+                    .with_help(format!("write <{tag}>link name</{tag}>")));
+            };
+            let l = n.text().unwrap_or("").trim().to_string();
+            if l != "world" && !frames.contains_key(&l) {
+                return Err(src.err_text(n, "no such link", format!("joint `{name}` names `{l}`, which is not a link or frame of model `{mname}`")).with_help("name a <link> of the model, or `world`"));
+            }
+            Ok(l)
+        };
+        let parent = link("parent")?;
+        let child_link = link("child")?;
+        frames.insert(
+            name.to_string(),
+            FrameDef {
+                pose: own_pose(j)?,
+                relative_to: rel(j),
+                default: child_link.clone(),
+                n: j,
+            },
+        );
+        joints.push(SJoint {
+            n: j,
+            name: name.to_string(),
+            kind,
+            parent,
+            child: child_link,
+        });
+    }
+    // Resolve every frame to the model frame.
+    let mut resolved: HashMap<String, Pose> = HashMap::new();
+    resolved.insert("__model__".into(), Pose::identity());
+    resolved.insert("world".into(), model_pose.inverse());
+    fn resolve(
+        name: &str,
+        frames: &HashMap<String, FrameDef>,
+        resolved: &mut HashMap<String, Pose>,
+        src: &Src,
+        depth: usize,
+    ) -> Result<Pose, ImportError> {
+        if let Some(p) = resolved.get(name) {
+            return Ok(*p);
+        }
+        let Some(f) = frames.get(name) else {
+            return Err(ImportError::new(format!("unknown frame `{name}`")));
+        };
+        if depth > frames.len() + 2 {
+            return Err(src
+                .err(
+                    f.n,
+                    "in a cycle",
+                    format!("the poses of frame `{name}` refer to each other in a cycle"),
+                )
+                .with_help("relative_to and attached_to must lead to the model frame"));
+        }
+        let base_name = f.relative_to.clone().unwrap_or_else(|| f.default.clone());
+        if base_name != "world" && base_name != "__model__" && !frames.contains_key(&base_name) {
+            let e = match &f.relative_to {
+                Some(_) => child(f.n, "pose").map(|p| {
+                    src.err_attr(
+                        p,
+                        "relative_to",
+                        "no such frame",
+                        format!(
+                            "relative_to names `{base_name}`, which is not a frame of the model"
+                        ),
+                    )
+                }),
+                None => None,
+            };
+            return Err(e
+                .unwrap_or_else(|| {
+                    src.err(
+                        f.n,
+                        "no such frame",
+                        format!("`{base_name}` is not a frame of the model"),
+                    )
+                })
+                .with_help(
+                    "name a link, joint or frame of the same model, `__model__` or `world`",
+                ));
+        }
+        let base = resolve(&base_name, frames, resolved, src, depth + 1)?;
+        let p = base * f.pose;
+        resolved.insert(name.to_string(), p);
+        Ok(p)
+    }
+    let world_of =
+        |name: &str, resolved: &mut HashMap<String, Pose>| -> Result<Pose, ImportError> {
+            Ok(model_pose * resolve(name, &frames, resolved, src, 0)?)
+        };
+    for (l, _) in &links {
+        b.body(&scope(l), "");
+    }
+    let frame_body = b.frame;
+    let mut bodies_of_joint: Vec<(usize, usize)> = Vec::new();
+    // Link a frame name to its body (a frame attached to a link belongs to that link).
+    for j in &joints {
+        let body_of = |n: &str| -> String {
+            let mut cur = n.to_string();
+            for _ in 0..=frames.len() {
+                if cur == "world" || links.iter().any(|(l, _)| *l == cur) {
+                    return cur;
+                }
+                match frames.get(&cur) {
+                    Some(f) => cur = f.default.clone(),
+                    None => break,
+                }
+            }
+            cur
+        };
+        let (pn, cn) = (body_of(&j.parent), body_of(&j.child));
+        if pn == "__model__" || cn == "__model__" {
+            return Err(src
+                .err(
+                    j.n,
+                    "not a link",
+                    format!("joint `{}` joins a frame not attached to a link", j.name),
+                )
+                .with_help("attach the frame to a link"));
+        }
+        let p = if pn == "world" {
+            frame_body
+        } else {
+            b.body(&scope(&pn), "")
+        };
+        let c = if cn == "world" {
+            frame_body
+        } else {
+            b.body(&scope(&cn), "")
+        };
+        bodies_of_joint.push((p, c));
+        let jw = world_of(&j.name, &mut resolved)?;
+        let axis_of = |tag: &str,
+                       resolved: &mut HashMap<String, Pose>|
+         -> Result<Option<Vector3<f64>>, ImportError> {
+            let Some(a) = child(j.n, tag) else {
+                return Ok(None);
+            };
+            let Some(x) = child(a, "xyz") else {
+                return Ok(None);
+            };
+            let v = src.nums_text(x, 3)?;
+            let Some(v) = unit(&v) else {
+                return Err(src
+                    .err_text(
+                        x,
+                        "zero",
+                        format!("joint `{}`: an axis of zero length", j.name),
+                    )
+                    .with_help("xyz gives the axis direction"));
+            };
+            let frame_rot = if version >= 7 {
+                match x.attribute("expressed_in").filter(|s| !s.is_empty()) {
+                    Some("__model__") => model_pose.rotation,
+                    Some("world") => UnitQuaternion::identity(),
+                    Some(f) => {
+                        if !frames.contains_key(f) {
+                            return Err(src.err_attr(x, "expressed_in", "no such frame", format!("expressed_in names `{f}`, which is not a frame of the model")).with_help("name a link, joint or frame of the model, `__model__` or `world`"));
+                        }
+                        world_of(f, resolved)?.rotation
+                    }
+                    None => jw.rotation,
+                }
+            } else if version == 4 {
+                model_pose.rotation
+            } else {
+                let upm = child(a, "use_parent_model_frame")
+                    .and_then(|u| u.text())
+                    .map(|t| t.trim() == "true" || t.trim() == "1")
+                    .unwrap_or(false);
+                if upm {
+                    model_pose.rotation
+                } else {
+                    jw.rotation
+                }
+            };
+            Ok(Some(frame_rot * v))
+        };
+        let origin = Some(arr(jw.translation.vector));
+        let axis = axis_of("axis", &mut resolved)?;
+        let axis2 = axis_of("axis2", &mut resolved)?;
+        let need_axis = |a: Option<Vector3<f64>>, tag: &str| -> Result<[f64; 3], ImportError> {
+            match a {
+                Some(a) => Ok(arr(a)),
+                None => Err(src
+                    .err(
+                        j.n,
+                        format!("no <{tag}>"),
+                        format!("joint `{}` ({}) has no <{tag}><xyz>", j.name, j.kind),
+                    )
+                    .with_help(format!("write <{tag}><xyz>0 0 1</xyz></{tag}>"))),
+            }
+        };
+        let (kind, geometry) = match j.kind.as_str() {
+            "revolute" | "continuous" => (
+                JointType::R,
+                Geometry {
+                    origin,
+                    axis: Some(need_axis(axis, "axis")?),
+                    ..Geometry::default()
+                },
+            ),
+            "prismatic" => (
+                JointType::P,
+                Geometry {
+                    origin,
+                    axis: Some(need_axis(axis, "axis")?),
+                    ..Geometry::default()
+                },
+            ),
+            "ball" => (
+                JointType::S,
+                Geometry {
+                    origin,
+                    ..Geometry::default()
+                },
+            ),
+            "universal" | "revolute2" => (
+                JointType::U,
+                Geometry {
+                    origin,
+                    axis: Some(need_axis(axis, "axis")?),
+                    axis2: Some(need_axis(axis2, "axis2")?),
+                    ..Geometry::default()
+                },
+            ),
+            "screw" => {
+                // 1.10: screw_thread_pitch in metres per revolution; earlier: thread_pitch in
+                // radians per metre (Gazebo's reading).
+                let pitch = if let Some(p) = child(j.n, "screw_thread_pitch") {
+                    src.nums_text(p, 1)?[0] / (2.0 * std::f64::consts::PI)
+                } else if let Some(p) = child(j.n, "thread_pitch") {
+                    let v = src.nums_text(p, 1)?[0];
+                    if v == 0.0 { 0.0 } else { 1.0 / v }
+                } else {
+                    1.0
+                };
+                (
+                    JointType::H,
+                    Geometry {
+                        origin,
+                        axis: Some(need_axis(axis, "axis")?),
+                        pitch: Some(pitch),
+                        ..Geometry::default()
+                    },
+                )
+            }
+            "fixed" => {
+                b.weld(p, c, &format!("fixed joint `{}`", j.name));
+                continue;
+            }
+            "gearbox" => {
+                let loc = src.loc(j.n);
+                b.warn(format!(
+                    "{loc}: gearbox joint `{}` couples two joints: not representable (left out)",
+                    j.name
+                ));
+                continue;
+            }
+            other => {
+                return Err(src.err_attr(j.n, "type", "unknown type", format!("joint `{}` has the unknown type `{other}`", j.name)).with_help("SDFormat joint types: revolute, prismatic, ball, universal, revolute2, screw, fixed, continuous, gearbox"));
+            }
+        };
+        b.joint(JointRec {
+            id: scope(&j.name),
+            kind,
+            bodies: vec![p, c],
+            driven: 0,
+            geometry,
+            comments: vec![format!(
+                "<joint name=\"{}\" type=\"{}\"> at {}",
+                j.name,
+                j.kind,
+                src.loc(j.n)
+            )],
+        });
+    }
+    // Links not joined to the world float (Gazebo), unless the model is static.
+    let mut adj: HashMap<usize, Vec<usize>> = HashMap::new();
+    for &(p, c) in &bodies_of_joint {
+        adj.entry(p).or_default().push(c);
+        adj.entry(c).or_default().push(p);
+    }
+    let mut reached: Vec<usize> = vec![frame_body];
+    let mut stack = vec![frame_body];
+    while let Some(x) = stack.pop() {
+        for &y in adj.get(&x).map(Vec::as_slice).unwrap_or(&[]) {
+            if !reached.contains(&y) {
+                reached.push(y);
+                stack.push(y);
+            }
+        }
+    }
+    for (l, _) in &links {
+        let id = b.body(&scope(l), "");
+        if reached.contains(&id) {
+            continue;
+        }
+        if is_static {
+            b.weld(frame_body, id, &format!("model `{mname}` is static"));
+            reached.push(id);
+            continue;
+        }
+        // A free joint for the first link of each floating part.
+        let mut part = vec![id];
+        let mut st = vec![id];
+        while let Some(x) = st.pop() {
+            for &y in adj.get(&x).map(Vec::as_slice).unwrap_or(&[]) {
+                if !part.contains(&y) {
+                    part.push(y);
+                    st.push(y);
+                }
+            }
+        }
+        reached.extend(&part);
+        b.joint(JointRec {
+            id: format!("{}:free", scope(l)),
+            kind: JointType::F,
+            bodies: vec![frame_body, id],
+            driven: 0,
+            geometry: Geometry::default(),
+            comments: vec![format!("link `{l}` and the links joined to it are not joined to the world: free (as Gazebo simulates it)")],
+        });
+    }
+    Ok(())
+}

@@ -1,0 +1,436 @@
+//! URDF reader: the link tree at zero joint positions; revolute/continuous, prismatic,
+//! floating and planar joints; fixed joints merge links; `<transmission>` gives driven DOF;
+//! `mimic` is reported; loop closures from Drake's `drake:ball_constraint` and Gazebo's
+//! `<gazebo><joint>` extension.
+
+use super::{
+    Builder, ImportError, JointRec, Node, Pose, Src, arr, child, children, pose, rpy, unit,
+};
+use crate::joint::JointType;
+use crate::mechanism::Geometry;
+use nalgebra::{Point3, Vector3};
+use std::collections::HashMap;
+
+/// A joint of the file.
+struct UJoint<'a> {
+    n: Node<'a>,
+    name: String,
+    kind: &'a str,
+    parent: String,
+    child: String,
+    origin: Pose,
+    axis: Vector3<f64>,
+}
+
+/// Read a URDF document.
+pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, ImportError> {
+    let root = doc.root_element();
+    let robot = root.attribute("name").unwrap_or("robot");
+    // Links, in order.
+    let mut links: Vec<(String, Node)> = Vec::new();
+    for l in children(root, "link") {
+        let Some(name) = l.attribute("name") else {
+            return Err(src
+                .err(l, "no name", "<link> without a `name`")
+                .with_help("every URDF link has a unique name"));
+        };
+        if links.iter().any(|(n, _)| n == name) {
+            return Err(src
+                .err_attr(
+                    l,
+                    "name",
+                    "repeated",
+                    format!("link `{name}` is defined twice"),
+                )
+                .with_help("link names must be unique"));
+        }
+        links.push((name.to_string(), l));
+    }
+    let mut joints: Vec<UJoint> = Vec::new();
+    for j in children(root, "joint") {
+        joints.push(parse_joint(src, j, &links, false)?);
+    }
+    // The tree: each link is the child of at most one joint.
+    let mut parent_of: HashMap<&str, usize> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        if let Some(&other) = parent_of.get(j.child.as_str()) {
+            return Err(src
+                .err(j.n, "second parent", format!("link `{}` is the child of joints `{}` and `{}`", j.child, joints[other].name, j.name))
+                .with_help("URDF describes a tree; close loops with drake:ball_constraint or a <gazebo> joint"));
+        }
+        parent_of.insert(j.child.as_str(), k);
+    }
+    let roots: Vec<&str> = links
+        .iter()
+        .map(|(n, _)| n.as_str())
+        .filter(|n| !parent_of.contains_key(n))
+        .collect();
+    let Some(&frame) = roots.first() else {
+        return Err(src
+            .err(
+                root,
+                "no root link",
+                "every link is the child of a joint: the tree has no root",
+            )
+            .with_help("one link (the base) must be the child of no joint"));
+    };
+    let mut b = Builder::new(robot, frame, "the URDF root link");
+    b.configuration = "every joint at position 0 (URDF has no default positions)".into();
+    // World poses: walk down from the roots.
+    let mut world: HashMap<String, Pose> = HashMap::new();
+    for r in &roots {
+        world.insert(r.to_string(), Pose::identity());
+    }
+    let mut joint_world: Vec<Option<Pose>> = vec![None; joints.len()];
+    let mut changed = true;
+    while changed {
+        changed = false;
+        for (k, j) in joints.iter().enumerate() {
+            if joint_world[k].is_some() {
+                continue;
+            }
+            if let Some(p) = world.get(&j.parent).copied() {
+                let jw = p * j.origin;
+                joint_world[k] = Some(jw);
+                world.insert(j.child.clone(), jw);
+                changed = true;
+            }
+        }
+    }
+    for (k, j) in joints.iter().enumerate() {
+        if joint_world[k].is_none() {
+            return Err(src
+                .err(
+                    j.n,
+                    "in a cycle",
+                    format!("joint `{}` is on a cycle of parent links", j.name),
+                )
+                .with_help(
+                    "URDF describes a tree: follow the parents of this joint to find the cycle",
+                ));
+        }
+    }
+    for (name, _) in &links {
+        b.body(name, "");
+    }
+    for extra in roots.iter().skip(1) {
+        let fb = b.frame;
+        let e = b.body(extra, "");
+        b.warn(format!(
+            "link `{extra}` is a second root: given a free (F) joint to `{frame}`"
+        ));
+        b.joint(JointRec {
+            id: format!("{extra}:free"),
+            kind: JointType::F,
+            bodies: vec![fb, e],
+            driven: 0,
+            geometry: Geometry::default(),
+            comments: vec![format!("second root link `{extra}`: free")],
+        });
+    }
+    let mut index: HashMap<String, usize> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        let Some(jw) = joint_world[k] else { continue };
+        if let Some(ji) = add_joint(src, &mut b, j, jw, "<joint")? {
+            index.insert(j.name.clone(), ji);
+        }
+        if let Some(m) = child(j.n, "mimic") {
+            b.warn(format!(
+                "{}: joint `{}` mimics `{}` (multiplier {}, offset {}): the coupling is not representable; the joint is imported as independent",
+                src.loc(m),
+                j.name,
+                m.attribute("joint").unwrap_or("?"),
+                m.attribute("multiplier").unwrap_or("1"),
+                m.attribute("offset").unwrap_or("0")
+            ));
+        }
+    }
+    // Transmissions.
+    for t in children(root, "transmission") {
+        let tname = t
+            .attribute("name")
+            .map(|n| format!(" name=\"{n}\""))
+            .unwrap_or_default();
+        for tj in children(t, "joint") {
+            let Some(jn) = tj.attribute("name") else {
+                continue;
+            };
+            match index.get(jn) {
+                Some(&ji) => {
+                    let j = &mut b.joints[ji];
+                    if j.driven < j.kind.grade() as u32 {
+                        j.driven += 1;
+                        j.comments
+                            .push(format!("driven by <transmission{tname}> at {}", src.loc(t)));
+                    }
+                }
+                None => {
+                    let loc = src.loc(tj);
+                    b.warn(format!("{loc}: <transmission{tname}> names joint `{jn}`, which is fixed or not defined: not counted"));
+                }
+            }
+        }
+    }
+    // Loop closures: Drake ball constraints and Gazebo joints.
+    let find = |name: &str| -> Option<Pose> { world.get(name).copied() };
+    for e in root.children().filter(|c| c.is_element()) {
+        match e.tag_name().name() {
+            "ball_constraint" => {
+                let part = |tag: &str| child(e, tag);
+                let (Some(ba), Some(pa), Some(bb), Some(pb)) = (
+                    part("ball_constraint_body_A"),
+                    part("ball_constraint_p_AP"),
+                    part("ball_constraint_body_B"),
+                    part("ball_constraint_p_BQ"),
+                ) else {
+                    return Err(src
+                        .err(
+                            e,
+                            "incomplete",
+                            "drake:ball_constraint needs body_A, p_AP, body_B and p_BQ",
+                        )
+                        .with_help("see Drake's URDF extension reference"));
+                };
+                let name_of = |n: Node| -> Result<(String, Pose), ImportError> {
+                    let name = n.attribute("name").unwrap_or("");
+                    match find(name) {
+                        Some(p) => Ok((name.to_string(), p)),
+                        None => Err(src
+                            .err_attr(
+                                n,
+                                "name",
+                                "no such link",
+                                format!("link `{name}` is not defined"),
+                            )
+                            .with_help("name a <link> of the robot")),
+                    }
+                };
+                let (na, wa) = name_of(ba)?;
+                let (nb, wb) = name_of(bb)?;
+                let pa = src
+                    .nums_attr(pa, "value", 3)?
+                    .unwrap_or_else(|| vec![0.0; 3]);
+                let pb = src
+                    .nums_attr(pb, "value", 3)?
+                    .unwrap_or_else(|| vec![0.0; 3]);
+                let p1 = wa * Point3::new(pa[0], pa[1], pa[2]);
+                let p2 = wb * Point3::new(pb[0], pb[1], pb[2]);
+                let loc = src.loc(e);
+                if (p1 - p2).norm() > 1e-6 {
+                    b.warn(format!("{loc}: drake:ball_constraint between `{na}` and `{nb}` is not closed at this configuration (gap {:.3e}); its joint is placed on body A's point", (p1 - p2).norm()));
+                }
+                let (ia, ib) = (b.body(&na, ""), b.body(&nb, ""));
+                b.joint(JointRec {
+                    id: format!("ball:{na}-{nb}"),
+                    kind: JointType::S,
+                    bodies: vec![ia, ib],
+                    driven: 0,
+                    geometry: Geometry {
+                        origin: Some(arr(p1.coords)),
+                        ..Geometry::default()
+                    },
+                    comments: vec![format!("<drake:ball_constraint> (loop closure) at {loc}")],
+                });
+            }
+            "gazebo" if e.attribute("reference").is_none() => {
+                for gj in children(e, "joint") {
+                    let j = parse_joint(src, gj, &links, true)?;
+                    let Some(child_world) = find(&j.child) else {
+                        continue;
+                    };
+                    // SDFormat semantics: the joint pose is in the child link's frame.
+                    let jw = child_world * j.origin;
+                    add_joint(src, &mut b, &j, jw, "<gazebo><joint")?;
+                }
+            }
+            "joint" | "link" | "transmission" | "material" | "gazebo" => {}
+            other => {
+                let loc = src.loc(e);
+                b.warn(format!("{loc}: <{other}> not imported"));
+            }
+        }
+    }
+    Ok(b)
+}
+
+/// Parse a `<joint>` (URDF attributes, or SDFormat-style children inside `<gazebo>`).
+fn parse_joint<'a>(
+    src: &Src,
+    j: Node<'a>,
+    links: &[(String, Node)],
+    sdf_style: bool,
+) -> Result<UJoint<'a>, ImportError> {
+    let Some(name) = j.attribute("name") else {
+        return Err(src
+            .err(j, "no name", "<joint> without a `name`")
+            .with_help("every URDF joint has a unique name"));
+    };
+    let Some(kind) = j.attribute("type") else {
+        return Err(src
+            .err(j, "no type", format!("joint `{name}` has no `type`"))
+            .with_help(
+                "URDF joint types: revolute, continuous, prismatic, fixed, floating, planar",
+            ));
+    };
+    let link = |tag: &str| -> Result<String, ImportError> {
+        let Some(n) = child(j, tag) else {
+            return Err(src
+                .err(
+                    j,
+                    format!("no <{tag}>"),
+                    format!("joint `{name}` has no <{tag}>"),
+                )
+                .with_help(format!("write <{tag} link=\"...\"/>")));
+        };
+        let l = if sdf_style {
+            n.text().unwrap_or("").trim()
+        } else {
+            n.attribute("link").unwrap_or("")
+        };
+        if !links.iter().any(|(x, _)| x == l) {
+            let at = if sdf_style {
+                src.err_text(
+                    n,
+                    "no such link",
+                    format!("joint `{name}` names link `{l}`, which is not defined"),
+                )
+            } else {
+                src.err_attr(
+                    n,
+                    "link",
+                    "no such link",
+                    format!("joint `{name}` names link `{l}`, which is not defined"),
+                )
+            };
+            return Err(at.with_help("name a <link> of the robot"));
+        }
+        Ok(l.to_string())
+    };
+    let parent = link("parent")?;
+    let child_link = link("child")?;
+    let origin = if sdf_style {
+        match child(j, "pose") {
+            Some(p) => {
+                let v = src.nums_text(p, 6)?;
+                pose([v[0], v[1], v[2]], rpy(v[3], v[4], v[5]))
+            }
+            None => Pose::identity(),
+        }
+    } else {
+        match child(j, "origin") {
+            Some(o) => {
+                let xyz = src.nums_attr(o, "xyz", 3)?.unwrap_or_else(|| vec![0.0; 3]);
+                let r = src.nums_attr(o, "rpy", 3)?.unwrap_or_else(|| vec![0.0; 3]);
+                pose([xyz[0], xyz[1], xyz[2]], rpy(r[0], r[1], r[2]))
+            }
+            None => Pose::identity(),
+        }
+    };
+    let axis_node = child(j, "axis");
+    let axis_v = match axis_node {
+        Some(a) if sdf_style => match child(a, "xyz") {
+            Some(x) => src.nums_text(x, 3)?,
+            None => vec![1.0, 0.0, 0.0],
+        },
+        Some(a) => src
+            .nums_attr(a, "xyz", 3)?
+            .unwrap_or_else(|| vec![1.0, 0.0, 0.0]),
+        None => vec![1.0, 0.0, 0.0],
+    };
+    let Some(axis) = unit(&axis_v) else {
+        let a = axis_node.unwrap_or(j);
+        return Err(src
+            .err(
+                a,
+                "zero axis",
+                format!("joint `{name}` has an axis of zero length"),
+            )
+            .with_help("axis xyz gives the joint axis direction"));
+    };
+    Ok(UJoint {
+        n: j,
+        name: name.to_string(),
+        kind,
+        parent,
+        child: child_link,
+        origin,
+        axis,
+    })
+}
+
+/// Add a parsed joint whose frame is at `jw` in the world; `None` for a fixed joint (merged).
+fn add_joint(
+    src: &Src,
+    b: &mut Builder,
+    j: &UJoint,
+    jw: Pose,
+    tag: &str,
+) -> Result<Option<usize>, ImportError> {
+    let p = b.body(&j.parent, "");
+    let c = b.body(&j.child, "");
+    let origin = arr(jw.translation.vector);
+    let axis = arr(jw.rotation * j.axis);
+    let (kind, geometry) = match j.kind {
+        "revolute" | "continuous" => (
+            JointType::R,
+            Geometry {
+                origin: Some(origin),
+                axis: Some(axis),
+                ..Geometry::default()
+            },
+        ),
+        "prismatic" => (
+            JointType::P,
+            Geometry {
+                origin: Some(origin),
+                axis: Some(axis),
+                ..Geometry::default()
+            },
+        ),
+        "floating" | "free" => (JointType::F, Geometry::default()),
+        "planar" => (
+            JointType::PL,
+            Geometry {
+                origin: Some(origin),
+                normal: Some(axis),
+                ..Geometry::default()
+            },
+        ),
+        "ball" => (
+            JointType::S,
+            Geometry {
+                origin: Some(origin),
+                ..Geometry::default()
+            },
+        ),
+        "fixed" => {
+            b.weld(p, c, &format!("fixed joint `{}`", j.name));
+            return Ok(None);
+        }
+        other => {
+            return Err(src
+                .err_attr(
+                    j.n,
+                    "type",
+                    "unknown type",
+                    format!("joint `{}` has the unknown type `{other}`", j.name),
+                )
+                .with_help(
+                    "URDF joint types: revolute, continuous, prismatic, fixed, floating, planar",
+                ));
+        }
+    };
+    Ok(Some(b.joint(JointRec {
+        id: j.name.clone(),
+        kind,
+        bodies: vec![p, c],
+        driven: 0,
+        geometry,
+        comments: vec![format!(
+            "{tag} name=\"{}\" type=\"{}\"> at {}",
+            j.name,
+            j.kind,
+            src.loc(j.n)
+        )],
+    })))
+}
