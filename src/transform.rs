@@ -265,7 +265,7 @@ pub struct Family {
 }
 
 /// Counts and notes of one run.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Summary {
     /// Mechanism name.
     pub name: String,
@@ -276,6 +276,9 @@ pub struct Summary {
     /// Constraint equations dependent at the file's configuration (they fix nothing, so the
     /// mechanism takes that many more inputs than its count says).
     pub set_aside: u32,
+    /// The joint geometry of the analyses (absent with `count_only`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub geometry: Option<crate::motion::GeometryUsed>,
     /// Inputs each placement has: the count plus the equations set aside, minus the isolated
     /// DOF (the true mobility less the isolated DOF).
     pub f: i64,
@@ -301,7 +304,7 @@ pub struct Summary {
 }
 
 /// The ranked result of [`transform`].
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Transform {
     /// Counts and notes.
     pub summary: Summary,
@@ -339,10 +342,16 @@ pub fn enumerate(
     sink: &mut dyn FnMut(Placement),
 ) -> Result<Summary, TransformError> {
     let rules = Rules::of(m, opts)?;
-    if !opts.analysis.count_only {
-        // A geometry that cannot be used is the user's error, said once, before any work.
-        crate::motion::geometries(m, opts.analysis.geometry, opts.analysis.precision)?;
-    }
+    // A geometry that cannot be used is the user's error, said once, before any work.
+    let geometry = if opts.analysis.count_only {
+        None
+    } else {
+        Some(crate::motion::choose(
+            m,
+            opts.analysis.geometry,
+            opts.analysis.precision,
+        )?)
+    };
     let (exps, total_exps) = expansions(m, opts.max_expansions);
     let mob = crate::mobility::mobility(m);
     let mut summary = Summary {
@@ -350,6 +359,7 @@ pub fn enumerate(
         count: mob.mobility.count,
         isolated: 0,
         set_aside: 0,
+        geometry,
         f: mob.mobility.count,
         drivable: 0,
         expansions: exps.len(),

@@ -227,3 +227,18 @@ fn hostile_values_are_refused() {
         assert!(out.is_empty() && err.contains(needle), "{a:?}: {err}");
     }
 }
+
+#[test]
+fn rigid_reports_finite_beside_first_order_mobility() {
+    // The Bricard: count 0, first-order mobility 1, and it really moves (finite 1).
+    let (code, out, err) = mbsa(&["rigid", "@bricard", "--finite", "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(v["geometric"]["mobility"], 1);
+    assert_eq!(v["finite"]["first_order"], 1);
+    assert_eq!(v["finite"]["finite"], 1);
+    // Without the file's geometry there is no configuration to move from: exit 2.
+    let (code, _, err) = mbsa(&["rigid", "@rotor", "--finite"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--finite needs the file's geometry"), "{err}");
+}

@@ -180,6 +180,11 @@ pub struct RigidArgs {
     /// Count driven inputs as constraints (default: analyse the chain alone).
     #[arg(long)]
     pub with_inputs: bool,
+    /// Also the finite mobility at the file's configuration: the local dimension of the
+    /// solution set (first-order motions followed and projected back), telling a mechanism
+    /// that really moves from one that only wiggles at a singular pose.
+    #[arg(long)]
+    pub finite: bool,
     #[command(flatten)]
     pub geometry: GeometryArgs,
     /// Replace the file's driven inputs (with `--with-inputs`).
@@ -203,11 +208,16 @@ pub fn input_error(file: &FileArg, e: mbsa::motion::MotionError) -> Failure {
     Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e))
 }
 
-/// Both rigidity reports, for `--format json` with `--method both`.
+/// Both rigidity reports, for `--format json` with `--method both` (and the finite
+/// mobility with `--finite`).
 #[derive(serde::Serialize)]
 struct Both<'a> {
-    counting: &'a pebble::PebbleReport,
-    geometric: &'a geometric::GeometricReport,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    counting: Option<&'a pebble::PebbleReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    geometric: Option<&'a geometric::GeometricReport>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    finite: Option<&'a mbsa::position::FiniteMobility>,
 }
 
 /// `mbsa rigid`.
@@ -236,13 +246,39 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
     } else {
         None
     };
+    let finite = if args.finite {
+        let file_geometry = geometric.as_ref().is_none_or(|g| g.geometry_used.is_file())
+            && mbsa::motion::has_geometry(&m);
+        if !file_geometry {
+            return Err(Failure::Input(format!(
+                "error: {}: --finite needs the file's geometry (a configuration to move from); \
+                 some joints lack it or `--geometry random` was asked",
+                file.file
+            )));
+        }
+        let config = mbsa::position::Configuration::reference(m.bodies.len());
+        Some(
+            mbsa::position::finite_mobility(&m, &config, &Default::default())
+                .map_err(|e| Failure::Input(format!("error: {}: {e}", file.file)))?,
+        )
+    } else {
+        None
+    };
     let text = match (format, &counting, &geometric) {
-        (OutputFormat::Json, Some(c), Some(g)) => mbsa::report::json(&Both {
-            counting: c,
-            geometric: g,
-        }),
+        (OutputFormat::Json, c, g) if finite.is_some() || (c.is_some() && g.is_some()) => {
+            mbsa::report::json(&Both {
+                counting: c.as_ref(),
+                geometric: g.as_ref(),
+                finite: finite.as_ref(),
+            })
+        }
         (OutputFormat::Json, Some(c), None) => mbsa::report::json(c),
         (OutputFormat::Json, None, Some(g)) => mbsa::report::json(g),
+        (OutputFormat::Json, Some(c), Some(g)) => mbsa::report::json(&Both {
+            counting: Some(c),
+            geometric: Some(g),
+            finite: None,
+        }),
         (OutputFormat::Table, c, g) => {
             let mut parts = Vec::new();
             if let Some(c) = c {
@@ -255,6 +291,12 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
                 parts.push(format!(
                     "Geometry (constraint Jacobian)\n\n{}",
                     mbsa::report::rigid_geometric::table(g)
+                ));
+            }
+            if let Some(f) = &finite {
+                parts.push(format!(
+                    "Finite mobility (position level)\n\n{}",
+                    mbsa::report::position::finite_section(f)
                 ));
             }
             parts.join("\n")

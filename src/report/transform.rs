@@ -70,6 +70,9 @@ pub fn summary(s: &Summary) -> String {
          the rank check, {} determined",
         s.name, why, s.f, s.count_valid, s.excluded_by_rank, s.determined
     );
+    if let Some(g) = &s.geometry {
+        let _ = writeln!(out, "{}", g.line());
+    }
     for n in &s.notes {
         let _ = writeln!(out, "note: {n}");
     }

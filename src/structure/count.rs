@@ -68,7 +68,11 @@ impl Equations {
             let node = e.nodes;
             e.nodes += 1;
             e.elements.push(ji);
-            for &x in &j.bodies {
+            // Pairs in body order, not listing order: nothing downstream (flow, rank check
+            // numerics, tie-breaks) may see the order in which the file lists the bodies.
+            let mut sorted = j.bodies.clone();
+            sorted.sort_unstable();
+            for x in sorted {
                 e.push(ji, node, x, b.saturating_sub(k), 0, false);
             }
             // Inputs between the first listed body and the others in order; the last pair
