@@ -63,3 +63,17 @@ fn thousand_point_laman_framework_is_minimally_rigid_at_every_seed() {
         assert!(r.numeric.exact.is_some());
     }
 }
+
+/// The structural rank check decides blocks too large for its dense SVD exactly at a random
+/// realization: the 1,257-body group of a planar Assur II-B linkage (3,771 unknowns) was left
+/// `unchecked` before.
+#[test]
+fn giant_group_is_checked_exactly() {
+    use mbsa::generate::{Variant, assur};
+    use mbsa::structure::{Library, Options, Status, analyze};
+    let m = assur(2, 2000, 364, Variant::B).expect("valid sizes");
+    let a = analyze(&m, &Options::default(), &Library::builtin()).expect("no geometry needed");
+    assert_eq!(a.status, Status::Determined);
+    assert!(a.groups.iter().any(|g| g.nm == 1257));
+    assert!(a.unchecked.is_empty(), "{:?}", a.unchecked);
+}

@@ -45,6 +45,13 @@ pub(crate) struct RankResult {
 /// without bound, 10 minutes and more at 22,000 unknowns).
 pub(crate) const MAX_DENSE_UNKNOWNS: usize = 1200;
 
+/// Largest block whose rank is decided by exact sparse elimination (random realizations). The
+/// giant group of a planar Assur II-B linkage of 10^5 bodies (21,603 unknowns) takes about a
+/// second; the under-determined part of a random spatial mechanism of 2·10^4 bodies (111,000
+/// unknowns, a random graph with little sparsity to exploit) took 45 s, so such blocks stay
+/// with the count.
+const MAX_EXACT_UNKNOWNS: usize = 50_000;
+
 /// Relative tolerance on singular values (scaled by the largest one and the size). An exact
 /// deficiency at random generic geometry leaves singular values near `n · ε` (numpy's
 /// `matrix_rank` threshold, `ε` = 2.2e-16), 4,500 times below this; a long chain of loops is
@@ -336,6 +343,7 @@ pub(crate) fn check(
     for (e, r) in rows.iter().enumerate() {
         eqs.cap[e] = r.nrows() as u32;
     }
+    let orig_rows: Vec<usize> = rows.iter().map(|r| r.nrows()).collect();
 
     // Pairs touching each body (compressed: `touch[start[x]..start[x + 1]]`), proper pairs
     // only (a pair of a body with itself constrains nothing).
@@ -498,6 +506,20 @@ pub(crate) fn check(
             }
             let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
             if nrows.max(ncols) > MAX_DENSE_UNKNOWNS {
+                // Too large for the dense SVD. At a random realization its rank is decided
+                // exactly, by sparse elimination over GF(2^61 − 1), unless a pair of it was
+                // already lowered (its exact rows would not be the ones kept).
+                let needed = if part == Part::Over { ncols } else { nrows };
+                let untouched = block_eqs.iter().all(|&e| rows[e].nrows() == orig_rows[e]);
+                if let Some(seed) = used.seed
+                    && untouched
+                    && needed <= nrows.min(ncols)
+                    && ncols <= MAX_EXACT_UNKNOWNS
+                    && exact_rank(m, eqs, block_eqs, bodies, seed) >= needed
+                {
+                    verified.insert(signature);
+                    continue;
+                }
                 unchecked.push(Unchecked {
                     bodies: bodies.len(),
                     unknowns: ncols,
@@ -661,6 +683,63 @@ fn pair_rows(
         }
     }
     (rows, free)
+}
+
+/// The exact rank, over GF(2^61 − 1) at the random realization `seed`, of a block's rows
+/// (its pairs acting on the full B columns of its bodies; bodies outside the block known).
+/// An isolated freedom of a body is a null direction of every pair touching it, so the rank is
+/// the one on the reduced unknowns.
+fn exact_rank(
+    m: &Mechanism,
+    eqs: &Equations,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    seed: u64,
+) -> usize {
+    use crate::exact::{Fp, SparseMatrix, dense, models};
+    let b = m.b() as usize;
+    let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
+    let mut a = SparseMatrix::with_groups(vec![b; bodies.len()]);
+    for &e in block_eqs {
+        let ji = eqs.joint[e];
+        let rows = if eqs.input_only[e] {
+            // The inputs alone: the driven model's rows beyond the free model's.
+            let free = models::joint_rows(m, ji, seed, 0);
+            let own = models::joint_rows(m, ji, seed, eqs.driven[e]);
+            let stacked = DMatrix::from_fn(free.nrows() + own.nrows(), b, |i, k| {
+                if i < free.nrows() {
+                    free[(i, k)]
+                } else {
+                    own[(i - free.nrows(), k)]
+                }
+            });
+            let extra: Vec<usize> = dense::independent_rows(&stacked)
+                .into_iter()
+                .filter(|&i| i >= free.nrows())
+                .collect();
+            DMatrix::from_fn(extra.len(), b, |i, k| stacked[(extra[i], k)])
+        } else {
+            models::joint_rows(m, ji, seed, eqs.driven[e])
+        };
+        let [h, o] = eqs.bodies(e);
+        for r in 0..rows.nrows() {
+            let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+            for (x, negate) in [(h, true), (o, false)] {
+                if h == o {
+                    break;
+                }
+                let Some(c) = col(x) else {
+                    continue;
+                };
+                for k in 0..b {
+                    let v = rows[(r, k)];
+                    entries.push(((c + k) as u32, if negate { Fp::ZERO - v } else { v }));
+                }
+            }
+            a.push_row(entries);
+        }
+    }
+    crate::exact::Factor::new(&a).rank()
 }
 
 /// The largest coordinate of a joint point: the lever arm that turns an uncertainty in an axis
