@@ -21,7 +21,7 @@ fuzz_target!(|data: &[u8]| {
     }
     if common::within(&m, 24, 48) {
         for geometry in [
-            GeometrySource::Auto,
+            GeometrySource::Auto { seed: 0 },
             GeometrySource::File,
             GeometrySource::Random { seed: 7 },
         ] {
@@ -30,6 +30,7 @@ fuzz_target!(|data: &[u8]| {
                 &GeometricOptions {
                     geometry,
                     check_finite: false,
+                    precision: None,
                 },
             ) {
                 let _ = mbsa::report::rigid_geometric::table(&r);
