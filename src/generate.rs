@@ -497,6 +497,7 @@ pub fn to_toml(m: &Mechanism) -> String {
             origin2,
             normal,
             pitch,
+            second,
         } = &j.geometry;
         for (key, v) in [("origin", origin), ("origin2", origin2)] {
             if let Some(v) = v {
@@ -510,6 +511,16 @@ pub fn to_toml(m: &Mechanism) -> String {
         }
         if let Some(p) = pitch {
             let _ = writeln!(out, "pitch = {p:?}");
+        }
+        if let Some(s) = second {
+            let fields: Vec<String> = s
+                .vectors()
+                .into_iter()
+                .filter_map(|(key, v)| {
+                    v.map(|v| format!("{key} = {}", toml_vec(&v, planar && key == "origin")))
+                })
+                .collect();
+            let _ = writeln!(out, "second = {{ {} }}", fields.join(", "));
         }
     }
     out
