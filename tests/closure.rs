@@ -73,7 +73,10 @@ fn a_four_bar_with_a_gap_is_reported_in_analyze_and_rigid_with_a_warning() {
         "{out}"
     );
     snapshot("closure_analyze_four-bar-gap", &out);
-    snapshot("closure_warning_four-bar-gap", &err);
+    snapshot(
+        "closure_warning_four-bar-gap",
+        &err.replace(FIX, "tests/fixtures"),
+    );
     let (code, out, err) = mbsa(&["rigid", &gap(), "--method", "geometric"]);
     assert_eq!(code, 0, "{err}");
     assert!(err.contains("misses closure by 1.000e-2"), "{err}");
@@ -129,7 +132,10 @@ fn a_gross_gap_is_an_error_naming_the_joint() {
     // `--geometry file` and `auto` alike: no silent fall-back to a random realization.
     let (code, _, err) = mbsa(&["analyze", &broken(), "--geometry", "file"]);
     assert_eq!(code, 2, "{err}");
-    snapshot("closure_error_four-bar-broken", &err);
+    snapshot(
+        "closure_error_four-bar-broken",
+        &err.replace(FIX, "tests/fixtures"),
+    );
     // solve says it too (and `--assemble` closes first).
     let (code, _, err) = mbsa(&["solve", &broken(), "--set", "A=10"]);
     assert_eq!(code, 2, "{err}");
@@ -395,7 +401,7 @@ fn a_point_gap_is_the_distance_of_the_points() {
     let g = Geometry {
         origin: Some([1.0, 2.0, 3.0]),
         second: Some(Box::new(Second {
-            origin: Some([1.0, 2.003, 3.004]),
+            origin: Some([1.0, 2.03, 3.04]),
             ..Second::default()
         })),
         ..Geometry::default()
@@ -411,7 +417,7 @@ fn a_point_gap_is_the_distance_of_the_points() {
     m.joints.push(far);
     let c = file_closure(&m, None).unwrap();
     assert_eq!(c.status, ClosureStatus::Open);
-    assert!((c.max_residual - 0.005).abs() < 1e-12, "{c:?}");
+    assert!((c.max_residual - 0.05).abs() < 1e-12, "{c:?}");
     // The check at the reference configuration of the full model agrees.
     let full =
         mbsa::position::check_closure(&m, &Configuration::reference(m.bodies.len()), None).unwrap();

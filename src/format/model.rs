@@ -849,7 +849,7 @@ fn parse_second(
     bodies: usize,
 ) -> Result<Box<Second>, LoadError> {
     let es = as_map(&e.value, "`second`")?;
-    check_keys(es, SECOND_KEYS, "second")?;
+    check_keys(es, SECOND_KEYS, "`second`")?;
     let fields = Second::fields(kind, space);
     let not_here = |span: &Range<usize>, message: String, text: &str, help: String| {
         err(
@@ -872,7 +872,7 @@ fn parse_second(
         return Err(not_here(
             &e.key_span,
             format!(
-                "a {} joint ({}) has no `second` geometry in a {} mechanism",
+                "joint type {} ({}) has no `second` geometry in a {} mechanism",
                 kind.code(),
                 c_name(kind.code()),
                 space.name()
@@ -880,7 +880,7 @@ fn parse_second(
             "not for this joint type",
             match kind {
                 JointType::SPSP => {
-                    "an SPSP joint carries its second body's centre in `origin2` already".into()
+                    "SPSP carries its second body's centre in `origin2` already".into()
                 }
                 _ => "its second body carries no point or axis the constraints compare; remove `second`"
                     .into(),
@@ -894,12 +894,12 @@ fn parse_second(
             return Err(not_here(
                 &x.key_span,
                 format!(
-                    "the second body of a {} joint carries no `{key}`",
+                    "joint type {}: its second body carries no `{key}`",
                     kind.code()
                 ),
                 "not carried by the second body",
                 format!(
-                    "`second` of a {} joint in a {} mechanism takes {}",
+                    "`second` of joint type {} in a {} mechanism takes {}",
                     kind.code(),
                     space.name(),
                     fields
