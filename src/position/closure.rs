@@ -121,8 +121,23 @@ pub fn check_closure(
 /// construction (residual 0), so only those are evaluated (cheap at any size, and joints
 /// without a position model do not matter). `tolerance` as in [`check_closure`].
 pub fn file_closure(m: &Mechanism, tolerance: Option<f64>) -> Result<Closure, ModelError> {
-    let open = (0..m.joints.len())
-        .filter(|&j| m.joints[j].geometry.second.is_some() && m.joints[j].bodies.len() == 2);
+    let open: Vec<usize> = (0..m.joints.len())
+        .filter(|&j| m.joints[j].geometry.second.is_some() && m.joints[j].bodies.len() == 2)
+        .collect();
+    if open.is_empty() {
+        // Closed by construction: no copy of the mechanism, no configuration (large files).
+        let s = super::residual::model_size(m);
+        return Ok(Closure {
+            model_size: super::pose::tidy(s),
+            tolerance: super::pose::tidy(
+                tolerance.unwrap_or_else(|| tolerance_for(s, crate::motion::written_precision(m))),
+            ),
+            gross_limit: super::pose::tidy(GROSS * s),
+            max_residual: 0.0,
+            status: ClosureStatus::Closed,
+            joints: Vec::new(),
+        });
+    }
     let model = PositionModel::of_joints(&undriven(m), open)?;
     Ok(closure_of(
         m,
