@@ -109,6 +109,9 @@ pub struct TransformOptions {
     pub limit: Option<usize>,
     /// Caps on the work of the search and the analyses (`--max-work`, `--budget`).
     pub budget: Budget,
+    /// Place the independent parts one by one (default). `false` places the whole mechanism
+    /// as one: the same placements, counts and scores, at the cost of the product (tests).
+    pub split: bool,
     /// Structural analysis options (`--count-only`, `--seed`, method).
     pub analysis: structure::Options,
 }
@@ -126,6 +129,7 @@ impl Default for TransformOptions {
             max_expansions: 64,
             limit: None,
             budget: Budget::DEFAULT,
+            split: true,
             analysis: structure::Options::default(),
         }
     }
@@ -405,7 +409,7 @@ pub fn enumerate(
     };
     let mob = crate::mobility::mobility(m);
     let mut meter = opts.budget.meter("the transform search");
-    let parts = split(m);
+    let parts = if opts.split { split(m) } else { Vec::new() };
     let mut summary = Summary {
         name: m.name.clone(),
         count: mob.mobility.count,
@@ -613,6 +617,7 @@ fn place(
     // work budget.
     let mut eval_meter = opts.budget.meter("the analysis of the placements");
     let mut found = 0usize;
+    let mut batch_size = 1usize;
     for (x, e) in exps.iter().enumerate() {
         let p = Problem::of(e, m, rules, opts);
         if x == 0 {
@@ -638,7 +643,9 @@ fn place(
                     .map(|q| (q, w[q]))
                     .collect(),
             ));
-            if batch.len() >= BATCH {
+            if batch.len() >= batch_size {
+                // Batches grow from one placement: the first ones stream at once.
+                batch_size = (batch_size * 2).min(BATCH);
                 if let Err(e) = flush(&mut batch, &mut r, &mut eval_meter, &mut stopped) {
                     err = Some(e);
                     return false;

@@ -91,6 +91,7 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         max_expansions: args.max_expansions,
         limit: args.limit,
         budget: super::budget(),
+        split: true,
         analysis: structure.options()?,
     };
     if let Some(given) = &opts.inputs {
