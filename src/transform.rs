@@ -1769,6 +1769,46 @@ impl Problem {
         if placed < self.need {
             return Ok(());
         }
+        // Units every placement needs (matroid coloops) are fixed at once: a unit is needed
+        // unless some slot outside the placement reaches it by an alternating path (one BFS
+        // from all such slots). A tree (star, serial chain) is then decided in linear time.
+        {
+            let Search { s, w, hi, sc, .. } = &mut t;
+            sc.next_stamp();
+            for &q in &self.cand {
+                if w[q] < hi[q] {
+                    for x in [self.a[q], self.c[q]] {
+                        if x != self.frame && sc.seen[x] != sc.stamp {
+                            sc.seen[x] = sc.stamp;
+                            sc.queue.push(x);
+                        }
+                    }
+                }
+            }
+            let mut reached = vec![false; self.a.len()];
+            let mut qi = 0;
+            while qi < sc.queue.len() {
+                let x = sc.queue[qi];
+                qi += 1;
+                meter.charge(1 + self.touching[x].len() as u64)?;
+                for &r in &self.touching[x] {
+                    if s.flow[r][self.side(r, x)] == 0 {
+                        continue;
+                    }
+                    reached[r] = true;
+                    let y = self.other(r, x);
+                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                        sc.seen[y] = sc.stamp;
+                        sc.queue.push(y);
+                    }
+                }
+            }
+            for &q in &self.cand {
+                if !reached[q] {
+                    t.lo[q] = t.lo[q].max(t.w[q]);
+                }
+            }
+        }
         t.trail.clear();
         // Choice points: (trail mark, candidate position) whose "no more units" branch is
         // still to be explored.

@@ -383,3 +383,27 @@ fn bundled_examples_keep_their_counts() {
     assert_eq!(t.placements.len() as u128, t.summary.determined);
     assert!(t.original_rank.is_some());
 }
+
+/// A serial chain of 20,000 R joints: every unit is needed by every placement (the matroid's
+/// coloops), fixed by one search before the enumeration: one placement, no backtracking.
+#[test]
+fn a_serial_chain_of_20000_joints_is_decided_in_linear_time() {
+    let m = mech(
+        "chain",
+        Space::Spatial,
+        (0..20_000).map(|b| (JointType::R, b, b + 1)).collect(),
+    );
+    let o = TransformOptions {
+        limit: Some(1),
+        ..count_only()
+    };
+    let start = Instant::now();
+    let t = transform(&m, &o, &Library::builtin(), None).unwrap();
+    assert!(
+        start.elapsed() < Duration::from_secs(60),
+        "{:?}",
+        start.elapsed()
+    );
+    assert_eq!(t.summary.determined, 1);
+    assert!(!t.summary.truncated);
+}
