@@ -111,6 +111,13 @@ fn timed(label: &str, m: &Mechanism) -> PebbleReport {
         r.degenerate
     );
     assert_eq!(r.dof, r.count + r.redundant as i64);
+    eprintln!(
+        "DBG contractions, |T0|, |T|, in scanned, finds, find work: {:?}",
+        mbsa::rigidity::pebble::DBG
+            .iter()
+            .map(|a| a.swap(0, std::sync::atomic::Ordering::Relaxed))
+            .collect::<Vec<_>>()
+    );
     if let Ok(dir) = std::env::var("MBSA_PEBBLE_WRITE") {
         let file = format!("{dir}/{}.toml", label.replace([' ', '/', '^'], "-"));
         std::fs::write(&file, generate::to_toml(m)).expect("writable");
@@ -202,4 +209,14 @@ fn scale_1e3_to_1e5() {
     for n in sizes {
         families(n);
     }
+}
+
+#[test]
+#[ignore = "profiling aid: MBSA_PEBBLE_LAMAN=points"]
+fn laman_only() {
+    let n: usize = std::env::var("MBSA_PEBBLE_LAMAN")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000);
+    timed(&format!("laman {n} points uniform"), &laman(n, false, 7));
 }

@@ -499,6 +499,66 @@ impl Fast {
         self.link(t, h);
     }
 
+    /// Whether node `n` is pinned to super-body `k` (B − k bars between them).
+    fn pinned_to(&self, n: u32, k: u32) -> bool {
+        !self.is_body(n) && self.bars_between(n, k) >= self.weight[n as usize] as usize
+    }
+
+    /// Whether node `n` has all its pebbles on bars to one super-body of the set.
+    fn pinned_in_set(&self, n: u32, q_e: u32) -> bool {
+        if self.is_body(n) || self.out[n as usize].len() < self.weight[n as usize] as usize {
+            return false;
+        }
+        let mut heads = self.out[n as usize].iter().map(|&b| self.head[b as usize]);
+        let first = heads.next();
+        first.is_some_and(|h| self.qmark[h as usize] == q_e && heads.all(|y| y == h))
+    }
+
+    /// Reverse-search step: every vertex with a bar into `x` that reaches no free pebble
+    /// outside the set joins it, with every vertex its search visited.
+    fn scan_in(&mut self, x: u32, q_e: u32, q: &mut Vec<u32>, seen: &mut Vec<u32>) {
+        let mut k = 0;
+        while k < self.inn[x as usize].len() {
+            let p = self.tail[self.inn[x as usize][k] as usize];
+            k += 1;
+            self.work += 1;
+            if self.qmark[p as usize] == q_e || self.fmark[p as usize] == q_e {
+                continue;
+            }
+            let e = self.next_epoch();
+            self.mark[p as usize] = e;
+            let mut found = self.peb[p as usize] > 0;
+            seen.clear();
+            seen.push(p);
+            let mut si = 0;
+            while si < seen.len() && !found {
+                let y = seen[si];
+                si += 1;
+                for &bar in &self.out[y as usize] {
+                    let z = self.head[bar as usize] as usize;
+                    self.work += 1;
+                    if self.qmark[z] == q_e || self.mark[z] == e {
+                        continue;
+                    }
+                    if self.fmark[z] == q_e || self.peb[z] > 0 {
+                        found = true;
+                        break;
+                    }
+                    self.mark[z] = e;
+                    seen.push(z as u32);
+                }
+            }
+            if found {
+                self.fmark[p as usize] = q_e;
+            } else {
+                for &y in seen.iter() {
+                    self.qmark[y as usize] = q_e;
+                    q.push(y);
+                }
+            }
+        }
+    }
+
     /// After a failed gather on {u, v}: grow the minimal tight set to the maximal one and
     /// contract it.
     fn contract(&mut self, u: u32, v: u32) {
@@ -516,66 +576,62 @@ impl Fast {
                 q.push(x);
             }
         }
-        // The part that stays: the super-body with the most in-bars (its in-list is neither
-        // scanned nor relabelled). A vertex whose bars all go into it and that holds no free
-        // pebble would already be tight with it, i.e. part of it or pinned to it.
-        let keep = q
-            .iter()
-            .copied()
-            .filter(|&x| self.is_body(x))
-            .max_by_key(|&x| (self.inn[x as usize].len(), std::cmp::Reverse(x)))
-            .unwrap_or(u);
         // Reverse search (Lee and Streinu): a vertex with a bar into the set joins it when it
-        // reaches no free pebble outside the set.
-        let mut qi = 0;
+        // reaches no free pebble outside the set. One super-body of the set, `keep` (the one
+        // with the most in-bars, usually the big component drawn in by the search), and the
+        // nodes pinned to it are never scanned: a vertex whose bars all go into them and that
+        // holds no free pebble would already have been tight with `keep` (contracted into it
+        // or pinned to it), so every other joiner has a bar into another member (or into
+        // the new bar's node, which the new bar may have just pinned: always scanned). Until the
+        // set stops growing, `big` is the candidate (a larger one replaces it, and the old one
+        // is scanned then) and pinned nodes wait.
+        let mut big: Option<u32> = None;
+        let mut fixed = false;
+        let mut waiting: Vec<u32> = Vec::new();
         let mut seen: Vec<u32> = Vec::new();
-        while qi < q.len() {
-            let x = q[qi];
-            qi += 1;
-            if x == keep {
-                continue;
-            }
-            let mut k = 0;
-            while k < self.inn[x as usize].len() {
-                let p = self.tail[self.inn[x as usize][k] as usize];
-                k += 1;
-                self.work += 1;
-                if self.qmark[p as usize] == q_e || self.fmark[p as usize] == q_e {
-                    continue;
-                }
-                let e = self.next_epoch();
-                self.mark[p as usize] = e;
-                let mut found = self.peb[p as usize] > 0;
-                seen.clear();
-                seen.push(p);
-                let mut si = 0;
-                while si < seen.len() && !found {
-                    let y = seen[si];
-                    si += 1;
-                    for &bar in &self.out[y as usize] {
-                        let z = self.head[bar as usize] as usize;
-                        self.work += 1;
-                        if self.qmark[z] == q_e || self.mark[z] == e {
-                            continue;
+        let mut qi = 0;
+        loop {
+            while qi < q.len() {
+                let x = q[qi];
+                qi += 1;
+                if self.is_body(x) {
+                    match big {
+                        None => big = Some(x),
+                        Some(b)
+                            if !fixed
+                                && self.inn[x as usize].len() > self.inn[b as usize].len() =>
+                        {
+                            big = Some(x);
+                            self.scan_in(b, q_e, &mut q, &mut seen);
                         }
-                        if self.fmark[z] == q_e || self.peb[z] > 0 {
-                            found = true;
-                            break;
-                        }
-                        self.mark[z] = e;
-                        seen.push(z as u32);
+                        Some(b) if b == x => {}
+                        Some(_) => self.scan_in(x, q_e, &mut q, &mut seen),
                     }
-                }
-                if found {
-                    self.fmark[p as usize] = q_e;
+                } else if x != u
+                    && x != v
+                    && (big.is_some_and(|b| self.pinned_to(x, b))
+                        || (!fixed && self.pinned_in_set(x, q_e)))
+                {
+                    if !fixed {
+                        waiting.push(x);
+                    }
                 } else {
-                    for &y in &seen {
-                        self.qmark[y as usize] = q_e;
-                        q.push(y);
-                    }
+                    self.scan_in(x, q_e, &mut q, &mut seen);
+                }
+            }
+            if fixed {
+                break;
+            }
+            fixed = true;
+            let k = big.unwrap_or(u);
+            big = Some(k);
+            for x in std::mem::take(&mut waiting) {
+                if !self.pinned_to(x, k) {
+                    self.scan_in(x, q_e, &mut q, &mut seen);
                 }
             }
         }
+        let keep = big.unwrap_or(u);
         // The set is closed: every out-bar of a member is inside it. Drop them all.
         for &x in &q {
             let outs = std::mem::take(&mut self.out[x as usize]);
