@@ -111,13 +111,6 @@ fn timed(label: &str, m: &Mechanism) -> PebbleReport {
         r.degenerate
     );
     assert_eq!(r.dof, r.count + r.redundant as i64);
-    eprintln!(
-        "DBG contractions, |T0|, |T|, in scanned, finds, find work: {:?}",
-        mbsa::rigidity::pebble::DBG
-            .iter()
-            .map(|a| a.swap(0, std::sync::atomic::Ordering::Relaxed))
-            .collect::<Vec<_>>()
-    );
     if let Ok(dir) = std::env::var("MBSA_PEBBLE_WRITE") {
         let file = format!("{dir}/{}.toml", label.replace([' ', '/', '^'], "-"));
         std::fs::write(&file, generate::to_toml(m)).expect("writable");

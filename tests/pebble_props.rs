@@ -165,3 +165,30 @@ fn work_limit_stops_the_game() {
     );
     assert!(analyze_within(&m, &PebbleOptions::default(), &Budget::DEFAULT).is_ok());
 }
+
+#[test]
+fn generated_families_match_the_plain_game() {
+    use mbsa::generate::{self, Variant};
+    for (points, bars) in [(400, 600), (300, 600), (200, 600), (150, 450)] {
+        check(
+            &generate::planar_framework(points, bars, 5),
+            &format!("planar_framework({points}, {bars})"),
+        );
+    }
+    for class in 1..=3 {
+        check(
+            &generate::assur(class, 20, 364, Variant::A).expect("valid"),
+            "assur",
+        );
+        check(
+            &generate::assur_spatial(class, 20, 364, Variant::B).expect("valid"),
+            "assur spatial",
+        );
+    }
+    for seed in 0..4 {
+        check(
+            &generate::random(150, seed % 2 == 0, seed).expect("valid").0,
+            "random",
+        );
+    }
+}
