@@ -708,8 +708,8 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
     for x in 0..g.weight.len() as u32 {
         rep.push(game.rep(x));
     }
-    for b in 0..g.n_bodies {
-        if rep[b] == b as u32 {
+    for (b, &r) in rep.iter().enumerate().take(g.n_bodies) {
+        if r == b as u32 {
             let mut c: Vec<usize> = game.members[b].iter().map(|&x| x as usize).collect();
             c.sort_unstable();
             components.push(c);
