@@ -262,14 +262,17 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
             j.driven = 0;
         }
     }
-    let counting = matches!(args.method, RigidMethod::Both | RigidMethod::Counting).then(|| {
-        pebble::analyze(
-            &m,
-            &pebble::PebbleOptions {
-                with_inputs: args.with_inputs,
-            },
+    let counting = if matches!(args.method, RigidMethod::Both | RigidMethod::Counting) {
+        let opts = pebble::PebbleOptions {
+            with_inputs: args.with_inputs,
+        };
+        Some(
+            pebble::analyze_within(&m, &opts, &super::budget())
+                .map_err(|e| super::budget_failure(&e))?,
         )
-    });
+    } else {
+        None
+    };
     let geometric = if matches!(args.method, RigidMethod::Both | RigidMethod::Geometric) {
         args.geometry.closure_check(&file.file, &m)?;
         let opts = geometric::GeometricOptions {

@@ -18,6 +18,7 @@
 //! Lee and Streinu's reverse search. Searches are local in practice; the worst case is
 //! O(bars · (bodies + bars)).
 
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use serde::Serialize;
 
@@ -164,6 +165,8 @@ struct Game {
     parent: Vec<(u32, u32)>,
     stack: Vec<u32>,
     visited: Vec<u32>,
+    /// Work units not yet charged to the meter.
+    work: u64,
 }
 
 impl Game {
@@ -180,6 +183,7 @@ impl Game {
             parent: vec![(0, 0); n],
             stack: Vec::new(),
             visited: Vec::new(),
+            work: 0,
         }
     }
 
@@ -202,6 +206,7 @@ impl Game {
         while let Some(x) = self.stack.pop() {
             for i in 0..self.out[x as usize].len() {
                 let (y, bar) = self.out[x as usize][i];
+                self.work += 1;
                 if self.mark[y as usize] == e {
                     continue;
                 }
@@ -275,6 +280,451 @@ impl Game {
     }
 }
 
+/// The component pebble game with contraction (issue 16 item 3): the game of [`Game`], but
+/// every rigid component found is contracted into one vertex of weight B (a *super-body*, kept
+/// under the id of one of its bodies) and each joint node inside it is re-pinned to that
+/// vertex by B − k bars. A tight set behaves, for every bar outside it, like one body with its
+/// nodes pinned on it (the count matroid of the contracted graph is the contraction of the
+/// original's by the component's bars), so:
+/// - a bar with both ends in one component is redundant without any search (same super-body,
+///   or a node already pinned to it by B − k bars);
+/// - searches cross a component in one step: a super-body has at most B out-edges;
+/// - after an independent bar uv is inserted, a failed gather of B + 1 pebbles on u, v gives
+///   the minimal tight set, the reverse search grows it to the maximal one (Lee and Streinu),
+///   and the parts are merged into the part with the most in-edges (the others' edges are
+///   relabelled: smaller into larger).
+///
+/// The answers (which bars are independent, the rigid components) are those of the plain game;
+/// `tests/pebble_props.rs` compares them on random graphs.
+struct Fast {
+    l: u8,
+    n_bodies: usize,
+    weight: Vec<u8>,
+    peb: Vec<u8>,
+    /// Out- and in-bars of each vertex (bar ids into `tail`/`head`).
+    out: Vec<Vec<u32>>,
+    inn: Vec<Vec<u32>>,
+    tail: Vec<u32>,
+    head: Vec<u32>,
+    pos_out: Vec<u32>,
+    pos_in: Vec<u32>,
+    /// Union-find over bodies: the root is the super-body's id.
+    parent: Vec<u32>,
+    /// Bodies of each super-body (at its root).
+    members: Vec<Vec<u32>>,
+    mark: Vec<u32>,
+    epoch: u32,
+    from: Vec<u32>,
+    stack: Vec<u32>,
+    visited: Vec<u32>,
+    /// Reverse search: in the growing tight set (`qmark == qepoch`), known to reach a free
+    /// pebble (`fmark == qepoch`).
+    qmark: Vec<u32>,
+    fmark: Vec<u32>,
+    qepoch: u32,
+    /// Work units not yet charged to the meter.
+    work: u64,
+}
+
+impl Fast {
+    fn new(weight: Vec<u8>, n_bodies: usize, l: u8, bars: usize) -> Fast {
+        let n = weight.len();
+        Fast {
+            l,
+            n_bodies,
+            peb: weight.clone(),
+            weight,
+            out: vec![Vec::new(); n],
+            inn: vec![Vec::new(); n],
+            tail: Vec::with_capacity(bars),
+            head: Vec::with_capacity(bars),
+            pos_out: Vec::with_capacity(bars),
+            pos_in: Vec::with_capacity(bars),
+            parent: (0..n_bodies as u32).collect(),
+            members: (0..n_bodies as u32).map(|b| vec![b]).collect(),
+            mark: vec![0; n],
+            epoch: 0,
+            from: vec![0; n],
+            stack: Vec::new(),
+            visited: Vec::new(),
+            qmark: vec![0; n],
+            fmark: vec![0; n],
+            qepoch: 0,
+            work: 0,
+        }
+    }
+
+    fn is_body(&self, x: u32) -> bool {
+        (x as usize) < self.n_bodies
+    }
+
+    /// The current vertex of original vertex `x`: its super-body, or the node itself.
+    fn rep(&mut self, mut x: u32) -> u32 {
+        if !self.is_body(x) {
+            return x;
+        }
+        while self.parent[x as usize] != x {
+            let p = self.parent[x as usize];
+            self.parent[x as usize] = self.parent[p as usize];
+            x = p;
+            self.work += 1;
+        }
+        x
+    }
+
+    fn next_epoch(&mut self) -> u32 {
+        self.epoch = self.epoch.wrapping_add(1);
+        if self.epoch == 0 {
+            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.epoch = 1;
+        }
+        self.epoch
+    }
+
+    /// Add a bar oriented `t` → `h` (the caller accounts for the pebble).
+    fn link(&mut self, t: u32, h: u32) -> u32 {
+        let bar = self.tail.len() as u32;
+        self.tail.push(t);
+        self.head.push(h);
+        self.pos_out.push(self.out[t as usize].len() as u32);
+        self.pos_in.push(self.inn[h as usize].len() as u32);
+        self.out[t as usize].push(bar);
+        self.inn[h as usize].push(bar);
+        bar
+    }
+
+    fn unlink_out(&mut self, bar: u32) {
+        let t = self.tail[bar as usize] as usize;
+        let p = self.pos_out[bar as usize] as usize;
+        self.out[t].swap_remove(p);
+        if let Some(&moved) = self.out[t].get(p) {
+            self.pos_out[moved as usize] = p as u32;
+        }
+    }
+
+    fn unlink_in(&mut self, bar: u32) {
+        let h = self.head[bar as usize] as usize;
+        let p = self.pos_in[bar as usize] as usize;
+        self.inn[h].swap_remove(p);
+        if let Some(&moved) = self.inn[h].get(p) {
+            self.pos_in[moved as usize] = p as u32;
+        }
+    }
+
+    /// Turn `bar` round: t → h becomes h → t.
+    fn flip(&mut self, bar: u32) {
+        self.unlink_out(bar);
+        self.unlink_in(bar);
+        let (t, h) = (self.tail[bar as usize], self.head[bar as usize]);
+        self.tail[bar as usize] = h;
+        self.head[bar as usize] = t;
+        self.pos_out[bar as usize] = self.out[h as usize].len() as u32;
+        self.out[h as usize].push(bar);
+        self.pos_in[bar as usize] = self.inn[t as usize].len() as u32;
+        self.inn[t as usize].push(bar);
+    }
+
+    /// Bars between node `n` and vertex `s`, in either direction (both out-lists are short).
+    fn bars_between(&self, n: u32, s: u32) -> usize {
+        let a = self.out[n as usize]
+            .iter()
+            .filter(|&&b| self.head[b as usize] == s)
+            .count();
+        let b = self.out[s as usize]
+            .iter()
+            .filter(|&&b| self.head[b as usize] == n)
+            .count();
+        a + b
+    }
+
+    /// Move one free pebble reachable from `s` onto `s`, never taking one from `a` or `b`.
+    fn find_pebble(&mut self, s: u32, a: u32, b: u32) -> bool {
+        let e = self.next_epoch();
+        self.mark[s as usize] = e;
+        self.stack.clear();
+        self.stack.push(s);
+        while let Some(x) = self.stack.pop() {
+            for i in 0..self.out[x as usize].len() {
+                let bar = self.out[x as usize][i];
+                let y = self.head[bar as usize];
+                self.work += 1;
+                if self.mark[y as usize] == e {
+                    continue;
+                }
+                self.mark[y as usize] = e;
+                self.from[y as usize] = bar;
+                self.visited.push(y);
+                if y != a && y != b && self.peb[y as usize] > 0 {
+                    self.peb[y as usize] -= 1;
+                    let mut z = y;
+                    while z != s {
+                        let bar = self.from[z as usize];
+                        z = self.tail[bar as usize];
+                        self.flip(bar);
+                        self.work += 1;
+                    }
+                    self.peb[s as usize] += 1;
+                    return true;
+                }
+                self.stack.push(y);
+            }
+        }
+        false
+    }
+
+    /// Gather `target` free pebbles on {u, v}; on failure `visited` holds the rest of the
+    /// minimal tight set containing u and v (closed: no out-edge leaves it).
+    fn gather(&mut self, u: u32, v: u32, target: u8) -> bool {
+        while self.peb[u as usize] + self.peb[v as usize] < target {
+            self.visited.clear();
+            if self.peb[u as usize] < self.weight[u as usize] && self.find_pebble(u, u, v) {
+                continue;
+            }
+            if self.peb[v as usize] < self.weight[v as usize] && self.find_pebble(v, u, v) {
+                continue;
+            }
+            return false;
+        }
+        true
+    }
+
+    /// Insert the independent bar u–v (B + 1 pebbles gathered on u, v).
+    fn insert(&mut self, u: u32, v: u32) {
+        let (t, h) = if self.peb[u as usize] > 0 {
+            (u, v)
+        } else {
+            (v, u)
+        };
+        self.peb[t as usize] -= 1;
+        self.link(t, h);
+    }
+
+    /// Whether node `n` is pinned to super-body `k` (B − k bars between them).
+    fn pinned_to(&self, n: u32, k: u32) -> bool {
+        !self.is_body(n) && self.bars_between(n, k) >= self.weight[n as usize] as usize
+    }
+
+    /// Whether node `n` has all its pebbles on bars to one super-body of the set.
+    fn pinned_in_set(&self, n: u32, q_e: u32) -> bool {
+        if self.is_body(n) || self.out[n as usize].len() < self.weight[n as usize] as usize {
+            return false;
+        }
+        let mut heads = self.out[n as usize].iter().map(|&b| self.head[b as usize]);
+        let first = heads.next();
+        first.is_some_and(|h| self.qmark[h as usize] == q_e && heads.all(|y| y == h))
+    }
+
+    /// Reverse-search step: every vertex with a bar into `x` that reaches no free pebble
+    /// outside the set joins it, with every vertex its search visited.
+    fn scan_in(&mut self, x: u32, q_e: u32, q: &mut Vec<u32>, seen: &mut Vec<u32>) {
+        let mut k = 0;
+        while k < self.inn[x as usize].len() {
+            let p = self.tail[self.inn[x as usize][k] as usize];
+            k += 1;
+            self.work += 1;
+            if self.qmark[p as usize] == q_e || self.fmark[p as usize] == q_e {
+                continue;
+            }
+            let e = self.next_epoch();
+            self.mark[p as usize] = e;
+            let mut found = self.peb[p as usize] > 0;
+            seen.clear();
+            seen.push(p);
+            let mut si = 0;
+            while si < seen.len() && !found {
+                let y = seen[si];
+                si += 1;
+                for &bar in &self.out[y as usize] {
+                    let z = self.head[bar as usize] as usize;
+                    self.work += 1;
+                    if self.qmark[z] == q_e || self.mark[z] == e {
+                        continue;
+                    }
+                    if self.fmark[z] == q_e || self.peb[z] > 0 {
+                        found = true;
+                        break;
+                    }
+                    self.mark[z] = e;
+                    seen.push(z as u32);
+                }
+            }
+            if found {
+                self.fmark[p as usize] = q_e;
+            } else {
+                for &y in seen.iter() {
+                    self.qmark[y as usize] = q_e;
+                    q.push(y);
+                }
+            }
+        }
+    }
+
+    /// After a failed gather on {u, v}: grow the minimal tight set to the maximal one and
+    /// contract it.
+    fn contract(&mut self, u: u32, v: u32) {
+        self.qepoch = self.qepoch.wrapping_add(1);
+        if self.qepoch == 0 {
+            self.qmark.iter_mut().for_each(|m| *m = 0);
+            self.fmark.iter_mut().for_each(|m| *m = 0);
+            self.qepoch = 1;
+        }
+        let q_e = self.qepoch;
+        let mut q: Vec<u32> = Vec::with_capacity(self.visited.len() + 2);
+        for x in [u, v].into_iter().chain(std::mem::take(&mut self.visited)) {
+            if self.qmark[x as usize] != q_e {
+                self.qmark[x as usize] = q_e;
+                q.push(x);
+            }
+        }
+        // Reverse search (Lee and Streinu): a vertex with a bar into the set joins it when it
+        // reaches no free pebble outside the set. One super-body of the set, `keep` (the one
+        // with the most in-bars, usually the big component drawn in by the search), and the
+        // nodes pinned to it are never scanned: a vertex whose bars all go into them and that
+        // holds no free pebble would already have been tight with `keep` (contracted into it
+        // or pinned to it), so every other joiner has a bar into another member (or into
+        // the new bar's node, which the new bar may have just pinned: always scanned). Until the
+        // set stops growing, `big` is the candidate (a larger one replaces it, and the old one
+        // is scanned then) and pinned nodes wait.
+        let mut big: Option<u32> = None;
+        let mut fixed = false;
+        let mut waiting: Vec<u32> = Vec::new();
+        let mut seen: Vec<u32> = Vec::new();
+        let mut qi = 0;
+        loop {
+            while qi < q.len() {
+                let x = q[qi];
+                qi += 1;
+                if self.is_body(x) {
+                    match big {
+                        None => big = Some(x),
+                        Some(b)
+                            if !fixed
+                                && self.inn[x as usize].len() > self.inn[b as usize].len() =>
+                        {
+                            big = Some(x);
+                            self.scan_in(b, q_e, &mut q, &mut seen);
+                        }
+                        Some(b) if b == x => {}
+                        Some(_) => self.scan_in(x, q_e, &mut q, &mut seen),
+                    }
+                } else if x != u
+                    && x != v
+                    && (big.is_some_and(|b| self.pinned_to(x, b))
+                        || (!fixed && self.pinned_in_set(x, q_e)))
+                {
+                    if !fixed {
+                        waiting.push(x);
+                    }
+                } else {
+                    self.scan_in(x, q_e, &mut q, &mut seen);
+                }
+            }
+            if fixed {
+                break;
+            }
+            fixed = true;
+            let k = big.unwrap_or(u);
+            big = Some(k);
+            for x in std::mem::take(&mut waiting) {
+                if !self.pinned_to(x, k) {
+                    self.scan_in(x, q_e, &mut q, &mut seen);
+                }
+            }
+        }
+        let keep = big.unwrap_or(u);
+        // The set is closed: every out-bar of a member is inside it. Drop them all.
+        for &x in &q {
+            let outs = std::mem::take(&mut self.out[x as usize]);
+            for bar in outs {
+                self.unlink_in(bar);
+                self.work += 1;
+            }
+        }
+        for &x in &q {
+            if x == keep {
+                continue;
+            }
+            if self.is_body(x) {
+                // Relabel the in-bars (all from outside now) to the kept super-body.
+                let inn = std::mem::take(&mut self.inn[x as usize]);
+                for bar in inn {
+                    self.head[bar as usize] = keep;
+                    self.pos_in[bar as usize] = self.inn[keep as usize].len() as u32;
+                    self.inn[keep as usize].push(bar);
+                    self.work += 1;
+                }
+                self.parent[x as usize] = keep;
+                let mut mine = std::mem::take(&mut self.members[x as usize]);
+                if mine.len() > self.members[keep as usize].len() {
+                    std::mem::swap(&mut mine, &mut self.members[keep as usize]);
+                }
+                self.work += mine.len() as u64;
+                self.members[keep as usize].extend(mine);
+                self.peb[x as usize] = 0;
+            } else {
+                // A node of the component: pinned to the super-body by its B − k bars.
+                for _ in 0..self.weight[x as usize] {
+                    self.link(x, keep);
+                }
+                self.peb[x as usize] = 0;
+            }
+        }
+        self.peb[keep as usize] = self.l;
+    }
+}
+
+/// The outcome of the contracted game.
+struct FastSolution {
+    accepted: Vec<bool>,
+    /// Rigid components as sorted body lists (every body in exactly one, singletons included).
+    components: Vec<Vec<usize>>,
+    /// For each vertex, its final super-body (bodies) or itself (nodes).
+    rep: Vec<u32>,
+    /// The final state (which nodes are pinned to which super-body).
+    game: Fast,
+}
+
+fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, BudgetExceeded> {
+    let mut game = Fast::new(g.weight.clone(), g.n_bodies, l, g.bars.len());
+    let mut accepted = vec![false; g.bars.len()];
+    for (i, &(u, v)) in g.bars.iter().enumerate() {
+        let (x, y) = (game.rep(u), game.rep(v));
+        game.work += 1;
+        if x == y {
+            // A bar from a body to itself, or inside one rigid component: redundant.
+        } else if !game.is_body(y) && game.bars_between(y, x) >= game.weight[y as usize] as usize {
+            // The node is pinned to the component: redundant.
+        } else if game.gather(x, y, l + 1) {
+            game.insert(x, y);
+            accepted[i] = true;
+            if !game.gather(x, y, l + 1) {
+                game.contract(x, y);
+            }
+        }
+        meter.charge(std::mem::take(&mut game.work))?;
+    }
+    let mut components = Vec::new();
+    let mut rep = Vec::with_capacity(g.weight.len());
+    for x in 0..g.weight.len() as u32 {
+        rep.push(game.rep(x));
+    }
+    for (b, &r) in rep.iter().enumerate().take(g.n_bodies) {
+        if r == b as u32 {
+            let mut c: Vec<usize> = game.members[b].iter().map(|&x| x as usize).collect();
+            c.sort_unstable();
+            components.push(c);
+        }
+    }
+    components.sort_unstable();
+    meter.charge(std::mem::take(&mut game.work) + g.weight.len() as u64)?;
+    Ok(FastSolution {
+        accepted,
+        components,
+        rep,
+        game,
+    })
+}
+
 /// Union-find with path halving; the smaller root wins (order independence).
 struct Dsu(Vec<u32>);
 
@@ -305,7 +755,7 @@ struct Solution {
     components: Vec<Vec<usize>>,
 }
 
-fn solve(g: &Graph, l: u8, regions: bool) -> Solution {
+fn solve(g: &Graph, l: u8, regions: bool, meter: &mut Meter) -> Result<Solution, BudgetExceeded> {
     let mut game = Game::new(g.weight.clone(), l);
     let mut accepted = vec![false; g.bars.len()];
     let mut circuits = regions.then(|| Dsu((0..g.bars.len() as u32).collect()));
@@ -332,15 +782,18 @@ fn solve(g: &Graph, l: u8, regions: bool) -> Solution {
                 for &(_, bar) in &game.out[x as usize] {
                     dsu.union(i as u32, bar);
                 }
+                game.work += game.out[x as usize].len() as u64;
             }
         }
+        meter.charge(std::mem::take(&mut game.work))?;
     }
     let components = components(g, &mut game, &accepted);
-    Solution {
+    meter.charge(std::mem::take(&mut game.work))?;
+    Ok(Solution {
         accepted,
         circuits,
         components,
-    }
+    })
 }
 
 /// Maximal tight sets containing a body, from the final pebble state (Lee and Streinu's
@@ -411,6 +864,7 @@ fn components(g: &Graph, game: &mut Game, accepted: &[bool]) -> Vec<Vec<usize>> 
             let x = q[qi];
             qi += 1;
             for &p in &inn_lists[x as usize] {
+                game.work += 1;
                 if state[p as usize] != 0 {
                     continue;
                 }
@@ -424,6 +878,7 @@ fn components(g: &Graph, game: &mut Game, accepted: &[bool]) -> Vec<Vec<usize>> 
                     let y = seen[si];
                     si += 1;
                     for &(z, _) in &game.out[y as usize] {
+                        game.work += 1;
                         let zs = state[z as usize];
                         if zs == 1 || game.mark[z as usize] == e {
                             continue;
@@ -470,13 +925,203 @@ fn components(g: &Graph, game: &mut Game, accepted: &[bool]) -> Vec<Vec<usize>> 
     comps
 }
 
-/// Analyse the generic rigidity of `m`.
+/// Analyse the generic rigidity of `m` (no work limit).
 pub fn analyze(m: &Mechanism, opts: &PebbleOptions) -> PebbleReport {
-    let b = m.b();
-    let l = b as u8;
+    // An unlimited meter never runs out; the reference is only a panic-free fallback.
+    analyze_within(m, opts, &Budget::UNLIMITED).unwrap_or_else(|_| analyze_reference(m, opts))
+}
+
+/// Analyse the generic rigidity of `m` within `budget`: the component pebble game, whose
+/// loops charge a work meter (about one unit per bar looked at); past
+/// [`Budget::max_work`], the typed error.
+pub fn analyze_within(
+    m: &Mechanism,
+    opts: &PebbleOptions,
+    budget: &Budget,
+) -> Result<PebbleReport, BudgetExceeded> {
+    let mut meter = budget.meter("the pebble game");
+    let l = m.b() as u8;
     let g = Graph::build(m, opts, None);
-    let mut sol = solve(&g, l, true);
-    let rank = sol.accepted.iter().filter(|&&a| a).count() as i64;
+    meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
+    let sol = solve_fast(&g, l, &mut meter)?;
+    let overconstrained = if sol.accepted.iter().all(|&a| a) {
+        Vec::new()
+    } else {
+        regions_of_overconstrained(m, &g, &sol, l, &mut meter)?
+    };
+    let n = m.bodies.len();
+    let degenerate = if sol.components.iter().any(|c| c.len() >= 2 && c.len() < n) {
+        true
+    } else if n > 2 && sol.components.iter().any(|c| c.len() == n) {
+        // The whole chain is rigid: a proper rigid sub-chain avoids some body.
+        let mut found = false;
+        for w in 0..n {
+            let g = Graph::build(m, opts, Some(w));
+            meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
+            if solve_fast(&g, l, &mut meter)?
+                .components
+                .iter()
+                .any(|c| c.iter().filter(|&&x| x != w).count() >= 2)
+            {
+                found = true;
+                break;
+            }
+        }
+        found
+    } else {
+        false
+    };
+    Ok(report(
+        m,
+        opts,
+        &g,
+        &sol.accepted,
+        &sol.components,
+        overconstrained,
+        degenerate,
+    ))
+}
+
+/// The same analysis by the plain pebble game (no component bookkeeping, components found
+/// after the game, a search per bar): quadratic on large rigid frameworks. Kept as the test
+/// oracle of [`analyze`] (`tests/pebble_props.rs`).
+#[doc(hidden)]
+pub fn analyze_reference(m: &Mechanism, opts: &PebbleOptions) -> PebbleReport {
+    let l = m.b() as u8;
+    let g = Graph::build(m, opts, None);
+    let mut meter = Budget::UNLIMITED.meter("the pebble game");
+    let Ok(mut sol) = solve(&g, l, true, &mut meter) else {
+        unreachable!("an unlimited meter never runs out")
+    };
+    let overconstrained = match &mut sol.circuits {
+        Some(dsu) => regions(m, &g, &sol.accepted, dsu),
+        None => Vec::new(),
+    };
+    let n = m.bodies.len();
+    let degenerate = if sol.components.iter().any(|c| c.len() >= 2 && c.len() < n) {
+        true
+    } else if n > 2 && sol.components.iter().any(|c| c.len() == n) {
+        (0..n).any(|w| {
+            let g = Graph::build(m, opts, Some(w));
+            solve(&g, l, false, &mut meter).is_ok_and(|s| {
+                s.components
+                    .iter()
+                    .any(|c| c.iter().filter(|&&x| x != w).count() >= 2)
+            })
+        })
+    } else {
+        false
+    };
+    report(
+        m,
+        opts,
+        &g,
+        &sol.accepted,
+        &sol.components,
+        overconstrained,
+        degenerate,
+    )
+}
+
+/// The overconstrained regions: the plain game (which finds every fundamental circuit) run
+/// again on the bars of the rigid components that hold a redundant bar, only. Every circuit
+/// lies inside one rigid component (its support is a tight set), so this gives the regions of
+/// the whole game.
+fn regions_of_overconstrained(
+    m: &Mechanism,
+    g: &Graph,
+    sol: &FastSolution,
+    l: u8,
+    meter: &mut Meter,
+) -> Result<Vec<Region>, BudgetExceeded> {
+    let nb = g.n_bodies;
+    let mut heavy = vec![false; nb];
+    for (i, &(u, _)) in g.bars.iter().enumerate() {
+        if !sol.accepted[i] {
+            heavy[sol.rep[u as usize] as usize] = true;
+        }
+    }
+    let mut sub = Graph {
+        weight: g.weight.clone(),
+        n_bodies: nb,
+        bars: Vec::new(),
+        joint: Vec::new(),
+    };
+    for (i, &(u, v)) in g.bars.iter().enumerate() {
+        let s = sol.rep[u as usize];
+        if !heavy[s as usize] {
+            continue;
+        }
+        let inside = if (v as usize) < nb {
+            sol.rep[v as usize] == s
+        } else {
+            sol.game.bars_between(v, s) >= g.weight[v as usize] as usize
+        };
+        if inside {
+            sub.bars.push((u, v));
+            sub.joint.push(g.joint[i]);
+        }
+    }
+    meter.charge(g.bars.len() as u64)?;
+    let mut sub_sol = solve(&sub, l, true, meter)?;
+    Ok(match &mut sub_sol.circuits {
+        Some(dsu) => regions(m, &sub, &sub_sol.accepted, dsu),
+        None => Vec::new(),
+    })
+}
+
+/// Group the bars by circuit union-find root; the groups with a redundant bar are regions.
+fn regions(m: &Mechanism, g: &Graph, accepted: &[bool], dsu: &mut Dsu) -> Vec<Region> {
+    let id = |i: usize| m.body_id(i).to_string();
+    let mut groups: std::collections::BTreeMap<u32, (Vec<usize>, Vec<usize>, u64)> =
+        std::collections::BTreeMap::new();
+    for (i, &(u, v)) in g.bars.iter().enumerate() {
+        let root = dsu.find(i as u32);
+        let entry = groups.entry(root).or_default();
+        for x in [u as usize, v as usize] {
+            if x < g.n_bodies {
+                entry.0.push(x);
+            }
+        }
+        entry.1.push(g.joint[i] as usize);
+        if !accepted[i] {
+            entry.2 += 1;
+        }
+    }
+    let mut regions: Vec<(Vec<usize>, Vec<usize>, u64)> = groups
+        .into_values()
+        .filter(|r| r.2 > 0)
+        .map(|(mut bs, mut js, r)| {
+            bs.sort_unstable();
+            bs.dedup();
+            js.sort_unstable();
+            js.dedup();
+            (bs, js, r)
+        })
+        .collect();
+    regions.sort();
+    regions
+        .into_iter()
+        .map(|(bs, js, r)| Region {
+            bodies: bs.into_iter().map(id).collect(),
+            joints: js.into_iter().map(|j| m.joints[j].id.clone()).collect(),
+            redundant: r,
+        })
+        .collect()
+}
+
+/// Assemble the report from the game's outcome.
+fn report(
+    m: &Mechanism,
+    opts: &PebbleOptions,
+    g: &Graph,
+    accepted: &[bool],
+    components: &[Vec<usize>],
+    overconstrained: Vec<Region>,
+    degenerate: bool,
+) -> PebbleReport {
+    let b = m.b();
+    let rank = accepted.iter().filter(|&&a| a).count() as i64;
     let redundant = g.bars.len() as u64 - rank as u64;
     let total_weight: i64 = g.weight.iter().map(|&w| w as i64).sum();
     let dof_free = total_weight - rank;
@@ -489,8 +1134,7 @@ pub fn analyze(m: &Mechanism, opts: &PebbleOptions) -> PebbleReport {
     let id = |i: usize| m.body_id(i).to_string();
 
     let frame = m.frame;
-    let mut comps: Vec<Vec<usize>> = sol
-        .components
+    let mut comps: Vec<Vec<usize>> = components
         .iter()
         .filter(|c| c.len() >= 2 || c.contains(&frame))
         .cloned()
@@ -505,66 +1149,11 @@ pub fn analyze(m: &Mechanism, opts: &PebbleOptions) -> PebbleReport {
         .map(|c| c.iter().filter(|&&x| x != frame).map(|&x| id(x)).collect())
         .unwrap_or_default();
 
-    let mut overconstrained = Vec::new();
-    if let Some(dsu) = &mut sol.circuits {
-        let mut groups: std::collections::BTreeMap<u32, (Vec<usize>, Vec<usize>, u64)> =
-            std::collections::BTreeMap::new();
-        for (i, &(u, v)) in g.bars.iter().enumerate() {
-            let root = dsu.find(i as u32);
-            let entry = groups.entry(root).or_default();
-            for x in [u as usize, v as usize] {
-                if x < g.n_bodies {
-                    entry.0.push(x);
-                }
-            }
-            entry.1.push(g.joint[i] as usize);
-            if !sol.accepted[i] {
-                entry.2 += 1;
-            }
-        }
-        let mut regions: Vec<(Vec<usize>, Vec<usize>, u64)> = groups
-            .into_values()
-            .filter(|r| r.2 > 0)
-            .map(|(mut bs, mut js, r)| {
-                bs.sort_unstable();
-                bs.dedup();
-                js.sort_unstable();
-                js.dedup();
-                (bs, js, r)
-            })
-            .collect();
-        regions.sort();
-        overconstrained = regions
-            .into_iter()
-            .map(|(bs, js, r)| Region {
-                bodies: bs.into_iter().map(id).collect(),
-                joints: js.into_iter().map(|j| m.joints[j].id.clone()).collect(),
-                redundant: r,
-            })
-            .collect();
-    }
-
-    let n = m.bodies.len();
-    let degenerate = if sol.components.iter().any(|c| c.len() >= 2 && c.len() < n) {
-        true
-    } else if n > 2 && sol.components.iter().any(|c| c.len() == n) {
-        // The whole chain is rigid: a proper rigid sub-chain avoids some body.
-        (0..n).any(|w| {
-            let g = Graph::build(m, opts, Some(w));
-            solve(&g, l, false)
-                .components
-                .iter()
-                .any(|c| c.iter().filter(|&&x| x != w).count() >= 2)
-        })
-    } else {
-        false
-    };
-
     PebbleReport {
         name: m.name.clone(),
         space: m.space.name(),
         b,
-        bodies: n,
+        bodies: m.bodies.len(),
         bars: g.bars.len() as u64,
         with_inputs: opts.with_inputs,
         count,
