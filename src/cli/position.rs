@@ -79,6 +79,7 @@ fn failed(msg: &str) -> Failure {
 fn solve_failure(file: &str, e: &SolveError) -> Failure {
     match e {
         SolveError::NotConverged { .. } => failed(&e.to_string()),
+        SolveError::Budget(b) => super::budget_failure(b),
         _ => input_err(file, e),
     }
 }
@@ -230,7 +231,10 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         args.tolerance,
         args.assemble,
     )?;
-    let opts = NewtonOptions::default();
+    let opts = NewtonOptions {
+        budget: super::budget(),
+        ..NewtonOptions::default()
+    };
     let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin())
         .map_err(|e| input_err(name, &e))?;
     let sched = mbsa::position::schedule(&m, &a, &model);

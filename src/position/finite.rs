@@ -145,6 +145,7 @@ pub fn finite_mobility(
     let newton = NewtonOptions {
         tolerance: 1e-13,
         max_iterations: 40,
+        ..NewtonOptions::default()
     };
     if first_order > 0 {
         for _ in 0..opts.samples {
