@@ -13,6 +13,7 @@
 //! ([`crate::structure::analyze`], with its rank check unless `count_only`), in parallel, and
 //! the ones the rank check rejects are excluded and counted. `docs/algorithms.md` has details.
 
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::joint::JointType;
 use crate::mechanism::{InputSpec, InputSpecError, Joint, Mechanism, resolve_ref};
 use crate::structure::{self, Analysis, Library, Status, TypeCount};
@@ -103,8 +104,14 @@ pub struct TransformOptions {
     pub inputs: Option<InputSpec>,
     /// `--max-expansions`: how many binary expansions of the multiple joints to explore.
     pub max_expansions: usize,
-    /// `--limit`: how many count-valid placements to examine at most.
+    /// `--limit`: how many count-valid placements to examine at most (per part); the search
+    /// stops there (it only looks on for one more, to say whether any were left out).
     pub limit: Option<usize>,
+    /// Caps on the work of the search and the analyses (`--max-work`, `--budget`).
+    pub budget: Budget,
+    /// Place the independent parts one by one (default). `false` places the whole mechanism
+    /// as one: the same placements, counts and scores, at the cost of the product (tests).
+    pub split: bool,
     /// Structural analysis options (`--count-only`, `--seed`, method).
     pub analysis: structure::Options,
 }
@@ -121,6 +128,8 @@ impl Default for TransformOptions {
             inputs: None,
             max_expansions: 64,
             limit: None,
+            budget: Budget::DEFAULT,
+            split: true,
             analysis: structure::Options::default(),
         }
     }
@@ -166,6 +175,9 @@ pub enum TransformError {
     /// The joint geometry asked for cannot be used.
     #[error(transparent)]
     Geometry(#[from] crate::motion::MotionError),
+    /// The work of the search or of the analyses passed the budget.
+    #[error(transparent)]
+    Budget(#[from] BudgetExceeded),
     /// A joint both kept and excluded.
     #[error("joint `{joint}` is both kept (--keep) and excluded (--exclude)")]
     KeepExcluded {
@@ -227,6 +239,18 @@ pub struct Placement {
     /// Index of the expansion (0 = every multiple joint as a star on its hub).
     #[serde(skip)]
     exp: usize,
+    /// Index (in the mechanism's joints) of the joint of each input.
+    #[serde(skip)]
+    inputs_at: Vec<usize>,
+    /// Level and smallest body (index) of each group of `partition`.
+    #[serde(skip)]
+    groups_at: Vec<(usize, usize)>,
+    /// SG type of each group of `partition`.
+    #[serde(skip)]
+    kinds: Vec<String>,
+    /// Whether the library covers each group of `partition`.
+    #[serde(skip)]
+    in_lib: Vec<bool>,
 }
 
 impl Placement {
@@ -284,20 +308,32 @@ pub struct Summary {
     pub f: i64,
     /// Joints (binary pairs) that may be driven under the restrictions.
     pub drivable: usize,
-    /// Binary expansions of the multiple joints explored.
+    /// Independent parts: the mechanism's bodies form this many connected pieces once the
+    /// frame is removed. Each is placed on its own; the counts are products over the parts.
+    pub parts: usize,
+    /// Binary expansions of the multiple joints explored (a product over the parts).
     pub expansions: usize,
     /// Binary expansions there are (saturating: `u64::MAX` means more than 10^19, and the
     /// notes say so in words).
     pub expansions_total: u64,
-    /// Count-valid placements examined by the full analysis.
-    pub count_valid: usize,
+    /// Count-valid placements examined by the full analysis (with several parts: the product
+    /// of the parts' counts). A count too large to hold (`u128::MAX`) is written in words,
+    /// "more than 10^38".
+    #[serde(serialize_with = "ser_count")]
+    pub count_valid: u128,
     /// Count-valid placements the rank check rejected (not determined).
-    pub excluded_by_rank: usize,
-    /// Determined placements.
-    pub determined: usize,
+    #[serde(serialize_with = "ser_count")]
+    pub excluded_by_rank: u128,
+    /// Determined placements (exact unless `truncated`).
+    #[serde(serialize_with = "ser_count")]
+    pub determined: u128,
+    /// Determined placements listed (the best ones; at most 100,000, fewer for large
+    /// mechanisms, and at most `--limit`).
+    pub listed: usize,
     /// The `--limit` used, if any.
     pub limit: Option<usize>,
-    /// Whether the limit cut the search (more placements exist).
+    /// Whether the search left placements out: `--limit` was reached and at least one more
+    /// count-valid placement exists.
     pub truncated: bool,
     /// Plain-language notes (restrictions, truncation, why nothing was found).
     pub notes: Vec<String>,
@@ -332,8 +368,27 @@ pub struct Progress {
 /// A progress callback (called from the thread that called the library, between batches).
 pub type ProgressFn<'a> = &'a (dyn Fn(Progress) + Sync);
 
-/// Enumerate the determined placements and stream them to `sink` in enumeration order
-/// (deterministic, unranked), calling `progress` between batches. Returns the counts.
+/// The most placements a result lists (and keeps in memory): 100,000, fewer for large
+/// mechanisms (about 256 MB of listed placements). Counts are never cut by it.
+fn list_cap(m: &Mechanism, limit: Option<usize>) -> usize {
+    let per = 64 * (m.bodies.len() + m.joints.len()) + 512;
+    let cap = (LIST_MEMORY / per).clamp(1_000, 100_000);
+    limit.map_or(cap, |l| l.min(cap))
+}
+
+/// Bytes of listed placements a result may hold ([`list_cap`]).
+const LIST_MEMORY: usize = 256 << 20;
+
+/// Placements analysed per parallel batch (and between progress reports).
+const BATCH: usize = 512;
+
+/// Enumerate the determined placements and stream them to `sink`, calling `progress` between
+/// batches. Returns the counts.
+///
+/// A mechanism in one part (its bodies connected without the frame) streams in enumeration
+/// order (deterministic, unranked) from the first placement found. A mechanism of several
+/// independent parts ([`Summary::parts`]) is placed part by part and the parts combined; its
+/// placements stream best first, at most [`list_cap`] of them, while the counts are exact.
 pub fn enumerate(
     m: &Mechanism,
     opts: &TransformOptions,
@@ -352,68 +407,176 @@ pub fn enumerate(
             opts.analysis.precision,
         )?)
     };
-    let (exps, total_exps) = expansions(m, opts.max_expansions);
     let mob = crate::mobility::mobility(m);
+    let mut meter = opts.budget.meter("the transform search");
+    let parts = if opts.split { split(m) } else { Vec::new() };
     let mut summary = Summary {
         name: m.name.clone(),
         count: mob.mobility.count,
         isolated: 0,
         set_aside: 0,
         geometry,
-        f: mob.mobility.count,
+        f: 0,
         drivable: 0,
-        expansions: exps.len(),
-        expansions_total: total_exps,
+        parts: parts.len().max(1),
+        expansions: 1,
+        expansions_total: 1,
         count_valid: 0,
         excluded_by_rank: 0,
         determined: 0,
+        listed: 0,
         limit: opts.limit,
         truncated: false,
         notes: rules.notes.clone(),
     };
-    if total_exps > exps.len() as u64 {
-        summary.notes.push(format!(
+    if parts.len() <= 1 {
+        let r = place(m, &rules, opts, lib, &mut meter, progress, &mut |p| {
+            sink(p);
+            true
+        })?;
+        summary.absorb(&r);
+        summary.count_valid = r.count_valid as u128;
+        summary.excluded_by_rank = r.excluded as u128;
+        summary.determined = r.determined as u128;
+        summary.listed = r.determined;
+        summary.truncated = r.cut;
+        summary.notes.extend(r.notes);
+        finish_notes(&mut summary, opts);
+        return Ok(summary);
+    }
+    combine_parts(
+        m,
+        &parts,
+        &rules,
+        opts,
+        lib,
+        &mut meter,
+        progress,
+        &mut summary,
+        sink,
+    )?;
+    finish_notes(&mut summary, opts);
+    Ok(summary)
+}
+
+/// The notes every run ends with: truncation, rank-check exclusions, a partial listing.
+fn finish_notes(s: &mut Summary, opts: &TransformOptions) {
+    if s.expansions_total > s.expansions as u64 {
+        s.notes.push(format!(
             "explored {} of {} binary expansions of the multiple joints (raise --max-expansions)",
-            exps.len(),
-            crate::budget::count_in_words(total_exps)
+            s.expansions,
+            crate::budget::count_in_words(s.expansions_total)
         ));
     }
-
-    // Enumerate the count-valid placements of every expansion first (cheap), so the
-    // expensive analysis knows its total and runs in parallel batches.
-    let mut cands: Vec<(usize, Vec<(usize, u32)>)> = Vec::new();
-    let mut limit_left = opts.limit.unwrap_or(usize::MAX);
-    for (x, e) in exps.iter().enumerate() {
-        let p = Problem::of(e, m, &rules, opts);
-        if x == 0 {
-            summary.isolated = p.isolated;
-            summary.set_aside = p.set_aside;
-            summary.f = p.f;
-            summary.drivable = p.drivable();
-            if let Some(n) = &p.note {
-                summary.notes.push(n.clone());
+    if s.truncated {
+        s.notes.push(format!(
+            "the search stopped at --limit {}: more placements exist and are not ranked here{}",
+            opts.limit.unwrap_or(0),
+            if s.parts > 1 {
+                " (the counts are lower bounds)"
+            } else {
+                ""
             }
-        }
-        let mut found = Vec::new();
-        let cut = p.enumerate(limit_left, &mut found);
-        limit_left -= found.len();
-        cands.extend(found.into_iter().map(|w| (x, w)));
-        if cut {
-            summary.truncated = true;
-            break;
-        }
-    }
-    if summary.truncated {
-        summary.notes.push(format!(
-            "the search stopped at --limit {}: more placements exist and are not ranked here",
-            opts.limit.unwrap_or(0)
         ));
     }
+    if s.excluded_by_rank > 0 {
+        s.notes.push(format!(
+            "{} of {} count-valid placements are not determined (the rank check finds redundant \
+             equations or uncontrolled freedoms) and are excluded",
+            count_words(s.excluded_by_rank),
+            count_words(s.count_valid)
+        ));
+    }
+    if (s.listed as u128) < s.determined {
+        s.notes.push(format!(
+            "{} determined placements: the best {} are listed",
+            count_words(s.determined),
+            s.listed
+        ));
+    }
+}
 
-    let total = cands.len();
-    const BATCH: usize = 512;
-    let mut done = 0;
-    for batch in cands.chunks(BATCH) {
+/// A count for messages; a saturated `u128::MAX` says "more than 10^38".
+pub fn count_words(n: u128) -> String {
+    if n == u128::MAX {
+        "more than 10^38".to_string()
+    } else {
+        n.to_string()
+    }
+}
+
+/// Serialize a count as a number, or as words when it saturated.
+fn ser_count<S: serde::Serializer>(n: &u128, s: S) -> Result<S::Ok, S::Error> {
+    if *n == u128::MAX {
+        s.serialize_str(&count_words(*n))
+    } else {
+        s.serialize_u128(*n)
+    }
+}
+
+/// What placing one mechanism (or one part) found.
+#[derive(Default)]
+struct Placed {
+    isolated: u32,
+    set_aside: u32,
+    f: i64,
+    drivable: usize,
+    expansions: usize,
+    expansions_total: u64,
+    count_valid: usize,
+    excluded: usize,
+    determined: usize,
+    cut: bool,
+    notes: Vec<String>,
+}
+
+impl Summary {
+    fn absorb(&mut self, r: &Placed) {
+        self.isolated += r.isolated;
+        self.set_aside += r.set_aside;
+        self.f += r.f;
+        self.drivable += r.drivable;
+        self.expansions = self.expansions.saturating_mul(r.expansions);
+        self.expansions_total = self.expansions_total.saturating_mul(r.expansions_total);
+    }
+}
+
+/// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
+/// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the
+/// count-valid placements examined; the search goes on only to learn whether one more
+/// exists (`cut`).
+#[allow(clippy::too_many_arguments)]
+fn place(
+    m: &Mechanism,
+    rules: &Rules,
+    opts: &TransformOptions,
+    lib: &Library,
+    meter: &mut Meter,
+    progress: Option<ProgressFn<'_>>,
+    sink: &mut dyn FnMut(Placement) -> bool,
+) -> Result<Placed, TransformError> {
+    let (exps, total_exps) = expansions(m, opts.max_expansions);
+    let mut r = Placed {
+        expansions: exps.len(),
+        expansions_total: total_exps,
+        f: crate::mobility::mobility(m).mobility.count,
+        ..Placed::default()
+    };
+    let limit = opts.limit.unwrap_or(usize::MAX);
+    let per_eval = (m.bodies.len() + m.joints.len()) as u64 * 50 + 100;
+    let mut batch: Vec<(usize, Vec<(usize, u32)>)> = Vec::new();
+    let mut stopped = false;
+    // Analyse a batch in parallel and stream its determined placements in order.
+    let mut flush = |batch: &mut Vec<(usize, Vec<(usize, u32)>)>,
+                     r: &mut Placed,
+                     meter: &mut Meter,
+                     stopped: &mut bool|
+     -> Result<(), BudgetExceeded> {
+        if batch.is_empty() || *stopped {
+            batch.clear();
+            return Ok(());
+        }
+        meter.charge(per_eval.saturating_mul(batch.len() as u64))?;
         let results: Vec<Option<Placement>> = batch
             .par_iter()
             .map_init(
@@ -426,52 +589,119 @@ pub fn enumerate(
                 },
             )
             .collect();
-        for (i, r) in results.into_iter().enumerate() {
-            match r {
+        let done = r.count_valid;
+        for (i, p) in results.into_iter().enumerate() {
+            r.count_valid += 1;
+            match p {
                 Some(mut p) => {
                     p.seq = done + i;
-                    summary.determined += 1;
-                    sink(p);
+                    r.determined += 1;
+                    if !*stopped && !sink(p) {
+                        *stopped = true;
+                    }
                 }
-                None => summary.excluded_by_rank += 1,
+                None => r.excluded += 1,
             }
         }
-        done += batch.len();
+        batch.clear();
         if let Some(cb) = progress {
             cb(Progress {
-                examined: done,
-                total,
-                determined: summary.determined,
+                examined: r.count_valid,
+                total: r.count_valid,
+                determined: r.determined,
             });
         }
+        Ok(())
+    };
+    // The analyses charge their own meter (the search holds `meter`): each may spend the
+    // work budget.
+    let mut eval_meter = opts.budget.meter("the analysis of the placements");
+    let mut found = 0usize;
+    let mut batch_size = 1usize;
+    for (x, e) in exps.iter().enumerate() {
+        let p = Problem::of(e, m, rules, opts);
+        if x == 0 {
+            r.isolated = p.isolated;
+            r.set_aside = p.set_aside;
+            r.f = p.f;
+            r.drivable = p.drivable();
+            if let Some(n) = &p.note {
+                r.notes.push(n.clone());
+            }
+        }
+        let mut err: Option<BudgetExceeded> = None;
+        p.search(meter, &mut |w| {
+            if found >= limit {
+                r.cut = true;
+                return false;
+            }
+            found += 1;
+            batch.push((
+                x,
+                (0..w.len())
+                    .filter(|&q| w[q] > 0)
+                    .map(|q| (q, w[q]))
+                    .collect(),
+            ));
+            if batch.len() >= batch_size {
+                // Batches grow from one placement: the first ones stream at once.
+                batch_size = (batch_size * 2).min(BATCH);
+                if let Err(e) = flush(&mut batch, &mut r, &mut eval_meter, &mut stopped) {
+                    err = Some(e);
+                    return false;
+                }
+                if stopped {
+                    return false;
+                }
+            }
+            true
+        })?;
+        if let Some(e) = err {
+            return Err(e.into());
+        }
+        if r.cut || stopped {
+            break;
+        }
     }
-    summary.count_valid = total;
-    if summary.excluded_by_rank > 0 {
-        summary.notes.push(format!(
-            "{} of {} count-valid placements are not determined (the rank check finds redundant \
-             equations or uncontrolled freedoms) and are excluded",
-            summary.excluded_by_rank, total
-        ));
-    }
-    Ok(summary)
+    flush(&mut batch, &mut r, &mut eval_meter, &mut stopped)?;
+    Ok(r)
 }
 
-/// Enumerate, rank and group every determined placement.
+/// Enumerate, rank and group the determined placements (at most [`list_cap`] listed, the best
+/// ones; the counts cover them all).
 pub fn transform(
     m: &Mechanism,
     opts: &TransformOptions,
     lib: &Library,
     progress: Option<ProgressFn<'_>>,
 ) -> Result<Transform, TransformError> {
-    let mut placements = Vec::new();
-    let summary = enumerate(m, opts, lib, progress, &mut |p| placements.push(p))?;
     let criteria = if opts.rank.is_empty() {
         Criterion::DEFAULT.to_vec()
     } else {
         opts.rank.clone()
     };
-    placements
-        .sort_by(|a, b| compare_scores(&a.scores, &b.scores, &criteria).then(a.seq.cmp(&b.seq)));
+    let cap = list_cap(m, None);
+    let order = |a: &Placement, b: &Placement| {
+        compare_scores(&a.scores, &b.scores, &criteria).then(a.seq.cmp(&b.seq))
+    };
+    let mut placements: Vec<Placement> = Vec::new();
+    let mut summary = enumerate(m, opts, lib, progress, &mut |p| {
+        placements.push(p);
+        // Keep the best `cap` only: memory stays bounded however many there are.
+        if placements.len() >= 2 * cap {
+            placements.sort_by(order);
+            placements.truncate(cap);
+        }
+    })?;
+    placements.sort_by(order);
+    if placements.len() > cap {
+        placements.truncate(cap);
+    }
+    if summary.listed != placements.len() {
+        summary.notes.retain(|n| !n.contains("are listed"));
+        summary.listed = placements.len();
+        finish_listing_note(&mut summary);
+    }
     let mut index: BTreeMap<Vec<Vec<String>>, usize> = BTreeMap::new();
     let mut families: Vec<Family> = Vec::new();
     for (i, p) in placements.iter_mut().enumerate() {
@@ -500,6 +730,436 @@ pub fn transform(
         placements,
         families,
     })
+}
+
+fn finish_listing_note(s: &mut Summary) {
+    if (s.listed as u128) < s.determined {
+        s.notes.push(format!(
+            "{} determined placements: the best {} are listed",
+            count_words(s.determined),
+            s.listed
+        ));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Independent parts
+
+/// One independent part: the frame with one connected component of the other bodies (joined
+/// by joints that do not pass through the frame) and the joints touching it.
+struct Part {
+    mech: Mechanism,
+    /// Original index of each joint of `mech`.
+    joints: Vec<usize>,
+    /// Original index of each body of `mech`.
+    bodies: Vec<usize>,
+}
+
+/// The parts of `m`, in order of their first joint; a mechanism in one piece gives one part
+/// (or none without movable bodies). Every joint belongs to exactly one part: the frame's
+/// equations only ever fix the frame, so the constraint Jacobian (frame fixed) is block
+/// diagonal over the parts, and so are the matching, the groups and the rank check.
+fn split(m: &Mechanism) -> Vec<Part> {
+    let nb = m.bodies.len();
+    let mut parent: Vec<usize> = (0..nb).collect();
+    fn root(p: &mut [usize], mut x: usize) -> usize {
+        while p[x] != x {
+            p[x] = p[p[x]];
+            x = p[x];
+        }
+        x
+    }
+    for j in &m.joints {
+        let mut first: Option<usize> = None;
+        for &b in &j.bodies {
+            if b == m.frame || b >= nb {
+                continue;
+            }
+            match first {
+                None => first = Some(b),
+                Some(f) => {
+                    let (ra, rb) = (root(&mut parent, f), root(&mut parent, b));
+                    if ra != rb {
+                        parent[ra.max(rb)] = ra.min(rb);
+                    }
+                }
+            }
+        }
+    }
+    // Part of each root, numbered by first joint, then bodies without joints by index.
+    let mut part_of: Vec<Option<usize>> = vec![None; nb];
+    let mut joints_of: Vec<Vec<usize>> = Vec::new();
+    let mut joint_part: Vec<Option<usize>> = vec![None; m.joints.len()];
+    for (ji, j) in m.joints.iter().enumerate() {
+        let Some(&b) = j.bodies.iter().find(|&&b| b != m.frame && b < nb) else {
+            continue;
+        };
+        let r = root(&mut parent, b);
+        let p = *part_of[r].get_or_insert_with(|| {
+            joints_of.push(Vec::new());
+            joints_of.len() - 1
+        });
+        joints_of[p].push(ji);
+        joint_part[ji] = Some(p);
+    }
+    for b in 0..nb {
+        if b != m.frame {
+            let r = root(&mut parent, b);
+            if part_of[r].is_none() {
+                joints_of.push(Vec::new());
+                part_of[r] = Some(joints_of.len() - 1);
+            }
+        }
+    }
+    let mut bodies_of: Vec<Vec<usize>> = vec![Vec::new(); joints_of.len()];
+    for b in 0..nb {
+        if b == m.frame {
+            continue;
+        }
+        let r = root(&mut parent, b);
+        if let Some(p) = part_of[r] {
+            bodies_of[p].push(b);
+        }
+    }
+    // Joints only on the frame (none should exist) join the first part.
+    if !joints_of.is_empty() {
+        for (ji, jp) in joint_part.iter().enumerate() {
+            if jp.is_none() {
+                joints_of[0].push(ji);
+            }
+        }
+        joints_of[0].sort_unstable();
+    }
+    if joints_of.len() <= 1 {
+        return Vec::new();
+    }
+    joints_of
+        .into_iter()
+        .zip(bodies_of)
+        .map(|(joints, mut bodies)| {
+            bodies.push(m.frame);
+            bodies.sort_unstable();
+            let mut local = vec![usize::MAX; nb];
+            for (i, &b) in bodies.iter().enumerate() {
+                local[b] = i;
+            }
+            let mech = Mechanism {
+                name: m.name.clone(),
+                description: None,
+                space: m.space,
+                frame: local[m.frame],
+                bodies: bodies.iter().map(|&b| m.bodies[b].clone()).collect(),
+                joints: joints
+                    .iter()
+                    .map(|&ji| {
+                        let mut j = m.joints[ji].clone();
+                        j.bodies = j.bodies.iter().map(|&b| local[b]).collect();
+                        j
+                    })
+                    .collect(),
+                expect: Default::default(),
+            };
+            Part {
+                mech,
+                joints,
+                bodies,
+            }
+        })
+        .collect()
+}
+
+/// The scores of a placement as a combinable key: groups and covered groups add up over the
+/// parts, "every group covered" is the conjunction, the largest group and the levels are the
+/// maxima. So the whole's scores are a function of the parts' keys, and ranking the whole
+/// by any `--rank` order only needs each part's placements grouped by key.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Key {
+    groups: usize,
+    covered: usize,
+    all_covered: bool,
+    largest: usize,
+    levels: usize,
+}
+
+impl Key {
+    fn of(s: &Scores) -> Key {
+        Key {
+            groups: s.groups,
+            covered: s.covered,
+            all_covered: s.all_covered,
+            largest: s.largest,
+            levels: s.levels,
+        }
+    }
+    fn join(self, o: Key) -> Key {
+        Key {
+            groups: self.groups + o.groups,
+            covered: self.covered + o.covered,
+            all_covered: self.all_covered && o.all_covered,
+            largest: self.largest.max(o.largest),
+            levels: self.levels.max(o.levels),
+        }
+    }
+    fn scores(self) -> Scores {
+        Scores {
+            groups: self.groups,
+            largest: self.largest,
+            levels: self.levels,
+            covered: self.covered,
+            all_covered: self.all_covered,
+        }
+    }
+}
+
+/// One part's placements by key: how many, and the first `cap` of each (enumeration order).
+struct PartKeys {
+    keys: Vec<(Key, u128, Vec<Placement>)>,
+}
+
+/// Place every part, count the whole as the product of the parts' counts, and stream the best
+/// placements of the whole (best first, at most [`list_cap`]).
+#[allow(clippy::too_many_arguments)]
+fn combine_parts(
+    m: &Mechanism,
+    parts: &[Part],
+    rules: &Rules,
+    opts: &TransformOptions,
+    lib: &Library,
+    meter: &mut Meter,
+    progress: Option<ProgressFn<'_>>,
+    summary: &mut Summary,
+    sink: &mut dyn FnMut(Placement),
+) -> Result<(), TransformError> {
+    let cap = list_cap(m, opts.limit);
+    let mut per: Vec<PartKeys> = Vec::with_capacity(parts.len());
+    let (mut count_valid, mut determined) = (1u128, 1u128);
+    summary.expansions = 1;
+    summary.expansions_total = 1;
+    let mut examined = 0usize;
+    for (pi, part) in parts.iter().enumerate() {
+        let prules = rules.restrict(&part.joints);
+        let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
+        let r = place(&part.mech, &prules, opts, lib, meter, None, &mut |mut p| {
+            for i in &mut p.inputs_at {
+                *i = part.joints[*i];
+            }
+            for g in &mut p.groups_at {
+                g.1 = part.bodies[g.1];
+            }
+            let e = by.entry(Key::of(&p.scores)).or_default();
+            e.0 += 1;
+            if e.1.len() < cap {
+                e.1.push(p);
+            }
+            true
+        })?;
+        summary.absorb(&r);
+        summary.truncated |= r.cut;
+        examined += r.count_valid;
+        count_valid = count_valid.saturating_mul(r.count_valid as u128);
+        determined = determined.saturating_mul(r.determined as u128);
+        for n in r.notes {
+            let n = format!("part {} ({}): {n}", pi + 1, part_label(m, part));
+            summary.notes.push(n);
+        }
+        if let Some(cb) = progress {
+            cb(Progress {
+                examined,
+                total: examined,
+                determined: 0,
+            });
+        }
+        per.push(PartKeys {
+            keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
+        });
+    }
+    summary.count_valid = count_valid;
+    summary.determined = determined;
+    summary.excluded_by_rank = count_valid.saturating_sub(determined);
+    if count_valid == u128::MAX {
+        summary.excluded_by_rank = 0;
+    }
+    summary.notes.push(format!(
+        "{} independent parts (joined only through the frame), placed one by one: the counts \
+         are the products of the parts' counts",
+        parts.len()
+    ));
+    if determined == 0 {
+        return Ok(());
+    }
+    // The keys of the whole, part by part: layer i holds the keys of parts 0..=i combined.
+    let mut layers: Vec<Vec<(Key, u128)>> = Vec::with_capacity(per.len());
+    for (i, pk) in per.iter().enumerate() {
+        let mut next: BTreeMap<Key, u128> = BTreeMap::new();
+        if i == 0 {
+            for (k, n, _) in &pk.keys {
+                next.insert(*k, *n);
+            }
+        } else {
+            let prev = &layers[i - 1];
+            meter.charge((prev.len() * pk.keys.len()) as u64 + 1)?;
+            for (a, na) in prev {
+                for (b, nb, _) in &pk.keys {
+                    let (a, na) = (*a, *na);
+                    let e = next.entry(a.join(*b)).or_insert(0);
+                    *e = e.saturating_add(na.saturating_mul(*nb));
+                }
+            }
+        }
+        layers.push(next.into_iter().collect());
+    }
+    let criteria = if opts.rank.is_empty() {
+        Criterion::DEFAULT.to_vec()
+    } else {
+        opts.rank.clone()
+    };
+    let Some(last) = layers.last() else {
+        return Ok(());
+    };
+    let mut whole: Vec<Key> = last.iter().map(|(k, _)| *k).collect();
+    whole.sort_by(|a, b| compare_scores(&a.scores(), &b.scores(), &criteria).then(a.cmp(b)));
+    let n = per.len();
+    let mut listed = 0usize;
+    'keys: for target in whole {
+        // Every choice of one key per part that joins to `target`, the last part first.
+        let mut tgt = vec![target; n];
+        let mut cursor = vec![0usize; n];
+        let mut chosen = vec![0usize; n];
+        let mut i = n - 1;
+        loop {
+            let np = if i == 0 { 1 } else { layers[i - 1].len() };
+            let total = per[i].keys.len() * np;
+            let mut hit = false;
+            while cursor[i] < total {
+                let c = cursor[i];
+                cursor[i] += 1;
+                meter.charge(1)?;
+                let (si, pj) = (c / np, c % np);
+                let k = per[i].keys[si].0;
+                if i == 0 {
+                    if k == tgt[0] {
+                        chosen[0] = si;
+                        hit = true;
+                        break;
+                    }
+                } else if let Some(&(prev, _)) = layers[i - 1].get(pj)
+                    && prev.join(k) == tgt[i]
+                {
+                    chosen[i] = si;
+                    tgt[i - 1] = prev;
+                    hit = true;
+                    break;
+                }
+            }
+            if !hit {
+                if i == n - 1 {
+                    break;
+                }
+                i += 1;
+                continue;
+            }
+            if i > 0 {
+                i -= 1;
+                cursor[i] = 0;
+                continue;
+            }
+            // A full choice: the product of the parts' listed placements, the last part
+            // varying fastest.
+            let lists: Vec<&Vec<Placement>> = (0..n).map(|p| &per[p].keys[chosen[p]].2).collect();
+            let mut digit = vec![0usize; n];
+            'prod: loop {
+                meter.charge(n as u64)?;
+                let members: Vec<&Placement> = (0..n).map(|p| &lists[p][digit[p]]).collect();
+                let mut p = join_placements(&members, target);
+                p.seq = listed;
+                sink(p);
+                listed += 1;
+                if listed >= cap {
+                    break 'keys;
+                }
+                let mut d = n;
+                loop {
+                    if d == 0 {
+                        break 'prod;
+                    }
+                    d -= 1;
+                    digit[d] += 1;
+                    if digit[d] < lists[d].len() {
+                        continue 'prod;
+                    }
+                    digit[d] = 0;
+                }
+            }
+        }
+    }
+    summary.listed = listed;
+    Ok(())
+}
+
+/// `bodies 2-5` style label of a part for notes: its movable bodies' ids, shortened.
+fn part_label(m: &Mechanism, part: &Part) -> String {
+    let ids: Vec<String> = part
+        .bodies
+        .iter()
+        .filter(|&&b| b != m.frame)
+        .map(|&b| m.body_id(b).to_string())
+        .collect();
+    match ids.len() {
+        0 => "no bodies".into(),
+        1..=4 => format!("bodies {}", ids.join(", ")),
+        k => format!("bodies {}, {} and {} more", ids[0], ids[1], k - 2),
+    }
+}
+
+/// The placement of the whole from one placement per part: inputs in joint order, groups in
+/// canonical order (level, size, smallest body), types in order of first appearance.
+fn join_placements(members: &[&Placement], key: Key) -> Placement {
+    let mut inputs: Vec<(usize, Input)> = members
+        .iter()
+        .flat_map(|p| p.inputs_at.iter().copied().zip(p.inputs.iter().cloned()))
+        .collect();
+    inputs.sort_by_key(|(j, _)| *j);
+    // (level, size, smallest body, part, group)
+    let mut groups: Vec<(usize, usize, usize, usize, usize)> = Vec::new();
+    for (pi, p) in members.iter().enumerate() {
+        for (gi, g) in p.groups_at.iter().enumerate() {
+            groups.push((g.0, p.partition[gi].len(), g.1, pi, gi));
+        }
+    }
+    groups.sort_unstable();
+    let mut types: Vec<TypeCount> = Vec::new();
+    let mut partition = Vec::with_capacity(groups.len());
+    let mut groups_at = Vec::with_capacity(groups.len());
+    for &(level, _, first, pi, gi) in &groups {
+        let p = members[pi];
+        partition.push(p.partition[gi].clone());
+        groups_at.push((level, first, p.kinds[gi].clone(), p.in_lib[gi]));
+        let kind = &p.kinds[gi];
+        match types.iter_mut().find(|t| &t.kind == kind) {
+            Some(t) => t.count += 1,
+            None => types.push(TypeCount {
+                kind: kind.clone(),
+                count: 1,
+                in_library: p.in_lib[gi],
+            }),
+        }
+    }
+    let labels: Vec<String> = members.iter().filter_map(|p| p.expansion.clone()).collect();
+    Placement {
+        rank: None,
+        family: None,
+        inputs: inputs.iter().map(|(_, i)| i.clone()).collect(),
+        expansion: (!labels.is_empty()).then(|| labels.join("; ")),
+        scores: key.scores(),
+        types,
+        partition,
+        seq: 0,
+        exp: members.iter().map(|p| p.exp).max().unwrap_or(0),
+        inputs_at: inputs.iter().map(|(j, _)| *j).collect(),
+        groups_at: groups_at.iter().map(|g| (g.0, g.1)).collect(),
+        kinds: groups_at.iter().map(|g| g.2.clone()).collect(),
+        in_lib: groups_at.iter().map(|g| g.3).collect(),
+    }
 }
 
 /// Order two score sets by `criteria` (`Less`: `a` ranks before `b`).
@@ -547,6 +1207,16 @@ struct Rules {
 }
 
 impl Rules {
+    /// The rules of one part, whose joints are `joints` of the whole.
+    fn restrict(&self, joints: &[usize]) -> Rules {
+        Rules {
+            allowed: joints.iter().map(|&j| self.allowed[j]).collect(),
+            grounded: self.grounded,
+            keep: joints.iter().map(|&j| self.keep[j]).collect(),
+            notes: Vec::new(),
+        }
+    }
+
     fn of(m: &Mechanism, opts: &TransformOptions) -> Result<Rules, TransformError> {
         let n = m.joints.len();
         let mut allowed = vec![true; n];
@@ -1055,138 +1725,320 @@ impl Problem {
         None
     }
 
-    /// Whether `need` more units fit using the candidates from position `from` on.
-    fn extends(&self, s: &State, w: &[u32], from: usize, need: usize, sc: &mut Scratch) -> bool {
-        if need == 0 {
-            return true;
-        }
-        let mut extra: Vec<(usize, u32)> = self.cand[from.min(self.cand.len())..]
-            .iter()
-            .map(|&q| (q, self.hi[q] - w[q]))
-            .filter(|&(_, x)| x > 0)
-            .collect();
-        let spare: u64 = extra.iter().map(|&(_, x)| x as u64).sum();
-        if spare < need as u64 {
-            return false;
-        }
-        let mut s = s.clone();
-        let mut sources: Vec<usize> = extra.iter().map(|&(q, _)| q).collect();
-        for _ in 0..need {
-            let Some(q) = self.augment(&mut s, &sources, sc) else {
-                return false;
-            };
-            if let Some(pos) = extra.iter().position(|&(r, _)| r == q) {
-                extra[pos].1 -= 1;
-                if extra[pos].1 == 0 {
-                    extra.remove(pos);
-                    sources = extra.iter().map(|&(r, _)| r).collect();
-                }
-            }
-        }
-        true
-    }
-
-    /// The first candidate position from which `need` units no longer fit (monotone, so a
-    /// binary search), at least `from`.
-    fn reach(&self, s: &State, w: &[u32], from: usize, need: usize, sc: &mut Scratch) -> usize {
-        if !self.extends(s, w, from, need, sc) {
-            return from;
-        }
-        // extends(lo) holds, extends(hi) fails.
-        let (mut lo, mut hi) = (from, self.cand.len());
-        while hi - lo > 1 {
-            let mid = lo + (hi - lo) / 2;
-            if self.extends(s, w, mid, need, sc) {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        hi
-    }
-
-    /// Push every count-valid placement (sparse `(pair, driven)`, pair order) into `out`, at
-    /// most `limit`. Returns whether the limit cut the search.
-    fn enumerate(&self, limit: usize, out: &mut Vec<Vec<(usize, u32)>>) -> bool {
+    /// Visit every count-valid placement (sparse `(pair, driven)`, pair order) in
+    /// lexicographic order of its units' candidate positions (the most units on the earliest
+    /// candidate first), calling `leaf` on each; `leaf` returns `false` to stop. Charges
+    /// `meter` one unit per search step and per body an exchange visits.
+    ///
+    /// The search is a binary partition of the bases of the placement matroid: a node holds
+    /// one complete placement (a perfect matching of equations and inputs to unknowns) and
+    /// bounds `lo ≤ w ≤ hi` per pair; it decides the first candidate still open, first "one
+    /// more unit here" (same placement, or one exchange), then "no more units here" (each
+    /// unit removed is refilled by an augmenting path). A branch whose bounds admit no
+    /// placement is cut at once by a failed exchange, so there are no dead ends: the first
+    /// placement comes after one greedy pass, and each further one after at most one
+    /// exchange per candidate. Changes are undone from a trail, so memory stays linear.
+    fn search(
+        &self,
+        meter: &mut Meter,
+        leaf: &mut dyn FnMut(&[u32]) -> bool,
+    ) -> Result<(), BudgetExceeded> {
         let Some(root) = &self.root else {
-            return false;
+            return Ok(());
         };
-        let mut sc = self.scratch();
-        let mut w = self.lo.clone();
-        let emit = |w: &[u32], out: &mut Vec<Vec<(usize, u32)>>| -> bool {
-            let ok = self
-                .kept_groups
-                .iter()
-                .all(|(qs, min)| qs.iter().map(|&q| w[q]).sum::<u32>() >= *min);
-            if ok {
-                out.push(
-                    (0..w.len())
-                        .filter(|&q| w[q] > 0)
-                        .map(|q| (q, w[q]))
-                        .collect(),
-                );
-            }
-            ok
+        let mut t = Search {
+            s: root.clone(),
+            w: self.lo.clone(),
+            lo: self.lo.clone(),
+            hi: self.hi.clone(),
+            trail: Vec::new(),
+            sc: self.scratch(),
         };
-        if limit == 0 {
-            return true;
-        }
-        if self.need == 0 {
-            emit(&w, out);
-            return false;
-        }
-        // Depth-first over multisets of candidate positions (non-decreasing), one unit per
-        // level, so the depth is at most `need`; explicit stack, no recursion.
-        struct Node {
-            state: State,
-            next: usize,
-            end: usize,
-        }
-        let end = self.reach(root, &w, 0, self.need, &mut sc);
-        let mut stack = vec![Node {
-            state: root.clone(),
-            next: 0,
-            end,
-        }];
-        let mut path: Vec<usize> = Vec::new();
-        while let Some(top) = stack.last_mut() {
-            if top.next >= top.end {
-                stack.pop();
-                if let Some(ci) = path.pop() {
-                    w[self.cand[ci]] -= 1;
+        // The greedy first placement: as many units as fit on each candidate in order.
+        let mut placed = 0usize;
+        for &q in &self.cand {
+            while placed < self.need && t.w[q] < t.hi[q] {
+                meter.charge(self.u.len() as u64 / 8 + 1)?;
+                if self.augment(&mut t.s, &[q], &mut t.sc).is_none() {
+                    break;
                 }
-                continue;
+                t.w[q] += 1;
+                placed += 1;
             }
-            let ci = top.next;
-            top.next += 1;
-            let q = self.cand[ci];
-            if w[q] >= self.hi[q] {
-                continue;
-            }
-            let mut s = top.state.clone();
-            if self.augment(&mut s, &[q], &mut sc).is_none() {
-                // Dependent: this slot over-determines some part; so would every larger set.
-                continue;
-            }
-            w[q] += 1;
-            let left = self.need - path.len() - 1;
-            if left == 0 {
-                emit(&w, out);
-                w[q] -= 1;
-                if out.len() >= limit {
-                    return true;
-                }
-                continue;
-            }
-            path.push(ci);
-            let end = self.reach(&s, &w, ci, left, &mut sc);
-            stack.push(Node {
-                state: s,
-                next: ci,
-                end,
-            });
         }
-        false
+        if placed < self.need {
+            return Ok(());
+        }
+        // Units every placement needs (matroid coloops) are fixed at once: a unit is needed
+        // unless some slot outside the placement reaches it by an alternating path (one BFS
+        // from all such slots). A tree (star, serial chain) is then decided in linear time.
+        {
+            let Search { s, w, hi, sc, .. } = &mut t;
+            sc.next_stamp();
+            for &q in &self.cand {
+                if w[q] < hi[q] {
+                    for x in [self.a[q], self.c[q]] {
+                        if x != self.frame && sc.seen[x] != sc.stamp {
+                            sc.seen[x] = sc.stamp;
+                            sc.queue.push(x);
+                        }
+                    }
+                }
+            }
+            let mut reached = vec![false; self.a.len()];
+            let mut qi = 0;
+            while qi < sc.queue.len() {
+                let x = sc.queue[qi];
+                qi += 1;
+                meter.charge(1 + self.touching[x].len() as u64)?;
+                for &r in &self.touching[x] {
+                    if s.flow[r][self.side(r, x)] == 0 {
+                        continue;
+                    }
+                    reached[r] = true;
+                    let y = self.other(r, x);
+                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                        sc.seen[y] = sc.stamp;
+                        sc.queue.push(y);
+                    }
+                }
+            }
+            for &q in &self.cand {
+                if !reached[q] {
+                    t.lo[q] = t.lo[q].max(t.w[q]);
+                }
+            }
+        }
+        t.trail.clear();
+        // Choice points: (trail mark, candidate position) whose "no more units" branch is
+        // still to be explored.
+        let mut choices: Vec<(usize, usize)> = Vec::new();
+        let mut cur = 0usize;
+        loop {
+            meter.charge(1)?;
+            while cur < self.cand.len() && t.lo[self.cand[cur]] >= t.hi[self.cand[cur]] {
+                cur += 1;
+            }
+            let mut go_back = false;
+            if cur == self.cand.len() {
+                let ok = self
+                    .kept_groups
+                    .iter()
+                    .all(|(qs, min)| qs.iter().map(|&q| t.w[q]).sum::<u32>() >= *min);
+                if ok && !leaf(&t.w) {
+                    return Ok(());
+                }
+                go_back = true;
+            } else {
+                let q = self.cand[cur];
+                let mark = t.trail.len();
+                if t.w[q] > t.lo[q] || self.exchange_in(&mut t, q, meter)? {
+                    choices.push((mark, cur));
+                    t.set_lo(q, t.lo[q] + 1);
+                } else if !self.cap(&mut t, q, meter)? {
+                    go_back = true;
+                }
+            }
+            if go_back {
+                // The "no more units" branch of the latest choice point that admits one.
+                loop {
+                    let Some((mark, c)) = choices.pop() else {
+                        return Ok(());
+                    };
+                    t.undo(mark);
+                    cur = c;
+                    if self.cap(&mut t, self.cand[c], meter)? {
+                        break;
+                    }
+                }
+            }
+        }
+    }
+
+    /// "One more unit on `q`" when the placement has none spare there: add a unit of `q` and
+    /// drop a free unit (above its lower bound) of another pair, along an alternating path.
+    fn exchange_in(
+        &self,
+        t: &mut Search,
+        q: usize,
+        meter: &mut Meter,
+    ) -> Result<bool, BudgetExceeded> {
+        let found = {
+            let Search { s, w, lo, sc, .. } = &mut *t;
+            sc.next_stamp();
+            for x in [self.a[q], self.c[q]] {
+                if x != self.frame && sc.seen[x] != sc.stamp {
+                    sc.seen[x] = sc.stamp;
+                    sc.prev[x] = (q as u32, NONE);
+                    sc.queue.push(x);
+                }
+            }
+            let mut found = None;
+            let mut qi = 0;
+            'bfs: while qi < sc.queue.len() {
+                let x = sc.queue[qi];
+                qi += 1;
+                meter.charge(1 + self.touching[x].len() as u64)?;
+                for &r in &self.touching[x] {
+                    if s.flow[r][self.side(r, x)] == 0 {
+                        continue;
+                    }
+                    if r != q && w[r] > lo[r] {
+                        found = Some((x, r));
+                        break 'bfs;
+                    }
+                    let y = self.other(r, x);
+                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                        sc.seen[y] = sc.stamp;
+                        sc.prev[y] = (r as u32, x as u32);
+                        sc.queue.push(y);
+                    }
+                }
+            }
+            found
+        };
+        let Some((x, r)) = found else {
+            return Ok(false);
+        };
+        // Drop a unit of r at x, then push the new unit of q along the path into x.
+        t.flow_add(r, self.side(r, x), -1);
+        t.w_add(r, -1);
+        let mut y = x;
+        loop {
+            let (pq, from) = t.sc.prev[y];
+            let pq = pq as usize;
+            t.flow_add(pq, self.side(pq, y), 1);
+            if from == NONE {
+                t.w_add(pq, 1);
+                return Ok(true);
+            }
+            let from = from as usize;
+            t.flow_add(pq, self.side(pq, from), -1);
+            y = from;
+        }
+    }
+
+    /// "No more units on `q`": its upper bound drops to its lower one; each unit above is
+    /// removed and the body it held refilled from a pair with spare capacity, along an
+    /// alternating path. `false` when some unit cannot be refilled (the branch is empty).
+    fn cap(&self, t: &mut Search, q: usize, meter: &mut Meter) -> Result<bool, BudgetExceeded> {
+        t.set_hi(q, t.lo[q]);
+        while t.w[q] > t.hi[q] {
+            let side = usize::from(t.s.flow[q][0] == 0);
+            let x = if side == 0 { self.a[q] } else { self.c[q] };
+            t.flow_add(q, side, -1);
+            t.w_add(q, -1);
+            if !self.refill(t, x, meter)? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Give body `x`, one unit short, a unit from a pair below its upper bound, moving units
+    /// between the two bodies of pairs along the way.
+    fn refill(&self, t: &mut Search, x: usize, meter: &mut Meter) -> Result<bool, BudgetExceeded> {
+        let found = {
+            let Search { s, w, hi, sc, .. } = &mut *t;
+            sc.next_stamp();
+            sc.seen[x] = sc.stamp;
+            sc.prev[x] = (NONE, NONE);
+            sc.queue.push(x);
+            let mut found = None;
+            let mut qi = 0;
+            'bfs: while qi < sc.queue.len() {
+                let z = sc.queue[qi];
+                qi += 1;
+                meter.charge(1 + self.touching[z].len() as u64)?;
+                for &r in &self.touching[z] {
+                    if w[r] < hi[r] {
+                        found = Some((z, r));
+                        break 'bfs;
+                    }
+                    let y = self.other(r, z);
+                    if y == self.frame || y == z || sc.seen[y] == sc.stamp {
+                        continue;
+                    }
+                    if s.flow[r][self.side(r, y)] > 0 {
+                        sc.seen[y] = sc.stamp;
+                        sc.prev[y] = (r as u32, z as u32);
+                        sc.queue.push(y);
+                    }
+                }
+            }
+            found
+        };
+        let Some((z, r)) = found else {
+            return Ok(false);
+        };
+        t.flow_add(r, self.side(r, z), 1);
+        t.w_add(r, 1);
+        let mut y = z;
+        while y != x {
+            let (pq, to) = t.sc.prev[y];
+            let (pq, to) = (pq as usize, to as usize);
+            t.flow_add(pq, self.side(pq, y), -1);
+            t.flow_add(pq, self.side(pq, to), 1);
+            y = to;
+        }
+        Ok(true)
+    }
+}
+
+impl Scratch {
+    /// A fresh BFS: a new stamp (clearing on wrap-around) and an empty queue.
+    fn next_stamp(&mut self) {
+        self.stamp = self.stamp.wrapping_add(1);
+        if self.stamp == 0 {
+            self.seen.iter_mut().for_each(|v| *v = 0);
+            self.stamp = 1;
+        }
+        self.queue.clear();
+    }
+}
+
+/// The mutable state of [`Problem::search`], with a trail of old values to undo.
+struct Search {
+    s: State,
+    w: Vec<u32>,
+    lo: Vec<u32>,
+    hi: Vec<u32>,
+    trail: Vec<(u8, u32, u32)>,
+    sc: Scratch,
+}
+
+impl Search {
+    fn flow_add(&mut self, q: usize, side: usize, d: i32) {
+        let old = self.s.flow[q][side];
+        self.trail.push((side as u8, q as u32, old));
+        self.s.flow[q][side] = old.wrapping_add_signed(d);
+    }
+    fn w_add(&mut self, q: usize, d: i32) {
+        let old = self.w[q];
+        self.trail.push((2, q as u32, old));
+        self.w[q] = old.wrapping_add_signed(d);
+    }
+    fn set_lo(&mut self, q: usize, v: u32) {
+        self.trail.push((3, q as u32, self.lo[q]));
+        self.lo[q] = v;
+    }
+    fn set_hi(&mut self, q: usize, v: u32) {
+        self.trail.push((4, q as u32, self.hi[q]));
+        self.hi[q] = v;
+    }
+    fn undo(&mut self, mark: usize) {
+        while self.trail.len() > mark {
+            let Some((k, q, old)) = self.trail.pop() else {
+                break;
+            };
+            let q = q as usize;
+            match k {
+                0 | 1 => self.s.flow[q][k as usize] = old,
+                2 => self.w[q] = old,
+                3 => self.lo[q] = old,
+                _ => self.hi[q] = old,
+            }
+        }
     }
 }
 
@@ -1219,6 +2071,15 @@ fn placement(
     a: &Analysis,
     w: &[(usize, u32)],
 ) -> Placement {
+    let mut sorted: Vec<(usize, u32)> = w.iter().copied().filter(|&(_, n)| n > 0).collect();
+    sorted.sort_by_key(|&(q, _)| (e.origin[q], q));
+    let smallest = |g: &structure::Group| {
+        g.bodies
+            .iter()
+            .filter_map(|b| mech.body_index(&crate::mechanism::BodyId::from_text(b)))
+            .min()
+            .unwrap_or(usize::MAX)
+    };
     Placement {
         rank: None,
         family: None,
@@ -1229,6 +2090,10 @@ fn placement(
         partition: a.groups.iter().map(|g| g.bodies.clone()).collect(),
         seq: 0,
         exp: x,
+        inputs_at: sorted.iter().map(|&(q, _)| e.origin[q]).collect(),
+        groups_at: a.groups.iter().map(|g| (g.level, smallest(g))).collect(),
+        kinds: a.groups.iter().map(|g| g.kind.clone()).collect(),
+        in_lib: a.groups.iter().map(|g| g.in_library).collect(),
     }
 }
 

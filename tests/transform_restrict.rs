@@ -135,18 +135,21 @@ fn streaming_matches_ranking_and_reports_progress() {
         lines.push(mbsa::report::transform::jsonl(&p));
     })
     .unwrap();
-    assert_eq!(lines.len(), s.determined);
+    assert_eq!(lines.len() as u128, s.determined);
     assert!(
         lines
             .iter()
             .all(|l| l.ends_with('\n') && !l[..l.len() - 1].contains('\n'))
     );
     assert!(calls.load(Ordering::Relaxed) >= 1);
-    assert_eq!(last.load(Ordering::Relaxed), s.count_valid);
+    assert_eq!(last.load(Ordering::Relaxed) as u128, s.count_valid);
     let t = transform(&m, &opts(), &lib, None).unwrap();
     assert_eq!(t.placements.len(), lines.len());
     let json: serde_json::Value = serde_json::from_str(&mbsa::report::json(&t)).unwrap();
-    assert_eq!(json["placements"].as_array().unwrap().len(), s.determined);
+    assert_eq!(
+        json["placements"].as_array().unwrap().len() as u128,
+        s.determined
+    );
 }
 
 /// Planar: bodies 2 and 3 pinned to the frame and joined with 4 by one ternary pin.

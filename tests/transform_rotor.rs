@@ -116,9 +116,9 @@ fn determined_count_equals_brute_force() {
     brute.sort();
     let mut found: Vec<Vec<String>> = t.placements.iter().map(spec_set).collect();
     found.sort();
-    assert_eq!(t.summary.determined, brute.len());
+    assert_eq!(t.summary.determined, brute.len() as u128);
     assert_eq!(found, brute);
-    assert_eq!(t.summary.count_valid, count_valid);
+    assert_eq!(t.summary.count_valid, count_valid as u128);
     assert_eq!(
         t.summary.excluded_by_rank,
         t.summary.count_valid - t.summary.determined

@@ -32,7 +32,7 @@ fn inverse_kinematics_placement_is_found_and_rank_rejects_are_counted() {
         t.summary.count_valid,
         t.summary.determined + t.summary.excluded_by_rank
     );
-    assert_eq!(t.placements.len(), t.summary.determined);
+    assert_eq!(t.placements.len() as u128, t.summary.determined);
     assert!(t.summary.notes.iter().any(|n| n.contains("rank check")));
     // The original inputs (the six legs) are determined too.
     assert!(t.original_rank.is_some());

@@ -35,7 +35,8 @@ pub struct TransformArgs {
     /// How many binary expansions of multiple joints to explore.
     #[arg(long, default_value_t = 64)]
     pub max_expansions: usize,
-    /// Examine at most this many count-valid placements (the output says when it cut the search).
+    /// Examine at most this many count-valid placements (per independent part): the search
+    /// stops there, and the output says when placements were left out.
     #[arg(long)]
     pub limit: Option<usize>,
     /// Output format: a ranked table, JSON with every placement, or JSON lines streamed one placement per line.
@@ -69,6 +70,11 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
     let bad = |flag: &str, e: &dyn std::error::Error| {
         Failure::Input(mbsa::diagnostic::render_plain(flag, e))
     };
+    // Past the work budget: the budget's own message and exit code.
+    let failed = |e: transform::TransformError| match e {
+        transform::TransformError::Budget(b) => super::budget_failure(&b),
+        e => bad("transform", &e),
+    };
     let opts = TransformOptions {
         rank: Criterion::parse_list(&args.rank).map_err(|e| bad("--rank", &e))?,
         top: args.top,
@@ -84,8 +90,13 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         inputs: spec(&structure.inputs, "--inputs")?,
         max_expansions: args.max_expansions,
         limit: args.limit,
+        budget: super::budget(),
+        split: true,
         analysis: structure.options()?,
     };
+    if !structure.count_only {
+        structure.geometry.closure_check(&file.file, &m)?;
+    }
     if let Some(given) = &opts.inputs {
         let c = transform::compare(&m, given, &opts, &lib).map_err(|e| bad("--inputs", &e))?;
         return emit(&match args.format {
@@ -114,23 +125,22 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
     let progress: Option<transform::ProgressFn<'_>> = bar.as_ref().map(|_| &report as _);
     match args.format {
         TransformFormat::Jsonl => {
-            let mut failed = None;
+            let mut failed_emit = None;
             let summary = transform::enumerate(&m, &opts, &lib, None, &mut |p| {
-                if failed.is_none()
+                if failed_emit.is_none()
                     && let Err(e) = emit(&mbsa::report::transform::jsonl(&p))
                 {
-                    failed = Some(e);
+                    failed_emit = Some(e);
                 }
             })
-            .map_err(|e| bad("transform", &e))?;
-            if let Some(e) = failed {
+            .map_err(failed)?;
+            if let Some(e) = failed_emit {
                 return Err(e);
             }
             emit(&mbsa::report::transform::jsonl(&summary))
         }
         TransformFormat::Json | TransformFormat::Table => {
-            let t = transform::transform(&m, &opts, &lib, progress)
-                .map_err(|e| bad("transform", &e))?;
+            let t = transform::transform(&m, &opts, &lib, progress).map_err(failed)?;
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
             }

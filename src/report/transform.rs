@@ -2,7 +2,7 @@
 //! one given placement beside the file's own; JSON lines for streaming.
 
 use crate::structure::Status;
-use crate::transform::{Comparison, Evaluation, Input, Placement, Summary, Transform};
+use crate::transform::{Comparison, Evaluation, Input, Placement, Summary, Transform, count_words};
 use std::fmt::Write;
 
 /// How many member placements a family row lists before `+n more`.
@@ -68,7 +68,12 @@ pub fn summary(s: &Summary) -> String {
         out,
         "{}: {}: {} input(s) to place; {} count-valid placement(s) examined, {} excluded by \
          the rank check, {} determined",
-        s.name, why, s.f, s.count_valid, s.excluded_by_rank, s.determined
+        s.name,
+        why,
+        s.f,
+        count_words(s.count_valid),
+        count_words(s.excluded_by_rank),
+        count_words(s.determined)
     );
     if let Some(g) = &s.geometry {
         let _ = writeln!(out, "{}", g.line());
