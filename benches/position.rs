@@ -1,12 +1,13 @@
 //! Benchmarks of the position level (divan): `cargo bench --bench position`.
 //!
 //! - `groups` / `global`: solving, group by group (the structural analysis's schedule, made
-//!   outside the timed closure) and all at once (the dense global Newton, the reference, cubic
-//!   in the body count: 10^2 bodies only), a planar ladder of parallelograms (N-four-bar at a
-//!   regular pose, 2 + 2w bodies, its crank turned 10 degrees: w dyads on w levels) and the
-//!   planar and spatial Assur families at a seeded random geometry (100 bodies, crank turned
-//!   1e-4 degree: random dyads meet folds, and larger random linkages have a group out of
-//!   reach even then).
+//!   outside the timed closure) and all at once (the sparse global Gauss–Newton, the
+//!   reference), a planar ladder of parallelograms (N-four-bar at a regular pose, 2 + 2w
+//!   bodies, its crank turned 10 degrees: w dyads on w levels) and the planar and spatial
+//!   Assur families at a seeded random geometry: crank turned 1e-4 degree (100 bodies: random
+//!   dyads meet folds, and larger random linkages have a group out of reach even then), and
+//!   `*_return`: every body started 1e-5 (model units) off the file's configuration, crank at
+//!   0, solved back (any size). Larger sizes: `examples/position_scale.rs`.
 //! - `sweep_step`: one step of a sweep of the bundled slider-crank with geometry and of a
 //!   10^3-body Assur linkage.
 //!
@@ -67,6 +68,21 @@ fn spatial(bodies: u64) -> Case {
     let g = (bodies - 2) / 2;
     let m = generate::assur_spatial(1, g, 1, Variant::A).expect("valid parameters");
     case(with_random_geometry(&m, 3), 1e-4)
+}
+
+/// Every moving body started at a seeded random twist of size 1e-5 from the file's
+/// configuration, the crank at 0: the solve brings them back.
+fn perturbed(mut c: Case) -> Case {
+    let mut rng = mbsa::rng::SplitMix64::new(11);
+    let b = c.model.b();
+    c.targets = targets(&c.m, &c.model, &[]).expect("no values");
+    for (i, p) in c.start.poses.iter_mut().enumerate() {
+        if i != c.m.frame {
+            let tw: Vec<f64> = (0..b).map(|_| 1e-5 * rng.next_signed()).collect();
+            *p = p.moved_by(c.m.space, &tw);
+        }
+    }
+    c
 }
 
 /// Parallelogram ladder: rockers of length 1 pivoted at (2i, 0) on the frame, standing up,
@@ -134,6 +150,16 @@ mod groups {
     fn spatial_assur(bencher: Bencher, n: u64) {
         run(bencher, spatial(n));
     }
+
+    #[divan::bench(args = [100, 1000])]
+    fn planar_assur_return(bencher: Bencher, n: u64) {
+        run(bencher, perturbed(planar(n)));
+    }
+
+    #[divan::bench(args = [100, 1000])]
+    fn spatial_assur_return(bencher: Bencher, n: u64) {
+        run(bencher, perturbed(spatial(n)));
+    }
 }
 
 #[divan::bench_group(sample_count = 3)]
@@ -147,7 +173,7 @@ mod global {
         });
     }
 
-    #[divan::bench(args = [100])]
+    #[divan::bench(args = [100, 1000, 10000])]
     fn planar_ladder(bencher: Bencher, n: u64) {
         run(bencher, ladder(n));
     }
@@ -160,6 +186,16 @@ mod global {
     #[divan::bench(args = [100])]
     fn spatial_assur(bencher: Bencher, n: u64) {
         run(bencher, spatial(n));
+    }
+
+    #[divan::bench(args = [100, 1000])]
+    fn planar_assur_return(bencher: Bencher, n: u64) {
+        run(bencher, perturbed(planar(n)));
+    }
+
+    #[divan::bench(args = [100, 1000])]
+    fn spatial_assur_return(bencher: Bencher, n: u64) {
+        run(bencher, perturbed(spatial(n)));
     }
 }
 

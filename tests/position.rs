@@ -700,3 +700,270 @@ fn bricard_moves_with_finite_mobility_one() {
         c = g.config;
     }
 }
+
+/// The bundled N-four-bar (N = 40, bars of length 1, verticals V_k pivoted at (k, 0) with
+/// their tops at (k + 0.6, 0.8)) moved to its singular pose: every vertical turned down onto
+/// the x axis (−53.13°), every horizontal translated by (0.4, −0.8), so all bars lie on one
+/// line. Body ids: V0 = 2, H_k = 2k + 1, V_k = 2k + 2.
+fn n_four_bar_40_singular(name: &str) -> (Mechanism, Configuration) {
+    let m = bundled(name);
+    let scale = mbsa::position::residual::model_size(&m);
+    let theta = -(0.8f64).atan2(0.6);
+    let mut cfg = Configuration::reference(m.bodies.len());
+    for (i, pose) in cfg.poses.iter_mut().enumerate() {
+        let id: i64 = m.body_id(i).to_string().parse().unwrap();
+        if id == 1 {
+            continue;
+        }
+        if id % 2 == 0 {
+            let k = (id - 2) / 2;
+            let c = Vector3::new(k as f64, 0.0, 0.0) / scale;
+            let r = nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), theta).into_inner();
+            *pose = Pose {
+                rotation: r,
+                translation: c - r * c,
+            };
+        } else {
+            pose.translation = Vector3::new(0.4, -0.8, 0.0) / scale;
+        }
+    }
+    let closure = check_closure(&m, &cfg, None).unwrap();
+    assert!(closure.max_residual < 1e-12, "{name}: {closure:?}");
+    (m, cfg)
+}
+
+fn n_four_bar_40_case(name: &str) {
+    let (m, cfg) = n_four_bar_40_singular(name);
+    let t = std::time::Instant::now();
+    let f = finite_mobility(&m, &cfg, &FiniteOptions::default()).unwrap();
+    let secs = t.elapsed().as_secs_f64();
+    assert_eq!(f.first_order, 41, "{name}: {f:?}");
+    assert_eq!(f.finite, 1, "{name}: {f:?}");
+    assert_eq!(f.verdict, Verdict::Singular, "{name}");
+    assert_eq!(f.instantaneous_only, 40, "{name}");
+    assert!(!f.singular_joints.is_empty(), "{name}");
+    assert!(
+        f.notes
+            .iter()
+            .any(|n| n.starts_with("singular configuration: first-order mobility 41")),
+        "{name}: {:?}",
+        f.notes
+    );
+    // At the bundled (parallelogram) pose: regular, 1 and 1.
+    let r = finite_mobility(
+        &m,
+        &Configuration::reference(m.bodies.len()),
+        &FiniteOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((r.first_order, r.finite), (1, 1), "{name}");
+    eprintln!("{name}: singular pose analysed in {secs:.2} s");
+}
+
+#[test]
+fn n_four_bar_40_singular_pose_planar() {
+    n_four_bar_40_case("n-four-bar-40");
+}
+
+#[test]
+#[ignore = "open: the 3D twin's tangent slices still meet two (finite 2 instead of 1), and it takes minutes; docs/algorithms.md"]
+fn n_four_bar_40_singular_pose_in_space() {
+    n_four_bar_40_case("n-four-bar-40-3d");
+}
+
+/// Every bundled mechanism whose file has complete joint geometry, its driven joints (or, if
+/// none, its first joint) set to small values: group by group and global give the same
+/// poses. Returns the names solved.
+#[test]
+fn bundled_with_geometry_groups_equal_global() {
+    let mut solved = Vec::new();
+    let mut failed: Vec<String> = Vec::new();
+    for name in mbsa::examples::names() {
+        let mut m = bundled(name);
+        if PositionModel::new(&m).is_err() {
+            continue;
+        }
+        if m.joints.iter().all(|j| j.driven == 0) {
+            // Drive what the structural analysis would need: skip undriven files.
+            continue;
+        }
+        // Files already at a singular pose are for the finite-mobility tests.
+        if name.starts_with("n-four-bar") {
+            continue;
+        }
+        m.name = name.to_string();
+        let model = PositionModel::new(&m).unwrap();
+        let sets = small_inputs(&m, &model);
+        let tg = targets(&m, &model, &sets).unwrap();
+        let sched = schedule(&m, &analysis(&m), &model);
+        let start = Configuration::reference(m.bodies.len());
+        let o = NewtonOptions::default();
+        let g = solve_groups(&m, &model, &sched, &tg, &start, &o);
+        let w = solve_global(&m, &model, &tg, &start, &o);
+        match (g, w) {
+            (Ok(g), Ok(w)) => {
+                for b in 0..m.bodies.len() {
+                    let (pg, pw) = (&g.config.poses[b], &w.config.poses[b]);
+                    assert!(
+                        (pg.rotation - pw.rotation).norm() < 1e-8
+                            && (pg.translation - pw.translation).norm() < 1e-8,
+                        "{name}: body {} differs",
+                        m.body_id(b)
+                    );
+                }
+                solved.push(name);
+            }
+            (g, w) => failed.push(format!(
+                "{name}: groups {:?} / global {:?}",
+                g.err().map(|e| e.to_string()),
+                w.err().map(|e| e.to_string())
+            )),
+        }
+    }
+    eprintln!("solved both ways: {solved:?}");
+    // Open (found by this test, not yet explained): with every driven DOF at 0.05°, group
+    // SG-III (bodies {2, 6}) of `multiple-joint-order` cannot close its joint P, while the
+    // global solve finds a configuration.
+    let known = ["multiple-joint-order:"];
+    for f in &failed {
+        assert!(known.iter().any(|k| f.starts_with(k)), "{f}");
+    }
+    for want in [
+        "slider-crank-geometry",
+        "four-bar-3d-driven",
+        "bricard-driven",
+    ] {
+        assert!(solved.contains(&want), "{want} not solved: {solved:?}");
+    }
+}
+
+/// Group by group against global on generated linkages with a seeded random geometry, every
+/// body started 1e-5 off the file's configuration and the crank at 0: both bring every body
+/// back (the reference is the solution) and agree.
+fn generated_return(m: &Mechanism) {
+    let m = with_random_geometry(m, 3);
+    let model = PositionModel::new(&m).unwrap();
+    let tg = targets(&m, &model, &[]).unwrap();
+    let sched = schedule(&m, &analysis(&m), &model);
+    let mut start = Configuration::reference(m.bodies.len());
+    let mut rng = SplitMix64::new(11);
+    let b = model.b();
+    for (i, p) in start.poses.iter_mut().enumerate() {
+        if i != m.frame {
+            let tw: Vec<f64> = (0..b).map(|_| 1e-5 * rng.next_signed()).collect();
+            *p = p.moved_by(m.space, &tw);
+        }
+    }
+    // Random dyads can sit near a fold (conditioning 1e-8): a residual of 1e-11 leaves
+    // pose errors of 1e-3 there, so both solve to 1e-13.
+    let o = NewtonOptions {
+        tolerance: 1e-13,
+        ..NewtonOptions::default()
+    };
+    let g = solve_groups(&m, &model, &sched, &tg, &start, &o).unwrap();
+    let w = solve_global(&m, &model, &tg, &start, &o).unwrap();
+    for i in 0..m.bodies.len() {
+        let (pg, pw) = (&g.config.poses[i], &w.config.poses[i]);
+        let off = (pg.rotation - nalgebra::Matrix3::identity())
+            .norm()
+            .max(pg.translation.norm());
+        assert!(
+            off < 1e-8,
+            "{}: body {} not back: {off}",
+            m.name,
+            m.body_id(i)
+        );
+        assert!(
+            (pg.rotation - pw.rotation).norm() < 1e-8
+                && (pg.translation - pw.translation).norm() < 1e-8,
+            "{}: body {} differs",
+            m.name,
+            m.body_id(i)
+        );
+    }
+}
+
+#[test]
+fn generated_return_groups_equal_global() {
+    use mbsa::generate::{self, Variant};
+    generated_return(&generate::assur(1, 49, 1, Variant::A).unwrap());
+    generated_return(&generate::assur(2, 12, 2, Variant::A).unwrap());
+    generated_return(&generate::assur_spatial(1, 49, 1, Variant::A).unwrap());
+}
+
+#[test]
+#[cfg_attr(debug_assertions, ignore = "slow in debug: run with --release")]
+fn generated_1000_bodies_groups_equal_global() {
+    use mbsa::generate::{self, Variant};
+    generated_return(&generate::assur(1, 499, 1, Variant::A).unwrap());
+    generated_return(&generate::assur_spatial(1, 499, 1, Variant::A).unwrap());
+}
+
+#[test]
+fn budget_stops_a_global_solve() {
+    use mbsa::generate::{self, Variant};
+    let m = with_random_geometry(&generate::assur(1, 49, 1, Variant::A).unwrap(), 3);
+    let model = PositionModel::new(&m).unwrap();
+    let tg = targets(&m, &model, &[]).unwrap();
+    let mut start = Configuration::reference(m.bodies.len());
+    start.poses[5] = start.poses[5].moved_by(m.space, &[1e-4, 0.0, 0.0]);
+    let tiny = mbsa::budget::Budget {
+        max_work: 10_000,
+        ..mbsa::budget::Budget::DEFAULT
+    };
+    let o = NewtonOptions {
+        budget: tiny,
+        ..NewtonOptions::default()
+    };
+    for e in [
+        solve_global(&m, &model, &tg, &start, &o).unwrap_err(),
+        solve_groups(
+            &m,
+            &model,
+            &schedule(&m, &analysis(&m), &model),
+            &tg,
+            &start,
+            &o,
+        )
+        .unwrap_err(),
+    ] {
+        assert!(matches!(e, SolveError::Budget(_)), "{e}");
+        assert!(e.to_string().contains("work limit"), "{e}");
+    }
+    let small_memory = NewtonOptions {
+        budget: mbsa::budget::Budget {
+            max_memory_bytes: 1000,
+            ..mbsa::budget::Budget::DEFAULT
+        },
+        ..NewtonOptions::default()
+    };
+    let e = solve_global(&m, &model, &tg, &start, &small_memory).unwrap_err();
+    assert!(e.to_string().contains("memory limit"), "{e}");
+}
+
+#[test]
+fn cli_solve_over_budget_exits_2_naming_the_limit() {
+    for global in [false, true] {
+        let mut cmd = assert_cmd::Command::cargo_bin("mbsa").unwrap();
+        cmd.args([
+            "solve",
+            "mechanisms/slider-crank-geometry.toml",
+            "--set",
+            "O=10",
+            "--max-work",
+            "100",
+        ]);
+        if global {
+            cmd.arg("--global");
+        }
+        let out = cmd.output().unwrap();
+        assert_eq!(out.status.code(), Some(2), "global {global}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains("position solve")
+                && err.contains("work limit")
+                && err.contains("--max-work"),
+            "{err}"
+        );
+    }
+}

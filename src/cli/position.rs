@@ -79,6 +79,7 @@ fn failed(msg: &str) -> Failure {
 fn solve_failure(file: &str, e: &SolveError) -> Failure {
     match e {
         SolveError::NotConverged { .. } => failed(&e.to_string()),
+        SolveError::Budget(b) => super::budget_failure(b),
         _ => input_err(file, e),
     }
 }
@@ -230,7 +231,10 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         args.tolerance,
         args.assemble,
     )?;
-    let opts = NewtonOptions::default();
+    let opts = NewtonOptions {
+        budget: super::budget(),
+        ..NewtonOptions::default()
+    };
     // The closure was checked (or the configuration assembled) above: the groups come from
     // the first bodies' geometry.
     let mut first = m.clone();

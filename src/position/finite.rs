@@ -110,6 +110,111 @@ fn null_basis(j: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
     DMatrix::from_fn(n, cols.len(), |r, c| vt[(cols[c], r)])
 }
 
+/// Solve the constraints together with `slices.len()` linear slices through `config`:
+/// `c_i · d(x) = o_i`, where `d(x)` stacks each unknown body's rotation vector and
+/// translation change from `config` (planar: its `B` embedded components). Dense Gauss–Newton
+/// with minimum-norm steps; the solution, or `None` when the residual stays above `1e-9`.
+fn solve_sliced(
+    sys: &System,
+    model: &PositionModel,
+    targets: &Targets,
+    config: &Configuration,
+    slices: &[(DVector<f64>, f64)],
+) -> Option<Configuration> {
+    let b = model.b();
+    let cols = super::pose::embed_columns(model.space);
+    let n = sys.bodies.len() * b;
+    let mut x = config.clone();
+    // d(x) and its derivative per body: rotation vector (≈ ω) and translation change
+    // (dp = v + ω × p).
+    let coords = |x: &Configuration| -> (DVector<f64>, DMatrix<f64>) {
+        let mut d = DVector::zeros(n);
+        let mut jd = DMatrix::zeros(n, n);
+        for (i, &body) in sys.bodies.iter().enumerate() {
+            let p0 = &config.poses[body];
+            let p = &x.poses[body];
+            let rel =
+                nalgebra::Rotation3::from_matrix_unchecked(p.rotation * p0.rotation.transpose());
+            let rv = rel.scaled_axis();
+            let dt = p.translation - p0.translation;
+            let full = [rv.x, rv.y, rv.z, dt.x, dt.y, dt.z];
+            // d(translation)/d(ω) = −[p]×, d/dv = I; d(rv)/dω ≈ I.
+            let t = p.translation;
+            let dfull = |row: usize, col: usize| -> f64 {
+                match (row, col) {
+                    (r, c) if r < 3 && c < 3 => f64::from(u8::from(r == c)),
+                    (r, c) if r >= 3 && c >= 3 => f64::from(u8::from(r == c)),
+                    (r, c) if r >= 3 => {
+                        // −[t]× (r−3, c)
+                        let sk = [[0.0, t.z, -t.y], [-t.z, 0.0, t.x], [t.y, -t.x, 0.0]];
+                        sk[r - 3][c]
+                    }
+                    _ => 0.0,
+                }
+            };
+            for (a, &ra) in cols.iter().enumerate() {
+                d[i * b + a] = full[ra];
+                for (c, &cc) in cols.iter().enumerate() {
+                    jd[(i * b + a, i * b + c)] = dfull(ra, cc);
+                }
+            }
+        }
+        (d, jd)
+    };
+    let eval = |x: &Configuration| -> (DVector<f64>, DMatrix<f64>) {
+        let (r, j, _) = sys.evaluate(model, targets, x);
+        let (d, jd) = coords(x);
+        let rows = r.len() + slices.len();
+        let mut rr = DVector::zeros(rows);
+        let mut jj = DMatrix::zeros(rows, n);
+        rr.rows_mut(0, r.len()).copy_from(&r);
+        jj.view_mut((0, 0), (j.nrows(), n)).copy_from(&j);
+        for (k, (c, o)) in slices.iter().enumerate() {
+            rr[r.len() + k] = c.dot(&d) - o;
+            let row = c.transpose() * &jd;
+            jj.row_mut(r.len() + k).copy_from(&row);
+        }
+        (rr, jj)
+    };
+    let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let (mut r, mut j) = eval(&x);
+    let mut slow = 0;
+    for _ in 0..40 {
+        if !r.iter().chain(j.iter()).all(|v| v.is_finite()) {
+            return None;
+        }
+        if inf(&r) <= 1e-12 {
+            break;
+        }
+        let svd = nalgebra::SVD::try_new(j.clone(), true, true, f64::EPSILON, 10_000)?;
+        let top = svd.singular_values.iter().copied().fold(0.0, f64::max);
+        let step = svd.solve(&(-&r), 1e-10 * top.max(1e-300)).ok()?;
+        let norm0 = r.norm();
+        let mut t = 1.0;
+        let mut accepted = false;
+        for _ in 0..30 {
+            let mut y = x.clone();
+            for (i, &body) in sys.bodies.iter().enumerate() {
+                let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
+                y.poses[body] = x.poses[body].moved_by(model.space, &tw);
+            }
+            let (r2, j2) = eval(&y);
+            if r2.norm() < norm0 {
+                // A set of lower dimension than the slices' count: Newton creeps.
+                slow = if r2.norm() > 0.9 * norm0 { slow + 1 } else { 0 };
+                (x, r, j) = (y, r2, j2);
+                accepted = true;
+                break;
+            }
+            t *= 0.5;
+        }
+        if !accepted || slow >= 5 {
+            break;
+        }
+    }
+    (inf(&r) <= 1e-9).then_some(x)
+}
+
 /// Finite against first-order mobility of `m` at `config` (driven DOF ignored).
 pub fn finite_mobility(
     m: &Mechanism,
@@ -145,6 +250,7 @@ pub fn finite_mobility(
     let newton = NewtonOptions {
         tolerance: 1e-13,
         max_iterations: 40,
+        ..NewtonOptions::default()
     };
     if first_order > 0 {
         for _ in 0..opts.samples {
@@ -168,7 +274,43 @@ pub fn finite_mobility(
             }
         }
     }
-    let finite = best.as_ref().map(|(k, _)| *k).unwrap_or(first_order);
+    // The local dimension by slicing: the largest k such that the constraints with k random
+    // linear slices at offsets of about `step` still have a solution near `config` (a set of
+    // dimension d meets a generic slice of codimension k ≤ d, and misses one of codimension
+    // d + 1). Unlike the nullity at a nearby sample, this is not fooled by components along
+    // which the Jacobian stays rank-deficient (the N-four-bar's branches with flat windows).
+    // Two tries per k; k runs up to the smallest sample nullity (an upper bound).
+    let cap = best.as_ref().map(|(k, _)| *k).unwrap_or(first_order);
+    let mut finite = 0;
+    'dims: for k in 1..=cap {
+        for _ in 0..2 {
+            let slices: Vec<(DVector<f64>, f64)> = (0..k)
+                .map(|_| {
+                    // A random direction of the first-order motions: a tangent slice.
+                    let w = DVector::from_fn(first_order, |_, _| rng.next_signed());
+                    let c = &n0 * w;
+                    let c = &c / c.norm().max(1e-300);
+                    // Offsets ten samples' steps: a set of lower dimension then misses the
+                    // slices by a residual of order (10·step)² (10⁻⁴), far above what Newton
+                    // reaches on a real solution.
+                    (c, 10.0 * opts.step * rng.next_signed())
+                })
+                .collect();
+            if let Some(x) = solve_sliced(&sys, &model, &targets, config, &slices) {
+                let (_, j1, _) = sys.evaluate(&model, &targets, &x);
+                let n1 = null_basis(&j1, opts.rank_tolerance);
+                if best.as_ref().is_none_or(|(q, _)| n1.ncols() < *q) {
+                    best = Some((n1.ncols(), n1));
+                }
+                finite = k;
+                continue 'dims;
+            }
+        }
+        break;
+    }
+    if first_order == 0 {
+        finite = 0;
+    }
     let near = best.map(|(_, n)| n).unwrap_or_else(|| n0.clone());
     // Relative motion of pair p over the columns of a basis.
     let motion = |basis: &DMatrix<f64>, p: usize| -> f64 {

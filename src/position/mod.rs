@@ -10,6 +10,8 @@
 //! - [`closure`]: [`check_closure`], [`assemble`], [`moved_mechanism`].
 //! - [`solve`]: the group-by-group schedule, [`solve_groups`] and the global reference
 //!   [`solve_global`].
+//! - [`sparse`]: the sparse Gauss–Newton the global reference uses (block Cholesky of the
+//!   normal equations in a minimum-degree order).
 //! - [`finite`]: the finite-mobility test, [`finite_mobility()`].
 //! - [`inputs`]: input values (`JOINT=30`, `JOINT=0.5rad`, sweeps).
 
@@ -21,6 +23,7 @@ pub mod pose;
 pub mod realize;
 pub mod residual;
 pub mod solve;
+pub mod sparse;
 mod track;
 
 pub use closure::{

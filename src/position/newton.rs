@@ -7,6 +7,7 @@
 
 use super::pose::{Configuration, Pose};
 use super::residual::PositionModel;
+use crate::budget::{BudgetExceeded, Meter};
 use nalgebra::{DMatrix, DVector};
 use std::collections::HashMap;
 
@@ -26,6 +27,10 @@ pub struct NewtonOptions {
     pub tolerance: f64,
     /// Iteration limit.
     pub max_iterations: usize,
+    /// Work and memory limits: every iteration charges its evaluations and factorizations
+    /// to a work meter ([`crate::budget::Meter`]); the sparse global solve checks its factor's
+    /// memory before allocating it.
+    pub budget: crate::budget::Budget,
 }
 
 impl Default for NewtonOptions {
@@ -33,6 +38,7 @@ impl Default for NewtonOptions {
         NewtonOptions {
             tolerance: 1e-11,
             max_iterations: 60,
+            budget: crate::budget::Budget::DEFAULT,
         }
     }
 }
@@ -197,6 +203,55 @@ impl System {
         config: &Configuration,
         opts: &NewtonOptions,
     ) -> (NewtonOutcome, Vec<Pose>) {
+        let mut meter = opts.budget.meter("the position solve");
+        match self.solve_metered(model, targets, config, opts, &mut meter) {
+            Ok(x) => x,
+            // Out of budget: unchanged poses, not converged.
+            Err(_) => {
+                let (r, j, per_pair) = self.evaluate(model, targets, config);
+                let residual = r.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+                let out = NewtonOutcome {
+                    converged: false,
+                    iterations: 0,
+                    residual,
+                    singular_values: Vec::new(),
+                    unknowns: j.ncols(),
+                    equations: j.nrows(),
+                    pair_residuals: per_pair,
+                };
+                (out, self.bodies.iter().map(|&x| config.poses[x]).collect())
+            }
+        }
+    }
+
+    /// Memory (bytes) the dense solve of this system needs: the Jacobian and the SVD's
+    /// factors.
+    pub fn dense_bytes(&self, model: &PositionModel) -> u64 {
+        let b = model.b() as u64;
+        let cols = self.bodies.len() as u64 * b;
+        let rows = self.pairs.len() as u64 * b;
+        let big = rows.max(cols);
+        big.saturating_mul(big).saturating_mul(8 * 3)
+    }
+
+    /// [`System::solve_local`], charging `meter` (each evaluation and each SVD) and checking
+    /// the dense memory against `opts.budget` first.
+    pub fn solve_metered(
+        &self,
+        model: &PositionModel,
+        targets: &Targets,
+        config: &Configuration,
+        opts: &NewtonOptions,
+        meter: &mut Meter,
+    ) -> Result<(NewtonOutcome, Vec<Pose>), BudgetExceeded> {
+        opts.budget.check_memory(self.dense_bytes(model), || {
+            format!(
+                "the dense solve of {} bodies and {} joint pairs",
+                self.bodies.len(),
+                self.pairs.len()
+            )
+        })?;
+        let eval_work = self.pairs.len() as u64 * 200;
         let b = model.b();
         let col = self.columns();
         let inf = |r: &DVector<f64>| {
@@ -207,6 +262,7 @@ impl System {
             }
         };
         let mut local: Vec<Pose> = self.bodies.iter().map(|&x| config.poses[x]).collect();
+        meter.charge(eval_work)?;
         let (mut r, mut j, mut per_pair) =
             self.evaluate_local(model, targets, config, &local, &col);
         let mut iterations = 0;
@@ -218,6 +274,13 @@ impl System {
                 break;
             }
             // Bounded iterations: never loop on a pathological matrix.
+            let (rows, cols) = (j.nrows() as u64, j.ncols() as u64);
+            meter.charge(
+                rows.max(cols)
+                    .saturating_mul(cols)
+                    .saturating_mul(cols.min(rows))
+                    / 4,
+            )?;
             let Some(svd) = nalgebra::SVD::try_new(j.clone(), true, true, f64::EPSILON, 10_000)
             else {
                 svd_values = Vec::new();
@@ -245,6 +308,7 @@ impl System {
                     let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
                     *p = base[i].moved_by(model.space, &tw);
                 }
+                meter.charge(eval_work)?;
                 let (r2, j2, p2) = self.evaluate_local(model, targets, config, &local, &col);
                 if r2.norm() < norm0 || inf(&r2) <= opts.tolerance {
                     (r, j, per_pair) = (r2, j2, p2);
@@ -268,6 +332,6 @@ impl System {
             equations: j.nrows(),
             pair_residuals: per_pair,
         };
-        (out, local)
+        Ok((out, local))
     }
 }

@@ -4,6 +4,7 @@
 use super::newton::{NewtonOptions, NewtonOutcome, System, Targets};
 use super::pose::{Configuration, PoseReport};
 use super::residual::{ModelError, PositionModel};
+use crate::budget::{BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use crate::structure::Analysis;
 use rayon::prelude::*;
@@ -112,6 +113,9 @@ pub enum SolveError {
     /// No position model.
     #[error(transparent)]
     Model(#[from] ModelError),
+    /// The work or memory budget ran out (`--max-work`, `--max-memory`, `--budget`).
+    #[error(transparent)]
+    Budget(#[from] BudgetExceeded),
     /// A step's equations have no solution near the start (a value out of reach, a
     /// configuration that cannot be assembled).
     #[error(
@@ -260,7 +264,31 @@ pub fn max_residual(model: &PositionModel, targets: &Targets, config: &Configura
     r.iter().fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
-/// Solve group by group from `start`. Steps of one level run in parallel.
+/// Steps with more unknown columns than this are solved by the sparse solver
+/// ([`super::sparse`]); smaller ones by the dense SVD of [`System::solve_local`].
+pub const SPARSE_COLUMNS: usize = 600;
+
+/// Solve one system, dense or sparse by its size, charging `meter`.
+fn solve_system(
+    sys: &System,
+    model: &PositionModel,
+    targets: &Targets,
+    config: &Configuration,
+    opts: &NewtonOptions,
+    meter: &mut Meter,
+) -> Result<(NewtonOutcome, Vec<super::pose::Pose>), BudgetExceeded> {
+    if sys.bodies.len() * model.b() > SPARSE_COLUMNS {
+        let sp = super::sparse::Sparse::new(sys, model, targets, opts, meter)?;
+        sp.solve(config, opts, meter)
+    } else {
+        sys.solve_metered(model, targets, config, opts, meter)
+    }
+}
+
+/// Solve group by group from `start`. Steps of one level run in parallel. Every step charges
+/// its Newton iterations (evaluations, factorizations) to one work meter of `opts.budget`
+/// (a level's steps each get the allowance left when the level starts; the level's total is
+/// charged after it): a huge solve stops with the budget error instead of running away.
 pub fn solve_groups(
     m: &Mechanism,
     model: &PositionModel,
@@ -271,6 +299,7 @@ pub fn solve_groups(
 ) -> Result<Solution, SolveError> {
     let mut config = start.clone();
     let mut reports = Vec::new();
+    let mut meter = opts.budget.meter("the group-by-group position solve");
     let mut s = 0;
     while s < sched.steps.len() {
         let level = sched.steps[s].level;
@@ -278,20 +307,27 @@ pub fn solve_groups(
         while e < sched.steps.len() && sched.steps[e].level == level {
             e += 1;
         }
+        let left = crate::budget::Budget {
+            max_work: opts.budget.max_work.saturating_sub(meter.used()),
+            ..opts.budget
+        };
         let run = |step: &Step| {
             let sys = System {
                 pairs: step.pairs.clone(),
                 bodies: step.bodies.clone(),
             };
-            let (out, poses) = sys.solve_local(model, targets, &config, opts);
-            (sys, out, poses)
+            let mut mine = left.meter("the group-by-group position solve");
+            let r = solve_system(&sys, model, targets, &config, opts, &mut mine);
+            (sys, r, mine.used())
         };
         let results: Vec<_> = if e - s > 1 && model.bodies > 64 {
             sched.steps[s..e].par_iter().map(run).collect()
         } else {
             sched.steps[s..e].iter().map(run).collect()
         };
-        for (step, (sys, out, poses)) in sched.steps[s..e].iter().zip(results) {
+        for (step, (sys, r, used)) in sched.steps[s..e].iter().zip(results) {
+            let (out, poses) = r?;
+            meter.charge(used)?;
             if !out.converged {
                 return Err(outcome_error(m, model, &step.name, &sys, &out, opts));
             }
@@ -339,7 +375,9 @@ fn finish(
     })
 }
 
-/// Solve every equation at once (the reference).
+/// Solve every equation at once (the reference): the sparse Gauss–Newton of
+/// [`super::sparse`] on every body but the frame, charging a work meter of `opts.budget` and
+/// checking the factor's memory against it before allocating.
 pub fn solve_global(
     m: &Mechanism,
     model: &PositionModel,
@@ -357,10 +395,15 @@ pub fn solve_global(
         pairs: step.pairs.clone(),
         bodies: step.bodies.clone(),
     };
-    let mut config = start.clone();
-    let out = sys.solve(model, targets, &mut config, opts);
+    let mut meter = opts.budget.meter("the global position solve");
+    let sp = super::sparse::Sparse::new(&sys, model, targets, opts, &mut meter)?;
+    let (out, poses) = sp.solve(start, opts, &mut meter)?;
     if !out.converged {
         return Err(outcome_error(m, model, "global", &sys, &out, opts));
+    }
+    let mut config = start.clone();
+    for (&b, p) in sys.bodies.iter().zip(poses) {
+        config.poses[b] = p;
     }
     let rep = report(m, model, &step, &out);
     finish(m, model, targets, config, vec![rep], opts)
