@@ -325,6 +325,7 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
     };
     for j in &m.joints {
         let hub = j.bodies[0];
+        let label = quote(&format!("{} {}", short_id(&j.id), j.kind.code()));
         for &other in &j.bodies[1..] {
             let (x, y) = if order(hub) <= order(other) {
                 (hub, other)
@@ -332,10 +333,7 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
                 (other, hub)
             };
             let same = order(x).1 == order(y).1;
-            let mut attrs = vec![format!(
-                "label={}",
-                quote(&format!("{} {}", short_id(&j.id), j.kind.code()))
-            )];
+            let mut attrs = vec![format!("label={label}")];
             if same {
                 attrs.push("dir=none".into());
             }

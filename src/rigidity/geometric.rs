@@ -962,6 +962,30 @@ fn analyze_models(
             smax: _,
         } = bp;
         let lcols: usize = lsizes.iter().sum();
+        // Before any elimination: the part has at least `lcols − rows` motions, each a dense
+        // vector over its unknowns, orthonormalized (d² · lcols) and compared body by body.
+        let prows: usize = blocks.iter().map(|x| x.mat.nrows()).sum();
+        let dmin = lcols.saturating_sub(prows) as u64;
+        let nv = part.bodies.len() as u64;
+        budget.check_memory(
+            dmin.saturating_mul(lcols as u64 + nv * b as u64)
+                .saturating_mul(16),
+            || {
+                format!(
+                    "the geometric rigidity analysis (at least {dmin} motions over {lcols} \
+                     unknowns in one rigid block of {nv} bodies)"
+                )
+            },
+        )?;
+        budget.check_work(
+            dmin.saturating_mul(dmin).saturating_mul(lcols as u64),
+            || {
+                format!(
+                    "the geometric rigidity analysis (at least {dmin} motions over {lcols} \
+                     unknowns in one rigid block of {nv} bodies)"
+                )
+            },
+        )?;
         let mut abs_tol = base_abs;
         let mut elim = Elimination::run(&lsizes, blocks.clone(), abs_tol);
         meter.charge(elim_work(&elim))?;
