@@ -811,6 +811,7 @@ fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f
     (abs / smax.max(f64::MIN_POSITIVE), abs)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn analyze_models(
     m: &Mechanism,
     models: &[JointModel],
