@@ -193,6 +193,15 @@ impl Elimination {
         }
     }
 
+    /// Work units of the elimination done (entries of the fronts' triangular factors times
+    /// their group's size), for budget meters.
+    pub(crate) fn work(&self) -> u64 {
+        self.records
+            .iter()
+            .map(|r| (r.r.nrows().max(1) * r.r.ncols().max(1) * r.perm.len().max(1)) as u64)
+            .sum()
+    }
+
     /// A basis of the null space (dense vectors over all unknowns), one per free column.
     pub(crate) fn null_space(&self) -> Vec<DVector<f64>> {
         let total: usize = self.sizes.iter().sum();

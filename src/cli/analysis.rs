@@ -178,7 +178,7 @@ pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Fa
             precision: args.geometry.precision()?,
             check_finite: false,
         };
-        let r = geometric::analyze(&m, &opts).map_err(|e| input_error(file, e))?;
+        let r = geometric_within(file, &m, &opts)?;
         return emit(&mbsa::report::dot::rigid(&m, &r));
     }
     let lib = args.library()?;
@@ -242,6 +242,18 @@ pub fn input_error(file: &FileArg, e: mbsa::motion::MotionError) -> Failure {
     Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e))
 }
 
+/// The geometric analysis within this run's budget (a budget error exits with code 2).
+fn geometric_within(
+    file: &FileArg,
+    m: &mbsa::mechanism::Mechanism,
+    opts: &geometric::GeometricOptions,
+) -> Result<geometric::GeometricReport, Failure> {
+    geometric::analyze_within(m, opts, &super::budget()).map_err(|e| match e {
+        geometric::GeometricError::Motion(e) => input_error(file, e),
+        geometric::GeometricError::Budget(e) => super::budget_failure(&e),
+    })
+}
+
 /// Both rigidity reports, for `--format json` with `--method both` (and the finite
 /// mobility with `--finite`).
 #[derive(serde::Serialize)]
@@ -280,7 +292,7 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
             precision: args.geometry.precision()?,
             check_finite: false,
         };
-        Some(geometric::analyze(&m, &opts).map_err(|e| input_error(file, e))?)
+        Some(geometric_within(file, &m, &opts)?)
     } else {
         None
     };

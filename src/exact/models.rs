@@ -212,6 +212,41 @@ pub fn jacobian_rank(m: &Mechanism, seed: u64) -> (usize, usize, usize) {
     (rank, rows, ncols)
 }
 
+/// The exact rank of the rows of some pairs `(joint, hub, other)` (`rows[joint]` acting on the
+/// twist of `other` minus that of `hub`), with B columns for each body `group` numbers
+/// (`0..ngroups`) and none for the others (held fixed).
+pub fn pairs_rank(
+    b: usize,
+    ngroups: usize,
+    rows: &[DMatrix<Fp>],
+    pairs: impl Iterator<Item = (usize, usize, usize)>,
+    group: impl Fn(usize) -> Option<usize>,
+) -> usize {
+    let mut a = SparseMatrix::with_groups(vec![b; ngroups]);
+    for (joint, hub, other) in pairs {
+        let r = &rows[joint];
+        let (gh, go) = (group(hub), group(other));
+        if hub == other || (gh.is_none() && go.is_none()) {
+            continue;
+        }
+        for i in 0..r.nrows() {
+            let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+            for (g, sign) in [(gh, true), (go, false)] {
+                let Some(g) = g else { continue };
+                for k in 0..b {
+                    let v = r[(i, k)];
+                    entries.push(((g * b + k) as u32, if sign { -v } else { v }));
+                }
+            }
+            a.push_row(entries);
+        }
+    }
+    if a.nrows() == 0 {
+        return 0;
+    }
+    Factor::new(&a).rank()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

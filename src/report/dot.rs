@@ -76,6 +76,13 @@ pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
             quote(fill)
         )
     };
+    // The bodies of each part in body order, in one pass (not one pass per part).
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); r.rigid.len()];
+    for (i, id) in ids.iter().enumerate() {
+        if let Some(&ci) = cluster_of.get(id.as_str()) {
+            members[ci].push(i);
+        }
+    }
     for (ci, c) in r.rigid.iter().enumerate() {
         let _ = writeln!(out, "  subgraph cluster_rigid_{ci} {{");
         let label = if c.frame {
@@ -89,10 +96,8 @@ pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
             "style=dashed;"
         };
         let _ = writeln!(out, "    label={}; {style}", quote(&label));
-        for (i, id) in ids.iter().enumerate() {
-            if cluster_of.get(id.as_str()) == Some(&ci) {
-                let _ = writeln!(out, "    {}", node(i));
-            }
+        for &i in &members[ci] {
+            let _ = writeln!(out, "    {}", node(i));
         }
         out.push_str("  }\n");
     }
@@ -284,6 +289,13 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
         )
     };
     let _ = writeln!(out, "  {} [{}];", body_node(m.frame), body_attrs(m.frame));
+    // The bodies of each group in body order, in one pass (not one pass per group).
+    let mut members: Vec<Vec<usize>> = vec![Vec::new(); a.groups.len()];
+    for (i, id) in ids.iter().enumerate() {
+        if let Some(&gi) = group_of.get(id.as_str()) {
+            members[gi].push(i);
+        }
+    }
     for (gi, g) in a.groups.iter().enumerate() {
         let _ = writeln!(out, "  subgraph cluster_{gi} {{");
         let _ = writeln!(
@@ -291,10 +303,8 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
             "    label={}; style=dashed;",
             quote(&format!("{} (level {}) {}", g.name, g.level, g.kind))
         );
-        for (i, id) in ids.iter().enumerate() {
-            if group_of.get(id.as_str()) == Some(&gi) {
-                let _ = writeln!(out, "    {} [{}];", body_node(i), body_attrs(i));
-            }
+        for &i in &members[gi] {
+            let _ = writeln!(out, "    {} [{}];", body_node(i), body_attrs(i));
         }
         out.push_str("  }\n");
     }
@@ -315,6 +325,7 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
     };
     for j in &m.joints {
         let hub = j.bodies[0];
+        let label = quote(&format!("{} {}", short_id(&j.id), j.kind.code()));
         for &other in &j.bodies[1..] {
             let (x, y) = if order(hub) <= order(other) {
                 (hub, other)
@@ -322,10 +333,7 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
                 (other, hub)
             };
             let same = order(x).1 == order(y).1;
-            let mut attrs = vec![format!(
-                "label={}",
-                quote(&format!("{} {}", j.id, j.kind.code()))
-            )];
+            let mut attrs = vec![format!("label={label}")];
             if same {
                 attrs.push("dir=none".into());
             }
@@ -347,6 +355,19 @@ pub fn structure(m: &Mechanism, a: &Analysis) -> String {
     legend(&mut out, a, !over.is_empty(), !under.is_empty());
     out.push_str("}\n");
     out
+}
+
+/// A joint id for an edge label: ids of more than 60 characters (the default id of a joint
+/// shared by thousands of bodies lists them all) keep their first and last 28, so that a view
+/// drawing one edge per pair stays linear in size.
+fn short_id(id: &str) -> String {
+    let n = id.chars().count();
+    if n <= 60 {
+        return id.to_string();
+    }
+    let head: String = id.chars().take(28).collect();
+    let tail: String = id.chars().skip(n - 28).collect();
+    format!("{head}...{tail}")
 }
 
 /// A DOT string literal: `"..."` with `"` and `\` escaped and newlines as `\n`.

@@ -27,7 +27,9 @@
 //!
 //! Results hold for the configuration analysed (instantaneous, first order).
 
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::elimination::{Block, Elimination, sigma_max};
+use crate::exact::Fp;
 use crate::mechanism::{Mechanism, Space};
 use crate::motion::{self, GeometryUsed, JointModel, MotionError};
 use nalgebra::{DMatrix, DVector};
@@ -529,8 +531,227 @@ fn walk(cycle: &[usize], edges: &[(usize, usize)]) -> Vec<usize> {
     nodes
 }
 
-/// The geometric rigidity analysis of `m`.
+/// Mechanisms with at most this many unknowns are analysed as one part (the whole Jacobian);
+/// larger ones block by block ([`biconnected_parts`]).
+const ONE_PART_COLUMNS: usize = 1200;
+
+fn elim_work(e: &Elimination) -> u64 {
+    e.work()
+}
+
+/// A part of the Jacobian: the pairs of one biconnected block of the body graph, its bodies
+/// (ascending, root included) and its root (the body held fixed: the frame, or the block's
+/// cut body nearest the frame or the first body of a floating component).
+struct Part {
+    root: usize,
+    pairs: Vec<usize>,
+    bodies: Vec<usize>,
+}
+
+/// A part's row blocks over its own groups (its bodies with a non-empty complement, root and
+/// frame excluded, in body order).
+struct Built {
+    groups: Vec<usize>,
+    sizes: Vec<usize>,
+    offsets: Vec<usize>,
+    blocks: Vec<Block>,
+    smax: f64,
+}
+
+/// The block of pair `pi` on `body` (sign: + other, − hub), in `body`'s reduced coordinates.
+fn pair_block(
+    pairs: &[Pair],
+    models: &[JointModel],
+    comp: &[DMatrix<f64>],
+    pi: usize,
+    body: usize,
+) -> DMatrix<f64> {
+    let p = pairs[pi];
+    let x = &models[p.joint].rows * &comp[body];
+    if body == p.hub { -x } else { x }
+}
+
+fn build_part(
+    part: &Part,
+    pairs: &[Pair],
+    models: &[JointModel],
+    comp: &[DMatrix<f64>],
+    frame: usize,
+) -> Built {
+    let mut groups = Vec::new();
+    let mut sizes = Vec::new();
+    let mut offsets = Vec::new();
+    let mut local: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut acc = 0;
+    for &x in &part.bodies {
+        if x != frame && x != part.root && comp[x].ncols() > 0 {
+            local.insert(x, groups.len());
+            groups.push(x);
+            sizes.push(comp[x].ncols());
+            offsets.push(acc);
+            acc += comp[x].ncols();
+        }
+    }
+    let mut blocks = Vec::new();
+    for &pi in &part.pairs {
+        let p = pairs[pi];
+        let mut bodies: Vec<usize> = [p.hub, p.other]
+            .into_iter()
+            .filter(|x| local.contains_key(x))
+            .collect();
+        bodies.sort_by_key(|x| local.get(x).copied());
+        bodies.dedup();
+        let r = models[p.joint].rows.nrows();
+        if bodies.is_empty() || r == 0 {
+            continue;
+        }
+        let width: usize = bodies.iter().map(|&x| comp[x].ncols()).sum();
+        let mut mat = DMatrix::zeros(r, width);
+        let mut c = 0;
+        for &x in &bodies {
+            let blk = pair_block(pairs, models, comp, pi, x);
+            mat.view_mut((0, c), (r, blk.ncols())).copy_from(&blk);
+            c += blk.ncols();
+        }
+        blocks.push(Block {
+            groups: bodies
+                .iter()
+                .filter_map(|x| local.get(x).copied())
+                .collect(),
+            mat,
+        });
+    }
+    let smax = sigma_max(&sizes, &offsets, &blocks);
+    Built {
+        groups,
+        sizes,
+        offsets,
+        blocks,
+        smax,
+    }
+}
+
+/// The biconnected blocks of the body graph with the pairs as edges (Hopcroft–Tarjan,
+/// iterative, from the frame first, then from each floating component's first body), each
+/// with its root: the body through which the search entered it. A pair joining a body to
+/// itself is a part of its own.
+fn biconnected_parts(nb: usize, pairs: &[Pair], frame: usize) -> Vec<Part> {
+    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nb];
+    let mut out: Vec<Part> = Vec::new();
+    for (e, p) in pairs.iter().enumerate() {
+        if p.hub != p.other {
+            adj[p.hub].push((p.other, e));
+            adj[p.other].push((p.hub, e));
+        } else {
+            out.push(Part {
+                root: p.hub,
+                pairs: vec![e],
+                bodies: vec![p.hub],
+            });
+        }
+    }
+    let mut disc = vec![usize::MAX; nb];
+    let mut low = vec![0usize; nb];
+    let mut time = 0;
+    let mut estack: Vec<usize> = Vec::new();
+    for s in std::iter::once(frame).chain(0..nb) {
+        if disc[s] != usize::MAX {
+            continue;
+        }
+        disc[s] = time;
+        low[s] = time;
+        time += 1;
+        // (node, edge it was entered by, next neighbour index)
+        let mut stack: Vec<(usize, usize, usize)> = vec![(s, usize::MAX, 0)];
+        while let Some(&mut (v, via, ref mut next)) = stack.last_mut() {
+            if *next < adj[v].len() {
+                let (x, e) = adj[v][*next];
+                *next += 1;
+                if e == via {
+                    continue;
+                }
+                if disc[x] == usize::MAX {
+                    estack.push(e);
+                    disc[x] = time;
+                    low[x] = time;
+                    time += 1;
+                    stack.push((x, e, 0));
+                } else if disc[x] < disc[v] {
+                    estack.push(e);
+                    low[v] = low[v].min(disc[x]);
+                }
+            } else {
+                stack.pop();
+                if let Some(&(p, _, _)) = stack.last() {
+                    low[p] = low[p].min(low[v]);
+                    if low[v] >= disc[p] {
+                        let mut block = Vec::new();
+                        while let Some(e) = estack.pop() {
+                            block.push(e);
+                            if e == via {
+                                break;
+                            }
+                        }
+                        block.sort_unstable();
+                        let mut bodies: Vec<usize> = block
+                            .iter()
+                            .flat_map(|&e| [pairs[e].hub, pairs[e].other])
+                            .collect();
+                        bodies.sort_unstable();
+                        bodies.dedup();
+                        out.push(Part {
+                            root: p,
+                            pairs: block,
+                            bodies,
+                        });
+                    }
+                }
+            }
+        }
+    }
+    out.sort_by_key(|p| p.pairs.first().copied());
+    out
+}
+
+/// Why [`analyze_within`] gave no report.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GeometricError {
+    /// The joint geometry cannot be modelled.
+    #[error(transparent)]
+    Motion(#[from] MotionError),
+    /// The analysis would exceed the budget (a rigid block too large for its dense motions).
+    #[error(transparent)]
+    Budget(#[from] BudgetExceeded),
+}
+
+/// The geometric rigidity analysis of `m`, without a budget (see [`analyze_within`]).
 pub fn analyze(m: &Mechanism, opts: &GeometricOptions) -> Result<GeometricReport, MotionError> {
+    match analyze_within(m, opts, &Budget::UNLIMITED) {
+        Ok(r) => Ok(r),
+        Err(GeometricError::Motion(e)) => Err(e),
+        // An unlimited budget is never exceeded (charges saturate at u64::MAX, which it
+        // allows).
+        Err(GeometricError::Budget(e)) => unreachable!("unlimited budget exceeded: {e}"),
+    }
+}
+
+/// The geometric rigidity analysis of `m` within `budget`: the work is charged to a meter and
+/// the memory of the dense motions of each rigid block is estimated before it is allocated.
+pub fn analyze_within(
+    m: &Mechanism,
+    opts: &GeometricOptions,
+    budget: &Budget,
+) -> Result<GeometricReport, GeometricError> {
+    analyze_split(m, opts, budget, ONE_PART_COLUMNS)
+}
+
+/// [`analyze_within`], analysing mechanisms of at most `one_part` unknowns as one part.
+fn analyze_split(
+    m: &Mechanism,
+    opts: &GeometricOptions,
+    budget: &Budget,
+    one_part: usize,
+) -> Result<GeometricReport, GeometricError> {
     let real = motion::realization(m, opts.geometry, opts.precision)?;
     // Full (undriven) twists for loop spatiality, at the same geometry.
     let mut free = m.clone();
@@ -542,18 +763,28 @@ pub fn analyze(m: &Mechanism, opts: &GeometricOptions) -> Result<GeometricReport
         None => motion::configure(&free).unwrap_or_default(),
     };
     let full_twists: Vec<DMatrix<f64>> = full_models.into_iter().map(|jm| jm.twists).collect();
-    let exact_rank = real
-        .used
-        .seed
-        .map(|seed| crate::exact::models::jacobian_rank(m, seed).0);
-    Ok(analyze_models(
+    // At a random realization, every joint's exact rows (once per joint, shared by the pairs
+    // of a multiple joint).
+    let exact_rows: Option<Vec<DMatrix<Fp>>> = real.used.seed.map(|seed| {
+        m.joints
+            .iter()
+            .enumerate()
+            .map(|(ji, j)| crate::exact::models::joint_rows(m, ji, seed, j.driven))
+            .collect()
+    });
+    let mut meter = budget.meter("the geometric rigidity analysis");
+    analyze_models(
         m,
         &real.models,
         &full_twists,
         real.used,
-        exact_rank,
+        exact_rows.as_deref(),
         opts.check_finite,
-    ))
+        budget,
+        &mut meter,
+        one_part,
+    )
+    .map_err(GeometricError::Budget)
 }
 
 /// Factor of the precision-derived threshold: a number rounded to ±δ on coordinates of size up
@@ -580,14 +811,18 @@ fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f
     (abs / smax.max(f64::MIN_POSITIVE), abs)
 }
 
+#[allow(clippy::too_many_arguments)]
 fn analyze_models(
     m: &Mechanism,
     models: &[JointModel],
     full_twists: &[DMatrix<f64>],
     used: GeometryUsed,
-    exact_rank: Option<usize>,
+    exact: Option<&[DMatrix<Fp>]>,
     check_finite: bool,
-) -> GeometricReport {
+    budget: &Budget,
+    meter: &mut Meter,
+    one_part: usize,
+) -> Result<GeometricReport, BudgetExceeded> {
     let geometry = match used.seed {
         Some(seed) => format!("random (seed {seed})"),
         None => "file".to_string(),
@@ -674,81 +909,327 @@ fn analyze_models(
         acc += s;
     }
     let reduced_cols = acc;
-    // The block of pair p on body `body` (sign: + other, − hub).
-    let pair_block = |pi: usize, body: usize| -> DMatrix<f64> {
-        let p = pairs[pi];
-        let r = &models[p.joint].rows;
-        let x = r * &comp[body];
-        if body == p.hub { -x } else { x }
+
+    // The Jacobian splits over the biconnected blocks of the body graph (pairs as edges): in
+    // coordinates relative to each block's root (its cut body nearest the frame), a block's
+    // rows act on its own bodies only, so ranks, null spaces and self-stresses add up over the
+    // blocks. Small mechanisms are one part (the whole Jacobian, frame fixed).
+    let parts: Vec<Part> = if b * m.movable() <= one_part {
+        vec![Part {
+            root: frame,
+            pairs: (0..pairs.len()).collect(),
+            bodies: (0..nb).collect(),
+        }]
+    } else {
+        biconnected_parts(nb, &pairs, frame)
     };
-    let mut blocks = Vec::new();
-    for (pi, &p) in pairs.iter().enumerate() {
-        let mut bodies: Vec<usize> = [p.hub, p.other]
-            .into_iter()
-            .filter(|&x| group_of[x].is_some())
-            .collect();
-        bodies.sort_by_key(|&x| group_of[x]);
-        let r = models[p.joint].rows.nrows();
-        if bodies.is_empty() || r == 0 {
-            continue;
-        }
-        let width: usize = bodies.iter().map(|&x| comp[x].ncols()).sum();
-        let mut mat = DMatrix::zeros(r, width);
-        let mut c = 0;
-        for &x in &bodies {
-            let blk = pair_block(pi, x);
-            mat.view_mut((0, c), (r, blk.ncols())).copy_from(&blk);
-            c += blk.ncols();
-        }
-        blocks.push(Block {
-            groups: bodies
-                .iter()
-                .map(|&x| group_of[x].expect("filtered"))
-                .collect(),
-            mat,
-        });
+    let mut built: Vec<Built> = Vec::with_capacity(parts.len());
+    for part in &parts {
+        meter.charge(part.pairs.len() as u64 * (b * b * 4) as u64 + part.bodies.len() as u64)?;
+        built.push(build_part(part, &pairs, models, &comp, frame));
     }
-    let smax = sigma_max(&sizes, &offsets, &blocks);
-    let (mut tol, mut abs_tol) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
-    let mut elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
-    // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating point
-    // cannot tell a large, badly conditioned full-rank system from a deficient one at every
-    // size and seed. The pivoted elimination (which gives the motions and self-stresses) is
-    // then run at a threshold that keeps exactly that many pivots.
-    let mut exact_note = None;
-    if let Some(target) = exact_rank {
-        let mut tries = 0;
-        while elim.rank != target && tries < 16 {
-            tries += 1;
-            abs_tol = if elim.rank > target {
-                elim.kept_min * (1.0 + 1e-9)
-            } else {
-                elim.dropped_max * (1.0 - 1e-9)
-            };
-            elim = Elimination::run(&sizes, blocks.clone(), abs_tol);
+    let smax = built.iter().map(|x| x.smax).fold(0.0, f64::max);
+    let (base_tol, base_abs) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
+    let mut tol = base_tol;
+
+    let zero_tol = 1e-7;
+    let mut rank = 0;
+    let mut float_rank = 0;
+    let mut kept_min = f64::INFINITY;
+    let mut dropped_max: f64 = 0.0;
+    let mut w: BTreeMap<usize, f64> = BTreeMap::new();
+    let mut locked_by_joint: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut uf: Vec<usize> = (0..nb).collect();
+    fn find(uf: &mut [usize], x: usize) -> usize {
+        let mut r = x;
+        while uf[r] != r {
+            r = uf[r];
         }
-        tol = abs_tol / smax.max(f64::MIN_POSITIVE);
-        exact_note = Some(if elim.rank == target {
+        let mut y = x;
+        while uf[y] != r {
+            let n = uf[y];
+            uf[y] = r;
+            y = n;
+        }
+        r
+    }
+    let one_part = parts.len() == 1;
+    for (part, bp) in parts.iter().zip(built) {
+        let Built {
+            groups: lbody,
+            sizes: lsizes,
+            offsets: loffsets,
+            blocks,
+            smax: _,
+        } = bp;
+        let lcols: usize = lsizes.iter().sum();
+        // Before any elimination: the part has at least `lcols − rows` motions, each a dense
+        // vector over its unknowns, orthonormalized (d² · lcols) and compared body by body.
+        let prows: usize = blocks.iter().map(|x| x.mat.nrows()).sum();
+        let dmin = lcols.saturating_sub(prows) as u64;
+        let nv = part.bodies.len() as u64;
+        budget.check_memory(
+            dmin.saturating_mul(lcols as u64 + nv * b as u64)
+                .saturating_mul(16),
+            || {
+                format!(
+                    "the geometric rigidity analysis (at least {dmin} motions over {lcols} \
+                     unknowns in one rigid block of {nv} bodies)"
+                )
+            },
+        )?;
+        budget.check_work(
+            dmin.saturating_mul(dmin).saturating_mul(lcols as u64),
+            || {
+                format!(
+                    "the geometric rigidity analysis (at least {dmin} motions over {lcols} \
+                     unknowns in one rigid block of {nv} bodies)"
+                )
+            },
+        )?;
+        let mut abs_tol = base_abs;
+        let mut elim = Elimination::run(&lsizes, blocks.clone(), abs_tol);
+        meter.charge(elim_work(&elim))?;
+        // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating
+        // point cannot tell a large, badly conditioned full-rank system from a deficient one
+        // at every size and seed. The pivoted elimination (which gives the motions and
+        // self-stresses) is then run at a threshold that keeps exactly that many pivots.
+        let target = match exact {
+            Some(rows) => {
+                let fixed = |x: usize| x == frame || x == part.root;
+                let mut ng = 0;
+                let mut local = BTreeMap::new();
+                for &x in &part.bodies {
+                    if !fixed(x) {
+                        local.insert(x, ng);
+                        ng += 1;
+                    }
+                }
+                let r = crate::exact::models::pairs_rank(
+                    b,
+                    ng,
+                    rows,
+                    part.pairs
+                        .iter()
+                        .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other)),
+                    |x| local.get(&x).copied(),
+                );
+                meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+                Some(r)
+            }
+            None => None,
+        };
+        if let Some(target) = target {
+            let mut tries = 0;
+            while elim.rank != target && tries < 16 {
+                tries += 1;
+                abs_tol = if elim.rank > target {
+                    elim.kept_min * (1.0 + 1e-9)
+                } else {
+                    elim.dropped_max * (1.0 - 1e-9)
+                };
+                elim = Elimination::run(&lsizes, blocks.clone(), abs_tol);
+                meter.charge(elim_work(&elim))?;
+            }
+            if one_part {
+                tol = abs_tol / smax.max(f64::MIN_POSITIVE);
+            }
+        }
+        rank += target.unwrap_or(elim.rank);
+        float_rank += elim.rank;
+        kept_min = kept_min.min(elim.kept_min);
+        dropped_max = dropped_max.max(elim.dropped_max);
+
+        // The part's motions (null space, orthonormal), then each body's twist over them.
+        let d = lcols.saturating_sub(elim.rank);
+        let nv = part.bodies.len() as u64;
+        budget.check_memory(
+            ((d as u64).saturating_mul(lcols as u64 + nv * b as u64)).saturating_mul(16),
+            || {
+                format!(
+                    "the geometric rigidity analysis ({d} motions over {lcols} unknowns in one \
+                     rigid block of {nv} bodies)"
+                )
+            },
+        )?;
+        meter.charge(
+            (d as u64)
+                .saturating_mul(d as u64)
+                .saturating_mul(lcols as u64)
+                .saturating_add((d as u64).saturating_mul(lcols as u64 * 8)),
+        )?;
+        let null_red: Vec<DVector<f64>> = orthonormalize(elim.null_space());
+        let d = null_red.len();
+        let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
+        for (g, &x) in lbody.iter().enumerate() {
+            lgroup.insert(x, g);
+        }
+        let tw: Vec<DMatrix<f64>> = part
+            .bodies
+            .iter()
+            .map(|&body| {
+                let mut t = DMatrix::zeros(b, d);
+                if let Some(&g) = lgroup.get(&body) {
+                    for (k, x) in null_red.iter().enumerate() {
+                        t.set_column(k, &(&comp[body] * x.rows(loffsets[g], lsizes[g])));
+                    }
+                }
+                t
+            })
+            .collect();
+        drop(null_red);
+        let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
+
+        // Left null space (self-stresses) by the same elimination on the transpose.
+        let prow: usize = part
+            .pairs
+            .iter()
+            .map(|&pi| models[pairs[pi].joint].rows.nrows())
+            .sum();
+        if prow > target.unwrap_or(elim.rank) {
+            let psizes: Vec<usize> = part
+                .pairs
+                .iter()
+                .map(|&pi| models[pairs[pi].joint].rows.nrows())
+                .collect();
+            let mut poff = Vec::new();
+            let mut acc = 0;
+            for &s in &psizes {
+                poff.push(acc);
+                acc += s;
+            }
+            let mut linc: Vec<Vec<usize>> = vec![Vec::new(); lbody.len()];
+            for (lp, &pi) in part.pairs.iter().enumerate() {
+                for x in [pairs[pi].hub, pairs[pi].other] {
+                    if let Some(&g) = lgroup.get(&x)
+                        && linc[g].last() != Some(&lp)
+                    {
+                        linc[g].push(lp);
+                    }
+                }
+            }
+            let mut tblocks = Vec::new();
+            for (g, &body) in lbody.iter().enumerate() {
+                let s = comp[body].ncols();
+                let ps = std::mem::take(&mut linc[g]);
+                let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+                let mut mat = DMatrix::zeros(s, width);
+                let mut c = 0;
+                for &lp in &ps {
+                    let blk = pair_block(&pairs, models, &comp, part.pairs[lp], body).transpose();
+                    mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+                    c += blk.ncols();
+                }
+                tblocks.push(Block { groups: ps, mat });
+            }
+            let telim = Elimination::run(&psizes, tblocks, abs_tol);
+            meter.charge(elim_work(&telim))?;
+            let e = prow.saturating_sub(telim.rank) as u64;
+            budget.check_memory(e.saturating_mul(prow as u64).saturating_mul(16), || {
+                format!(
+                    "the geometric rigidity analysis ({e} self-stresses over {prow} constraint \
+                     rows in one rigid block)"
+                )
+            })?;
+            meter.charge(e.saturating_mul(e).saturating_mul(prow as u64))?;
+            let stresses = orthonormalize(telim.null_space());
+            for y in &stresses {
+                for (lp, &pi) in part.pairs.iter().enumerate() {
+                    let s = y.rows(poff[lp], psizes[lp]).norm_squared();
+                    *w.entry(pairs[pi].joint).or_insert(0.0) += s;
+                }
+            }
+        }
+
+        // Locked DOF per joint: allowed dimension minus the rank used over all motions.
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * (d + 2 * b)) as u64))?;
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (th, to) = (&tw[lidx(p.hub)], &tw[lidx(p.other)]);
+            let mut cols: Vec<DVector<f64>> = Vec::new();
+            for k in 0..d {
+                cols.push(to.column(k) - th.column(k));
+            }
+            for body in [p.hub, p.other] {
+                for c in iso[body].column_iter() {
+                    cols.push(c.into_owned());
+                }
+            }
+            let used = if cols.is_empty() {
+                0
+            } else {
+                small_rank(&DMatrix::from_columns(&cols), zero_tol)
+            };
+            let allowed = models[p.joint].twists.ncols();
+            *locked_by_joint.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
+        }
+
+        // 4. Rigid clusters over the part's motions: bodies whose twists agree (modulo their
+        // own isolated motions), joined across parts at their shared cut bodies.
+        let nl = part.bodies.len();
+        let mut luf: Vec<usize> = (0..nl).collect();
+        let same = |x: usize, y: usize| {
+            let diff = &tw[x] - &tw[y];
+            let cols: Vec<DVector<f64>> = iso[part.bodies[x]]
+                .column_iter()
+                .chain(iso[part.bodies[y]].column_iter())
+                .map(|c| c.into_owned())
+                .collect();
+            let q = orthonormalize(cols);
+            let mut res = diff;
+            for qv in &q {
+                let proj = qv * (qv.transpose() * &res);
+                res -= proj;
+            }
+            res.norm() <= zero_tol
+        };
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (x, y) = (lidx(p.hub), lidx(p.other));
+            if same(x, y) {
+                let (a, c) = (find(&mut luf, x), find(&mut luf, y));
+                luf[a.max(c)] = a.min(c);
+            }
+        }
+        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
+        meter.charge(
+            (reps.len() as u64)
+                .saturating_mul(reps.len() as u64)
+                .saturating_mul((b * (d + 2 * b) + 16) as u64)
+                / 2,
+        )?;
+        for i in 0..reps.len() {
+            for j in 0..i {
+                let (a, c) = (reps[j], reps[i]);
+                if find(&mut luf, c) == c && find(&mut luf, a) == a && same(a, c) {
+                    luf[c] = a;
+                }
+            }
+        }
+        for x in 0..nl {
+            let r = find(&mut luf, x);
+            if r != x {
+                let (a, c) = (find(&mut uf, part.bodies[r]), find(&mut uf, part.bodies[x]));
+                uf[a.max(c)] = a.min(c);
+            }
+        }
+    }
+    let exact_note = exact.map(|_| {
+        if float_rank == rank {
             "rank decided exactly over GF(2^61 - 1) at a random realization".to_string()
         } else {
             format!(
-                "rank decided exactly over GF(2^61 - 1): {target}; the floating-point motions \
-                 below come from a rank-{} elimination and may be approximate",
-                elim.rank
+                "rank decided exactly over GF(2^61 - 1): {rank}; the floating-point motions \
+                 below come from a rank-{float_rank} elimination and may be approximate"
             )
-        });
-    }
-    let rank = if let Some(target) = exact_rank {
-        target
-    } else {
-        elim.rank
-    };
+        }
+    });
     let fully: usize = (0..nb)
         .filter(|&x| x != frame)
         .map(|x| iso[x].ncols())
         .sum();
-    let mobility = fully + (reduced_cols - rank);
-    let redundant = rows_total - rank;
+    let mobility = fully + reduced_cols.saturating_sub(rank);
+    let redundant = rows_total.saturating_sub(rank);
 
     // The frame never moves. When it is itself held by two joints or more with a spin of its
     // own (a frame bar between two S joints), that spin appears, frame fixed, as every other
@@ -768,96 +1249,22 @@ fn analyze_models(
         .collect();
     let frame_spin = orthonormalize(frame_motions).len();
 
-    let null_red: Vec<DVector<f64>> = orthonormalize(elim.null_space());
-    let body_twist = |body: usize, x: &DVector<f64>| -> DVector<f64> {
-        match group_of[body] {
-            Some(g) => &comp[body] * x.rows(offsets[g], sizes[g]),
-            None => DVector::zeros(b),
-        }
-    };
-    // Twists of each body over the reduced null basis (B × d).
-    let d = null_red.len();
-    let tw: Vec<DMatrix<f64>> = (0..nb)
-        .map(|body| {
-            let mut t = DMatrix::zeros(b, d);
-            for (k, x) in null_red.iter().enumerate() {
-                t.set_column(k, &body_twist(body, x));
-            }
-            t
-        })
-        .collect();
-    let zero_tol = 1e-7;
-
-    // Left null space (self-stresses) by the same elimination on the transpose.
     let mut redundant_joints = Vec::new();
-    if redundant > 0 {
-        let psizes: Vec<usize> = pairs.iter().map(|p| models[p.joint].rows.nrows()).collect();
-        let mut poff = Vec::new();
-        let mut acc = 0;
-        for &s in &psizes {
-            poff.push(acc);
-            acc += s;
-        }
-        let mut tblocks = Vec::new();
-        for &body in &gbody {
-            let s = comp[body].ncols();
-            let ps: Vec<usize> = incident[body].clone();
-            let width: usize = ps.iter().map(|&pi| psizes[pi]).sum();
-            let mut mat = DMatrix::zeros(s, width);
-            let mut c = 0;
-            for &pi in &ps {
-                let blk = pair_block(pi, body).transpose();
-                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
-                c += blk.ncols();
-            }
-            tblocks.push(Block { groups: ps, mat });
-        }
-        let telim = Elimination::run(&psizes, tblocks, abs_tol);
-        let stresses = orthonormalize(telim.null_space());
-        let mut w: BTreeMap<usize, f64> = BTreeMap::new();
-        for y in &stresses {
-            for (pi, p) in pairs.iter().enumerate() {
-                let s = y.rows(poff[pi], psizes[pi]).norm_squared();
-                *w.entry(p.joint).or_insert(0.0) += s;
-            }
-        }
-        let wmax = w.values().cloned().fold(0.0, f64::max);
-        if wmax > 0.0 {
-            let mut list: Vec<(usize, f64)> = w
-                .into_iter()
-                .map(|(j, v)| (j, (v / wmax).sqrt()))
-                .filter(|(_, v)| *v > 1e-6)
-                .collect();
-            list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-            redundant_joints = list
-                .into_iter()
-                .map(|(j, v)| JointWeight {
-                    joint: m.joints[j].id.clone(),
-                    weight: (v * 1e6).round() / 1e6,
-                })
-                .collect();
-        }
-    }
-
-    // Locked DOF per joint: allowed dimension minus the rank used over all motions.
-    let mut locked_by_joint: BTreeMap<usize, usize> = BTreeMap::new();
-    for p in &pairs {
-        let mut cols: Vec<DVector<f64>> = Vec::new();
-        for k in 0..d {
-            cols.push(tw[p.other].column(k) - tw[p.hub].column(k));
-        }
-        for body in [p.hub, p.other] {
-            for c in iso[body].column_iter() {
-                cols.push(c.into_owned());
-            }
-        }
-        let used = if cols.is_empty() {
-            0
-        } else {
-            small_rank(&DMatrix::from_columns(&cols), zero_tol)
-        };
-        let allowed = models[p.joint].twists.ncols();
-        *locked_by_joint.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
+    let wmax = w.values().cloned().fold(0.0, f64::max);
+    if wmax > 0.0 {
+        let mut list: Vec<(usize, f64)> = w
+            .into_iter()
+            .map(|(j, v)| (j, (v / wmax).sqrt()))
+            .filter(|(_, v)| *v > 1e-6)
+            .collect();
+        list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+        redundant_joints = list
+            .into_iter()
+            .map(|(j, v)| JointWeight {
+                joint: m.joints[j].id.clone(),
+                weight: (v * 1e6).round() / 1e6,
+            })
+            .collect();
     }
     let locked: usize = locked_by_joint.values().sum();
     let locked_joints = locked_by_joint
@@ -869,48 +1276,6 @@ fn analyze_models(
         })
         .collect();
 
-    // 4. Rigid clusters over the reduced null space.
-    let mut uf: Vec<usize> = (0..nb).collect();
-    fn find(uf: &mut [usize], x: usize) -> usize {
-        let mut r = x;
-        while uf[r] != r {
-            r = uf[r];
-        }
-        uf[x] = r;
-        r
-    }
-    // Same rigid motion modulo the two bodies' own isolated motions.
-    let same = |x: usize, y: usize| {
-        let diff = &tw[x] - &tw[y];
-        let cols: Vec<DVector<f64>> = iso[x]
-            .column_iter()
-            .chain(iso[y].column_iter())
-            .map(|c| c.into_owned())
-            .collect();
-        let q = orthonormalize(cols);
-        let mut res = diff;
-        for qv in &q {
-            let proj = qv * (qv.transpose() * &res);
-            res -= proj;
-        }
-        res.norm() <= zero_tol
-    };
-    for p in &pairs {
-        if same(p.hub, p.other) {
-            let (a, c) = (find(&mut uf, p.hub), find(&mut uf, p.other));
-            uf[a.max(c)] = a.min(c);
-        }
-    }
-    let mut reps: Vec<usize> = (0..nb).filter(|&x| find(&mut uf, x) == x).collect();
-    reps.sort();
-    for i in 0..reps.len() {
-        for j in 0..i {
-            let (a, c) = (reps[j], reps[i]);
-            if find(&mut uf, c) == c && find(&mut uf, a) == a && same(a, c) {
-                uf[c] = a;
-            }
-        }
-    }
     let mut clusters: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for x in 0..nb {
         let r = find(&mut uf, x);
@@ -968,14 +1333,25 @@ fn analyze_models(
             },
         });
     }
-    for c in clusters.values() {
+    // The boundary pairs of every cluster, in one pass over the pairs (ascending).
+    let mut cluster_of = vec![usize::MAX; nb];
+    for (ci, c) in clusters.values().enumerate() {
+        for &x in c {
+            cluster_of[x] = ci;
+        }
+    }
+    let mut boundaries: Vec<Vec<usize>> = vec![Vec::new(); clusters.len()];
+    for (pi, p) in pairs.iter().enumerate() {
+        let (a, c) = (cluster_of[p.hub], cluster_of[p.other]);
+        if a != c {
+            boundaries[a].push(pi);
+            boundaries[c].push(pi);
+        }
+    }
+    for (c, boundary) in clusters.values().zip(boundaries) {
         if c.len() < 2 || c.contains(&frame) {
             continue;
         }
-        let inside: BTreeSet<usize> = c.iter().copied().collect();
-        let boundary: Vec<usize> = (0..pairs.len())
-            .filter(|&pi| inside.contains(&pairs[pi].hub) != inside.contains(&pairs[pi].other))
-            .collect();
         // Isolated only across a cut of two or more constraining joints (one joint's own DOF
         // is driven by an input on it).
         let mut cut_joints: Vec<usize> = boundary
@@ -1122,8 +1498,8 @@ fn analyze_models(
 
     // Numeric facts.
     let rel = |x: f64| if smax > 0.0 { x / smax } else { x };
-    let smallest_kept = elim.kept_min.is_finite().then(|| rel(elim.kept_min));
-    let largest_dropped = (elim.dropped_max > 0.0).then(|| rel(elim.dropped_max));
+    let smallest_kept = kept_min.is_finite().then(|| rel(kept_min));
+    let largest_dropped = (dropped_max > 0.0).then(|| rel(dropped_max));
     let mut warning = None;
     if exact_note.is_none()
         && (smallest_kept.is_some_and(|k| k < tol * 1e2)
@@ -1148,7 +1524,7 @@ fn analyze_models(
         }
     };
 
-    GeometricReport {
+    Ok(GeometricReport {
         name: m.name.clone(),
         space: m.space,
         b: m.b(),
@@ -1185,5 +1561,84 @@ fn analyze_models(
             warning,
             exact: exact_note,
         },
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::generate::{self, Variant};
+
+    /// The block-by-block path agrees with the whole-Jacobian one on every number and list.
+    fn same_both_ways(m: &Mechanism, opts: &GeometricOptions) {
+        let whole = analyze_split(m, opts, &Budget::UNLIMITED, usize::MAX);
+        let split = analyze_split(m, opts, &Budget::UNLIMITED, 0);
+        let (whole, split) = match (whole, split) {
+            (Ok(a), Ok(b)) => (a, b),
+            (Err(a), Err(b)) => {
+                assert_eq!(a, b);
+                return;
+            }
+            (a, b) => panic!("{}: {a:?} vs {b:?}", m.name),
+        };
+        let n = &m.name;
+        assert_eq!(whole.rank, split.rank, "{n}");
+        assert_eq!(whole.mobility, split.mobility, "{n}");
+        assert_eq!(whole.redundant, split.redundant, "{n}");
+        assert_eq!(whole.locked_joints, split.locked_joints, "{n}");
+        assert_eq!(whole.isolated_motions, split.isolated_motions, "{n}");
+        assert_eq!(whole.rigid, split.rigid, "{n}");
+        let joints = |r: &GeometricReport| {
+            let mut v: Vec<String> = r.redundant_joints.iter().map(|j| j.joint.clone()).collect();
+            v.sort();
+            v
+        };
+        assert_eq!(joints(&whole), joints(&split), "{n}");
+        for (a, b) in whole.redundant_joints.iter().zip(&split.redundant_joints) {
+            if a.joint == b.joint {
+                assert!((a.weight - b.weight).abs() < 1e-4, "{n}: {a:?} {b:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn blocks_agree_with_the_whole_jacobian_on_the_examples() {
+        let mut compared = 0;
+        for name in crate::examples::names() {
+            let Some((file, text)) = crate::examples::find(name) else {
+                continue;
+            };
+            let Ok(m) = crate::format::load(file, text, crate::format::Format::sniff(text)) else {
+                continue;
+            };
+            if m.bodies.len() > 60 {
+                continue;
+            }
+            compared += 1;
+            for geometry in [
+                GeometrySource::Auto { seed: 1 },
+                GeometrySource::Random { seed: 3 },
+            ] {
+                let opts = GeometricOptions {
+                    geometry,
+                    ..Default::default()
+                };
+                same_both_ways(&m, &opts);
+            }
+        }
+        assert!(compared >= 20, "{compared} examples compared");
+    }
+
+    #[test]
+    fn blocks_agree_with_the_whole_jacobian_on_generated_families() {
+        let mut ms = vec![generate::stewart_stack(2).expect("small")];
+        for seed in 0..4 {
+            ms.push(generate::assur(1, 6, seed, Variant::A).expect("small"));
+            ms.push(generate::assur_spatial(2, 3, seed, Variant::B).expect("small"));
+            ms.push(generate::random(30, seed % 2 == 0, seed).expect("small").0);
+        }
+        for m in &ms {
+            same_both_ways(m, &GeometricOptions::default());
+        }
     }
 }

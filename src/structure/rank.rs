@@ -138,6 +138,9 @@ fn rank_of(a: &DMatrix<f64>, t: &Tol) -> usize {
     sv.iter().filter(|&&s| s > tol).count()
 }
 
+/// Stacks of more rows than this are reduced by a QR before the SVD in [`reduced_basis`].
+const TALL_STACK_ROWS: usize = 96;
+
 /// The reduced unknowns of a body whose pairs have the constraint rows `rows` (its neighbours
 /// held fixed): `None` when the stacked rows have full column rank (no isolated freedom: the
 /// body keeps all `b` unknowns, basis the identity), else an orthonormal basis of the
@@ -164,8 +167,19 @@ fn reduced_basis<'a>(
         s.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
         r0 += r.nrows();
     }
-    // Only V is needed: skipping U leaves V and the singular values unchanged.
-    let (sv, tol, _, v_t) = svd_parts(&s, false, true, t);
+    // Only V is needed: skipping U leaves V and the singular values unchanged. A body held
+    // by many pairs (the hub of a star: 10^5 pairs) first has its tall stack reduced to the
+    // b × b triangle of its QR (same singular values and right singular vectors), instead of
+    // an SVD padded to total × total; the threshold keeps the stack's size.
+    let (sv, tol, v_t) = if total > TALL_STACK_ROWS {
+        let r = s.qr().r();
+        let (sv, _, _, v_t) = svd_parts(&r, false, true, t);
+        let max = sv.iter().copied().fold(0.0, f64::max);
+        (sv, t.cut(max, total), v_t)
+    } else {
+        let (sv, tol, _, v_t) = svd_parts(&s, false, true, t);
+        (sv, tol, v_t)
+    };
     let v_t = v_t.expect("requested V^T");
     let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
     let mut qb = DMatrix::<f64>::zeros(b, keep.len());
