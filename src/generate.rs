@@ -69,6 +69,11 @@ pub enum Size {
         /// Stacked platforms.
         stages: u64,
     },
+    /// [`serial_chain`] or [`star`]: bodies (the frame included).
+    Tree {
+        /// Bodies, the frame included.
+        bodies: u64,
+    },
 }
 
 /// How many joints a generator makes (exact for Assur and Stewart, an upper estimate for
@@ -90,6 +95,7 @@ pub fn estimated_joints(size: Size) -> u64 {
             }
         }
         Size::Stewart { stages } => stages.saturating_mul(18),
+        Size::Tree { bodies } => bodies,
     }
 }
 
@@ -234,6 +240,103 @@ pub fn stewart_stack(stages: u64) -> Result<Mechanism, GenerateError> {
     );
     m.description = Some(format!(
         "Generated: {stages} Stewart platform(s) stacked on U-P-S legs, prismatic joints driven"
+    ));
+    Ok(m)
+}
+
+fn tree_bodies(bodies: u64) -> Result<i64, GenerateError> {
+    if !(2..=10_000_000).contains(&bodies) {
+        return Err(GenerateError::Range(format!(
+            "the number of bodies must be between 2 and 10^7, not {bodies}"
+        )));
+    }
+    Ok(bodies as i64)
+}
+
+fn tree_space(kind: JointType, planar: bool) -> Result<Space, GenerateError> {
+    let space = if planar {
+        Space::Planar
+    } else {
+        Space::Spatial
+    };
+    if planar && !kind.valid_in(space) {
+        return Err(GenerateError::Range(format!(
+            "a {} joint is not a planar joint",
+            kind.code()
+        )));
+    }
+    Ok(space)
+}
+
+/// An open serial chain of `bodies` bodies (the frame, body 1, included): joint k joins bodies
+/// k and k + 1, every joint of kind `kind`, all of its DOF driven when `driven` (a determined
+/// arm: one group per body) or none (mobility = the sum of the grades). No geometry: the
+/// geometric analyses use a random realization. For the scale benchmarks of issue 16.
+pub fn serial_chain(
+    bodies: u64,
+    kind: JointType,
+    planar: bool,
+    driven: bool,
+) -> Result<Mechanism, GenerateError> {
+    let n = tree_bodies(bodies)?;
+    let space = tree_space(kind, planar)?;
+    let d = if driven { u32::from(kind.grade()) } else { 0 };
+    let joints = (1..n).map(|k| JointSpec::new(kind, k, k + 1, d)).collect();
+    let mut m = Mechanism::from_parts(
+        format!("serial chain x{}", n - 1),
+        space,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    );
+    m.description = Some(format!(
+        "Generated: an open serial chain of {} {} joints{}",
+        n - 1,
+        kind.code(),
+        if driven { ", every DOF driven" } else { "" }
+    ));
+    Ok(m)
+}
+
+/// A star of `bodies` bodies (the frame, body 1, included): every other body joined to the
+/// frame by its own `kind` joint, or with `shared` by one multiple joint naming all of them.
+/// Every DOF driven when `driven`. No geometry. For the scale benchmarks of issue 16.
+pub fn star(
+    bodies: u64,
+    kind: JointType,
+    planar: bool,
+    shared: bool,
+    driven: bool,
+) -> Result<Mechanism, GenerateError> {
+    let n = tree_bodies(bodies)?;
+    let space = tree_space(kind, planar)?;
+    let d = if driven { u32::from(kind.grade()) } else { 0 };
+    let joints = if shared {
+        vec![JointSpec {
+            id: Some("hub".to_string()),
+            kind,
+            bodies: (1..=n).map(BodyId::Int).collect(),
+            // A multiple joint of k bodies is k - 1 pairs; `driven` counts the pair DOF.
+            driven: d.saturating_mul((n - 1) as u32),
+            geometry: Geometry::default(),
+        }]
+    } else {
+        (2..=n).map(|k| JointSpec::new(kind, 1, k, d)).collect()
+    };
+    let mut m = Mechanism::from_parts(
+        format!("star x{}", n - 1),
+        space,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    );
+    m.description = Some(format!(
+        "Generated: {} bodies on the frame by {} {} joint{}{}",
+        n - 1,
+        if shared { "one shared" } else { "their own" },
+        kind.code(),
+        if shared { "" } else { "s" },
+        if driven { ", every DOF driven" } else { "" }
     ));
     Ok(m)
 }
@@ -497,6 +600,7 @@ pub fn to_toml(m: &Mechanism) -> String {
             origin2,
             normal,
             pitch,
+            second,
         } = &j.geometry;
         for (key, v) in [("origin", origin), ("origin2", origin2)] {
             if let Some(v) = v {
@@ -510,6 +614,16 @@ pub fn to_toml(m: &Mechanism) -> String {
         }
         if let Some(p) = pitch {
             let _ = writeln!(out, "pitch = {p:?}");
+        }
+        if let Some(s) = second {
+            let fields: Vec<String> = s
+                .vectors()
+                .into_iter()
+                .filter_map(|(key, v)| {
+                    v.map(|v| format!("{key} = {}", toml_vec(&v, planar && key == "origin")))
+                })
+                .collect();
+            let _ = writeln!(out, "second = {{ {} }}", fields.join(", "));
         }
     }
     out

@@ -127,6 +127,66 @@ pub struct Geometry {
     /// Helical lead per radian.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub pitch: Option<f64>,
+    /// The joint as carried by the second body, when the file's configuration is not closed
+    /// (`None`: the same as the first body's, closed). Boxed: rare, and `Geometry` is cloned
+    /// per joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub second: Option<Box<Second>>,
+}
+
+/// The features of a joint as carried by its second body at a configuration that is not
+/// closed (`docs/format.md`, "Open configurations"). A field left out is the same as the
+/// joint's own (the first body's); which fields a kind accepts: [`Second::fields`].
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
+pub struct Second {
+    /// The joint point on the second body.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub origin: Option<[f64; 3]>,
+    /// The joint axis on the second body (R, P, H, C, ER, PC, CR; planar P; spherical R).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis: Option<[f64; 3]>,
+    /// The second axis of a universal joint (the one fixed in the second body).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub axis2: Option<[f64; 3]>,
+    /// The plane normal on the second body (PL, FP in space).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal: Option<[f64; 3]>,
+}
+
+impl Second {
+    /// The fields of `second` a binary joint of `kind` accepts in `space`: the features its
+    /// second body carries (empty: `second` makes no sense for this kind).
+    pub fn fields(kind: JointType, space: Space) -> &'static [&'static str] {
+        use JointType::*;
+        match space {
+            Space::Spatial => match kind {
+                R | P | H | C | ER | PC | CR => &["origin", "axis"],
+                U => &["origin", "axis2"],
+                S | SC | SP => &["origin"],
+                PL | FP => &["origin", "normal"],
+                _ => &[],
+            },
+            Space::Planar => match kind {
+                R => &["origin"],
+                P => &["origin", "axis"],
+                _ => &[],
+            },
+            Space::Spherical => match kind {
+                R => &["axis"],
+                _ => &[],
+            },
+        }
+    }
+
+    /// Every vector set, with its field name.
+    pub fn vectors(&self) -> [(&'static str, Option<[f64; 3]>); 4] {
+        [
+            ("origin", self.origin),
+            ("axis", self.axis),
+            ("axis2", self.axis2),
+            ("normal", self.normal),
+        ]
+    }
 }
 
 impl Geometry {

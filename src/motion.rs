@@ -97,6 +97,24 @@ pub enum MotionError {
         /// Grade.
         grade: u32,
     },
+    /// The file's configuration misses closure grossly (more than
+    /// [`crate::position::closure::GROSS`] × the model size): it is not assembled.
+    #[error(
+        "the configuration written is not assembled: joint `{joint}` is open by {residual:.3e}, more than {limit:.1e} (1e-2 x model size){others}; `mbsa assemble FILE > closed.toml` projects it onto the constraints (least change)"
+    )]
+    NotClosed {
+        /// The worst joint.
+        joint: String,
+        /// Its residual (file lengths).
+        residual: f64,
+        /// The gross limit.
+        limit: f64,
+        /// The other joints over the limit, in words (empty when none).
+        others: String,
+    },
+    /// The closure of a joint with `second` geometry cannot be evaluated.
+    #[error("closure check: {0}")]
+    Closure(crate::position::ModelError),
     /// An error located at a joint of a mechanism.
     #[error("joint `{joint}`: {source}")]
     InJoint {
@@ -633,6 +651,7 @@ pub fn random_geometry(kind: JointType, space: Space, rng: &mut SplitMix64) -> G
         origin2: Some(origin2),
         normal: Some(normal),
         pitch: Some(pitch),
+        second: None,
     }
 }
 
@@ -713,6 +732,11 @@ pub struct GeometryUsed {
     /// `--tolerance`); 0 when every number is exact.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub precision: Option<f64>,
+    /// File geometry: whether the configuration written satisfies every joint (only joints
+    /// with `second` geometry can miss it); the first-order analyses use the first body's
+    /// geometry of an open joint.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub closure: Option<crate::position::Closure>,
 }
 
 impl GeometryUsed {
@@ -732,6 +756,10 @@ impl GeometryUsed {
         }
         if let Some(n) = &self.note {
             s.push_str(&format!(" ({n})"));
+        }
+        if let Some(c) = &self.closure {
+            s.push('\n');
+            s.push_str(&crate::report::position::closure_lines(c));
         }
         s
     }
@@ -775,16 +803,19 @@ pub fn choose(
         configuration: "a random generic realization of the joint types".into(),
         note,
         precision: None,
+        closure: None,
     };
     let file = |note: Option<String>| -> Result<GeometryUsed, MotionError> {
         // Every joint model must build at the file's geometry.
         check_file_geometry(m)?;
+        let precision = precision.unwrap_or_else(|| written_precision(m));
         Ok(GeometryUsed {
             mode: "file",
             seed: None,
             configuration: "the configuration written in the file".into(),
             note,
-            precision: Some(precision.unwrap_or_else(|| written_precision(m))),
+            precision: Some(precision),
+            closure: Some(file_closure(m, precision)?),
         })
     };
     let lack = lacking(m);
@@ -805,6 +836,9 @@ pub fn choose(
         GeometrySource::Auto { seed } if lack.is_empty() => {
             match file(Some("every joint has its geometry".into())) {
                 Ok(r) => Ok(r),
+                // A configuration that is not assembled is the user's to fix, not a reason
+                // to analyse another geometry.
+                Err(e @ MotionError::NotClosed { .. }) => Err(e),
                 Err(e) => Ok(random(
                     seed,
                     Some(format!(
@@ -829,6 +863,43 @@ pub fn choose(
             ))
         }
     }
+}
+
+/// The closure of the file's configuration ([`crate::position::file_closure`]) at the
+/// tolerance its numbers' `precision` gives; a gross miss is [`MotionError::NotClosed`].
+fn file_closure(m: &Mechanism, precision: f64) -> Result<crate::position::Closure, MotionError> {
+    use crate::position::{ClosureStatus, closure};
+    let scale = crate::position::residual::model_size(m);
+    let tol = closure::tolerance_for(scale, precision);
+    let c = crate::position::file_closure(m, Some(tol)).map_err(MotionError::Closure)?;
+    if c.status == ClosureStatus::Broken {
+        let over: Vec<&closure::JointResidual> = c
+            .worst(usize::MAX)
+            .into_iter()
+            .filter(|j| j.residual > c.gross_limit)
+            .collect();
+        let others = match over.len() {
+            0 | 1 => String::new(),
+            n => format!(
+                " ({} other joint(s) too: {}{})",
+                n - 1,
+                over[1..]
+                    .iter()
+                    .take(closure::LISTED - 1)
+                    .map(|j| format!("`{}` {:.3e}", j.joint, j.residual))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                if n > closure::LISTED { ", ..." } else { "" }
+            ),
+        };
+        return Err(MotionError::NotClosed {
+            joint: over.first().map(|j| j.joint.clone()).unwrap_or_default(),
+            residual: c.max_residual,
+            limit: c.gross_limit,
+            others,
+        });
+    }
+    Ok(c)
 }
 
 /// Build every joint model at the file's geometry (in parallel), keeping only the first error
@@ -987,8 +1058,10 @@ pub fn written_precision(m: &Mechanism) -> f64 {
     for j in &m.joints {
         let g = &j.geometry;
         let vectors = [g.origin, g.origin2, g.axis, g.axis2, g.normal];
+        let second = g.second.as_ref().map(|s| s.vectors().map(|(_, v)| v));
         let numbers = vectors
             .iter()
+            .chain(second.iter().flatten())
             .flatten()
             .flat_map(|v| v.iter().copied())
             .chain(g.pitch);

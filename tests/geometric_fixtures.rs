@@ -57,6 +57,7 @@ fn load(name: &str) -> Mechanism {
                 origin2: vec3(j.get("origin2")),
                 normal: vec3(j.get("normal")),
                 pitch: j.get("pitch").and_then(|p| p.as_float()),
+                ..Geometry::default()
             },
         })
         .collect();

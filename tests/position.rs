@@ -28,6 +28,7 @@ fn geometry(kind: JointType, space: Space, r: &mut SplitMix64) -> Geometry {
         normal: Some(unit(r)),
         pitch: Some(0.3),
         origin2: Some(rv(r)),
+        ..Geometry::default()
     };
     if matches!(kind, JointType::PC | JointType::CR) {
         // normal perpendicular to axis

@@ -53,6 +53,34 @@ impl GeometryArgs {
         }
     }
 
+    /// The closure check of a command about to use these options' geometry on `m`: nothing
+    /// to say unless a joint carries `second` geometry (every other joint is closed by
+    /// construction); then a warning on standard error when the file geometry is used and the
+    /// configuration misses closure, and an input error (exit 2, the joint named) when it
+    /// misses it grossly. The reports carry the closure section themselves.
+    pub fn closure_check(&self, file: &str, m: &mbsa::Mechanism) -> Result<(), Failure> {
+        if !m.joints.iter().any(|j| j.geometry.second.is_some()) {
+            return Ok(());
+        }
+        match mbsa::motion::choose(m, self.source(), self.precision()?) {
+            Ok(used) => {
+                if let Some(msg) = used.closure.as_ref().and_then(|c| c.message()) {
+                    use std::io::Write;
+                    let _ = writeln!(
+                        std::io::stderr().lock(),
+                        "warning: {file}: {msg}; first-order results use the first body's geometry of each joint"
+                    );
+                }
+                Ok(())
+            }
+            Err(e @ mbsa::motion::MotionError::NotClosed { .. }) => {
+                Err(Failure::Input(mbsa::diagnostic::render_plain(file, &e)))
+            }
+            // Other geometry errors are the analysis's to report.
+            Err(_) => Ok(()),
+        }
+    }
+
     /// `--tolerance`, checked.
     pub fn precision(&self) -> Result<Option<f64>, Failure> {
         match self.tolerance {
@@ -113,6 +141,9 @@ impl StructureArgs {
 pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Result<(), Failure> {
     let m = load_with_inputs(file, args.inputs.as_deref())?;
     let lib = args.library()?;
+    if !args.count_only {
+        args.geometry.closure_check(&file.file, &m)?;
+    }
     let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
     let out = emit(&match format {
         OutputFormat::Table => mbsa::report::structure::table(&a),
@@ -138,6 +169,9 @@ pub enum ViewArg {
 /// `mbsa dot`.
 pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Failure> {
     let m = load_with_inputs(file, args.inputs.as_deref())?;
+    if !args.count_only || view == ViewArg::Rigid {
+        args.geometry.closure_check(&file.file, &m)?;
+    }
     if view == ViewArg::Rigid {
         let opts = geometric::GeometricOptions {
             geometry: args.geometry.source(),
@@ -237,6 +271,7 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
         )
     });
     let geometric = if matches!(args.method, RigidMethod::Both | RigidMethod::Geometric) {
+        args.geometry.closure_check(&file.file, &m)?;
         let opts = geometric::GeometricOptions {
             geometry: args.geometry.source(),
             precision: args.geometry.precision()?,

@@ -32,6 +32,10 @@ pub fn run(
             }
             Err(Failure::Check) => unreachable!("loading never fails a check"),
         };
+        if let Err(Failure::Input(msg)) = geometry.closure_check(name, &m) {
+            broken.push(msg);
+            continue;
+        }
         let outcomes = mbsa::expect::evaluate(&m, &opts);
         let mut text = String::new();
         let bad = outcomes.iter().filter(|o| !o.ok).count();

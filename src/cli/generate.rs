@@ -3,6 +3,7 @@
 use super::{Failure, emit};
 use clap::{Subcommand, ValueEnum};
 use mbsa::generate::{self, Variant};
+use mbsa::joint::JointType;
 
 /// Generator families.
 #[derive(Subcommand, Debug)]
@@ -54,6 +55,47 @@ pub enum Family {
         #[arg(long)]
         stages: u64,
     },
+    /// Open serial chain: body k joined to body k + 1 (the frame is body 1).
+    #[command(after_help = "Example:\n  mbsa generate chain --bodies 100000 --joint R > arm.toml")]
+    Chain {
+        /// Number of bodies, the frame included.
+        #[arg(long)]
+        bodies: u64,
+        /// Joint kind (a code or long name from `mbsa joints`).
+        #[arg(long, default_value = "R", value_parser = parse_kind)]
+        joint: JointType,
+        /// Planar (B = 3) instead of spatial.
+        #[arg(long)]
+        planar: bool,
+        /// Drive every DOF (a determined chain) instead of none.
+        #[arg(long)]
+        driven: bool,
+    },
+    /// Star: every body joined to the frame, each by its own joint or all by one shared joint.
+    #[command(
+        after_help = "Example:\n  mbsa generate star --bodies 20000 --joint S --shared > hub.toml"
+    )]
+    Star {
+        /// Number of bodies, the frame included.
+        #[arg(long)]
+        bodies: u64,
+        /// Joint kind (a code or long name from `mbsa joints`).
+        #[arg(long, default_value = "R", value_parser = parse_kind)]
+        joint: JointType,
+        /// Planar (B = 3) instead of spatial.
+        #[arg(long)]
+        planar: bool,
+        /// One multiple joint naming every body instead of one joint per body.
+        #[arg(long)]
+        shared: bool,
+        /// Drive every DOF (a determined star) instead of none.
+        #[arg(long)]
+        driven: bool,
+    },
+}
+
+fn parse_kind(text: &str) -> Result<JointType, String> {
+    JointType::parse(text).ok_or_else(|| format!("unknown joint kind `{text}` (see `mbsa joints`)"))
 }
 
 /// `--variant` values.
@@ -73,6 +115,9 @@ pub fn run(family: &Family) -> Result<(), Failure> {
         Family::Assur { class, groups, .. } => generate::Size::Assur { class, groups },
         Family::Random { bodies, planar, .. } => generate::Size::Random { bodies, planar },
         Family::Stewart { stages } => generate::Size::Stewart { stages },
+        Family::Chain { bodies, .. } | Family::Star { bodies, .. } => {
+            generate::Size::Tree { bodies }
+        }
     };
     let joints = generate::estimated_joints(size);
     super::budget()
@@ -104,6 +149,19 @@ pub fn run(family: &Family) -> Result<(), Failure> {
             seed,
         } => generate::random(bodies, planar, seed).map(|(m, _)| m),
         Family::Stewart { stages } => generate::stewart_stack(stages),
+        Family::Chain {
+            bodies,
+            joint,
+            planar,
+            driven,
+        } => generate::serial_chain(bodies, joint, planar, driven),
+        Family::Star {
+            bodies,
+            joint,
+            planar,
+            shared,
+            driven,
+        } => generate::star(bodies, joint, planar, shared, driven),
     }
     .map_err(|e| Failure::Input(format!("error: {e}")))?;
     emit(&generate::to_toml(&m))

@@ -231,7 +231,13 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         args.assemble,
     )?;
     let opts = NewtonOptions::default();
-    let a = structure::analyze(&m, &structure::Options::default(), &Library::builtin())
+    // The closure was checked (or the configuration assembled) above: the groups come from
+    // the first bodies' geometry.
+    let mut first = m.clone();
+    for j in &mut first.joints {
+        j.geometry.second = None;
+    }
+    let a = structure::analyze(&first, &structure::Options::default(), &Library::builtin())
         .map_err(|e| input_err(name, &e))?;
     let sched = mbsa::position::schedule(&m, &a, &model);
     let run = |sets: &[(usize, Vec<Value>)], from: &Configuration| {

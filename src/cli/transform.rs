@@ -86,6 +86,9 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         limit: args.limit,
         analysis: structure.options()?,
     };
+    if !structure.count_only {
+        structure.geometry.closure_check(&file.file, &m)?;
+    }
     if let Some(given) = &opts.inputs {
         let c = transform::compare(&m, given, &opts, &lib).map_err(|e| bad("--inputs", &e))?;
         return emit(&match args.format {

@@ -75,6 +75,9 @@ pub enum ErrorKind {
     BarPoints,
     /// Two points with the same id.
     DuplicatePointId,
+    /// A joint's `second` geometry where it makes no sense (a kind whose second body carries
+    /// no such feature, a multiple joint, a framework).
+    SecondNotApplicable,
 }
 
 /// Most source lines a label's span covers in a rendered snippet; longer spans are cut.

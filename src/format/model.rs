@@ -4,7 +4,9 @@
 use super::error::{ErrorKind, Label, LoadError};
 use super::tree::{Entry, Lazy, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
-use crate::mechanism::{Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Space};
+use crate::mechanism::{
+    Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Second, Space,
+};
 use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -27,7 +29,9 @@ const TOP_KEYS: &[&str] = &[
 ];
 const JOINT_KEYS: &[&str] = &[
     "id", "type", "bodies", "driven", "origin", "origin2", "axis", "axis2", "normal", "pitch",
+    "second",
 ];
+const SECOND_KEYS: &[&str] = &["origin", "axis", "axis2", "normal"];
 const BODY_KEYS: &[&str] = &["id", "label"];
 const POINT_KEYS: &[&str] = &["id", "at"];
 const BAR_KEYS: &[&str] = &["id", "points"];
@@ -740,7 +744,10 @@ fn build_joints<'a>(
                 id
             }
         };
-        let geometry = parse_geometry(es, space)?;
+        let mut geometry = parse_geometry(es, space)?;
+        if let Some(e) = get(es, "second") {
+            geometry.second = Some(parse_second(e, kind, space, ids.len())?);
+        }
         joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
         read.push(Joint {
             id,
@@ -985,6 +992,88 @@ fn parse_geometry(es: &[Entry], space: Space) -> Result<Geometry, LoadError> {
         }
     }
     Ok(g)
+}
+
+/// `second = { origin = [...], axis = [...] }`: the joint as carried by its second body at a
+/// configuration that is not closed. Only the features the kind's second body carries
+/// ([`Second::fields`]); not on a multiple joint.
+fn parse_second(
+    e: &Entry,
+    kind: JointType,
+    space: Space,
+    bodies: usize,
+) -> Result<Box<Second>, LoadError> {
+    let es = as_map(&e.value, "`second`")?;
+    check_keys(es, SECOND_KEYS, "`second`")?;
+    let fields = Second::fields(kind, space);
+    let not_here = |span: &Range<usize>, message: String, text: &str, help: String| {
+        err(
+            ErrorKind::SecondNotApplicable,
+            message,
+            span,
+            text,
+            Some(help),
+        )
+    };
+    if bodies > 2 {
+        return Err(not_here(
+            &e.key_span,
+            format!("a multiple joint ({bodies} bodies) has no `second` geometry"),
+            "not on a multiple joint",
+            "split it into binary joints to give each its second body's geometry".into(),
+        ));
+    }
+    if fields.is_empty() {
+        return Err(not_here(
+            &e.key_span,
+            format!(
+                "joint type {} ({}) has no `second` geometry in a {} mechanism",
+                kind.code(),
+                c_name(kind.code()),
+                space.name()
+            ),
+            "not for this joint type",
+            match kind {
+                JointType::SPSP => {
+                    "SPSP carries its second body's centre in `origin2` already".into()
+                }
+                _ => "its second body carries no point or axis the constraints compare; remove `second`"
+                    .into(),
+            },
+        ));
+    }
+    let mut s = Second::default();
+    for x in es {
+        let key = x.key.as_ref();
+        if !fields.contains(&key) {
+            return Err(not_here(
+                &x.key_span,
+                format!(
+                    "joint type {}: its second body carries no `{key}`",
+                    kind.code()
+                ),
+                "not carried by the second body",
+                format!(
+                    "`second` of joint type {} in a {} mechanism takes {}",
+                    kind.code(),
+                    space.name(),
+                    fields
+                        .iter()
+                        .map(|f| format!("`{f}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        let v = Some(parse_vector(x, space, key != "origin")?);
+        match key {
+            "origin" => s.origin = v,
+            "axis" => s.axis = v,
+            "axis2" => s.axis2 = v,
+            _ => s.normal = v,
+        }
+    }
+    Ok(Box::new(s))
 }
 
 /// `[expect]`: keys and types from [`Expect`] itself, so the two stay in sync.

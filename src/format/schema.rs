@@ -117,6 +117,33 @@ struct JointDoc {
     normal: Option<Vec<f64>>,
     /// Helical lead per radian.
     pitch: Option<f64>,
+    /// The joint as carried by the second body, when the configuration written is not closed
+    /// (absent: the same as the first body's). Only the features the second body carries: R,
+    /// P, H, C, ER, PC, CR `origin`, `axis`; U `origin`, `axis2`; S, SC, SP `origin`; PL `origin`,
+    /// `normal`; planar R `origin`, planar P `origin`, `axis`; spherical R `axis`.
+    second: Option<SecondDoc>,
+}
+
+/// A joint's geometry on its second body (`mbsa assemble` closes the configuration and drops it).
+#[derive(JsonSchema)]
+#[serde(deny_unknown_fields)]
+struct SecondDoc {
+    /// The joint point on the second body.
+    #[serde(default)]
+    #[schemars(schema_with = "point_schema")]
+    origin: Option<Vec<f64>>,
+    /// The joint axis on the second body; non-zero.
+    #[serde(default)]
+    #[schemars(schema_with = "vector_schema")]
+    axis: Option<Vec<f64>>,
+    /// The second axis of a universal joint, on the second body; non-zero.
+    #[serde(default)]
+    #[schemars(schema_with = "vector_schema")]
+    axis2: Option<Vec<f64>>,
+    /// The plane normal on the second body (PL); non-zero.
+    #[serde(default)]
+    #[schemars(schema_with = "vector_schema")]
+    normal: Option<Vec<f64>>,
 }
 
 /// A framework point.

@@ -1024,7 +1024,7 @@ impl<'d> Ctx<'d> {
                 let gap = (w1 - w2).norm();
                 if gap > 1e-6 {
                     b.warn(format!(
-                        "{loc}: <connect{name_attr}> between `{}` and `{}` is not closed at this configuration (gap {:.3e}); its joint is placed on the first body's point",
+                        "{loc}: <connect{name_attr}> between `{}` and `{}` is not closed at this configuration (gap {:.3e}): its joint carries body2's point in `second` (`mbsa assemble` closes the loop)",
                         self.bodies[b1].name, self.bodies[b2].name, gap
                     ));
                 }
@@ -1036,10 +1036,7 @@ impl<'d> Ctx<'d> {
                     kind: JointType::S,
                     bodies: vec![ids[b1], ids[b2]],
                     driven: 0,
-                    geometry: Geometry {
-                        origin: Some(arr(w1.coords)),
-                        ..Geometry::default()
-                    },
+                    geometry: super::point_closure(w1.coords, w2.coords),
                     comments: vec![format!("<connect{name_attr}> (loop closure) at {loc}")],
                 });
             }

@@ -471,6 +471,24 @@ pub(crate) fn arr(v: Vector3<f64>) -> [f64; 3] {
     [v.x, v.y, v.z]
 }
 
+/// The geometry of a point joint (S) of a loop closure whose point is `p1` on the first body
+/// and `p2` on the second at the configuration: `origin` = `p1`, and `second.origin` = `p2`
+/// when the two differ as written (the loop is open there; `mbsa assemble` closes it).
+pub(crate) fn point_closure(p1: Vector3<f64>, p2: Vector3<f64>) -> Geometry {
+    let (a, b) = (arr(p1), arr(p2));
+    let differ = a.iter().zip(&b).any(|(x, y)| num(*x) != num(*y));
+    Geometry {
+        origin: Some(a),
+        second: differ.then(|| {
+            Box::new(crate::mechanism::Second {
+                origin: Some(b),
+                ..Default::default()
+            })
+        }),
+        ..Geometry::default()
+    }
+}
+
 // ---------------------------------------------------------------------------------------------
 // The intermediate model
 
@@ -761,6 +779,16 @@ impl Builder {
             }
             if let Some(p) = g.pitch {
                 let _ = writeln!(t, "pitch = {}", num(p));
+            }
+            if let Some(s) = &g.second {
+                let fields: Vec<String> = s
+                    .vectors()
+                    .into_iter()
+                    .filter_map(|(key, v)| {
+                        v.map(|v| format!("{key} = [{}, {}, {}]", num(v[0]), num(v[1]), num(v[2])))
+                    })
+                    .collect();
+                let _ = writeln!(t, "second = {{ {} }}", fields.join(", "));
             }
         }
         t

@@ -504,7 +504,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                     let p1 = w1 * Point3::from(Vector3::from(vec3(src, c, "location_body_1")?));
                     let p2 = w2 * Point3::from(Vector3::from(vec3(src, c, "location_body_2")?));
                     if (p1 - p2).norm() > 1e-6 {
-                        b.warn(format!("{loc}: PointConstraint `{cname}` between `{n1}` and `{n2}` is not closed at the default coordinates (gap {:.3e}); its joint is placed on body 1's point", (p1 - p2).norm()));
+                        b.warn(format!("{loc}: PointConstraint `{cname}` between `{n1}` and `{n2}` is not closed at the default coordinates (gap {:.3e}): its joint carries body 2's point in `second` (`mbsa assemble` closes the loop)", (p1 - p2).norm()));
                     }
                     let (i1, i2) = (b.body(&n1, ""), b.body(&n2, ""));
                     b.joint(JointRec {
@@ -516,10 +516,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                         kind: JointType::S,
                         bodies: vec![i1, i2],
                         driven: 0,
-                        geometry: Geometry {
-                            origin: Some(arr(p1.coords)),
-                            ..Geometry::default()
-                        },
+                        geometry: super::point_closure(p1.coords, p2.coords),
                         comments: vec![format!(
                             "<PointConstraint name=\"{cname}\"> (loop closure) at {loc}"
                         )],

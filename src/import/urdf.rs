@@ -217,7 +217,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                 let p2 = wb * Point3::new(pb[0], pb[1], pb[2]);
                 let loc = src.loc(e);
                 if (p1 - p2).norm() > 1e-6 {
-                    b.warn(format!("{loc}: drake:ball_constraint between `{na}` and `{nb}` is not closed at this configuration (gap {:.3e}); its joint is placed on body A's point", (p1 - p2).norm()));
+                    b.warn(format!("{loc}: drake:ball_constraint between `{na}` and `{nb}` is not closed at this configuration (gap {:.3e}): its joint carries body B's point in `second` (`mbsa assemble` closes the loop)", (p1 - p2).norm()));
                 }
                 let (ia, ib) = (b.body(&na, ""), b.body(&nb, ""));
                 b.joint(JointRec {
@@ -225,10 +225,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                     kind: JointType::S,
                     bodies: vec![ia, ib],
                     driven: 0,
-                    geometry: Geometry {
-                        origin: Some(arr(p1.coords)),
-                        ..Geometry::default()
-                    },
+                    geometry: super::point_closure(p1.coords, p2.coords),
                     comments: vec![format!("<drake:ball_constraint> (loop closure) at {loc}")],
                 });
             }

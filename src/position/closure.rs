@@ -27,7 +27,7 @@ pub enum ClosureStatus {
     Closed,
     /// Some residual above the tolerance but below the gross limit: a warning.
     Open,
-    /// Some residual above the gross limit (1e-3 × model size): an error.
+    /// Some residual above the gross limit ([`GROSS`] × model size): an error.
     Broken,
 }
 
@@ -48,15 +48,34 @@ pub struct Closure {
     pub joints: Vec<JointResidual>,
 }
 
+/// How many open joints one-line messages and table reports list (the worst first).
+pub const LISTED: usize = 5;
+
 impl Closure {
-    /// A one-line message for a warning or error, or `None` when closed.
-    pub fn message(&self) -> Option<String> {
-        let list = self
-            .joints
+    /// The joints above the tolerance, worst first (ties in joint order), at most `n`.
+    pub fn worst(&self, n: usize) -> Vec<&JointResidual> {
+        let mut v: Vec<&JointResidual> = self.joints.iter().collect();
+        v.sort_by(|a, b| b.residual.total_cmp(&a.residual));
+        v.truncate(n);
+        v
+    }
+
+    fn list(&self) -> String {
+        let mut s = self
+            .worst(LISTED)
             .iter()
             .map(|j| format!("{} ({:.3e})", j.joint, j.residual))
             .collect::<Vec<_>>()
             .join(", ");
+        if self.joints.len() > LISTED {
+            s.push_str(&format!(" and {} more", self.joints.len() - LISTED));
+        }
+        s
+    }
+
+    /// A one-line message for a warning or error, or `None` when closed.
+    pub fn message(&self) -> Option<String> {
+        let list = self.list();
         match self.status {
             ClosureStatus::Closed => None,
             ClosureStatus::Open => Some(format!(
@@ -64,18 +83,30 @@ impl Closure {
                 self.max_residual, self.tolerance
             )),
             ClosureStatus::Broken => Some(format!(
-                "the configuration is not assembled: joint(s) {list} open by up to {:.3e}, more than {:.1e} (1e-3 x model size); `--assemble` projects it onto the constraints",
+                "the configuration is not assembled: joint(s) {list} open by up to {:.3e}, more than {:.1e} ({GROSS:.0e} x model size); `mbsa assemble` (or `solve --assemble`) projects it onto the constraints",
                 self.max_residual, self.gross_limit
             )),
         }
     }
 }
 
-/// Default closure tolerance: `1e-9 ×` model size.
+/// The default closure tolerance factor: `1e-9 ×` model size (exact numbers).
 pub const DEFAULT_TOLERANCE: f64 = 1e-9;
 
+/// Gross limit: a joint open by more than this times the model size is an error (the
+/// configuration is not assembled); between the tolerance and this, a warning.
+pub const GROSS: f64 = 1e-2;
+
+/// The closure tolerance (file lengths) of a model of size `scale` whose numbers are known to
+/// ±`precision` (`crate::motion::written_precision`): `1e-9 × scale`, or what two rounded
+/// copies of a point (3 coordinates each, `2√3 δ`) or of a unit axis (an angle of `2√3 δ`
+/// times the model size) can differ by: `4 δ max(1, scale)`, whichever is larger.
+pub fn tolerance_for(scale: f64, precision: f64) -> f64 {
+    (DEFAULT_TOLERANCE * scale).max(4.0 * precision * scale.max(1.0))
+}
+
 /// Check every joint at `config` (driven values not counted). `tolerance` in file units
-/// (default `1e-9 ×` model size).
+/// (default [`tolerance_for`] the written precision of `m`).
 pub fn check_closure(
     m: &Mechanism,
     config: &Configuration,
@@ -85,7 +116,38 @@ pub fn check_closure(
     Ok(closure_of(m, &model, config, tolerance))
 }
 
-/// [`check_closure`] with a model already built.
+/// The closure of the file's own configuration, which only a joint with `second` geometry
+/// (the joint as carried by its second body) can miss: every other joint is closed by
+/// construction (residual 0), so only those are evaluated (cheap at any size, and joints
+/// without a position model do not matter). `tolerance` as in [`check_closure`].
+pub fn file_closure(m: &Mechanism, tolerance: Option<f64>) -> Result<Closure, ModelError> {
+    let open: Vec<usize> = (0..m.joints.len())
+        .filter(|&j| m.joints[j].geometry.second.is_some() && m.joints[j].bodies.len() == 2)
+        .collect();
+    if open.is_empty() {
+        // Closed by construction: no copy of the mechanism, no configuration (large files).
+        let s = super::residual::model_size(m);
+        return Ok(Closure {
+            model_size: super::pose::tidy(s),
+            tolerance: super::pose::tidy(
+                tolerance.unwrap_or_else(|| tolerance_for(s, crate::motion::written_precision(m))),
+            ),
+            gross_limit: super::pose::tidy(GROSS * s),
+            max_residual: 0.0,
+            status: ClosureStatus::Closed,
+            joints: Vec::new(),
+        });
+    }
+    let model = PositionModel::of_joints(&undriven(m), open)?;
+    Ok(closure_of(
+        m,
+        &model,
+        &Configuration::reference(m.bodies.len()),
+        tolerance,
+    ))
+}
+
+/// [`check_closure`] with a model already built (only its pairs are evaluated).
 pub fn closure_of(
     m: &Mechanism,
     model: &PositionModel,
@@ -93,8 +155,8 @@ pub fn closure_of(
     tolerance: Option<f64>,
 ) -> Closure {
     let s = model.scale;
-    let tol = tolerance.unwrap_or(DEFAULT_TOLERANCE * s);
-    let gross = 1e-3 * s;
+    let tol = tolerance.unwrap_or_else(|| tolerance_for(s, crate::motion::written_precision(m)));
+    let gross = GROSS * s;
     let mut per_joint = vec![0.0f64; m.joints.len()];
     for (p, pair) in model.pairs.iter().enumerate() {
         let e = model.pair_equations(p, &config.poses[pair.a], &config.poses[pair.b], &[]);
@@ -119,9 +181,9 @@ pub fn closure_of(
         ClosureStatus::Closed
     };
     Closure {
-        model_size: s,
-        tolerance: tol,
-        gross_limit: gross,
+        model_size: super::pose::tidy(s),
+        tolerance: super::pose::tidy(tol),
+        gross_limit: super::pose::tidy(gross),
         max_residual: super::pose::tidy(max_residual),
         status,
         joints,
@@ -152,7 +214,13 @@ pub fn assemble(
     };
     let targets: Targets = vec![Vec::new(); model.pairs.len()];
     let mut config = start.clone();
-    let out = sys.solve(&model, &targets, &mut config, opts);
+    let mut out = sys.solve(&model, &targets, &mut config, opts);
+    // A loop that is redundant at the configuration (a planar loop written in space with its
+    // axes rounded) leaves a residual floor near the rounding of its numbers, which Newton's
+    // tolerance may not reach; within the closure tolerance for exact numbers it is closed.
+    if !out.converged && out.residual <= DEFAULT_TOLERANCE {
+        out.converged = true;
+    }
     if !out.converged {
         let mut ids: Vec<&str> = Vec::new();
         for (i, &p) in sys.pairs.iter().enumerate() {
@@ -179,7 +247,9 @@ fn arr(v: nalgebra::Vector3<f64>, planar: bool) -> [f64; 3] {
 /// `m` with its joint geometry moved to `config` (which becomes the new reference): each
 /// feature moves with the body it is attached to (the sphere centre of SP and SC and the
 /// cylinder of PC, `axis2` of U and `origin2` of SPSP with the second body, the rest with
-/// the first).
+/// the first). A joint's `second` geometry is dropped: the second body's features are
+/// carried by its pose followed by the `second` offset, which at a closed configuration puts
+/// them where the first body's are.
 pub fn moved_mechanism(m: &Mechanism, config: &Configuration) -> Mechanism {
     let mut out = m.clone();
     let planar = m.space == Space::Planar;
@@ -189,16 +259,24 @@ pub fn moved_mechanism(m: &Mechanism, config: &Configuration) -> Mechanism {
         rotation: p.rotation,
         translation: p.translation * scale,
     };
-    for j in &mut out.joints {
+    for (ji, j) in out.joints.iter_mut().enumerate() {
         let a = file_units(config.poses[j.bodies[0]]);
-        let b = j
+        let mut b = j
             .bodies
             .get(1)
             .map(|&i| file_units(config.poses[i]))
             .unwrap_or_else(Pose::identity);
+        if j.geometry.second.is_some() {
+            let t = super::residual::second_offset_of(m, ji).unwrap_or_else(Pose::identity);
+            b = Pose {
+                rotation: b.rotation * t.rotation,
+                translation: b.rotation * t.translation + b.translation,
+            };
+        }
         let on_second = matches!(j.kind, JointType::SP | JointType::SC | JointType::PC);
         let owner = if on_second { b } else { a };
         let g = &mut j.geometry;
+        g.second = None;
         let v = |x: [f64; 3]| nalgebra::Vector3::new(x[0], x[1], x[2]);
         if let Some(o) = g.origin {
             g.origin = Some(arr(owner.point(&v(o)), planar));

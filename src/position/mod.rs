@@ -24,7 +24,8 @@ pub mod solve;
 mod track;
 
 pub use closure::{
-    Closure, ClosureStatus, JointResidual, assemble, check_closure, closure_of, moved_mechanism,
+    Closure, ClosureStatus, JointResidual, assemble, check_closure, closure_of, file_closure,
+    moved_mechanism, tolerance_for,
 };
 pub use finite::{FiniteMobility, FiniteOptions, Verdict, finite_mobility};
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
@@ -35,8 +36,3 @@ pub use solve::{
     JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,
     schedule, solve_global, solve_groups,
 };
-
-/// The closure section for the file's own configuration (what other reports show).
-pub fn file_closure(m: &crate::Mechanism, tolerance: Option<f64>) -> Result<Closure, ModelError> {
-    check_closure(m, &Configuration::reference(m.bodies.len()), tolerance)
-}

@@ -96,6 +96,10 @@ pub struct Pair {
     /// Driven DOF on this pair.
     pub driven: usize,
     f: Features,
+    /// Where the second body carries the joint at the reference configuration, as a move of
+    /// the first body's features (identity when the file's configuration is closed there;
+    /// from the joint's `second` geometry otherwise).
+    pub offset: Pose,
 }
 
 /// The position model of a mechanism: every pair's equations, lengths scaled by `scale`.
@@ -146,10 +150,26 @@ pub fn model_size(m: &Mechanism) -> f64 {
 impl PositionModel {
     /// Build the model of `m`. Errors name the joint.
     pub fn new(m: &Mechanism) -> Result<PositionModel, ModelError> {
+        Self::of_joints(m, 0..m.joints.len())
+    }
+
+    /// The model of some joints of `m` only (pairs keep their joint's index in `m.joints`;
+    /// lengths scaled by the model size of all of `m`).
+    pub fn of_joints(
+        m: &Mechanism,
+        joints: impl IntoIterator<Item = usize>,
+    ) -> Result<PositionModel, ModelError> {
         let scale = model_size(m);
         let mut pairs = Vec::new();
-        for (ji, j) in m.joints.iter().enumerate() {
+        for ji in joints {
+            let j = &m.joints[ji];
             let f = features(m.space, j.kind, &j.geometry, scale, &j.id)?;
+            let offset = match &j.geometry.second {
+                Some(s) if j.bodies.len() == 2 => {
+                    second_offset(m.space, j.kind, &f, s, scale, &j.id)?
+                }
+                _ => Pose::identity(),
+            };
             let k = j.grade() as usize;
             let mut left = j.driven as usize;
             for (p, &b) in j.bodies.iter().skip(1).enumerate() {
@@ -169,6 +189,7 @@ impl PositionModel {
                     kind: j.kind,
                     driven: d,
                     f: f.clone(),
+                    offset,
                 });
             }
         }
@@ -320,6 +341,89 @@ fn features(
     Ok(f)
 }
 
+/// The move that takes the first body's features of a joint to the ones its second body
+/// carries (`second`): the least rotation taking the first axis (`axis`; `axis2` of a U;
+/// `normal` of PL, FP) to the second's, about the joint point, then the translation taking the
+/// (rotated) point to the second's `origin`. Fields left out stay as the first body's.
+fn second_offset(
+    space: Space,
+    kind: JointType,
+    f: &Features,
+    s: &crate::mechanism::Second,
+    scale: f64,
+    joint: &str,
+) -> Result<Pose, ModelError> {
+    let bad = |field: &'static str| ModelError::BadVector {
+        joint: joint.to_string(),
+        field,
+    };
+    let (first, second, field) = match kind {
+        JointType::U => (f.w, s.axis2, "second.axis2"),
+        JointType::PL | JointType::FP => (f.n, s.normal, "second.normal"),
+        _ => (f.u, s.axis, "second.axis"),
+    };
+    let mut q = Rotation3::identity();
+    if let Some(a) = second {
+        let mut d = v3(a);
+        if space == Space::Planar {
+            d.z = 0.0;
+        }
+        let n = d.norm();
+        if !(n.is_finite() && n > 1e-300) {
+            return Err(bad(field));
+        }
+        let d = d / n;
+        let from = if space == Space::Planar {
+            Vector3::new(first.x, first.y, 0.0).normalize()
+        } else {
+            first
+        };
+        q = Rotation3::rotation_between(&from, &d).unwrap_or_else(|| {
+            // Opposite: a half turn about an axis perpendicular to it (z in the plane).
+            let axis = if space == Space::Planar {
+                Vector3::z()
+            } else {
+                perpendicular_pair(&from).0
+            };
+            Rotation3::new(axis * PI)
+        });
+    }
+    let o_b = match s.origin {
+        Some(a) => {
+            let mut p = v3(a) / scale;
+            if !p.iter().all(|x| x.is_finite()) {
+                return Err(bad("second.origin"));
+            }
+            if space == Space::Planar {
+                p.z = 0.0;
+            }
+            p
+        }
+        None => f.o,
+    };
+    Ok(Pose {
+        rotation: q.into_inner(),
+        translation: o_b - q * f.o,
+    })
+}
+
+/// The move that takes joint `j`'s features on the first body to the ones its second body
+/// carries (its `second` geometry), translation in file lengths; the identity without
+/// `second`, `None` when the joint's geometry has no position model.
+pub fn second_offset_of(m: &Mechanism, j: usize) -> Option<Pose> {
+    let joint = &m.joints[j];
+    let Some(s) = &joint.geometry.second else {
+        return Some(Pose::identity());
+    };
+    let scale = model_size(m);
+    let f = features(m.space, joint.kind, &joint.geometry, scale, &joint.id).ok()?;
+    let p = second_offset(m.space, joint.kind, &f, s, scale, &joint.id).ok()?;
+    Some(Pose {
+        rotation: p.rotation,
+        translation: p.translation * scale,
+    })
+}
+
 /// The second centre of a sphere-sphere joint (on the second body).
 fn origin2(g: &Geometry) -> Option<[f64; 3]> {
     g.origin2
@@ -373,6 +477,18 @@ fn comp(t: &TV, k: usize) -> TS {
 }
 
 impl Pair {
+    /// The pose that carries the joint's features on the second body: `pb` followed by
+    /// [`Pair::offset`] (`pb` itself when the joint has no `second` geometry).
+    pub fn carried(&self, pb: &Pose) -> Pose {
+        if self.offset == Pose::identity() {
+            return *pb;
+        }
+        Pose {
+            rotation: pb.rotation * self.offset.rotation,
+            translation: pb.rotation * self.offset.translation + pb.translation,
+        }
+    }
+
     fn pa(&self, pa: &Pose, x: &Vector3<f64>) -> TV {
         TV::point(pa.point(x), 0)
     }
@@ -564,6 +680,7 @@ impl PositionModel {
     /// (−π, π]); targets are in model units (slides divided by [`PositionModel::scale`]).
     pub fn pair_equations(&self, p: usize, pa: &Pose, pb: &Pose, targets: &[f64]) -> PairEquations {
         let pair = &self.pairs[p];
+        let pb = &pair.carried(pb);
         let mut rows = pair.constraints(self.space, pa, pb);
         let n_driven = if targets.is_empty() {
             0
@@ -599,8 +716,8 @@ impl PositionModel {
     /// The joint values of pair `p` (driven-DOF order; slides in model units, angles in
     /// radians in (−π, π]).
     pub fn pair_values(&self, p: usize, pa: &Pose, pb: &Pose) -> Vec<(f64, bool)> {
-        self.pairs[p]
-            .values(self.space, pa, pb)
+        let pair = &self.pairs[p];
+        pair.values(self.space, pa, &pair.carried(pb))
             .into_iter()
             .map(|(v, a)| (v.v, a))
             .collect()

@@ -120,30 +120,43 @@ pub fn sweep_table(joint: &str, rows: &[(f64, Vec<JointValues>)]) -> String {
     format!("{t}\n")
 }
 
-/// The closure section (for other reports): one line when closed, else the open joints.
+/// The closure section (for other reports): one line when closed, else a line with the
+/// verdict and the worst joints, one per line.
 pub fn closure_section(c: &Closure) -> String {
+    let mut s = closure_lines(c);
+    s.push('\n');
+    s
+}
+
+/// [`closure_section`] without the final newline: `closure: every joint closed` when closed;
+/// else the largest residual, the tolerance, what the first-order results use, and the worst
+/// joints ([`crate::position::closure::LISTED`] at most).
+pub fn closure_lines(c: &Closure) -> String {
     let mut s = String::new();
     match c.status {
-        ClosureStatus::Closed => {
-            let _ = writeln!(
-                s,
-                "Closure: every joint closed (largest residual {:.1e}, tolerance {:.1e})",
-                c.max_residual, c.tolerance
-            );
-        }
+        ClosureStatus::Closed => s.push_str("closure: every joint closed"),
         _ => {
             let word = if c.status == ClosureStatus::Open {
                 "warning"
             } else {
                 "error"
             };
-            let _ = writeln!(
+            let _ = write!(
                 s,
-                "Closure ({word}): largest residual {:.3e} (tolerance {:.1e}, gross limit {:.1e})",
-                c.max_residual, c.tolerance, c.gross_limit
+                "closure ({word}): the configuration misses closure by up to {:.3e} at {} joint(s) (tolerance {:.1e}); first-order results use the first body's geometry of each joint; `mbsa assemble` closes it",
+                c.max_residual,
+                c.joints.len(),
+                c.tolerance
             );
-            for j in &c.joints {
-                let _ = writeln!(s, "  joint {}: {:.3e}", j.joint, j.residual);
+            for j in c.worst(crate::position::closure::LISTED) {
+                let _ = write!(s, "\n  joint {}: {:.3e}", j.joint, j.residual);
+            }
+            let more = c
+                .joints
+                .len()
+                .saturating_sub(crate::position::closure::LISTED);
+            if more > 0 {
+                let _ = write!(s, "\n  ... and {more} more joint(s)");
             }
         }
     }

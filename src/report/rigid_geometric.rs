@@ -59,6 +59,9 @@ pub fn table(r: &GeometricReport) -> String {
     if let Some(n) = &r.geometry_note {
         let _ = writeln!(s, "Geometry: {n}.");
     }
+    if let Some(c) = &r.geometry_used.closure {
+        let _ = writeln!(s, "{}", super::position::closure_lines(c));
+    }
     let _ = writeln!(s);
     let _ = writeln!(s, "count {}; true mobility {}", r.count, r.mobility);
     let mut parts = Vec::new();
