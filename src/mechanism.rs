@@ -461,7 +461,7 @@ impl Mechanism {
                 .expect("every joint body was inserted above")
         };
         let frame = index(&frame);
-        let mut joints: Vec<Joint> = joints
+        let joints: Vec<Joint> = joints
             .into_iter()
             .map(|j| Joint {
                 id: j.id.unwrap_or_else(|| {
@@ -479,20 +479,23 @@ impl Mechanism {
                 geometry: j.geometry,
             })
             .collect();
+        Mechanism::from_indexed(name, space, frame, bodies, joints)
+    }
+
+    /// The last step of [`Mechanism::from_parts`], for callers that index the bodies
+    /// themselves: `bodies` sorted by id, `frame` and the joints' bodies indices into it. The
+    /// joints are put in natural order of their ids; the n-th joint (in given order) with an
+    /// id already used gets `id#n`.
+    pub(crate) fn from_indexed(
+        name: impl Into<String>,
+        space: Space,
+        frame: usize,
+        bodies: Vec<Body>,
+        mut joints: Vec<Joint>,
+    ) -> Mechanism {
         // Natural order by id; the n-th joint (in given order) with an id already used gets
-        // `id#n`. The sort is stable, so equal ids stay in given order next to each other.
-        let mut order: Vec<usize> = (0..joints.len()).collect();
-        {
-            // Each id split into chunks once, not at every comparison.
-            let keys: Vec<Vec<(bool, &str)>> = joints
-                .iter()
-                .map(|j| natural_chunks(&j.id).collect())
-                .collect();
-            order.sort_by(|&a, &b| {
-                cmp_chunks(keys[a].iter().copied(), keys[b].iter().copied())
-                    .then_with(|| joints[a].id.cmp(&joints[b].id))
-            });
-        }
+        // `id#n`. Equal ids stay in given order next to each other.
+        let order = natural_order(&joints);
         // A suffixed id may be another joint's own id (the second `[1, 2]` and a `[1, "2#2"]`
         // both give `1-2#2`): the suffix then skips to the next free number, so that ids stay
         // unique (the reader reports that case as an error before calling this).
@@ -521,6 +524,7 @@ impl Mechanism {
         }
         let mut slots: Vec<Option<Joint>> = joints.into_iter().map(Some).collect();
         let mut joints: Vec<Joint> = order.into_iter().filter_map(|i| slots[i].take()).collect();
+        drop(slots);
         if renamed {
             joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
         }
@@ -532,6 +536,89 @@ impl Mechanism {
             bodies,
             joints,
             expect: Expect::default(),
+        }
+    }
+}
+
+/// The joints' positions sorted by [`natural_cmp`] of their ids, equal ids in given order.
+fn natural_order(joints: &[Joint]) -> Vec<usize> {
+    // Fast path: ids made of numbers without leading zeros joined by `-` or `#` (`12-5`,
+    // `3-4#2`), the default ids of integer bodies. Their natural order is the order of the
+    // token sequences (numbers by value, separators by character, a prefix first), and equal
+    // sequences are equal texts. At most three tokens (`a-b`): a packed key sorted in place
+    // (a separator is never 0, so a shorter sequence padded with zeros still sorts first).
+    let mut buf: Vec<u64> = Vec::with_capacity(8);
+    let mut keyed: Vec<([u64; 3], u32)> = Vec::with_capacity(joints.len());
+    let short = joints.len() <= u32::MAX as usize
+        && joints.iter().enumerate().all(|(k, j)| {
+            buf.clear();
+            if !numeric_tokens(&j.id, &mut buf) || buf.len() > 3 {
+                return false;
+            }
+            let mut key = [0u64; 3];
+            key[..buf.len()].copy_from_slice(&buf);
+            keyed.push((key, k as u32));
+            true
+        });
+    if short {
+        keyed.sort_unstable();
+        return keyed.into_iter().map(|(_, k)| k as usize).collect();
+    }
+    drop(keyed);
+    let mut order: Vec<usize> = (0..joints.len()).collect();
+    // Longer sequences: compared as slices of one flat array, no allocation per joint.
+    let mut tokens: Vec<u64> = Vec::with_capacity(3 * joints.len());
+    let mut ranges: Vec<(u32, u32)> = Vec::with_capacity(joints.len());
+    let simple = joints.iter().all(|j| {
+        let start = tokens.len();
+        let ok = numeric_tokens(&j.id, &mut tokens);
+        ranges.push((start as u32, tokens.len() as u32));
+        ok && tokens.len() <= u32::MAX as usize
+    });
+    if simple {
+        let key = |i: usize| &tokens[ranges[i].0 as usize..ranges[i].1 as usize];
+        order.sort_unstable_by(|&a, &b| key(a).cmp(key(b)).then(a.cmp(&b)));
+        return order;
+    }
+    drop(tokens);
+    // Each id split into chunks once, not at every comparison.
+    let keys: Vec<Vec<(bool, &str)>> = joints
+        .iter()
+        .map(|j| natural_chunks(&j.id).collect())
+        .collect();
+    order.sort_by(|&a, &b| {
+        cmp_chunks(keys[a].iter().copied(), keys[b].iter().copied())
+            .then_with(|| joints[a].id.cmp(&joints[b].id))
+    });
+    order
+}
+
+/// Append the tokens of `id` (numbers, separators as their byte) when it is numbers without
+/// leading zeros (at most 18 digits) joined by single `-` or `#`; `false` otherwise.
+fn numeric_tokens(id: &str, out: &mut Vec<u64>) -> bool {
+    let bytes = id.as_bytes();
+    let mut i = 0;
+    loop {
+        let start = i;
+        let mut n: u64 = 0;
+        while let Some(&b) = bytes.get(i)
+            && b.is_ascii_digit()
+        {
+            n = n * 10 + u64::from(b - b'0');
+            i += 1;
+        }
+        let len = i - start;
+        if len == 0 || len > 18 || (len > 1 && bytes[start] == b'0') {
+            return false;
+        }
+        out.push(n);
+        match bytes.get(i) {
+            None => return true,
+            Some(&c @ (b'-' | b'#')) => {
+                out.push(u64::from(c));
+                i += 1;
+            }
+            Some(_) => return false,
         }
     }
 }
@@ -689,6 +776,37 @@ fn split_pair(m: &Mechanism, text: &str) -> Option<(usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The packed-key and flat-token fast paths of `natural_order` agree with `natural_cmp`.
+    #[test]
+    fn natural_order_fast_paths_agree_with_natural_cmp() {
+        let sets: [&[&str]; 3] = [
+            &[
+                "12-5", "3-4", "0-1", "10-2", "3-4", "1", "1-0", "2-10", "2-9", "0",
+            ],
+            &[
+                "3-4#2", "3-4", "1-2-3", "1-2#2", "1-2", "12-5", "3-4#10", "3-4#9", "1-2-3",
+            ],
+            &[
+                "a-1", "3-4", "03-4", "1-2", "x", "-1-2", "1--2", "10-2", "1-2",
+            ],
+        ];
+        for ids in sets {
+            let joints: Vec<Joint> = ids
+                .iter()
+                .map(|id| Joint {
+                    id: id.to_string(),
+                    kind: JointType::R,
+                    bodies: vec![0, 1],
+                    driven: 0,
+                    geometry: Geometry::default(),
+                })
+                .collect();
+            let mut expected: Vec<usize> = (0..ids.len()).collect();
+            expected.sort_by(|&a, &b| natural_cmp(ids[a], ids[b]));
+            assert_eq!(natural_order(&joints), expected, "{ids:?}");
+        }
+    }
 
     #[test]
     fn body_ids_sort_numbers_first() {

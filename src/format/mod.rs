@@ -16,6 +16,7 @@ use crate::budget::Budget;
 use crate::mechanism::Mechanism;
 use error::Label;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// Largest input accepted by default, in bytes ([`crate::budget::Budget::DEFAULT`]).
 pub const MAX_INPUT_BYTES: usize = crate::budget::Budget::DEFAULT.max_input_bytes as usize;
@@ -169,15 +170,29 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
     if text.trim().is_empty() {
         return Err(model::empty_document());
     }
-    let root = match format {
-        Format::Toml => tree::parse_toml(text)?,
+    let name = default_name(source_name);
+    match format {
+        Format::Toml => {
+            // Large files: the joints read a piece at a time (see `tree::parse_toml_lazy`);
+            // anything that way cannot join is read again whole.
+            let fallback = AtomicBool::new(false);
+            if let Some((root, lazy)) = tree::parse_toml_lazy(text, &fallback) {
+                let built = model::build(root, &name, lazy);
+                if !fallback.load(Ordering::Relaxed) {
+                    return built;
+                }
+            }
+            model::build(tree::parse_toml(text)?, &name, tree::Lazy::None)
+        }
         Format::Yaml => match tree::parse_yaml(text)? {
-            Some(root) => root,
-            None => return Err(model::empty_document()),
+            Some(root) => model::build(root, &name, tree::Lazy::None),
+            None => Err(model::empty_document()),
         },
-        Format::Json => tree::parse_json(text)?,
-    };
-    model::build(&root, &default_name(source_name))
+        Format::Json => {
+            let (root, lazy) = tree::parse_json(text)?;
+            model::build(root, &name, lazy)
+        }
+    }
 }
 
 /// The file stem of a source name (`mechanisms/four-bar.toml` -> `four-bar`).

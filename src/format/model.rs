@@ -2,9 +2,11 @@
 //! located at the key or value it is about.
 
 use super::error::{ErrorKind, Label, LoadError};
-use super::tree::{Entry, Node, Value};
+use super::tree::{Entry, Lazy, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
-use crate::mechanism::{Body, BodyId, Expect, Geometry, JointSpec, Mechanism, Second, Space};
+use crate::mechanism::{
+    Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Second, Space,
+};
 use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -86,14 +88,14 @@ fn out_of_range(node: &Node, what: &str) -> LoadError {
     )
 }
 
-fn as_map<'n>(node: &'n Node, what: &str) -> Result<&'n [Entry], LoadError> {
+fn as_map<'n, 'a>(node: &'n Node<'a>, what: &str) -> Result<&'n [Entry<'a>], LoadError> {
     match &node.value {
         Value::Map(es) => Ok(es),
         _ => Err(wrong_type(node, "a table", what)),
     }
 }
 
-fn as_seq<'n>(node: &'n Node, what: &str) -> Result<&'n [Node], LoadError> {
+fn as_seq<'n, 'a>(node: &'n Node<'a>, what: &str) -> Result<&'n [Node<'a>], LoadError> {
     match &node.value {
         Value::Seq(xs) => Ok(xs),
         _ => Err(wrong_type(node, "an array", what)),
@@ -166,7 +168,7 @@ fn as_id(node: &Node, what: &str) -> Result<BodyId, LoadError> {
         )),
         Value::Str(s) => Ok(match s.parse::<i64>() {
             Ok(i) if i.to_string() == *s => BodyId::Int(i),
-            _ => BodyId::Name(s.clone()),
+            _ => BodyId::Name(s.to_string()),
         }),
         Value::BigInt(_) => Err(out_of_range(node, what)),
         _ => Err(wrong_type(node, "an integer or a string", what)),
@@ -176,7 +178,7 @@ fn as_id(node: &Node, what: &str) -> Result<BodyId, LoadError> {
 /// Reject keys outside `allowed`, suggesting the nearest one.
 fn check_keys(entries: &[Entry], allowed: &[&str], context: &str) -> Result<(), LoadError> {
     for e in entries {
-        if !allowed.contains(&e.key.as_str()) {
+        if !allowed.contains(&e.key.as_ref()) {
             let listed: Vec<&str> = allowed
                 .iter()
                 .copied()
@@ -198,12 +200,16 @@ fn check_keys(entries: &[Entry], allowed: &[&str], context: &str) -> Result<(), 
     Ok(())
 }
 
-fn get<'n>(entries: &'n [Entry], key: &str) -> Option<&'n Entry> {
+fn get<'n, 'a>(entries: &'n [Entry<'a>], key: &str) -> Option<&'n Entry<'a>> {
     entries.iter().find(|e| e.key == key)
 }
 
 /// The entry under `a` or its alias `b` (not both).
-fn get_alias<'n>(entries: &'n [Entry], a: &str, b: &str) -> Result<Option<&'n Entry>, LoadError> {
+fn get_alias<'n, 'a>(
+    entries: &'n [Entry<'a>],
+    a: &str,
+    b: &str,
+) -> Result<Option<&'n Entry<'a>>, LoadError> {
     match (get(entries, a), get(entries, b)) {
         (Some(x), Some(y)) => {
             let (first, second) = if x.key_span.start <= y.key_span.start {
@@ -227,12 +233,12 @@ fn get_alias<'n>(entries: &'n [Entry], a: &str, b: &str) -> Result<Option<&'n En
     }
 }
 
-fn required<'n>(
-    entries: &'n [Entry],
+fn required<'n, 'a>(
+    entries: &'n [Entry<'a>],
     key: &str,
     owner: &Node,
     what: &str,
-) -> Result<&'n Entry, LoadError> {
+) -> Result<&'n Entry<'a>, LoadError> {
     get(entries, key).ok_or_else(|| {
         // Point at the table's first key: the table's own span may be its whole body.
         let at = entries
@@ -254,7 +260,27 @@ fn required<'n>(
 }
 
 /// Read the whole document.
-pub(crate) fn build(root: &Node, default_name: &str) -> Result<Mechanism, LoadError> {
+pub(crate) fn build<'a>(
+    mut root: Node<'a>,
+    default_name: &str,
+    lazy: Lazy<'a>,
+) -> Result<Mechanism, LoadError> {
+    // The joint lists leave the tree (a placeholder stays), to be read and freed one joint at
+    // a time: the largest part of a large file.
+    let mut lists: [Option<Value<'a>>; 2] = [None, None];
+    if let Value::Map(es) = &mut root.value {
+        for e in es.iter_mut() {
+            let slot = match e.key.as_ref() {
+                "joint" => 0,
+                "joints" => 1,
+                _ => continue,
+            };
+            if matches!(e.value.value, Value::Seq(_) | Value::Deferred) {
+                lists[slot] = Some(std::mem::replace(&mut e.value.value, Value::Deferred));
+            }
+        }
+    }
+    let root = &root;
     let top = as_map(root, "the top level")?;
     if top.is_empty() {
         return Err(empty(root));
@@ -319,13 +345,14 @@ pub(crate) fn build(root: &Node, default_name: &str) -> Result<Mechanism, LoadEr
             bars,
         )?
     } else {
+        let list = joints.and_then(|j| lists[usize::from(j.key != "joint")].take());
         build_joints(
             root,
             &name,
             space,
             frame,
             &frame_entry.value,
-            joints,
+            joints.map(|j| (j, list, lazy)),
             bodies,
         )?
     };
@@ -457,14 +484,68 @@ fn joint_grade_help(space: Space) -> String {
     )
 }
 
-fn build_joints(
-    root: &Node,
+/// Body ids to dense indices, in order of first appearance.
+struct Interner {
+    /// Index by small non-negative integer id (`u32::MAX`: none yet).
+    small: Vec<u32>,
+    map: std::collections::HashMap<BodyId, u32>,
+    ids: Vec<BodyId>,
+}
+
+impl Interner {
+    fn new() -> Interner {
+        Interner {
+            small: Vec::new(),
+            map: std::collections::HashMap::new(),
+            ids: Vec::new(),
+        }
+    }
+
+    /// The index of `id`, added if new.
+    fn get(&mut self, id: BodyId) -> usize {
+        let next = self.ids.len() as u32;
+        if let BodyId::Int(i) = id
+            && let Ok(i) = usize::try_from(i)
+            && i < 8 * (self.ids.len() + 4096)
+        {
+            if i >= self.small.len() {
+                let len = (i + 1).max(2 * self.small.len());
+                self.small.resize(len, u32::MAX);
+            }
+            if self.small[i] == u32::MAX {
+                // An integer first met above the small range may come back within it.
+                self.small[i] = match self.map.get(&id) {
+                    Some(&k) => k,
+                    None => {
+                        self.ids.push(id);
+                        next
+                    }
+                };
+            }
+            return self.small[i] as usize;
+        }
+        // Not in the small range now, so never in it before (the range only grows).
+        if let Some(&k) = self.map.get(&id) {
+            return k as usize;
+        }
+        self.map.insert(id.clone(), next);
+        self.ids.push(id);
+        next as usize
+    }
+}
+
+/// A joint list: its entry (for locations), its value taken out of the tree, and where its
+/// deferred items come from.
+type JointList<'e, 'a> = (&'e Entry<'a>, Option<Value<'a>>, Lazy<'a>);
+
+fn build_joints<'a>(
+    root: &Node<'a>,
     name: &str,
     space: Space,
     frame: BodyId,
-    frame_node: &Node,
-    joints: Option<&Entry>,
-    bodies: Option<&Entry>,
+    frame_node: &Node<'a>,
+    joints: Option<JointList<'_, 'a>>,
+    bodies: Option<&Entry<'a>>,
 ) -> Result<Mechanism, LoadError> {
     let declared = bodies.map(parse_bodies).transpose()?;
     if let Some(d) = &declared
@@ -478,22 +559,45 @@ fn build_joints(
             "declared bodies",
         ));
     }
-    let Some(joints) = joints else {
+    let Some((joints, list, lazy)) = joints else {
         let at = root.span.start..root.span.start;
         return Err(no_joints(&at, "no `joint` list in this file"));
     };
-    let list = as_seq(&joints.value, "the joint list")?;
-    if list.is_empty() {
+    let list = match list {
+        Some(list) => list,
+        None => {
+            as_seq(&joints.value, "the joint list")?;
+            return Err(no_joints(&joints.value.span, "empty list"));
+        }
+    };
+    if matches!(&list, Value::Seq(items) if items.is_empty()) {
         return Err(no_joints(&joints.value.span, "empty list"));
     }
-    // (spec without final id, explicit id and its span, span of the joint for later errors)
-    let mut specs: Vec<ReadJoint> = Vec::with_capacity(list.len());
+    // Bodies: the declared ones first (so that `index < n_declared` means declared), then the
+    // frame, then in order of appearance.
+    let mut interner = Interner::new();
+    let mut labels: Vec<Option<String>> = Vec::new();
+    let n_declared = match declared {
+        Some(d) => {
+            for (id, (label, _)) in d {
+                interner.get(id);
+                labels.push(label);
+            }
+            Some(interner.ids.len())
+        }
+        None => None,
+    };
+    let frame_index = interner.get(frame.clone());
+    let mut read: Vec<Joint> = Vec::new();
+    // The span that locates each joint in later errors.
+    let mut joint_spans: Vec<Range<usize>> = Vec::new();
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
-    for j in list {
-        let es = as_map(j, "a joint")?;
+    let mut any_name = false;
+    lazy.for_each(list, &mut |j: Node<'a>| {
+        let es = as_map(&j, "a joint")?;
         check_keys(es, JOINT_KEYS, "joint")?;
         // Type.
-        let type_entry = required(es, "type", j, "joint")?;
+        let type_entry = required(es, "type", &j, "joint")?;
         let type_text = as_str(&type_entry.value, "a joint `type`")?;
         let kind = JointType::parse(type_text).ok_or_else(|| {
             err(
@@ -525,7 +629,7 @@ fn build_joints(
             ));
         }
         // Bodies.
-        let bodies_entry = required(es, "bodies", j, "joint")?;
+        let bodies_entry = required(es, "bodies", &j, "joint")?;
         let items = as_seq(&bodies_entry.value, "a joint's `bodies`")?;
         if items.len() < 2 {
             return Err(err(
@@ -539,32 +643,34 @@ fn build_joints(
                 Some("write both bodies, e.g. bodies = [1, 2]".into()),
             ));
         }
-        let mut ids: Vec<BodyId> = Vec::with_capacity(items.len());
+        let mut ids: Vec<usize> = Vec::with_capacity(items.len());
         for (i, b) in items.iter().enumerate() {
             let id = as_id(b, "a body id")?;
-            if let Some(k) = ids.iter().position(|x| *x == id) {
+            any_name |= matches!(id, BodyId::Name(_));
+            let k = interner.get(id);
+            if let Some(first) = ids.iter().position(|x| *x == k) {
                 return Err(LoadError::new(
                     ErrorKind::RepeatedBody,
-                    format!("body `{id}` appears twice in one joint"),
+                    format!("body `{}` appears twice in one joint", interner.ids[k]),
                     vec![
                         label(&b.span, "again here"),
-                        label(&items[k].span, "first here"),
+                        label(&items[first].span, "first here"),
                     ],
                     Some("a joint joins distinct bodies".into()),
                 ));
             }
-            if let Some(d) = &declared
-                && !d.contains_key(&id)
+            if let Some(n) = n_declared
+                && k >= n
             {
                 return Err(undeclared(
-                    &id,
+                    &interner.ids[k],
                     &items[i].span,
-                    d.keys(),
+                    interner.ids[..n].iter(),
                     "body",
                     "declared bodies",
                 ));
             }
-            ids.push(id);
+            ids.push(k);
         }
         // Driven DOF.
         let max = u32::from(kind.grade()) * (ids.len() as u32 - 1);
@@ -603,9 +709,9 @@ fn build_joints(
                 n as u32
             }
         };
-        // Id.
+        // Id (empty: not given; an explicit id is never empty).
         let id = match get(es, "id") {
-            None => None,
+            None => String::new(),
             Some(e) => {
                 let id = match &e.value.value {
                     Value::Int(i) => i.to_string(),
@@ -635,85 +741,96 @@ fn build_joints(
                     ));
                 }
                 explicit.insert(id.clone(), e.value.span.clone());
-                Some(id)
+                id
             }
         };
         let mut geometry = parse_geometry(es, space)?;
         if let Some(e) = get(es, "second") {
             geometry.second = Some(parse_second(e, kind, space, ids.len())?);
         }
-        let id_span = get(es, "id").map(|e| e.value.span.clone());
-        let joint_span = es.first().map_or(j.span.clone(), |e| e.key_span.clone());
-        specs.push((
-            JointSpec {
-                id,
-                kind,
-                bodies: ids,
-                driven,
-                geometry,
-            },
-            id_span,
-            joint_span,
-        ));
-    }
-    if !specs.iter().any(|(s, ..)| s.bodies.contains(&frame)) {
+        joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
+        read.push(Joint {
+            id,
+            kind,
+            bodies: ids,
+            driven,
+            geometry,
+        });
+        Ok(())
+    })?;
+    if !read.iter().any(|j| j.bodies.contains(&frame_index)) {
         return Err(frame_not_in_joint(&frame, frame_node));
     }
+    let names = &interner.ids;
     // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too). Without
     // explicit ids, the n-th joint of a body list gets `#n` (as `Mechanism::from_parts` does),
     // and a default that another joint's body list gives too is an error naming both.
     if explicit.is_empty() {
-        return default_joint_ids(&mut specs).map(|()| {
-            let extra: Vec<Body> = declared
-                .unwrap_or_default()
-                .into_iter()
-                .map(|(id, (label, _))| Body { id, label })
-                .collect();
-            Mechanism::from_parts(
-                name,
-                space,
-                frame,
-                extra,
-                specs.into_iter().map(|(s, ..)| s).collect(),
-            )
-        });
-    }
-    let mut taken: HashSet<String> = explicit.keys().cloned().collect();
-    for (s, ..) in &mut specs {
-        if s.id.is_none() {
-            let base = joined_ids(&s.bodies);
-            let mut id = base.clone();
-            let mut n = 1;
-            while taken.contains(&id) {
-                n += 1;
-                id = format!("{base}#{n}");
+        default_joint_ids(&mut read, names, &joint_spans, !any_name)?;
+    } else {
+        let mut taken: HashSet<String> = explicit.into_keys().collect();
+        for j in &mut read {
+            if j.id.is_empty() {
+                let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
+                let mut id = base.clone();
+                let mut n = 1;
+                while taken.contains(&id) {
+                    n += 1;
+                    id = format!("{base}#{n}");
+                }
+                taken.insert(id.clone());
+                j.id = id;
             }
-            taken.insert(id.clone());
-            s.id = Some(id);
         }
     }
-    let extra: Vec<Body> = declared
-        .unwrap_or_default()
-        .into_iter()
-        .map(|(id, (label, _))| Body { id, label })
+    drop(joint_spans);
+    // Bodies sorted by id; the joints' indices follow.
+    let Interner { ids, .. } = interner;
+    let order: Vec<u32> = if ids.iter().all(|b| matches!(b, BodyId::Int(_))) {
+        let mut keyed: Vec<(i64, u32)> = ids
+            .iter()
+            .enumerate()
+            .map(|(k, b)| (if let BodyId::Int(i) = b { *i } else { 0 }, k as u32))
+            .collect();
+        keyed.sort_unstable();
+        keyed.into_iter().map(|(_, k)| k).collect()
+    } else {
+        let mut order: Vec<u32> = (0..ids.len() as u32).collect();
+        order.sort_unstable_by(|&a, &b| ids[a as usize].cmp(&ids[b as usize]));
+        order
+    };
+    let mut rank = vec![0usize; ids.len()];
+    for (r, &k) in order.iter().enumerate() {
+        rank[k as usize] = r;
+    }
+    labels.resize(ids.len(), None);
+    let mut ids: Vec<Option<BodyId>> = ids.into_iter().map(Some).collect();
+    let bodies: Vec<Body> = order
+        .iter()
+        .map(|&k| Body {
+            id: ids[k as usize].take().unwrap_or(BodyId::Int(0)),
+            label: labels[k as usize].take(),
+        })
         .collect();
-    Ok(Mechanism::from_parts(
+    drop(ids);
+    for j in &mut read {
+        for b in &mut j.bodies {
+            *b = rank[*b];
+        }
+    }
+    Ok(Mechanism::from_indexed(
         name,
         space,
-        frame,
-        extra,
-        specs.into_iter().map(|(s, ..)| s).collect(),
+        rank[frame_index],
+        bodies,
+        read,
     ))
 }
 
-/// A joint as read: its spec (id not yet defaulted), the span of its explicit id, and the
-/// span that locates the joint in later errors.
-type ReadJoint = (JointSpec, Option<Range<usize>>, Range<usize>);
-
 /// `a-b-c` for a joint's body list.
-fn joined_ids(bodies: &[BodyId]) -> String {
+fn joined_ids<'b>(bodies: impl IntoIterator<Item = &'b BodyId>) -> String {
     let mut base = String::new();
-    for (i, b) in bodies.iter().enumerate() {
+    for (i, b) in bodies.into_iter().enumerate() {
         let sep = if i == 0 { "" } else { "-" };
         // Writing into a String cannot fail.
         let _ = write!(base, "{sep}{b}");
@@ -723,45 +840,83 @@ fn joined_ids(bodies: &[BodyId]) -> String {
 
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
 /// `a-b#n` (the first plain `a-b`). A default that two joints would get (the second `[1, 2]`
-/// and a `[1, "2#2"]` both give `1-2#2`) is an error naming both.
-fn default_joint_ids(specs: &mut [ReadJoint]) -> Result<(), LoadError> {
-    let mut seen: std::collections::HashMap<String, usize> =
-        std::collections::HashMap::with_capacity(specs.len());
-    let mut ids: Vec<String> = Vec::with_capacity(specs.len());
-    for (s, ..) in specs.iter() {
-        let base = joined_ids(&s.bodies);
-        let n = seen.entry(base.clone()).or_insert(0);
-        *n += 1;
-        ids.push(if *n == 1 { base } else { format!("{base}#{n}") });
-    }
-    let mut owner: std::collections::HashMap<&str, usize> =
-        std::collections::HashMap::with_capacity(ids.len());
-    for (k, id) in ids.iter().enumerate() {
-        if let Some(&first) = owner.get(id.as_str()) {
-            let (a, b) = (first.min(k), first.max(k));
-            return Err(LoadError::new(
-                ErrorKind::DuplicateJointId,
-                format!(
-                    "two joints get the default id `{id}`: joint {} (bodies {}) and joint {} (bodies {})",
-                    a + 1,
-                    joined_ids(&specs[a].0.bodies),
-                    b + 1,
-                    joined_ids(&specs[b].0.bodies)
-                ),
-                vec![
-                    label(&specs[a].2, format!("joint {} gets `{id}`", a + 1)),
-                    label(&specs[b].2, format!("joint {} gets `{id}` too", b + 1)),
-                ],
-                Some(
-                    "give one of them an explicit `id`; `--inputs` and reports name joints by id"
-                        .into(),
-                ),
-            ));
+/// and a `[1, "2#2"]` both give `1-2#2`) is an error naming both. With integer ids only, the
+/// defaults are distinct by construction (`a-b` reads back into its list; no `#` in it), and
+/// that check is skipped.
+fn default_joint_ids(
+    joints: &mut [Joint],
+    names: &[BodyId],
+    spans: &[Range<usize>],
+    all_integers: bool,
+) -> Result<(), LoadError> {
+    // The rank of each joint among the joints of its body list (1 for the first): joints
+    // sorted by body list, then by position (a sort, not a hash map: no hash flooding).
+    let mut nth = vec![1u32; joints.len()];
+    {
+        // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
+        let mut pairs: Vec<(u64, u32)> = Vec::new();
+        let mut others: Vec<u32> = Vec::new();
+        for (k, j) in joints.iter().enumerate() {
+            match j.bodies[..] {
+                [a, b] if a <= u32::MAX as usize && b <= u32::MAX as usize => {
+                    pairs.push((((a as u64) << 32) | b as u64, k as u32));
+                }
+                _ => others.push(k as u32),
+            }
         }
-        owner.insert(id, k);
+        pairs.sort_unstable();
+        others.sort_unstable_by(|&a, &b| {
+            joints[a as usize]
+                .bodies
+                .cmp(&joints[b as usize].bodies)
+                .then(a.cmp(&b))
+        });
+        let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+        order.extend(others);
+        for w in 1..order.len() {
+            let (a, b) = (order[w - 1] as usize, order[w] as usize);
+            if joints[a].bodies == joints[b].bodies {
+                nth[b] = nth[a] + 1;
+            }
+        }
     }
-    for ((s, ..), id) in specs.iter_mut().zip(ids) {
-        s.id = Some(id);
+    let mut ids: Vec<String> = Vec::with_capacity(joints.len());
+    for (j, &n) in joints.iter().zip(&nth) {
+        let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
+        ids.push(if n == 1 { base } else { format!("{base}#{n}") });
+    }
+    drop(nth);
+    if !all_integers {
+        let mut owner: std::collections::HashMap<&str, usize> =
+            std::collections::HashMap::with_capacity(ids.len());
+        for (k, id) in ids.iter().enumerate() {
+            if let Some(&first) = owner.get(id.as_str()) {
+                let (a, b) = (first.min(k), first.max(k));
+                let list = |i: usize| joined_ids(joints[i].bodies.iter().map(|&k| &names[k]));
+                return Err(LoadError::new(
+                    ErrorKind::DuplicateJointId,
+                    format!(
+                        "two joints get the default id `{id}`: joint {} (bodies {}) and joint {} (bodies {})",
+                        a + 1,
+                        list(a),
+                        b + 1,
+                        list(b)
+                    ),
+                    vec![
+                        label(&spans[a], format!("joint {} gets `{id}`", a + 1)),
+                        label(&spans[b], format!("joint {} gets `{id}` too", b + 1)),
+                    ],
+                    Some(
+                        "give one of them an explicit `id`; `--inputs` and reports name joints by id"
+                            .into(),
+                    ),
+                ));
+            }
+            owner.insert(id, k);
+        }
+    }
+    for (j, id) in joints.iter_mut().zip(ids) {
+        j.id = id;
     }
     Ok(())
 }
@@ -826,7 +981,7 @@ fn parse_vector(e: &Entry, space: Space, axis: bool) -> Result<[f64; 3], LoadErr
 fn parse_geometry(es: &[Entry], space: Space) -> Result<Geometry, LoadError> {
     let mut g = Geometry::default();
     for e in es {
-        match e.key.as_str() {
+        match e.key.as_ref() {
             "origin" => g.origin = Some(parse_vector(e, space, false)?),
             "origin2" => g.origin2 = Some(parse_vector(e, space, false)?),
             "axis" => g.axis = Some(parse_vector(e, space, true)?),
@@ -889,7 +1044,7 @@ fn parse_second(
     }
     let mut s = Second::default();
     for x in es {
-        let key = x.key.as_str();
+        let key = x.key.as_ref();
         if !fields.contains(&key) {
             return Err(not_here(
                 &x.key_span,
@@ -934,7 +1089,7 @@ fn parse_expect(node: &Node) -> Result<Expect, LoadError> {
     let mut object = serde_json::Map::new();
     for e in es {
         let v = to_json(&e.value)?;
-        let one = serde_json::Value::Object([(e.key.clone(), v.clone())].into_iter().collect());
+        let one = serde_json::Value::Object([(e.key.to_string(), v.clone())].into_iter().collect());
         if let Err(x) = serde_json::from_value::<Expect>(one) {
             let msg = x.to_string();
             return Err(err(
@@ -942,14 +1097,14 @@ fn parse_expect(node: &Node) -> Result<Expect, LoadError> {
                 format!("`expect.{}`: {msg}", e.key),
                 &e.value.span,
                 "wrong type",
-                Some(match e.key.as_str() {
+                Some(match e.key.as_ref() {
                     "determined" => "write true or false".to_string(),
                     "mobility" | "generic_dof" | "true_mobility" => "write an integer".to_string(),
                     _ => "write a non-negative integer".to_string(),
                 }),
             ));
         }
-        object.insert(e.key.clone(), v);
+        object.insert(e.key.to_string(), v);
     }
     serde_json::from_value(serde_json::Value::Object(object)).map_err(|x| {
         err(
@@ -968,17 +1123,17 @@ fn to_json(node: &Node) -> Result<serde_json::Value, LoadError> {
         Value::Map(es) => {
             let mut m = serde_json::Map::new();
             for e in es {
-                m.insert(e.key.clone(), to_json(&e.value)?);
+                m.insert(e.key.to_string(), to_json(&e.value)?);
             }
             J::Object(m)
         }
         Value::Seq(xs) => J::Array(xs.iter().map(to_json).collect::<Result<_, _>>()?),
-        Value::Str(s) => J::String(s.clone()),
+        Value::Str(s) => J::String(s.to_string()),
         Value::Int(i) => J::from(*i),
         Value::BigInt(_) => return Err(out_of_range(node, "this number")),
         Value::Float(f) => serde_json::Number::from_f64(*f).map_or(J::Null, J::Number),
         Value::Bool(b) => J::Bool(*b),
-        Value::Null | Value::DateTime => J::Null,
+        Value::Null | Value::DateTime | Value::Deferred => J::Null,
     })
 }
 

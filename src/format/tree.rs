@@ -2,6 +2,7 @@
 //! every error at the exact key or value.
 
 use super::error::{ErrorKind, Label, LoadError, floor_boundary, offset_of};
+use std::borrow::Cow;
 use std::ops::Range;
 
 /// Deepest nesting accepted (the format itself needs 4 levels).
@@ -9,27 +10,28 @@ pub(crate) const MAX_DEPTH: usize = 64;
 
 /// A value with the byte span it was read from.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Node {
+pub(crate) struct Node<'a> {
     pub span: Range<usize>,
-    pub value: Value,
+    pub value: Value<'a>,
 }
 
 /// A key with its span and value.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) struct Entry {
-    pub key: String,
+pub(crate) struct Entry<'a> {
+    pub key: Cow<'a, str>,
     pub key_span: Range<usize>,
-    pub value: Node,
+    pub value: Node<'a>,
 }
 
 /// The values of the three formats, unified.
 #[derive(Clone, Debug, PartialEq)]
-pub(crate) enum Value {
+pub(crate) enum Value<'a> {
     /// Table / mapping / object, in source order.
-    Map(Vec<Entry>),
+    Map(Vec<Entry<'a>>),
     /// Array / sequence.
-    Seq(Vec<Node>),
-    Str(String),
+    Seq(Vec<Node<'a>>),
+    /// Borrowed from the text unless it had escapes.
+    Str(Cow<'a, str>),
     Int(i64),
     /// An integer that does not fit in 64 bits, as written.
     BigInt(String),
@@ -38,14 +40,16 @@ pub(crate) enum Value {
     Null,
     /// A TOML date-time (never valid in this format).
     DateTime,
+    /// A non-empty joint list whose items are parsed one at a time by [`Lazy::for_each`].
+    Deferred,
 }
 
-impl Value {
+impl Value<'_> {
     /// The type name used in messages.
     pub fn type_name(&self) -> &'static str {
         match self {
             Value::Map(_) => "a table",
-            Value::Seq(_) => "an array",
+            Value::Seq(_) | Value::Deferred => "an array",
             Value::Str(_) => "a string",
             Value::Int(_) | Value::BigInt(_) => "an integer",
             Value::Float(_) => "a float",
@@ -82,6 +86,127 @@ fn too_deep(at: Range<usize>) -> LoadError {
     )
 }
 
+/// Keys whose list is read one item at a time (the largest list of a file, by far).
+pub(crate) fn is_joint_list(key: &str) -> bool {
+    key == "joint" || key == "joints"
+}
+
+/// Where the items of a [`Value::Deferred`] list come from.
+pub(crate) enum Lazy<'a> {
+    /// Nothing deferred.
+    None,
+    /// JSON: the list's text (from `[` to `]`), parsed item by item.
+    Json { text: &'a str, span: Range<usize> },
+    /// TOML: the joints of the first piece, then later pieces of the text (each starts with a
+    /// `[[joint]]` header and holds only joints), parsed in parallel a few at a time. A piece
+    /// that holds anything else, or fails to parse, sets `fallback`: the caller then reads the
+    /// whole text again without deferring.
+    Toml {
+        text: &'a str,
+        first: Vec<Node<'a>>,
+        rest: Vec<Range<usize>>,
+        fallback: &'a std::sync::atomic::AtomicBool,
+    },
+}
+
+impl<'a> Lazy<'a> {
+    /// Call `f` on every item of `list` (a `Seq`, or the `Deferred` list), in order, each item
+    /// dropped after its call; stops at the first error.
+    pub(crate) fn for_each(
+        self,
+        list: Value<'a>,
+        f: &mut dyn FnMut(Node<'a>) -> Result<(), LoadError>,
+    ) -> Result<(), LoadError> {
+        match (list, self) {
+            (Value::Seq(items), _) => items.into_iter().try_for_each(f),
+            (Value::Deferred, Lazy::Json { text, span }) => {
+                let mut p = JsonParser {
+                    text,
+                    bytes: text.as_bytes(),
+                    pos: span.start + 1,
+                    deferred: None,
+                };
+                let mut failed = None;
+                loop {
+                    p.ws();
+                    // The list's items are at depth 3 (top level 1, the list 2).
+                    let item = p.value(3)?;
+                    // After a model error, only the tree's own errors (found first when the
+                    // whole tree was built before the model) can still take its place.
+                    if failed.is_none()
+                        && let Err(e) = f(item)
+                    {
+                        failed = Some(e);
+                    }
+                    if p.list_end(b']')? {
+                        return failed.map_or(Ok(()), Err);
+                    }
+                }
+            }
+            (
+                Value::Deferred,
+                Lazy::Toml {
+                    text,
+                    first,
+                    rest,
+                    fallback,
+                },
+            ) => {
+                use rayon::prelude::*;
+                let batch = 2 * rayon::current_num_threads();
+                let again = || {
+                    fallback.store(true, std::sync::atomic::Ordering::Relaxed);
+                    Err(syntax("TOML", "read again", 0..0, "here"))
+                };
+                let mut failed = first.into_iter().try_for_each(&mut *f).err();
+                for pieces in rest.chunks(batch) {
+                    let parsed: Vec<Option<Vec<Node<'a>>>> = pieces
+                        .par_iter()
+                        .map(|r| toml_joint_piece(text, r.clone()))
+                        .collect();
+                    for items in parsed {
+                        // A piece that does not parse: the serial parse says why (a syntax
+                        // error comes before any model error, as when the tree came first).
+                        let Some(items) = items else {
+                            return again();
+                        };
+                        if failed.is_none() {
+                            failed = items.into_iter().try_for_each(&mut *f).err();
+                        }
+                    }
+                }
+                failed.map_or(Ok(()), Err)
+            }
+            (Value::Deferred, Lazy::None) => Ok(()),
+            (_, _) => Ok(()),
+        }
+    }
+}
+
+/// The joints of one later TOML piece, `None` unless the piece parses and holds nothing but
+/// `[[joint]]` tables.
+fn toml_joint_piece(text: &str, r: Range<usize>) -> Option<Vec<Node<'_>>> {
+    let piece = text.get(r.clone())?;
+    let table = toml::de::DeTable::parse(piece).ok()?;
+    let tree = toml_table(table.get_ref(), shift(table.span(), r.start), 1, r.start).ok()?;
+    let Value::Map(mut entries) = tree.value else {
+        return None;
+    };
+    if entries.len() != 1 || entries[0].key != "joint" {
+        return None;
+    }
+    let e = entries.pop()?;
+    let header = |span: &Range<usize>| text.get(span.clone()).is_some_and(|t| t.starts_with("[["));
+    let Value::Seq(items) = e.value.value else {
+        return None;
+    };
+    (header(&e.value.span)
+        && items
+            .iter()
+            .all(|t| matches!(t.value, Value::Map(_)) && header(&t.span)))
+    .then_some(items)
+}
+
 fn duplicate_key(key: &str, first: Range<usize>, again: Range<usize>) -> LoadError {
     LoadError::new(
         ErrorKind::DuplicateKey,
@@ -107,10 +232,10 @@ const SCAN_KEYS: usize = 8;
 /// Add `entry` to a map, refusing a key already present. Linear over the whole map: a scan
 /// while the map is small, then a hash index of the keys (`index`, built once the map grows
 /// past [`SCAN_KEYS`]; a 300,000-key object was quadratic before).
-fn push_entry(
-    entries: &mut Vec<Entry>,
-    index: &mut Option<std::collections::HashMap<String, usize>>,
-    entry: Entry,
+fn push_entry<'a>(
+    entries: &mut Vec<Entry<'a>>,
+    index: &mut Option<std::collections::HashMap<Cow<'a, str>, usize>>,
+    entry: Entry<'a>,
 ) -> Result<(), LoadError> {
     let prev = match index {
         Some(ix) => ix.get(&entry.key).copied(),
@@ -128,7 +253,7 @@ fn push_entry(
             ix.insert(entry.key.clone(), entries.len());
         }
         None if entries.len() >= SCAN_KEYS => {
-            let mut ix: std::collections::HashMap<String, usize> = entries
+            let mut ix: std::collections::HashMap<Cow<'a, str>, usize> = entries
                 .iter()
                 .enumerate()
                 .map(|(i, e)| (e.key.clone(), i))
@@ -149,16 +274,18 @@ fn push_entry(
 const CHUNKED_TOML_BYTES: usize = 1 << 20;
 
 /// Parse TOML into a tree.
-pub(crate) fn parse_toml(text: &str) -> Result<Node, LoadError> {
+pub(crate) fn parse_toml(text: &str) -> Result<Node<'_>, LoadError> {
+    // Pieces of about 1 MiB: the toml parser holds tens of times its input while parsing.
+    let pieces = (4 * rayon::current_num_threads()).max(text.len() / CHUNKED_TOML_BYTES);
     if text.len() >= CHUNKED_TOML_BYTES
-        && let Some(root) = parse_toml_chunked(text, 4 * rayon::current_num_threads())
+        && let Some(root) = parse_toml_chunked(text, pieces)
     {
         return Ok(root);
     }
     parse_toml_serial(text)
 }
 
-fn parse_toml_serial(text: &str) -> Result<Node, LoadError> {
+fn parse_toml_serial(text: &str) -> Result<Node<'_>, LoadError> {
     let table = toml::de::DeTable::parse(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let msg = e.message().trim().to_string();
@@ -183,11 +310,82 @@ const JOINT_HEADER: &str = "\n[[joint]]";
 ///   across pieces) is left to the serial parse;
 /// - spans are shifted by each piece's offset; the joint entry's spans come from the first
 ///   header, as in the serial tree.
-fn parse_toml_chunked(text: &str, pieces: usize) -> Option<Node> {
-    use rayon::prelude::*;
+fn parse_toml_chunked(text: &str, pieces: usize) -> Option<Node<'_>> {
+    let mut cuts = toml_cuts(text, pieces);
+    if cuts.len() < 2 {
+        return None;
+    }
+    cuts.push(text.len());
+    chunked_join(text, &cuts)
+}
+
+/// Parse a large TOML file for a one-joint-at-a-time read: the first piece (cut as in
+/// [`parse_toml_chunked`]) as a tree whose joint list is [`Value::Deferred`], the later
+/// pieces left to [`Lazy::for_each`]. `None` (read the file whole) for a small file, a
+/// first piece that does not parse or has no `[[joint]]` table, or a later piece with a
+/// line that starts another table (`[body]`, `[[point]]`, `[expect]`...).
+pub(crate) fn parse_toml_lazy<'a>(
+    text: &'a str,
+    fallback: &'a std::sync::atomic::AtomicBool,
+) -> Option<(Node<'a>, Lazy<'a>)> {
+    if text.len() < CHUNKED_TOML_BYTES {
+        return None;
+    }
+    let mut cuts = toml_cuts(text, text.len() / CHUNKED_TOML_BYTES);
+    if cuts.len() < 2 {
+        return None;
+    }
+    cuts.push(text.len());
+    // Later pieces: table headers of the joints only (a line of a multi-line string or array
+    // that starts with `[` is refused too: the whole read then decides).
+    let later = &text[cuts[1]..];
+    let other_table = later.split('\n').any(|line| {
+        let t = line.trim_start_matches([' ', '\t']);
+        t.starts_with('[') && !t.starts_with("[[joint]]")
+    });
+    if other_table {
+        return None;
+    }
+    let table = toml::de::DeTable::parse(&text[..cuts[1]]).ok()?;
+    let mut root = toml_table(table.get_ref(), table.span(), 1, 0).ok()?;
+    drop(table);
+    let Value::Map(entries) = &mut root.value else {
+        return None;
+    };
+    let joint = entries.iter_mut().find(|e| e.key == "joint")?;
+    let header = |span: &Range<usize>| text.get(span.clone()).is_some_and(|t| t.starts_with("[["));
+    if !header(&joint.value.span) {
+        return None;
+    }
+    let Value::Seq(first) = std::mem::replace(&mut joint.value.value, Value::Deferred) else {
+        return None;
+    };
+    if first.is_empty() || !first.iter().all(|t| header(&t.span)) {
+        return None;
+    }
+    let rest = cuts[1..].windows(2).map(|w| w[0]..w[1]).collect();
+    Some((
+        root,
+        Lazy::Toml {
+            text,
+            first,
+            rest,
+            fallback,
+        },
+    ))
+}
+
+/// Where to cut `text` into about `pieces` TOML documents: before `[[joint]]` header lines
+/// (alone on their line) after the first one; starts with 0.
+fn toml_cuts(text: &str, pieces: usize) -> Vec<usize> {
     let mut cuts = vec![0usize];
+    let Some(first) = text.find(JOINT_HEADER) else {
+        return cuts;
+    };
     for k in 1..pieces {
-        let mut from = (text.len() * k / pieces).max(cuts[cuts.len() - 1]);
+        let mut from = (text.len() * k / pieces)
+            .max(cuts[cuts.len() - 1])
+            .max(first + 1);
         while !text.is_char_boundary(from) {
             from += 1;
         }
@@ -201,11 +399,13 @@ fn parse_toml_chunked(text: &str, pieces: usize) -> Option<Node> {
             cuts.push(cut);
         }
     }
-    if cuts.len() < 2 {
-        return None;
-    }
-    cuts.push(text.len());
-    let trees: Vec<Option<Node>> = cuts
+    cuts
+}
+
+/// Parse the pieces between `cuts` in parallel and join them (see [`parse_toml_chunked`]).
+fn chunked_join<'a>(text: &'a str, cuts: &[usize]) -> Option<Node<'a>> {
+    use rayon::prelude::*;
+    let trees: Vec<Option<Node<'_>>> = cuts
         .par_windows(2)
         .map(|w| {
             let table = toml::de::DeTable::parse(&text[w[0]..w[1]]).ok()?;
@@ -213,8 +413,8 @@ fn parse_toml_chunked(text: &str, pieces: usize) -> Option<Node> {
         })
         .collect();
     let mut span = None;
-    let mut top: Vec<Entry> = Vec::new();
-    let mut joint: Option<Entry> = None;
+    let mut top: Vec<Entry<'_>> = Vec::new();
+    let mut joint: Option<Entry<'_>> = None;
     for tree in trees {
         let tree = tree?;
         span.get_or_insert(tree.span);
@@ -276,19 +476,19 @@ fn shift(span: Range<usize>, off: usize) -> Range<usize> {
     span.start + off..span.end + off
 }
 
-fn toml_table(
-    table: &toml::de::DeTable<'_>,
+fn toml_table<'a>(
+    table: &toml::de::DeTable<'a>,
     span: Range<usize>,
     depth: usize,
     off: usize,
-) -> Result<Node, LoadError> {
+) -> Result<Node<'a>, LoadError> {
     if depth > MAX_DEPTH {
         return Err(too_deep(span));
     }
     let mut entries = Vec::with_capacity(table.len());
     for (k, v) in table.iter() {
         entries.push(Entry {
-            key: k.get_ref().to_string(),
+            key: k.get_ref().clone(),
             key_span: shift(k.span(), off),
             value: toml_value(v.get_ref(), shift(v.span(), off), depth + 1, off)?,
         });
@@ -301,18 +501,18 @@ fn toml_table(
     })
 }
 
-fn toml_value(
-    v: &toml::de::DeValue<'_>,
+fn toml_value<'a>(
+    v: &toml::de::DeValue<'a>,
     span: Range<usize>,
     depth: usize,
     off: usize,
-) -> Result<Node, LoadError> {
+) -> Result<Node<'a>, LoadError> {
     use toml::de::DeValue;
     if depth > MAX_DEPTH {
         return Err(too_deep(span));
     }
     let value = match v {
-        DeValue::String(s) => Value::Str(s.to_string()),
+        DeValue::String(s) => Value::Str(s.clone()),
         DeValue::Integer(i) => match i64::from_str_radix(i.as_str(), i.radix()) {
             Ok(n) => Value::Int(n),
             Err(_) => Value::BigInt(i.to_string()),
@@ -419,7 +619,7 @@ impl<'a> YamlReader<'a> {
         }
     }
 
-    fn node(&mut self, ev: YamlEvent<'a>, depth: usize) -> Result<Node, LoadError> {
+    fn node(&mut self, ev: YamlEvent<'a>, depth: usize) -> Result<Node<'a>, LoadError> {
         use saphyr_parser::{Event, ScalarStyle};
         let (ev, span) = ev;
         if depth > MAX_DEPTH {
@@ -430,14 +630,14 @@ impl<'a> YamlReader<'a> {
                 let value = match (&tag, style) {
                     (Some(t), _) if t.handle == "tag:yaml.org,2002:" || t.handle == "!!" => {
                         match t.suffix.as_str() {
-                            "str" => Value::Str(text.to_string()),
-                            "int" | "float" | "bool" | "null" => resolve_plain(&text),
+                            "str" => Value::Str(text),
+                            "int" | "float" | "bool" | "null" => resolve_plain(text),
                             _ => return Err(unsupported_tag(t, span)),
                         }
                     }
                     (Some(t), _) => return Err(unsupported_tag(t, span)),
-                    (None, ScalarStyle::Plain) => resolve_plain(&text),
-                    (None, _) => Value::Str(text.to_string()),
+                    (None, ScalarStyle::Plain) => resolve_plain(text),
+                    (None, _) => Value::Str(text),
                 };
                 Ok(Node { span, value })
             }
@@ -479,7 +679,7 @@ impl<'a> YamlReader<'a> {
                                 value: Value::Map(entries),
                             });
                         }
-                        Event::Scalar(k, ..) => k.to_string(),
+                        Event::Scalar(k, ..) => k,
                         Event::Alias(_) => return Err(alias(key_span)),
                         _ => {
                             return Err(LoadError::new(
@@ -537,12 +737,20 @@ fn unsupported_tag(t: &saphyr_parser::Tag, span: Range<usize>) -> LoadError {
 }
 
 /// Resolve a plain YAML scalar by the YAML 1.2 core schema.
-fn resolve_plain(s: &str) -> Value {
+fn resolve_plain(text: Cow<'_, str>) -> Value<'_> {
+    match resolve_plain_str(&text) {
+        Some(v) => v,
+        None => Value::Str(text),
+    }
+}
+
+/// [`resolve_plain`] for the non-string values (`None`: a string).
+fn resolve_plain_str(s: &str) -> Option<Value<'static>> {
     match s {
-        "" | "~" | "null" | "Null" | "NULL" => return Value::Null,
-        "true" | "True" | "TRUE" => return Value::Bool(true),
-        "false" | "False" | "FALSE" => return Value::Bool(false),
-        ".nan" | ".NaN" | ".NAN" => return Value::Float(f64::NAN),
+        "" | "~" | "null" | "Null" | "NULL" => return Some(Value::Null),
+        "true" | "True" | "TRUE" => return Some(Value::Bool(true)),
+        "false" | "False" | "FALSE" => return Some(Value::Bool(false)),
+        ".nan" | ".NaN" | ".NAN" => return Some(Value::Float(f64::NAN)),
         _ => {}
     }
     let (sign, body) = match s.as_bytes()[0] {
@@ -551,31 +759,31 @@ fn resolve_plain(s: &str) -> Value {
         _ => (1.0, s),
     };
     if matches!(body, ".inf" | ".Inf" | ".INF") {
-        return Value::Float(sign * f64::INFINITY);
+        return Some(Value::Float(sign * f64::INFINITY));
     }
     let digits = |t: &str, radix: u32| !t.is_empty() && t.chars().all(|c| c.is_digit(radix));
     if let Some(h) = s.strip_prefix("0x")
         && digits(h, 16)
     {
-        return int_or_big(i64::from_str_radix(h, 16).ok(), s);
+        return Some(int_or_big(i64::from_str_radix(h, 16).ok(), s));
     }
     if let Some(o) = s.strip_prefix("0o")
         && digits(o, 8)
     {
-        return int_or_big(i64::from_str_radix(o, 8).ok(), s);
+        return Some(int_or_big(i64::from_str_radix(o, 8).ok(), s));
     }
     if digits(body, 10) {
-        return int_or_big(s.parse::<i64>().ok(), s);
+        return Some(int_or_big(s.parse::<i64>().ok(), s));
     }
     if is_yaml_float(body)
         && let Ok(f) = s.parse::<f64>()
     {
-        return Value::Float(f);
+        return Some(Value::Float(f));
     }
-    Value::Str(s.to_string())
+    None
 }
 
-fn int_or_big(n: Option<i64>, s: &str) -> Value {
+fn int_or_big(n: Option<i64>, s: &str) -> Value<'static> {
     n.map_or_else(|| Value::BigInt(s.to_string()), Value::Int)
 }
 
@@ -601,7 +809,7 @@ fn is_yaml_float(t: &str) -> bool {
 }
 
 /// Parse YAML (one document) into a tree; `None` for a stream without a document.
-pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node>, LoadError> {
+pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node<'_>>, LoadError> {
     use saphyr_parser::Event;
     let mut r = YamlReader {
         parser: saphyr_parser::Parser::new_from_str(text),
@@ -638,8 +846,13 @@ pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node>, LoadError> {
 
 /// Parse JSON into a tree: syntax checked by serde_json (good messages), tree built by a small
 /// spanned parser.
-pub(crate) fn parse_json(text: &str) -> Result<Node, LoadError> {
-    if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(text) {
+pub(crate) fn parse_json(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
+    // Both passes at once (two cores): serde_json's check, and the spanned tree.
+    let (check, tree) = rayon::join(
+        || serde_json::from_str::<serde::de::IgnoredAny>(text),
+        || parse_json_tree(text),
+    );
+    if let Err(e) = check {
         let at = offset_of(text, e.line(), e.column());
         let msg = e.to_string();
         // serde_json appends " at line L column C": the rendered location says it already.
@@ -649,10 +862,16 @@ pub(crate) fn parse_json(text: &str) -> Result<Node, LoadError> {
             .to_string();
         return Err(syntax("JSON", msg, at..at, "here"));
     }
+    tree
+}
+
+/// The spanned tree of JSON text (its syntax errors are less precise than serde_json's).
+fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
     let mut p = JsonParser {
         text,
         bytes: text.as_bytes(),
         pos: 0,
+        deferred: None,
     };
     p.ws();
     let node = p.value(1)?;
@@ -660,16 +879,22 @@ pub(crate) fn parse_json(text: &str) -> Result<Node, LoadError> {
     if p.pos != p.bytes.len() {
         return Err(p.error("trailing characters"));
     }
-    Ok(node)
+    let lazy = match p.deferred {
+        Some(span) => Lazy::Json { text, span },
+        None => Lazy::None,
+    };
+    Ok((node, lazy))
 }
 
 struct JsonParser<'a> {
     text: &'a str,
     bytes: &'a [u8],
     pos: usize,
+    /// The top-level joint list, skipped (see [`Lazy::Json`]).
+    deferred: Option<Range<usize>>,
 }
 
-impl JsonParser<'_> {
+impl<'a> JsonParser<'a> {
     /// After an element of an object or array: consume `,` (more follow: `false`) or the
     /// closing bracket (`true`).
     fn list_end(&mut self, close: u8) -> Result<bool, LoadError> {
@@ -715,7 +940,7 @@ impl JsonParser<'_> {
         }
     }
 
-    fn value(&mut self, depth: usize) -> Result<Node, LoadError> {
+    fn value(&mut self, depth: usize) -> Result<Node<'a>, LoadError> {
         let start = self.pos;
         if depth > MAX_DEPTH {
             return Err(too_deep(start..start + 1));
@@ -738,7 +963,19 @@ impl JsonParser<'_> {
                             self.ws();
                             self.eat(b':')?;
                             self.ws();
-                            let value = self.value(depth + 1)?;
+                            let value = if depth == 1
+                                && self.deferred.is_none()
+                                && is_joint_list(&key)
+                                && let Some(span) = self.skip_list()?
+                            {
+                                self.deferred = Some(span.clone());
+                                Node {
+                                    span,
+                                    value: Value::Deferred,
+                                }
+                            } else {
+                                self.value(depth + 1)?
+                            };
                             push_entry(
                                 &mut entries,
                                 &mut index,
@@ -809,6 +1046,55 @@ impl JsonParser<'_> {
         })
     }
 
+    /// At a non-empty array: move past it (brackets and strings matched, nothing else
+    /// checked: serde_json checks the syntax) and give its span; `None` (not moved) at anything
+    /// else.
+    fn skip_list(&mut self) -> Result<Option<Range<usize>>, LoadError> {
+        let start = self.pos;
+        if self.bytes.get(start) != Some(&b'[') {
+            return Ok(None);
+        }
+        let mut i = start + 1;
+        while self
+            .bytes
+            .get(i)
+            .is_some_and(|b| matches!(b, b' ' | b'\t' | b'\n' | b'\r'))
+        {
+            i += 1;
+        }
+        if matches!(self.bytes.get(i), None | Some(b']')) {
+            return Ok(None);
+        }
+        // Inside the list's `[`.
+        let mut depth = 1usize;
+        while let Some(&b) = self.bytes.get(i) {
+            i += 1;
+            match b {
+                b'[' | b'{' => depth += 1,
+                b']' | b'}' => {
+                    depth = depth.saturating_sub(1);
+                    if depth == 0 {
+                        self.pos = i;
+                        return Ok(Some(start..i));
+                    }
+                }
+                b'"' => {
+                    while let Some(&c) = self.bytes.get(i) {
+                        i += 1;
+                        match c {
+                            b'\\' => i += 1,
+                            b'"' => break,
+                            _ => {}
+                        }
+                    }
+                }
+                _ => {}
+            }
+        }
+        self.pos = self.bytes.len();
+        Err(self.error("unterminated array"))
+    }
+
     fn hex4(&mut self) -> Result<u32, LoadError> {
         let h = self
             .text
@@ -819,8 +1105,26 @@ impl JsonParser<'_> {
         Ok(h)
     }
 
-    fn string(&mut self) -> Result<String, LoadError> {
+    fn string(&mut self) -> Result<Cow<'a, str>, LoadError> {
         self.eat(b'"')?;
+        let start = self.pos;
+        // The common case: no escape, borrowed from the text.
+        while self
+            .bytes
+            .get(self.pos)
+            .is_some_and(|&b| b != b'"' && b != b'\\')
+        {
+            self.pos += 1;
+        }
+        if self.bytes.get(self.pos) == Some(&b'"') {
+            let s = self
+                .text
+                .get(start..self.pos)
+                .ok_or_else(|| self.error("invalid string"))?;
+            self.pos += 1;
+            return Ok(Cow::Borrowed(s));
+        }
+        self.pos = start;
         let mut out = String::new();
         loop {
             let run = self.pos;
@@ -839,7 +1143,7 @@ impl JsonParser<'_> {
             match self.bytes.get(self.pos) {
                 Some(b'"') => {
                     self.pos += 1;
-                    return Ok(out);
+                    return Ok(Cow::Owned(out));
                 }
                 Some(b'\\') => {
                     self.pos += 1;
@@ -955,7 +1259,9 @@ mod tests {
         let y = parse_yaml("a: 1\nb: [x, 2.5, true]\nc: {d: -3}\n")
             .unwrap()
             .unwrap();
-        let j = parse_json(r#"{"a": 1, "b": ["x", 2.5, true], "c": {"d": -3}}"#).unwrap();
+        let j = parse_json(r#"{"a": 1, "b": ["x", 2.5, true], "c": {"d": -3}}"#)
+            .unwrap()
+            .0;
         assert_eq!(strip(&t), strip(&y));
         assert_eq!(strip(&t), strip(&j));
     }
@@ -968,7 +1274,7 @@ mod tests {
         assert_eq!(&text[es[2].key_span.clone()], "value");
         assert_eq!(&text[es[2].value.span.clone()], "abc");
         let j = r#"{"a": [1, "b"]}"#;
-        let n = parse_json(j).unwrap();
+        let n = parse_json(j).unwrap().0;
         let Value::Map(es) = &n.value else { panic!() };
         assert_eq!(&j[es[0].key_span.clone()], "\"a\"");
         assert_eq!(&j[es[0].value.span.clone()], "[1, \"b\"]");
@@ -976,29 +1282,38 @@ mod tests {
 
     #[test]
     fn yaml_core_schema() {
-        assert_eq!(resolve_plain("~"), Value::Null);
-        assert_eq!(resolve_plain("0x1F"), Value::Int(31));
-        assert_eq!(resolve_plain("-12"), Value::Int(-12));
-        assert_eq!(resolve_plain("1e3"), Value::Float(1000.0));
-        assert_eq!(resolve_plain(".5"), Value::Float(0.5));
-        assert_eq!(resolve_plain("-.inf"), Value::Float(f64::NEG_INFINITY));
-        assert!(matches!(resolve_plain(".nan"), Value::Float(f) if f.is_nan()));
-        assert_eq!(resolve_plain("1-2"), Value::Str("1-2".into()));
-        assert_eq!(resolve_plain("e3"), Value::Str("e3".into()));
+        assert_eq!(resolve_plain(Cow::Borrowed("~")), Value::Null);
+        assert_eq!(resolve_plain(Cow::Borrowed("0x1F")), Value::Int(31));
+        assert_eq!(resolve_plain(Cow::Borrowed("-12")), Value::Int(-12));
+        assert_eq!(resolve_plain(Cow::Borrowed("1e3")), Value::Float(1000.0));
+        assert_eq!(resolve_plain(Cow::Borrowed(".5")), Value::Float(0.5));
+        assert_eq!(
+            resolve_plain(Cow::Borrowed("-.inf")),
+            Value::Float(f64::NEG_INFINITY)
+        );
+        assert!(matches!(resolve_plain(Cow::Borrowed(".nan")), Value::Float(f) if f.is_nan()));
+        assert_eq!(
+            resolve_plain(Cow::Borrowed("1-2")),
+            Value::Str(Cow::Borrowed("1-2"))
+        );
+        assert_eq!(
+            resolve_plain(Cow::Borrowed("e3")),
+            Value::Str(Cow::Borrowed("e3"))
+        );
         assert!(matches!(
-            resolve_plain("100000000000000000000000"),
+            resolve_plain(Cow::Borrowed("100000000000000000000000")),
             Value::BigInt(_)
         ));
     }
 
     #[test]
     fn json_escapes() {
-        let n = parse_json(r#"["a\u00e9\ud83d\ude00\n"]"#).unwrap();
+        let n = parse_json(r#"["a\u00e9\ud83d\ude00\n"]"#).unwrap().0;
         assert_eq!(
             n.value,
             Value::Seq(vec![Node {
                 span: 1..24,
-                value: Value::Str("aé😀\n".into())
+                value: Value::Str(Cow::Owned("aé😀\n".into()))
             }])
         );
     }
