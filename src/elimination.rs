@@ -38,6 +38,24 @@ pub(crate) struct Elimination {
 impl Elimination {
     /// Rank-revealing elimination of the blocks over groups of the given sizes.
     pub(crate) fn run(sizes: &[usize], blocks: Vec<Block>, abs_tol: f64) -> Elimination {
+        match Self::run_within(sizes, blocks, abs_tol, u64::MAX) {
+            Ok(e) => e,
+            Err(_) => unreachable!("no memory cap"),
+        }
+    }
+
+    /// [`Elimination::run`] that stops, before allocating a front, once the fronts' factors
+    /// kept plus the blocks waiting plus the next front would pass `max_bytes` (fill-in on a
+    /// large, densely coupled block grows without a bound the caller can foresee). The error
+    /// is the number of bytes that step needed.
+    pub(crate) fn run_within(
+        sizes: &[usize],
+        blocks: Vec<Block>,
+        abs_tol: f64,
+        max_bytes: u64,
+    ) -> Result<Elimination, u64> {
+        let bytes = |m: &DMatrix<f64>| (m.len() as u64).saturating_mul(8);
+        let mut held: u64 = blocks.iter().map(|b| bytes(&b.mat)).sum();
         let n = sizes.len();
         let mut offsets = Vec::with_capacity(n);
         let mut acc = 0;
@@ -88,6 +106,7 @@ impl Elimination {
             let mut members: Vec<Block> = Vec::new();
             for id in ids {
                 if let Some(b) = store[id].take() {
+                    held = held.saturating_sub(bytes(&b.mat));
                     for &h in &b.groups {
                         of_group[h].remove(&id);
                     }
@@ -111,6 +130,16 @@ impl Elimination {
                 width += sizes[h];
             }
             let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
+            let front_bytes = (nrows as u64)
+                .saturating_mul(width as u64)
+                .saturating_mul(8);
+            let members_bytes: u64 = members.iter().map(|b| bytes(&b.mat)).sum();
+            let need = held
+                .saturating_add(members_bytes)
+                .saturating_add(front_bytes.saturating_mul(2));
+            if need > max_bytes {
+                return Err(need);
+            }
             let mut front = DMatrix::zeros(nrows, width);
             let mut r0 = 0;
             for b in &members {
@@ -156,6 +185,7 @@ impl Elimination {
                     }
                     rest = rest.rows(0, k).into_owned();
                 }
+                held = held.saturating_add(bytes(&rest));
                 add(
                     Block {
                         groups: others.clone(),
@@ -175,6 +205,7 @@ impl Elimination {
                     heap.push(Reverse((score(h, &store, &of_group), h, version[h])));
                 }
             }
+            held = held.saturating_add(bytes(&rmat));
             records.push(Record {
                 group: g,
                 perm,
@@ -183,14 +214,14 @@ impl Elimination {
                 r: rmat,
             });
         }
-        Elimination {
+        Ok(Elimination {
             offsets,
             sizes: sizes.to_vec(),
             records,
             rank,
             kept_min,
             dropped_max,
-        }
+        })
     }
 
     /// Work units of the elimination done (entries of the fronts' triangular factors times

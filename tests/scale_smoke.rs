@@ -4,8 +4,6 @@
 //! abort) or a panic fails the test.
 //!
 //! Release only (`.ci/run`): `cargo test --release --test scale_smoke -- --ignored`.
-//! Commands still waiting for issue 16 items 2 and 4 (transform at scale, geometric rigidity
-//! at scale, the structure and rigid DOT views) run only with `MBSA_SMOKE_ALL=1`.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -17,7 +15,7 @@ const MEMORY_KIB: u64 = 4_000_000;
 /// builds (the slowest command, `analyze` on random spatial, took 85 s there; 6 s when quiet).
 const SECONDS: u64 = 240;
 
-const READY: &[&[&str]] = &[
+const COMMANDS: &[&[&str]] = &[
     &["mobility"],
     &["check"],
     &["analyze"],
@@ -26,9 +24,6 @@ const READY: &[&[&str]] = &[
     &["rigid", "--method", "counting"],
     &["dot"],
     &["dot", "--view", "topology"],
-];
-
-const PENDING: &[&[&str]] = &[
     &["rigid", "--method", "geometric"],
     &["rigid"],
     &["dot", "--view", "structure"],
@@ -107,11 +102,9 @@ fn every_command_on_a_hundred_thousand_bodies() {
             &["assur", "--class", "1", "--groups", "25000"],
         ),
     ];
-    let all = std::env::var_os("MBSA_SMOKE_ALL").is_some();
     let mut failures = Vec::new();
     for file in &files {
-        let commands = READY.iter().chain(if all { PENDING } else { &[] });
-        for args in commands {
+        for args in COMMANDS {
             let mut full: Vec<String> = args.iter().map(|s| s.to_string()).collect();
             full.insert(1, file.to_str().expect("UTF-8").to_string());
             let (code, secs, tail) = capped(&full);

@@ -27,7 +27,7 @@
 //!
 //! Results hold for the configuration analysed (instantaneous, first order).
 
-use crate::budget::{Budget, BudgetExceeded, Meter};
+use crate::budget::{Budget, BudgetExceeded, Limit, Meter};
 use crate::elimination::{Block, Elimination, sigma_max};
 use crate::exact::Fp;
 use crate::mechanism::{Mechanism, Space};
@@ -988,7 +988,7 @@ fn analyze_models(
             },
         )?;
         let mut abs_tol = base_abs;
-        let mut elim = Elimination::run(&lsizes, blocks.clone(), abs_tol);
+        let mut elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv)?;
         meter.charge(elim_work(&elim))?;
         // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating
         // point cannot tell a large, badly conditioned full-rank system from a deficient one
@@ -1028,7 +1028,7 @@ fn analyze_models(
                 } else {
                     elim.dropped_max * (1.0 - 1e-9)
                 };
-                elim = Elimination::run(&lsizes, blocks.clone(), abs_tol);
+                elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv)?;
                 meter.charge(elim_work(&elim))?;
             }
             if one_part {
@@ -1122,7 +1122,7 @@ fn analyze_models(
                 }
                 tblocks.push(Block { groups: ps, mat });
             }
-            let telim = Elimination::run(&psizes, tblocks, abs_tol);
+            let telim = eliminate(&psizes, tblocks, abs_tol, budget, part.bodies.len() as u64)?;
             meter.charge(elim_work(&telim))?;
             let e = prow.saturating_sub(telim.rank) as u64;
             budget.check_memory(e.saturating_mul(prow as u64).saturating_mul(16), || {
@@ -1561,6 +1561,34 @@ fn analyze_models(
             warning,
             exact: exact_note,
         },
+    })
+}
+
+/// [`Elimination::run`] within the memory budget: fill-in on a large, densely coupled block
+/// can exceed any estimate made before eliminating, so the elimination stops itself. It may
+/// hold half the memory limit: the blocks it eliminates (and their copy kept for a retry at
+/// another threshold) and the joint models stay alive beside it.
+fn eliminate(
+    sizes: &[usize],
+    blocks: Vec<Block>,
+    abs_tol: f64,
+    budget: &Budget,
+    bodies: u64,
+) -> Result<Elimination, BudgetExceeded> {
+    let cap = budget.max_memory_bytes / 2;
+    Elimination::run_within(sizes, blocks, abs_tol, cap).map_err(|held| {
+        BudgetExceeded {
+            limit: Limit::Memory,
+            what: format!(
+                "the geometric rigidity analysis (the elimination of one rigid block of {bodies} \
+                 bodies over {} unknowns, with its fill-in)",
+                sizes.iter().sum::<usize>()
+            ),
+            // Past half the limit with fill still growing: at least twice that in all.
+            needed: held.saturating_mul(2),
+            at_least: true,
+            allowed: budget.max_memory_bytes,
+        }
     })
 }
 
