@@ -72,7 +72,8 @@ def run(args, cap_seconds, stdout=subprocess.DEVNULL):
     # `time` writes "Command exited with non-zero status N" before the numbers on failure.
     wall, user, system, rss, code = fields[-5:]
     cpu = float(user) + float(system)
-    if any("signal 24" in f for f in fields) or cpu >= cap_seconds:  # SIGXCPU
+    # Killed by SIGXCPU at the cap: `time` says "Command terminated by signal 24".
+    if "signal" in fields or cpu >= cap_seconds - 0.05:
         return None, None, None, "timeout"
     return float(wall), cpu, int(rss) / 1024, int(code)
 
