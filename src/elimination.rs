@@ -365,3 +365,65 @@ pub(crate) fn sigma_max(sizes: &[usize], offsets: &[usize], blocks: &[Block]) ->
     // Power iteration converges from below; a small margin keeps the threshold conservative.
     est * 1.0
 }
+/// The biconnected blocks of a graph given by adjacency lists of `(neighbour, edge)` (Hopcroft–
+/// Tarjan, iterative, from `root` first, then from each further component's first vertex):
+/// each block's root (the vertex through which the search entered it) and its edges ascending,
+/// in the order the search closes them. Shared by the structural rank check and the geometric
+/// rigidity analysis, which both work block by block.
+pub(crate) fn biconnected_blocks(
+    adj: &[Vec<(usize, usize)>],
+    root: usize,
+) -> Vec<(usize, Vec<usize>)> {
+    let nb = adj.len();
+    let mut disc = vec![usize::MAX; nb];
+    let mut low = vec![0usize; nb];
+    let mut time = 0;
+    let mut estack: Vec<usize> = Vec::new();
+    let mut blocks: Vec<(usize, Vec<usize>)> = Vec::new();
+    for s in std::iter::once(root).chain(0..nb) {
+        if disc[s] != usize::MAX {
+            continue;
+        }
+        disc[s] = time;
+        low[s] = time;
+        time += 1;
+        // (node, edge it was entered by, next neighbour index)
+        let mut stack: Vec<(usize, usize, usize)> = vec![(s, usize::MAX, 0)];
+        while let Some(&mut (v, via, ref mut next)) = stack.last_mut() {
+            if *next < adj[v].len() {
+                let (w, e) = adj[v][*next];
+                *next += 1;
+                if e == via {
+                    continue;
+                }
+                if disc[w] == usize::MAX {
+                    estack.push(e);
+                    disc[w] = time;
+                    low[w] = time;
+                    time += 1;
+                    stack.push((w, e, 0));
+                } else if disc[w] < disc[v] {
+                    estack.push(e);
+                    low[v] = low[v].min(disc[w]);
+                }
+            } else {
+                stack.pop();
+                if let Some(&(p, _, _)) = stack.last() {
+                    low[p] = low[p].min(low[v]);
+                    if low[v] >= disc[p] {
+                        let mut block = Vec::new();
+                        while let Some(e) = estack.pop() {
+                            block.push(e);
+                            if e == via {
+                                break;
+                            }
+                        }
+                        block.sort_unstable();
+                        blocks.push((p, block));
+                    }
+                }
+            }
+        }
+    }
+    blocks
+}

@@ -650,64 +650,18 @@ fn biconnected_parts(nb: usize, pairs: &[Pair], frame: usize) -> Vec<Part> {
             });
         }
     }
-    let mut disc = vec![usize::MAX; nb];
-    let mut low = vec![0usize; nb];
-    let mut time = 0;
-    let mut estack: Vec<usize> = Vec::new();
-    for s in std::iter::once(frame).chain(0..nb) {
-        if disc[s] != usize::MAX {
-            continue;
-        }
-        disc[s] = time;
-        low[s] = time;
-        time += 1;
-        // (node, edge it was entered by, next neighbour index)
-        let mut stack: Vec<(usize, usize, usize)> = vec![(s, usize::MAX, 0)];
-        while let Some(&mut (v, via, ref mut next)) = stack.last_mut() {
-            if *next < adj[v].len() {
-                let (x, e) = adj[v][*next];
-                *next += 1;
-                if e == via {
-                    continue;
-                }
-                if disc[x] == usize::MAX {
-                    estack.push(e);
-                    disc[x] = time;
-                    low[x] = time;
-                    time += 1;
-                    stack.push((x, e, 0));
-                } else if disc[x] < disc[v] {
-                    estack.push(e);
-                    low[v] = low[v].min(disc[x]);
-                }
-            } else {
-                stack.pop();
-                if let Some(&(p, _, _)) = stack.last() {
-                    low[p] = low[p].min(low[v]);
-                    if low[v] >= disc[p] {
-                        let mut block = Vec::new();
-                        while let Some(e) = estack.pop() {
-                            block.push(e);
-                            if e == via {
-                                break;
-                            }
-                        }
-                        block.sort_unstable();
-                        let mut bodies: Vec<usize> = block
-                            .iter()
-                            .flat_map(|&e| [pairs[e].hub, pairs[e].other])
-                            .collect();
-                        bodies.sort_unstable();
-                        bodies.dedup();
-                        out.push(Part {
-                            root: p,
-                            pairs: block,
-                            bodies,
-                        });
-                    }
-                }
-            }
-        }
+    for (root, block) in crate::elimination::biconnected_blocks(&adj, frame) {
+        let mut bodies: Vec<usize> = block
+            .iter()
+            .flat_map(|&e| [pairs[e].hub, pairs[e].other])
+            .collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        out.push(Part {
+            root,
+            pairs: block,
+            bodies,
+        });
     }
     out.sort_by_key(|p| p.pairs.first().copied());
     out

@@ -949,57 +949,10 @@ fn biconnected_blocks(nb: usize, eqs: &Equations, root: usize) -> Vec<Vec<usize>
             adj[o].push((h, e));
         }
     }
-    let mut disc = vec![usize::MAX; nb];
-    let mut low = vec![0usize; nb];
-    let mut time = 0;
-    let mut estack: Vec<usize> = Vec::new();
-    let mut blocks: Vec<Vec<usize>> = Vec::new();
-    let starts = std::iter::once(root).chain(0..nb);
-    for s in starts {
-        if disc[s] != usize::MAX {
-            continue;
-        }
-        disc[s] = time;
-        low[s] = time;
-        time += 1;
-        // (node, edge it was entered by, next neighbour index)
-        let mut stack: Vec<(usize, usize, usize)> = vec![(s, usize::MAX, 0)];
-        while let Some(&mut (v, via, ref mut next)) = stack.last_mut() {
-            if *next < adj[v].len() {
-                let (w, e) = adj[v][*next];
-                *next += 1;
-                if e == via {
-                    continue;
-                }
-                if disc[w] == usize::MAX {
-                    estack.push(e);
-                    disc[w] = time;
-                    low[w] = time;
-                    time += 1;
-                    stack.push((w, e, 0));
-                } else if disc[w] < disc[v] {
-                    estack.push(e);
-                    low[v] = low[v].min(disc[w]);
-                }
-            } else {
-                stack.pop();
-                if let Some(&(p, _, _)) = stack.last() {
-                    low[p] = low[p].min(low[v]);
-                    if low[v] >= disc[p] {
-                        let mut block = Vec::new();
-                        while let Some(e) = estack.pop() {
-                            block.push(e);
-                            if e == via {
-                                break;
-                            }
-                        }
-                        block.sort_unstable();
-                        blocks.push(block);
-                    }
-                }
-            }
-        }
-    }
+    let mut blocks: Vec<Vec<usize>> = crate::elimination::biconnected_blocks(&adj, root)
+        .into_iter()
+        .map(|(_, block)| block)
+        .collect();
     blocks.sort();
     blocks
 }
