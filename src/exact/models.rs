@@ -222,6 +222,19 @@ pub fn pairs_rank(
     pairs: impl Iterator<Item = (usize, usize, usize)>,
     group: impl Fn(usize) -> Option<usize>,
 ) -> usize {
+    pairs_factor(b, ngroups, rows, pairs, group).map_or(0, |f| f.rank())
+}
+
+/// The exact factorization behind [`pairs_rank`] (`None` when the pairs give no row): its
+/// rank, and random vectors of its null space (the motions, B columns per group in group
+/// order) through [`Factor::random_null_vectors`].
+pub fn pairs_factor(
+    b: usize,
+    ngroups: usize,
+    rows: &[DMatrix<Fp>],
+    pairs: impl Iterator<Item = (usize, usize, usize)>,
+    group: impl Fn(usize) -> Option<usize>,
+) -> Option<Factor> {
     let mut a = SparseMatrix::with_groups(vec![b; ngroups]);
     for (joint, hub, other) in pairs {
         let r = &rows[joint];
@@ -242,9 +255,9 @@ pub fn pairs_rank(
         }
     }
     if a.nrows() == 0 {
-        return 0;
+        return None;
     }
-    Factor::new(&a).rank()
+    Some(Factor::new(&a))
 }
 
 #[cfg(test)]
