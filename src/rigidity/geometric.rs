@@ -584,6 +584,34 @@ struct ExactPart<'a> {
 }
 
 impl ExactPart<'_> {
+    /// The part's pairs carrying its self-stresses
+    /// ([`crate::exact::models::pairs_stress_support`]).
+    fn stress_support(&self, meter: &mut Meter) -> Result<Vec<bool>, BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let mut local: BTreeMap<usize, usize> = BTreeMap::new();
+        for &x in &part.bodies {
+            if x != self.frame && x != part.root {
+                let g = local.len();
+                local.insert(x, g);
+            }
+        }
+        meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+        let list: Vec<(usize, usize, usize)> = part
+            .pairs
+            .iter()
+            .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
+            .collect();
+        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        Ok(crate::exact::models::pairs_stress_support(
+            b,
+            self.rows,
+            &list,
+            |x| local.get(&x).copied(),
+            local.len(),
+            0x7374_7265_7373 ^ seed,
+        ))
+    }
+
     /// The rank and the part's local union-find (a parent per body of `part.bodies`, each
     /// pointing to its cluster's smallest member); locked DOF are added to `locked`.
     fn run(
@@ -1212,20 +1240,66 @@ fn analyze_models(
                 b,
             };
             let (r, luf) = ctx.run(budget, meter, &mut locked_by_joint)?;
-            self_stresses(
-                part,
-                &pairs,
-                models,
-                &comp,
-                &lgroup,
-                lbody.len(),
-                r,
-                base_abs,
-                Some(r),
-                budget,
-                meter,
-                &mut w,
-            )?;
+            let prow: usize = part
+                .pairs
+                .iter()
+                .map(|&pi| models[pairs[pi].joint].rows.nrows())
+                .sum();
+            if prow > r {
+                // The self-stresses live on the pairs a random exact self-stress reaches:
+                // the floating-point ones (for the joints' weights) come from those rows
+                // alone, whose left null space is the whole one's.
+                let support = ctx.stress_support(meter)?;
+                let sub = Part {
+                    root: part.root,
+                    pairs: part
+                        .pairs
+                        .iter()
+                        .zip(&support)
+                        .filter(|(_, s)| **s)
+                        .map(|(&pi, _)| pi)
+                        .collect(),
+                    bodies: Vec::new(),
+                };
+                let srows: usize = sub
+                    .pairs
+                    .iter()
+                    .map(|&pi| models[pairs[pi].joint].rows.nrows())
+                    .sum();
+                let mut sbodies: Vec<usize> = sub
+                    .pairs
+                    .iter()
+                    .flat_map(|&pi| [pairs[pi].hub, pairs[pi].other])
+                    .collect();
+                sbodies.sort_unstable();
+                sbodies.dedup();
+                let mut sgroup: BTreeMap<usize, usize> = BTreeMap::new();
+                for &x in &sbodies {
+                    if lgroup.contains_key(&x) {
+                        let g = sgroup.len();
+                        sgroup.insert(x, g);
+                    }
+                }
+                let sub = Part {
+                    bodies: sbodies,
+                    ..sub
+                };
+                let target = srows.saturating_sub(prow - r);
+                self_stresses(
+                    &sub,
+                    &pairs,
+                    models,
+                    &comp,
+                    &sgroup,
+                    sgroup.len(),
+                    target,
+                    base_abs,
+                    Some(target),
+                    budget,
+                    meter,
+                    &mut w,
+                )?;
+            }
             rank += r;
             float_rank += r;
             for (x, &l) in luf.iter().enumerate() {
