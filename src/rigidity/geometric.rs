@@ -2058,7 +2058,7 @@ mod tests {
         let mut ms = vec![generate::stewart_stack(2).expect("small")];
         for seed in 0..4 {
             ms.push(generate::assur(1, 6, seed, Variant::A).expect("small"));
-            ms.push(generate::assur_spatial(2, 3, seed as u64, Variant::B).expect("small"));
+            ms.push(generate::assur_spatial(2, 3, seed, Variant::B).expect("small"));
             ms.push(generate::random(30, seed % 2 == 0, seed).expect("small").0);
         }
         for m in &ms {
