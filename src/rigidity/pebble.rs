@@ -700,10 +700,6 @@ impl Fast {
                 }
                 self.work += mine.len() as u64;
                 self.members[keep as usize].extend(mine);
-                let size = self.members[keep as usize].len();
-                if size < self.n_bodies {
-                    self.proper = true;
-                }
                 self.peb[x as usize] = 0;
             } else {
                 // A node of the component: pinned to the super-body by its B − k bars.
@@ -714,6 +710,10 @@ impl Fast {
             }
         }
         self.peb[keep as usize] = self.l;
+        let size = self.members[keep as usize].len();
+        if size >= 2 && size < self.n_bodies {
+            self.proper = true;
+        }
     }
 }
 
