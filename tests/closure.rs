@@ -117,6 +117,37 @@ fn a_four_bar_with_a_gap_is_reported_in_analyze_and_rigid_with_a_warning() {
     assert!(err.is_empty(), "{err}");
 }
 
+/// `dot` carries the closure line under its title in every view when the configuration
+/// misses closure (as `analyze`'s closure section); a closed file's pictures have none.
+#[test]
+fn dot_titles_carry_the_closure_line_of_an_open_file() {
+    for view in ["diagram", "structure", "topology", "rigid"] {
+        let (code, out, err) = mbsa(&["dot", &gap(), "--view", view]);
+        assert_eq!(code, 0, "{view}: {err}");
+        let label = out
+            .lines()
+            .find(|l| l.trim_start().starts_with("graph ["))
+            .unwrap_or_default();
+        assert!(
+            label.contains("\\nclosure (warning): the configuration misses closure by up to 1.000e-2 at 1 joint(s)")
+                && label.contains("\\n  joint C: 1.000e-2"),
+            "{view}: {label}"
+        );
+        if view == "diagram" {
+            snapshot("closure_dot_four-bar-gap", &out);
+        }
+    }
+    // Closed: the title alone.
+    let (code, out, err) = mbsa(&[
+        "dot",
+        "mechanisms/four-bar-3d-driven.toml",
+        "--view",
+        "structure",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("closure"), "{out}");
+}
+
 #[test]
 fn a_gross_gap_is_an_error_naming_the_joint() {
     for cmd in ["analyze", "rigid", "dot", "transform", "check"] {
