@@ -733,11 +733,11 @@ fn n_four_bar_40_singular(name: &str) -> (Mechanism, Configuration) {
 }
 
 #[test]
-#[ignore = "experiment: the finite mobility of the N-four-bar twins over seeds"]
+#[ignore = "experiment (not committed)"]
 fn n_four_bar_40_seeds() {
     for name in ["n-four-bar-40-3d", "n-four-bar-40"] {
         let (m, cfg) = n_four_bar_40_singular(name);
-        for seed in 1..4 {
+        for seed in 1..6 {
             let t = std::time::Instant::now();
             let o = FiniteOptions {
                 seed,
@@ -756,14 +756,14 @@ fn n_four_bar_40_seeds() {
     }
 }
 
-fn n_four_bar_40_case(name: &str) {
+fn n_four_bar_40_case(name: &str, singular: Verdict, regular: Verdict) {
     let (m, cfg) = n_four_bar_40_singular(name);
     let t = std::time::Instant::now();
     let f = finite_mobility(&m, &cfg, &FiniteOptions::default()).unwrap();
     let secs = t.elapsed().as_secs_f64();
     assert_eq!(f.first_order, 41, "{name}: {f:?}");
     assert_eq!(f.finite, 1, "{name}: {f:?}");
-    assert_eq!(f.verdict, Verdict::Singular, "{name}");
+    assert_eq!(f.verdict, singular, "{name}");
     assert_eq!(f.instantaneous_only, 40, "{name}");
     assert!(!f.singular_joints.is_empty(), "{name}");
     assert!(
@@ -781,18 +781,37 @@ fn n_four_bar_40_case(name: &str) {
     )
     .unwrap();
     assert_eq!((r.first_order, r.finite), (1, 1), "{name}");
+    assert_eq!(r.verdict, regular, "{name}");
     eprintln!("{name}: singular pose analysed in {secs:.2} s");
 }
 
 #[test]
 fn n_four_bar_40_singular_pose_planar() {
-    n_four_bar_40_case("n-four-bar-40");
+    n_four_bar_40_case("n-four-bar-40", Verdict::Singular, Verdict::Regular);
 }
 
+/// The 3D twin (every R axis along z) has the planar twin's solution set exactly: every body
+/// is reached from the frame by a tree of R joints with parallel axes (A0, VB0, B1, VB1, ...),
+/// so every configuration the joints allow is planar, and the closing joints P_k add nothing
+/// out of the plane. In the plane, window k is a rhombus (ground, V_(k-1), H_k, V_k all of
+/// length 1) whose closure equation in the verticals' angles (a = V_(k-1), b = V_k, from the
+/// flat pose) is exactly -4 sin(a/2) cos(b/2) sin((b - a)/2) = 0: near the flat pose a = 0
+/// or a = b. Each of the 40 windows fixes one angle from the next: 2^40 branches, every one of
+/// dimension 1. So: first order 41 (no out-of-plane first-order motion either), finite 1, as
+/// in the plane; the verdict adds "overconstrained by design" because the spatial count is
+/// -119 (3 redundant constraints per planar loop written in space), and at the parallelogram
+/// pose it is overconstrained-moving with 1 and 1.
 #[test]
-#[ignore = "open: the 3D twin's tangent slices still meet two (finite 2 instead of 1), and it takes minutes; docs/algorithms.md"]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "slow in debug (150-230 s on the shared machine): run with --release"
+)]
 fn n_four_bar_40_singular_pose_in_space() {
-    n_four_bar_40_case("n-four-bar-40-3d");
+    n_four_bar_40_case(
+        "n-four-bar-40-3d",
+        Verdict::SingularOverconstrained,
+        Verdict::OverconstrainedMoving,
+    );
 }
 
 /// Every bundled mechanism whose file has complete joint geometry, its driven joints (or, if

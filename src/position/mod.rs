@@ -35,7 +35,7 @@ pub use finite::{
 };
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
 pub use pose::{Configuration, Pose, PoseReport};
-pub use realize::with_random_geometry;
+pub use realize::{Redrawn, with_random_geometry, with_random_geometry_away_from_folds};
 pub use residual::{ModelError, PositionModel};
 pub use solve::{
     JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,

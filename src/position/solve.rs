@@ -172,12 +172,12 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
                 .filter(|&b| known_at[b] < known_at[first])
                 .min_by_key(|&b| known_at[b]);
             if let Some(root) = root {
-                for q in p..e {
-                    let b = model.pairs[q].b;
+                for (q, pair) in model.pairs.iter().enumerate().take(e).skip(p) {
+                    let b = pair.b;
                     if b == root {
                         continue;
                     }
-                    skip[q] = model.pairs[q].driven == 0;
+                    skip[q] = pair.driven == 0;
                     links.push((
                         q,
                         Link {
