@@ -732,30 +732,6 @@ fn n_four_bar_40_singular(name: &str) -> (Mechanism, Configuration) {
     (m, cfg)
 }
 
-#[test]
-#[ignore = "experiment (not committed)"]
-fn n_four_bar_40_seeds() {
-    for name in ["n-four-bar-40-3d", "n-four-bar-40"] {
-        let (m, cfg) = n_four_bar_40_singular(name);
-        for seed in 1..6 {
-            let t = std::time::Instant::now();
-            let o = FiniteOptions {
-                seed,
-                ..FiniteOptions::default()
-            };
-            let f = finite_mobility(&m, &cfg, &o).unwrap();
-            eprintln!(
-                "{name} seed {seed}: first {} finite {} samples {:?} verdict {:?} in {:.1} s",
-                f.first_order,
-                f.finite,
-                f.samples,
-                f.verdict,
-                t.elapsed().as_secs_f64()
-            );
-        }
-    }
-}
-
 fn n_four_bar_40_case(name: &str, singular: Verdict, regular: Verdict) {
     let (m, cfg) = n_four_bar_40_singular(name);
     let t = std::time::Instant::now();
