@@ -1051,3 +1051,43 @@ fn cli_solve_over_budget_exits_2_naming_the_limit() {
         );
     }
 }
+
+/// Random geometry drawn again away from folds: every group's conditioning at the reference
+/// reaches the margin (some groups had to be drawn again), and a turned crank then solves
+/// group by group like the global solve.
+#[test]
+fn random_geometry_away_from_folds_has_room_in_every_group() {
+    use mbsa::generate::{self, Variant};
+    let m = generate::assur(1, 199, 1, Variant::A).unwrap();
+    let first = with_random_geometry(&m, 3);
+    let model = PositionModel::new(&first).unwrap();
+    let a = analysis(&first);
+    let sched = schedule(&first, &a, &model);
+    let (m2, r) =
+        mbsa::position::with_random_geometry_away_from_folds(&m, 3, &sched, 0.05, 50).unwrap();
+    assert!(r.steps > 0 && r.draws >= r.steps, "{r:?}");
+    assert_eq!(r.below, 0, "{r:?}");
+    assert!(r.worst >= 0.05, "{r:?}");
+    let model2 = PositionModel::new(&m2).unwrap();
+    let sched2 = schedule(&m2, &a, &model2);
+    let tg = targets(&m2, &model2, &[(0, vec![deg(0.5)])]).unwrap();
+    let start = Configuration::reference(m2.bodies.len());
+    let o = NewtonOptions {
+        tolerance: 1e-13,
+        ..NewtonOptions::default()
+    };
+    let g = solve_groups(&m2, &model2, &sched2, &tg, &start, &o).unwrap();
+    let w = solve_global(&m2, &model2, &tg, &start, &o).unwrap();
+    for b in 0..m2.bodies.len() {
+        let (pg, pw) = (&g.config.poses[b], &w.config.poses[b]);
+        assert!(
+            (pg.rotation - pw.rotation).norm() < 1e-8
+                && (pg.translation - pw.translation).norm() < 1e-8,
+            "body {}",
+            m2.body_id(b)
+        );
+    }
+    for st in &g.steps {
+        assert!(st.conditioning > 1e-3, "{st:?}");
+    }
+}
