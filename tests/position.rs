@@ -925,10 +925,31 @@ fn multiple_joint_listing_order_solves_the_same() {
 /// body started 1e-5 off the file's configuration and the crank at 0: both bring every body
 /// back (the reference is the solution) and agree.
 fn generated_return(m: &Mechanism) {
-    let m = with_random_geometry(m, 3);
-    let model = PositionModel::new(&m).unwrap();
+    generated_return_with(m, None);
+}
+
+/// [`generated_return`] with the geometry drawn away from folds (every group's conditioning
+/// at the reference at least `margin`) when given.
+fn generated_return_with(m: &Mechanism, margin: Option<f64>) {
+    let first = with_random_geometry(m, 3);
+    let model = PositionModel::new(&first).unwrap();
+    let a = analysis(&first);
+    let (m, model, sched) = match margin {
+        Some(c) => {
+            let sched = schedule(&first, &a, &model);
+            let (m2, r) =
+                mbsa::position::with_random_geometry_away_from_folds(m, 3, &sched, c, 50).unwrap();
+            eprintln!("{}: away from folds: {r:?}", m.name);
+            let model2 = PositionModel::new(&m2).unwrap();
+            let sched2 = schedule(&m2, &a, &model2);
+            (m2, model2, sched2)
+        }
+        None => {
+            let sched = schedule(&first, &a, &model);
+            (first, model, sched)
+        }
+    };
     let tg = targets(&m, &model, &[]).unwrap();
-    let sched = schedule(&m, &analysis(&m), &model);
     let mut start = Configuration::reference(m.bodies.len());
     let mut rng = SplitMix64::new(11);
     let b = model.b();
@@ -979,8 +1000,17 @@ fn generated_return_groups_equal_global() {
 #[cfg_attr(debug_assertions, ignore = "slow in debug: run with --release")]
 fn generated_1000_bodies_groups_equal_global() {
     use mbsa::generate::{self, Variant};
-    generated_return(&generate::assur(1, 499, 1, Variant::A).unwrap());
-    generated_return(&generate::assur_spatial(1, 499, 1, Variant::A).unwrap());
+    // At 10^3 bodies some random dyads sit so near a fold (conditioning 1e-8) that the
+    // global Newton stalls at 4.6e-13 above the 1e-13 asked (measured), and a margin of 1e-2
+    // per group still lets pose errors grow level by level past 1e-8: the geometry is drawn
+    // away from folds with a margin of 0.1 (planar; spatial groups rarely reach 0.1: 0.03,
+    // where 1e-2 still left a global pose 1e-8 off) (docs/benchmarks.md, "Geometry away from
+    // folds").
+    generated_return_with(&generate::assur(1, 499, 1, Variant::A).unwrap(), Some(0.1));
+    generated_return_with(
+        &generate::assur_spatial(1, 499, 1, Variant::A).unwrap(),
+        Some(0.03),
+    );
 }
 
 #[test]

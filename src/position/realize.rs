@@ -33,7 +33,8 @@ pub struct Redrawn {
 /// joints solved by a step of `sched` (the pairs of the step) are drawn again (up to `tries`
 /// times, other seeds) while that step's Jacobian at the reference configuration has a
 /// conditioning (smallest over largest singular value, as [`super::StepReport`]'s) below
-/// `margin`: a dyad near a fold (its links nearly aligned) is replaced by one with room, so a
+/// `margin` (the best draw is kept when none reaches it): a dyad near a fold (its links nearly
+/// aligned) is replaced by one with room, so a
 /// small input step or perturbation keeps every group solvable. Each joint belongs to one step,
 /// so redrawing a step changes no other step's equations. Linear in the size (a dense SVD per
 /// step draw). Driven DOF count as equations (the input fixes them).
@@ -89,17 +90,42 @@ pub fn with_random_geometry_away_from_folds(
                 .fold(top, f64::min)
                 / top)
         };
+        let mine: Vec<usize> = joints
+            .iter()
+            .copied()
+            .filter(|&ji| owner[ji] == Some(si))
+            .collect();
         let mut c = conditioning(&out)?;
+        // The best draw so far (kept when no draw reaches the margin).
+        let mut best: (f64, Vec<_>) = (
+            c,
+            mine.iter()
+                .map(|&ji| out.joints[ji].geometry.clone())
+                .collect(),
+        );
         let mut attempt = 0;
         while c < margin && attempt < tries {
             attempt += 1;
             done.draws += 1;
             let again = seed ^ (attempt as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-            for &ji in joints.iter().filter(|&&ji| owner[ji] == Some(si)) {
+            for &ji in &mine {
                 let mut rng = SplitMix64::new(joint_seed(again, ji));
                 out.joints[ji].geometry = random_geometry(out.joints[ji].kind, m.space, &mut rng);
             }
             c = conditioning(&out)?;
+            if c > best.0 {
+                let kept = mine
+                    .iter()
+                    .map(|&ji| out.joints[ji].geometry.clone())
+                    .collect();
+                best = (c, kept);
+            }
+        }
+        if c < best.0 {
+            for (&ji, g) in mine.iter().zip(best.1) {
+                out.joints[ji].geometry = g;
+            }
+            c = best.0;
         }
         if attempt > 0 {
             done.steps += 1;
