@@ -534,6 +534,9 @@ impl Interner {
     }
 }
 
+/// Body lists up to this long are checked for a repeated body by a scan.
+const SCAN_BODIES: usize = 16;
+
 /// A joint list: its entry (for locations), its value taken out of the tree, and where its
 /// deferred items come from.
 type JointList<'e, 'a> = (&'e Entry<'a>, Option<Value<'a>>, Lazy<'a>);
@@ -588,11 +591,13 @@ fn build_joints<'a>(
         None => None,
     };
     let frame_index = interner.get(frame.clone());
-    let mut read: Vec<Joint> = Vec::new();
+    let mut read: Vec<Joint> = Vec::with_capacity(lazy.len_hint(&list));
     // The span that locates each joint in later errors.
     let mut joint_spans: Vec<Range<usize>> = Vec::new();
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
     let mut any_name = false;
+    // Per body: the last joint of more than SCAN_BODIES bodies that named it, and where.
+    let mut seen: Vec<(u32, u32)> = Vec::new();
     lazy.for_each(list, &mut |j: Node<'a>| {
         let es = as_map(&j, "a joint")?;
         check_keys(es, JOINT_KEYS, "joint")?;
@@ -644,11 +649,24 @@ fn build_joints<'a>(
             ));
         }
         let mut ids: Vec<usize> = Vec::with_capacity(items.len());
+        // A body named twice in one joint: a scan for short lists, else a mark per body (the
+        // joint's number and the item's position), so that one joint of n bodies is linear.
+        let stamp = read.len() as u32;
         for (i, b) in items.iter().enumerate() {
             let id = as_id(b, "a body id")?;
             any_name |= matches!(id, BodyId::Name(_));
             let k = interner.get(id);
-            if let Some(first) = ids.iter().position(|x| *x == k) {
+            let again = if items.len() <= SCAN_BODIES {
+                ids.iter().position(|x| *x == k)
+            } else {
+                if seen.len() <= k {
+                    seen.resize(interner.ids.len().max(k + 1), (u32::MAX, 0));
+                }
+                let (joint, at) = seen[k];
+                seen[k] = (stamp, i as u32);
+                (joint == stamp).then_some(at as usize)
+            };
+            if let Some(first) = again {
                 return Err(LoadError::new(
                     ErrorKind::RepeatedBody,
                     format!("body `{}` appears twice in one joint", interner.ids[k]),

@@ -110,6 +110,22 @@ pub(crate) enum Lazy<'a> {
 }
 
 impl<'a> Lazy<'a> {
+    /// About how many items `list` holds (to size the joint vector once: growing a vector of
+    /// a million joints by doubling holds both copies at once). Counted, not parsed: the
+    /// `[[joint]]` headers of a TOML file, the `"bodies"` keys of a JSON list; bounded by the
+    /// text's length, so a wrong guess costs little.
+    pub(crate) fn len_hint(&self, list: &Value<'a>) -> usize {
+        match (list, self) {
+            (Value::Seq(items), _) => items.len(),
+            (Value::Deferred, Lazy::Json { text, span }) => text
+                .get(span.clone())
+                .map_or(0, |t| t.matches("\"bodies\"").count()),
+            // Every header but one at the very start follows a line break.
+            (Value::Deferred, Lazy::Toml { text, .. }) => text.matches(JOINT_HEADER).count() + 1,
+            _ => 0,
+        }
+    }
+
     /// Call `f` on every item of `list` (a `Seq`, or the `Deferred` list), in order, each item
     /// dropped after its call; stops at the first error.
     pub(crate) fn for_each(
