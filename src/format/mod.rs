@@ -5,6 +5,7 @@
 //! reference of format v1). [`load`] takes text; [`load_bytes`] also checks size and UTF-8.
 
 mod error;
+mod fast_toml;
 mod model;
 mod schema;
 mod tree;
@@ -173,6 +174,18 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
     let name = default_name(source_name);
     match format {
         Format::Toml => {
+            // The common shapes in one pass (`fast_toml`); anything it does not read, and any
+            // error, read again by the toml crate below, which finds and locates every error.
+            if let Some((root, joints)) = fast_toml::parse(text) {
+                let lazy = if joints.is_empty() {
+                    tree::Lazy::None
+                } else {
+                    tree::Lazy::TomlLines { text, joints }
+                };
+                if let Ok(m) = model::build(root, &name, lazy) {
+                    return Ok(m);
+                }
+            }
             // Large files: the joints read a piece at a time (see `tree::parse_toml_lazy`);
             // anything that way cannot join is read again whole.
             let fallback = AtomicBool::new(false);
@@ -189,8 +202,11 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             None => Err(model::empty_document()),
         },
         Format::Json => {
-            let (root, lazy) = tree::parse_json(text)?;
-            model::build(root, &name, lazy)
+            // One pass: the tree parser refuses whatever serde_json refuses; after an error,
+            // serde_json's check reports its own first (as when it ran before the tree).
+            tree::parse_json_tree(text)
+                .and_then(|(root, lazy)| model::build(root, &name, lazy))
+                .map_err(|e| tree::json_check(text).err().unwrap_or(e))
         }
     }
 }

@@ -8,7 +8,6 @@ use crate::mechanism::{
     Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Second, Space,
 };
 use std::collections::{BTreeMap, BTreeSet, HashSet};
-use std::fmt::Write as _;
 use std::ops::Range;
 
 const TOP_KEYS: &[&str] = &[
@@ -849,11 +848,36 @@ fn build_joints<'a>(
 fn joined_ids<'b>(bodies: impl IntoIterator<Item = &'b BodyId>) -> String {
     let mut base = String::new();
     for (i, b) in bodies.into_iter().enumerate() {
-        let sep = if i == 0 { "" } else { "-" };
-        // Writing into a String cannot fail.
-        let _ = write!(base, "{sep}{b}");
+        if i > 0 {
+            base.push('-');
+        }
+        match b {
+            // Integers by hand: the formatting machinery, a million times, showed in profiles.
+            BodyId::Int(n) => push_int(&mut base, *n),
+            BodyId::Name(s) => base.push_str(s),
+        }
     }
     base
+}
+
+/// Append the decimal digits of `n` (as `n.to_string()`).
+fn push_int(out: &mut String, n: i64) {
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    let mut m = n.unsigned_abs();
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (m % 10) as u8;
+        m /= 10;
+        if m == 0 {
+            break;
+        }
+    }
+    if n < 0 {
+        out.push('-');
+    }
+    // ASCII digits only.
+    out.push_str(std::str::from_utf8(&digits[at..]).unwrap_or_default());
 }
 
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
@@ -1347,4 +1371,18 @@ fn build_framework(
         .map(|id| Body { id, label: None })
         .collect();
     Ok(Mechanism::from_parts(name, space, frame, extra, specs))
+}
+
+#[cfg(test)]
+mod fast_tests {
+    use super::*;
+
+    #[test]
+    fn push_int_is_to_string() {
+        for n in [0, 1, -1, 9, 10, -10, 12345, i64::MAX, i64::MIN, 1_000_000] {
+            let mut s = String::from("x");
+            push_int(&mut s, n);
+            assert_eq!(s, format!("x{n}"));
+        }
+    }
 }

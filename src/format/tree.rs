@@ -107,6 +107,13 @@ pub(crate) enum Lazy<'a> {
         rest: Vec<Range<usize>>,
         fallback: &'a std::sync::atomic::AtomicBool,
     },
+    /// TOML read by [`super::fast_toml`]: the byte range of each `[[joint]]` table, read one
+    /// at a time. A table it does not read is an error (the caller then reads the text with
+    /// the toml crate).
+    TomlLines {
+        text: &'a str,
+        joints: Vec<Range<usize>>,
+    },
 }
 
 impl<'a> Lazy<'a> {
@@ -120,6 +127,7 @@ impl<'a> Lazy<'a> {
             (Value::Deferred, Lazy::Json { text, span }) => text
                 .get(span.clone())
                 .map_or(0, |t| t.matches("\"bodies\"").count()),
+            (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
             // Every header but one at the very start follows a line break.
             (Value::Deferred, Lazy::Toml { text, .. }) => text.matches(JOINT_HEADER).count() + 1,
             _ => 0,
@@ -192,6 +200,15 @@ impl<'a> Lazy<'a> {
                     }
                 }
                 failed.map_or(Ok(()), Err)
+            }
+            (Value::Deferred, Lazy::TomlLines { text, joints }) => {
+                for r in joints {
+                    match super::fast_toml::joint(text, r) {
+                        Some(item) => f(item)?,
+                        None => return Err(syntax("TOML", "read again", 0..0, "here")),
+                    }
+                }
+                Ok(())
             }
             (Value::Deferred, Lazy::None) => Ok(()),
             (_, _) => Ok(()),
@@ -301,7 +318,7 @@ pub(crate) fn parse_toml(text: &str) -> Result<Node<'_>, LoadError> {
     parse_toml_serial(text)
 }
 
-fn parse_toml_serial(text: &str) -> Result<Node<'_>, LoadError> {
+pub(crate) fn parse_toml_serial(text: &str) -> Result<Node<'_>, LoadError> {
     let table = toml::de::DeTable::parse(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let msg = e.message().trim().to_string();
@@ -862,13 +879,17 @@ pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node<'_>>, LoadError> {
 
 /// Parse JSON into a tree: syntax checked by serde_json (good messages), tree built by a small
 /// spanned parser.
+#[cfg(test)]
 pub(crate) fn parse_json(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
-    // Both passes at once (two cores): serde_json's check, and the spanned tree.
-    let (check, tree) = rayon::join(
-        || serde_json::from_str::<serde::de::IgnoredAny>(text),
-        || parse_json_tree(text),
-    );
-    if let Err(e) = check {
+    json_check(text)?;
+    parse_json_tree(text)
+}
+
+/// serde_json's syntax check of the whole text (its messages are better than the tree
+/// parser's). The tree parser ([`parse_json_tree`]) refuses everything serde_json refuses, so
+/// the reader runs this check only after an error, to report serde_json's first.
+pub(crate) fn json_check(text: &str) -> Result<(), LoadError> {
+    if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(text) {
         let at = offset_of(text, e.line(), e.column());
         let msg = e.to_string();
         // serde_json appends " at line L column C": the rendered location says it already.
@@ -878,11 +899,11 @@ pub(crate) fn parse_json(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> 
             .to_string();
         return Err(syntax("JSON", msg, at..at, "here"));
     }
-    tree
+    Ok(())
 }
 
 /// The spanned tree of JSON text (its syntax errors are less precise than serde_json's).
-fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
+pub(crate) fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
     let mut p = JsonParser {
         text,
         bytes: text.as_bytes(),
@@ -961,101 +982,126 @@ impl<'a> JsonParser<'a> {
         if depth > MAX_DEPTH {
             return Err(too_deep(start..start + 1));
         }
-        let value =
-            match self.bytes.get(self.pos) {
-                Some(b'{') => {
+        let value = match self.bytes.get(self.pos) {
+            Some(b'{') => {
+                self.pos += 1;
+                let mut entries = Vec::new();
+                let mut index = None;
+                self.ws();
+                if self.bytes.get(self.pos) == Some(&b'}') {
                     self.pos += 1;
-                    let mut entries = Vec::new();
-                    let mut index = None;
-                    self.ws();
-                    if self.bytes.get(self.pos) == Some(&b'}') {
-                        self.pos += 1;
-                    } else {
-                        loop {
-                            self.ws();
-                            let key_start = self.pos;
-                            let key = self.string()?;
-                            let key_span = key_start..self.pos;
-                            self.ws();
-                            self.eat(b':')?;
-                            self.ws();
-                            let value = if depth == 1
-                                && self.deferred.is_none()
-                                && is_joint_list(&key)
-                                && let Some(span) = self.skip_list()?
-                            {
-                                self.deferred = Some(span.clone());
-                                Node {
-                                    span,
-                                    value: Value::Deferred,
-                                }
-                            } else {
-                                self.value(depth + 1)?
-                            };
-                            push_entry(
-                                &mut entries,
-                                &mut index,
-                                Entry {
-                                    key,
-                                    key_span,
-                                    value,
-                                },
-                            )?;
-                            if self.list_end(b'}')? {
-                                break;
+                } else {
+                    loop {
+                        self.ws();
+                        let key_start = self.pos;
+                        let key = self.string()?;
+                        let key_span = key_start..self.pos;
+                        self.ws();
+                        self.eat(b':')?;
+                        self.ws();
+                        let value = if depth == 1
+                            && self.deferred.is_none()
+                            && is_joint_list(&key)
+                            && let Some(span) = self.skip_list()?
+                        {
+                            self.deferred = Some(span.clone());
+                            Node {
+                                span,
+                                value: Value::Deferred,
                             }
+                        } else {
+                            self.value(depth + 1)?
+                        };
+                        push_entry(
+                            &mut entries,
+                            &mut index,
+                            Entry {
+                                key,
+                                key_span,
+                                value,
+                            },
+                        )?;
+                        if self.list_end(b'}')? {
+                            break;
                         }
                     }
-                    Value::Map(entries)
                 }
-                Some(b'[') => {
+                Value::Map(entries)
+            }
+            Some(b'[') => {
+                self.pos += 1;
+                let mut items = Vec::new();
+                self.ws();
+                if self.bytes.get(self.pos) == Some(&b']') {
                     self.pos += 1;
-                    let mut items = Vec::new();
-                    self.ws();
-                    if self.bytes.get(self.pos) == Some(&b']') {
-                        self.pos += 1;
-                    } else {
-                        loop {
-                            self.ws();
-                            items.push(self.value(depth + 1)?);
-                            if self.list_end(b']')? {
-                                break;
-                            }
+                } else {
+                    loop {
+                        self.ws();
+                        items.push(self.value(depth + 1)?);
+                        if self.list_end(b']')? {
+                            break;
                         }
                     }
-                    Value::Seq(items)
                 }
-                Some(b'"') => Value::Str(self.string()?),
-                Some(b't') if self.bytes[self.pos..].starts_with(b"true") => {
-                    self.pos += 4;
-                    Value::Bool(true)
-                }
-                Some(b'f') if self.bytes[self.pos..].starts_with(b"false") => {
-                    self.pos += 5;
-                    Value::Bool(false)
-                }
-                Some(b'n') if self.bytes[self.pos..].starts_with(b"null") => {
-                    self.pos += 4;
-                    Value::Null
-                }
-                Some(b'-' | b'0'..=b'9') => {
-                    while self.bytes.get(self.pos).is_some_and(|b| {
-                        matches!(b, b'-' | b'+' | b'.' | b'e' | b'E' | b'0'..=b'9')
-                    }) {
-                        self.pos += 1;
+                Value::Seq(items)
+            }
+            Some(b'"') => Value::Str(self.string()?),
+            Some(b't') if self.bytes[self.pos..].starts_with(b"true") => {
+                self.pos += 4;
+                Value::Bool(true)
+            }
+            Some(b'f') if self.bytes[self.pos..].starts_with(b"false") => {
+                self.pos += 5;
+                Value::Bool(false)
+            }
+            Some(b'n') if self.bytes[self.pos..].starts_with(b"null") => {
+                self.pos += 4;
+                Value::Null
+            }
+            Some(b'-' | b'0'..=b'9') => {
+                // JSON's grammar exactly (`-?(0|[1-9][0-9]*)(.[0-9]+)?([eE][+-]?[0-9]+)?`),
+                // as serde_json: the text is checked by this parser alone unless it fails
+                // (`json_check`). `1e999` is infinite here (the model says so, located).
+                let b = self.bytes;
+                let digits = |mut i: usize| {
+                    while b.get(i).is_some_and(u8::is_ascii_digit) {
+                        i += 1;
                     }
-                    let s = &self.text[start..self.pos];
-                    if s.contains(['.', 'e', 'E']) {
-                        match s.parse::<f64>() {
-                            Ok(f) => Value::Float(f),
-                            Err(_) => return Err(self.error("invalid number")),
-                        }
-                    } else {
-                        int_or_big(s.parse::<i64>().ok(), s)
-                    }
+                    i
+                };
+                let mut i = start + usize::from(b[start] == b'-');
+                let int_end = digits(i);
+                let mut float = false;
+                let mut ok = int_end > i && (b[i] != b'0' || int_end == i + 1);
+                i = int_end;
+                if ok && b.get(i) == Some(&b'.') {
+                    let e = digits(i + 1);
+                    ok = e > i + 1;
+                    (i, float) = (e, true);
                 }
-                _ => return Err(self.error("expected a value")),
-            };
+                if ok && matches!(b.get(i), Some(b'e' | b'E')) {
+                    let from = i + 1 + usize::from(matches!(b.get(i + 1), Some(b'+' | b'-')));
+                    let e = digits(from);
+                    ok = e > from;
+                    (i, float) = (e, true);
+                }
+                if !ok {
+                    self.pos = i;
+                    return Err(self.error("invalid number"));
+                }
+                self.pos = i;
+                let s = &self.text[start..self.pos];
+                if float {
+                    match s.parse::<f64>() {
+                        Ok(f) => Value::Float(f),
+                        Err(_) => return Err(self.error("invalid number")),
+                    }
+                } else {
+                    int_or_big(s.parse::<i64>().ok(), s)
+                }
+            }
+            _ => return Err(self.error("expected a value")),
+        };
         Ok(Node {
             span: start..self.pos,
             value,
@@ -1124,11 +1170,12 @@ impl<'a> JsonParser<'a> {
     fn string(&mut self) -> Result<Cow<'a, str>, LoadError> {
         self.eat(b'"')?;
         let start = self.pos;
-        // The common case: no escape, borrowed from the text.
+        // The common case: no escape, borrowed from the text. A control character is an
+        // error (as in serde_json).
         while self
             .bytes
             .get(self.pos)
-            .is_some_and(|&b| b != b'"' && b != b'\\')
+            .is_some_and(|&b| b != b'"' && b != b'\\' && b >= 0x20)
         {
             self.pos += 1;
         }
@@ -1147,7 +1194,7 @@ impl<'a> JsonParser<'a> {
             while self
                 .bytes
                 .get(self.pos)
-                .is_some_and(|&b| b != b'"' && b != b'\\')
+                .is_some_and(|&b| b != b'"' && b != b'\\' && b >= 0x20)
             {
                 self.pos += 1;
             }
@@ -1320,6 +1367,55 @@ mod tests {
             resolve_plain(Cow::Borrowed("100000000000000000000000")),
             Value::BigInt(_)
         ));
+    }
+
+    /// Mutated JSON: whatever serde_json refuses, the tree parser refuses too (the reader runs
+    /// serde_json's check only after an error).
+    #[test]
+    fn json_tree_parser_is_as_strict_as_serde_json() {
+        let base = r#"{"name": "a\u00e9", "frame": 1, "joints": [{"type": "R", "bodies": [1, 2], "axis": [0.5, -1e3, 2E+2]}, {"type": "P", "bodies": [2, 3], "driven": 1}], "expect": {"mobility": 0, "determined": true, "x": null}}"#;
+        let alphabet = b" \t\n{}[]:,.\"\\-+0123456789eEtrufalsn\x01";
+        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut refused = 0;
+        for _ in 0..6000 {
+            let mut bytes = base.as_bytes().to_vec();
+            for _ in 0..1 + next() % 2 {
+                let at = (next() % bytes.len() as u64) as usize;
+                let c = alphabet[(next() % alphabet.len() as u64) as usize];
+                match next() % 3 {
+                    0 => bytes[at] = c,
+                    1 => bytes.insert(at, c),
+                    _ => {
+                        bytes.remove(at);
+                    }
+                }
+            }
+            let Ok(text) = String::from_utf8(bytes) else {
+                continue;
+            };
+            if json_check(&text).is_ok() {
+                continue;
+            }
+            refused += 1;
+            let ours = parse_json_tree(&text).and_then(|(root, lazy)| {
+                let list = match root.value {
+                    Value::Map(es) => es
+                        .into_iter()
+                        .find(|e| matches!(e.value.value, Value::Deferred))
+                        .map_or(Value::Null, |e| e.value.value),
+                    _ => Value::Null,
+                };
+                lazy.for_each(list, &mut |_| Ok(()))
+            });
+            assert!(ours.is_err(), "accepted what serde_json refuses: {text:?}");
+        }
+        assert!(refused > 1000, "{refused}");
     }
 
     #[test]
