@@ -8,6 +8,7 @@ use crate::mechanism::{
     Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Second, Space,
 };
 use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::fmt::Write as _;
 use std::ops::Range;
 
 const TOP_KEYS: &[&str] = &[
@@ -597,11 +598,34 @@ fn build_joints<'a>(
     let mut any_name = false;
     // Per body: the last joint of more than SCAN_BODIES bodies that named it, and where.
     let mut seen: Vec<(u32, u32)> = Vec::new();
+    // Per joint: whether its id is the default `a-b` (suffixed below).
+    let mut defaulted: Vec<bool> = Vec::with_capacity(read.capacity());
     lazy.for_each(list, &mut |j: Node<'a>| {
         let es = as_map(&j, "a joint")?;
-        check_keys(es, JOINT_KEYS, "joint")?;
+        // One pass over the keys: the entries looked up below, and whether any is unknown
+        // (then `check_keys` names it, as it would have first).
+        let (mut type_entry, mut bodies_entry, mut id_entry, mut driven_entry, mut second_entry) =
+            (None, None, None, None, None);
+        let mut unknown = false;
+        for e in es {
+            match e.key.as_ref() {
+                "type" => type_entry = Some(e),
+                "bodies" => bodies_entry = Some(e),
+                "id" => id_entry = Some(e),
+                "driven" => driven_entry = Some(e),
+                "second" => second_entry = Some(e),
+                "origin" | "origin2" | "axis" | "axis2" | "normal" | "pitch" => {}
+                _ => unknown = true,
+            }
+        }
+        if unknown {
+            check_keys(es, JOINT_KEYS, "joint")?;
+        }
         // Type.
-        let type_entry = required(es, "type", &j, "joint")?;
+        let type_entry = match type_entry {
+            Some(e) => e,
+            None => required(es, "type", &j, "joint")?,
+        };
         let type_text = as_str(&type_entry.value, "a joint `type`")?;
         let kind = JointType::parse(type_text).ok_or_else(|| {
             err(
@@ -633,7 +657,10 @@ fn build_joints<'a>(
             ));
         }
         // Bodies.
-        let bodies_entry = required(es, "bodies", &j, "joint")?;
+        let bodies_entry = match bodies_entry {
+            Some(e) => e,
+            None => required(es, "bodies", &j, "joint")?,
+        };
         let items = as_seq(&bodies_entry.value, "a joint's `bodies`")?;
         if items.len() < 2 {
             return Err(err(
@@ -651,9 +678,14 @@ fn build_joints<'a>(
         // A body named twice in one joint: a scan for short lists, else a mark per body (the
         // joint's number and the item's position), so that one joint of n bodies is linear.
         let stamp = read.len() as u32;
+        // The default id `a-b` when no `id` is given, written while the ids are at hand.
+        let mut base = String::new();
         for (i, b) in items.iter().enumerate() {
             let id = as_id(b, "a body id")?;
             any_name |= matches!(id, BodyId::Name(_));
+            if id_entry.is_none() {
+                push_id(&mut base, i, &id);
+            }
             let k = interner.get(id);
             let again = if items.len() <= SCAN_BODIES {
                 ids.iter().position(|x| *x == k)
@@ -691,7 +723,7 @@ fn build_joints<'a>(
         }
         // Driven DOF.
         let max = u32::from(kind.grade()) * (ids.len() as u32 - 1);
-        let driven = match get(es, "driven") {
+        let driven = match driven_entry {
             None => 0,
             Some(e) => {
                 let n = match as_int(&e.value, "`driven`") {
@@ -726,9 +758,10 @@ fn build_joints<'a>(
                 n as u32
             }
         };
-        // Id (empty: not given; an explicit id is never empty).
-        let id = match get(es, "id") {
-            None => String::new(),
+        // Id (an explicit id is never empty).
+        defaulted.push(id_entry.is_none());
+        let id = match id_entry {
+            None => base,
             Some(e) => {
                 let id = match &e.value.value {
                     Value::Int(i) => i.to_string(),
@@ -762,7 +795,7 @@ fn build_joints<'a>(
             }
         };
         let mut geometry = parse_geometry(es, space)?;
-        if let Some(e) = get(es, "second") {
+        if let Some(e) = second_entry {
             geometry.second = Some(parse_second(e, kind, space, ids.len())?);
         }
         joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
@@ -786,9 +819,9 @@ fn build_joints<'a>(
         default_joint_ids(&mut read, names, &joint_spans, !any_name)?;
     } else {
         let mut taken: HashSet<String> = explicit.into_keys().collect();
-        for j in &mut read {
-            if j.id.is_empty() {
-                let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
+        for (j, _) in read.iter_mut().zip(&defaulted).filter(|(_, d)| **d) {
+            {
+                let base = std::mem::take(&mut j.id);
                 let mut id = base.clone();
                 let mut n = 1;
                 while taken.contains(&id) {
@@ -848,16 +881,21 @@ fn build_joints<'a>(
 fn joined_ids<'b>(bodies: impl IntoIterator<Item = &'b BodyId>) -> String {
     let mut base = String::new();
     for (i, b) in bodies.into_iter().enumerate() {
-        if i > 0 {
-            base.push('-');
-        }
-        match b {
-            // Integers by hand: the formatting machinery, a million times, showed in profiles.
-            BodyId::Int(n) => push_int(&mut base, *n),
-            BodyId::Name(s) => base.push_str(s),
-        }
+        push_id(&mut base, i, b);
     }
     base
+}
+
+/// Append the `i`-th id of a joint's default id `a-b-...`.
+fn push_id(out: &mut String, i: usize, b: &BodyId) {
+    if i > 0 {
+        out.push('-');
+    }
+    match b {
+        // Integers by hand: the formatting machinery, a million times, showed in profiles.
+        BodyId::Int(n) => push_int(out, *n),
+        BodyId::Name(s) => out.push_str(s),
+    }
 }
 
 /// Append the decimal digits of `n` (as `n.to_string()`).
@@ -922,17 +960,19 @@ fn default_joint_ids(
             }
         }
     }
-    let mut ids: Vec<String> = Vec::with_capacity(joints.len());
-    for (j, &n) in joints.iter().zip(&nth) {
-        let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
-        ids.push(if n == 1 { base } else { format!("{base}#{n}") });
+    // The joints hold their base `a-b` already (written as they were read).
+    for (j, &n) in joints.iter_mut().zip(&nth) {
+        if n > 1 {
+            let _ = write!(j.id, "#{n}");
+        }
     }
     drop(nth);
+    let ids: Vec<&str> = joints.iter().map(|j| j.id.as_str()).collect();
     if !all_integers {
         let mut owner: std::collections::HashMap<&str, usize> =
             std::collections::HashMap::with_capacity(ids.len());
         for (k, id) in ids.iter().enumerate() {
-            if let Some(&first) = owner.get(id.as_str()) {
+            if let Some(&first) = owner.get(id) {
                 let (a, b) = (first.min(k), first.max(k));
                 let list = |i: usize| joined_ids(joints[i].bodies.iter().map(|&k| &names[k]));
                 return Err(LoadError::new(
@@ -956,9 +996,6 @@ fn default_joint_ids(
             }
             owner.insert(id, k);
         }
-    }
-    for (j, id) in joints.iter_mut().zip(ids) {
-        j.id = id;
     }
     Ok(())
 }
