@@ -107,6 +107,13 @@ pub(crate) enum Lazy<'a> {
         rest: Vec<Range<usize>>,
         fallback: &'a std::sync::atomic::AtomicBool,
     },
+    /// YAML: the text is read a second time, the items of the top-level joint list built
+    /// one at a time (the first read built the rest, skipping them).
+    Yaml { text: &'a str },
+    /// YAML whose joint list is the last top-level key: the reader that stopped at the list
+    /// reads on, item by item ([`parse_yaml_resume`]); anything after the list is an error
+    /// (the caller then reads the text again).
+    YamlResume(Box<YamlReader<'a>>),
     /// TOML read by [`super::fast_toml`]: the byte range of each `[[joint]]` table, read one
     /// at a time. A table it does not read is an error (the caller then reads the text with
     /// the toml crate).
@@ -128,6 +135,8 @@ impl<'a> Lazy<'a> {
                 .get(span.clone())
                 .map_or(0, |t| t.matches("\"bodies\"").count()),
             (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
+            (Value::Deferred, Lazy::Yaml { text }) => text.matches("bodies").count(),
+            (Value::Deferred, Lazy::YamlResume(r)) => r.index.text.matches("bodies").count(),
             // Every header but one at the very start follows a line break.
             (Value::Deferred, Lazy::Toml { text, .. }) => text.matches(JOINT_HEADER).count() + 1,
             _ => 0,
@@ -209,6 +218,28 @@ impl<'a> Lazy<'a> {
                     }
                 }
                 Ok(())
+            }
+            (Value::Deferred, Lazy::Yaml { text }) => yaml_joint_items(text, f),
+            (Value::Deferred, Lazy::YamlResume(mut r)) => {
+                use saphyr_parser::Event;
+                loop {
+                    let next = r.next()?;
+                    if let Event::SequenceEnd = next.0 {
+                        break;
+                    }
+                    f(r.node(next, 3)?)?;
+                }
+                // Nothing after the list: the mapping, the document and the stream end.
+                if !matches!(r.next()?.0, Event::MappingEnd) {
+                    return Err(syntax("YAML", "read again", 0..0, "here"));
+                }
+                loop {
+                    match r.next()?.0 {
+                        Event::DocumentEnd | Event::Nothing => {}
+                        Event::StreamEnd => return Ok(()),
+                        _ => return Err(syntax("YAML", "read again", 0..0, "here")),
+                    }
+                }
             }
             (Value::Deferred, Lazy::None) => Ok(()),
             (_, _) => Ok(()),
@@ -630,9 +661,11 @@ impl<'a> CharIndex<'a> {
     }
 }
 
-struct YamlReader<'a> {
+pub(crate) struct YamlReader<'a> {
     parser: saphyr_parser::Parser<'a, saphyr_parser::StrInput<'a>>,
     index: CharIndex<'a>,
+    /// Skip the first top-level joint list that is a sequence ([`parse_yaml_lazy`]).
+    defer: bool,
 }
 
 type YamlEvent<'a> = (saphyr_parser::Event<'a>, Range<usize>);
@@ -650,6 +683,23 @@ impl<'a> YamlReader<'a> {
                 Err(syntax("YAML", "unexpected end of input", end..end, "here"))
             }
         }
+    }
+
+    /// Consume the events of the node that starts with `ev`, building nothing.
+    fn skip(&mut self, ev: YamlEvent<'a>) -> Result<(), LoadError> {
+        use saphyr_parser::Event;
+        let mut open = match ev.0 {
+            Event::SequenceStart(..) | Event::MappingStart(..) => 1usize,
+            _ => return Ok(()),
+        };
+        while open > 0 {
+            match self.next()?.0 {
+                Event::SequenceStart(..) | Event::MappingStart(..) => open += 1,
+                Event::SequenceEnd | Event::MappingEnd => open -= 1,
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     fn node(&mut self, ev: YamlEvent<'a>, depth: usize) -> Result<Node<'a>, LoadError> {
@@ -727,7 +777,23 @@ impl<'a> YamlReader<'a> {
                         }
                     };
                     let value_ev = self.next()?;
-                    let value = self.node(value_ev, depth + 1)?;
+                    let value = if depth == 1
+                        && self.defer
+                        && is_joint_list(&key)
+                        && let Event::SequenceStart(..) = value_ev.0
+                    {
+                        // Skipped (read again item by item: `Lazy::Yaml`); its span is the
+                        // start of the list (its items' spans locate everything after).
+                        self.defer = false;
+                        let at = value_ev.1.clone();
+                        self.skip(value_ev)?;
+                        Node {
+                            span: at,
+                            value: Value::Deferred,
+                        }
+                    } else {
+                        self.node(value_ev, depth + 1)?
+                    };
                     push_entry(
                         &mut entries,
                         &mut index,
@@ -843,10 +909,122 @@ fn is_yaml_float(t: &str) -> bool {
 
 /// Parse YAML (one document) into a tree; `None` for a stream without a document.
 pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node<'_>>, LoadError> {
+    parse_yaml_with(text, false)
+}
+
+/// [`parse_yaml`] with the top-level joint list (if a sequence) left [`Value::Deferred`], its
+/// items read by [`Lazy::Yaml`]. The caller reads the text again with [`parse_yaml`] after any
+/// error: the order in which errors are found differs.
+pub(crate) fn parse_yaml_lazy(text: &str) -> Result<Option<Node<'_>>, LoadError> {
+    parse_yaml_with(text, true)
+}
+
+/// One read of YAML whose top-level joint list (a sequence) comes last: the top-level entries
+/// before it and the list [`Value::Deferred`], with the reader stopped at the list's first
+/// item. `None` at anything else (no such list, a document that is not a mapping, an error).
+pub(crate) fn parse_yaml_resume(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
     use saphyr_parser::Event;
     let mut r = YamlReader {
         parser: saphyr_parser::Parser::new_from_str(text),
         index: CharIndex::new(text),
+        defer: false,
+    };
+    let start = loop {
+        let (ev, span) = r.next().ok()?;
+        match ev {
+            Event::StreamStart | Event::DocumentStart(_) | Event::Nothing => {}
+            Event::MappingStart(_, None) => break span,
+            _ => return None,
+        }
+    };
+    let mut entries = Vec::new();
+    let mut index = None;
+    loop {
+        let (ev, key_span) = r.next().ok()?;
+        let Event::Scalar(key, ..) = ev else {
+            return None;
+        };
+        let value_ev = r.next().ok()?;
+        if is_joint_list(&key) && matches!(value_ev.0, Event::SequenceStart(_, None)) {
+            let value = Node {
+                span: value_ev.1,
+                value: Value::Deferred,
+            };
+            push_entry(
+                &mut entries,
+                &mut index,
+                Entry {
+                    key,
+                    key_span,
+                    value,
+                },
+            )
+            .ok()?;
+            let root = Node {
+                span: start.start..start.start,
+                value: Value::Map(entries),
+            };
+            return Some((root, Lazy::YamlResume(Box::new(r))));
+        }
+        let value = r.node(value_ev, 2).ok()?;
+        push_entry(
+            &mut entries,
+            &mut index,
+            Entry {
+                key,
+                key_span,
+                value,
+            },
+        )
+        .ok()?;
+    }
+}
+
+/// The second read of [`Lazy::Yaml`]: `f` on each item of the top-level joint list.
+fn yaml_joint_items<'a>(
+    text: &'a str,
+    f: &mut dyn FnMut(Node<'a>) -> Result<(), LoadError>,
+) -> Result<(), LoadError> {
+    use saphyr_parser::Event;
+    let mut r = YamlReader {
+        parser: saphyr_parser::Parser::new_from_str(text),
+        index: CharIndex::new(text),
+        defer: false,
+    };
+    let lost = || syntax("YAML", "read again", 0..0, "here");
+    // Down to the top-level mapping.
+    loop {
+        match r.next()?.0 {
+            Event::MappingStart(..) => break,
+            Event::StreamStart | Event::DocumentStart(_) | Event::Nothing => {}
+            _ => return Err(lost()),
+        }
+    }
+    loop {
+        let key = match r.next()?.0 {
+            Event::Scalar(k, ..) => k,
+            _ => return Err(lost()),
+        };
+        let value = r.next()?;
+        if is_joint_list(&key) && matches!(value.0, Event::SequenceStart(..)) {
+            loop {
+                let next = r.next()?;
+                if let Event::SequenceEnd = next.0 {
+                    return Ok(());
+                }
+                f(r.node(next, 3)?)?;
+            }
+        }
+        r.skip(value)?;
+    }
+}
+
+fn parse_yaml_with(text: &str, defer: bool) -> Result<Option<Node<'_>>, LoadError> {
+    use saphyr_parser::Event;
+    let mut r = YamlReader {
+        parser: saphyr_parser::Parser::new_from_str(text),
+        index: CharIndex::new(text),
+        defer,
     };
     let mut root = None;
     loop {
