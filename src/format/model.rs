@@ -627,7 +627,8 @@ fn build_joints<'a>(
             None => required(es, "type", &j, "joint")?,
         };
         let type_text = as_str(&type_entry.value, "a joint `type`")?;
-        let kind = JointType::parse(type_text).ok_or_else(|| {
+        // A code as written (`R`, `SPSP`) first: `JointType::parse` normalizes every spelling.
+        let kind = exact_code(type_text).or_else(|| JointType::parse(type_text)).ok_or_else(|| {
             err(
                 ErrorKind::UnknownJointType,
                 format!("unknown joint type `{type_text}`"),
@@ -817,6 +818,31 @@ fn build_joints<'a>(
     // and a default that another joint's body list gives too is an error naming both.
     if explicit.is_empty() {
         default_joint_ids(&mut read, names, &joint_spans, !any_name)?;
+    } else if !any_name {
+        // Integer bodies: a default `a-b` or `a-b#n` has no other `#`, so defaults of two body
+        // lists never meet; the k-th default of a list takes the k-th suffix not taken by an
+        // explicit id (as the general loop below, without a set of every id).
+        let order = by_body_list(&read, |k| defaulted[k]);
+        let mut k = 0;
+        while k < order.len() {
+            let first = order[k] as usize;
+            let mut n = 1u64;
+            while k < order.len() && read[order[k] as usize].bodies == read[first].bodies {
+                let j = &mut read[order[k] as usize];
+                let base = j.id.len();
+                loop {
+                    j.id.truncate(base);
+                    if n > 1 {
+                        let _ = write!(j.id, "#{n}");
+                    }
+                    n += 1;
+                    if !explicit.contains_key(j.id.as_str()) {
+                        break;
+                    }
+                }
+                k += 1;
+            }
+        }
     } else {
         let mut taken: HashSet<String> = explicit.into_keys().collect();
         for (j, _) in read.iter_mut().zip(&defaulted).filter(|(_, d)| **d) {
@@ -918,6 +944,32 @@ fn push_int(out: &mut String, n: i64) {
     out.push_str(std::str::from_utf8(&digits[at..]).unwrap_or_default());
 }
 
+/// The positions of the joints `keep` selects, sorted by body list, then by position: equal
+/// lists next to each other, in file order.
+fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> Vec<u32> {
+    // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
+    let mut pairs: Vec<(u64, u32)> = Vec::new();
+    let mut others: Vec<u32> = Vec::new();
+    for (k, j) in joints.iter().enumerate().filter(|(k, _)| keep(*k)) {
+        match j.bodies[..] {
+            [a, b] if a <= u32::MAX as usize && b <= u32::MAX as usize => {
+                pairs.push((((a as u64) << 32) | b as u64, k as u32));
+            }
+            _ => others.push(k as u32),
+        }
+    }
+    pairs.sort_unstable();
+    others.sort_unstable_by(|&a, &b| {
+        joints[a as usize]
+            .bodies
+            .cmp(&joints[b as usize].bodies)
+            .then(a.cmp(&b))
+    });
+    let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+    order.extend(others);
+    order
+}
+
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
 /// `a-b#n` (the first plain `a-b`). A default that two joints would get (the second `[1, 2]`
 /// and a `[1, "2#2"]` both give `1-2#2`) is an error naming both. With integer ids only, the
@@ -933,26 +985,7 @@ fn default_joint_ids(
     // sorted by body list, then by position (a sort, not a hash map: no hash flooding).
     let mut nth = vec![1u32; joints.len()];
     {
-        // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
-        let mut pairs: Vec<(u64, u32)> = Vec::new();
-        let mut others: Vec<u32> = Vec::new();
-        for (k, j) in joints.iter().enumerate() {
-            match j.bodies[..] {
-                [a, b] if a <= u32::MAX as usize && b <= u32::MAX as usize => {
-                    pairs.push((((a as u64) << 32) | b as u64, k as u32));
-                }
-                _ => others.push(k as u32),
-            }
-        }
-        pairs.sort_unstable();
-        others.sort_unstable_by(|&a, &b| {
-            joints[a as usize]
-                .bodies
-                .cmp(&joints[b as usize].bodies)
-                .then(a.cmp(&b))
-        });
-        let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
-        order.extend(others);
+        let order = by_body_list(joints, |_| true);
         for w in 1..order.len() {
             let (a, b) = (order[w - 1] as usize, order[w] as usize);
             if joints[a].bodies == joints[b].bodies {
@@ -998,6 +1031,11 @@ fn default_joint_ids(
         }
     }
     Ok(())
+}
+
+/// The joint type whose code is exactly `text` (as [`JointType::parse`] reads it).
+fn exact_code(text: &str) -> Option<JointType> {
+    CATALOGUE.iter().find(|i| i.code == text).map(|i| i.kind)
 }
 
 fn c_name(code: &str) -> &'static str {
@@ -1413,6 +1451,14 @@ fn build_framework(
 #[cfg(test)]
 mod fast_tests {
     use super::*;
+
+    #[test]
+    fn exact_codes_read_as_parse_reads_them() {
+        for i in CATALOGUE.iter() {
+            assert_eq!(exact_code(i.code), JointType::parse(i.code), "{}", i.code);
+        }
+        assert_eq!(exact_code("r"), None);
+    }
 
     #[test]
     fn push_int_is_to_string() {

@@ -334,3 +334,25 @@ fn yaml_lazy_reads_equal_the_whole_read() {
         .collect();
     assert_eq!(one_read, [true, false, false, true]);
 }
+
+/// Integer bodies with explicit ids: the k-th default of a body list takes the k-th suffix no
+/// explicit id holds (the set-free path), as with named bodies (the general path).
+#[test]
+fn default_ids_skip_explicit_suffixes_in_order() {
+    let joints = |b: &str| {
+        format!(
+            "frame: 1\njoints:\n  - {{id: 1-{b}, type: R, bodies: [1, {b}]}}\n  - {{type: R, bodies: [1, {b}]}}\n  - {{id: 1-{b}#3, type: R, bodies: [1, {b}]}}\n  - {{type: R, bodies: [1, {b}]}}\n  - {{type: R, bodies: [1, {b}]}}\n  - {{id: 9-9, type: R, bodies: [{b}, 3]}}\n  - {{type: R, bodies: [3, {b}]}}\n"
+        )
+    };
+    for (b, named) in [("2", false), ("x", true)] {
+        let m = load("t.yaml", &joints(b), Format::Yaml).unwrap();
+        let mut ids: Vec<String> = m.joints.iter().map(|j| j.id.clone()).collect();
+        ids.sort();
+        let mut expected: Vec<String> = ["1-B", "1-B#2", "1-B#3", "1-B#4", "1-B#5", "9-9", "3-B"]
+            .iter()
+            .map(|s| s.replace('B', b))
+            .collect();
+        expected.sort();
+        assert_eq!(ids, expected, "named {named}");
+    }
+}
