@@ -117,6 +117,85 @@ fn a_four_bar_with_a_gap_is_reported_in_analyze_and_rigid_with_a_warning() {
     assert!(err.is_empty(), "{err}");
 }
 
+/// `dot` carries the closure line under its title in every view when the configuration
+/// misses closure (as `analyze`'s closure section); a closed file's pictures have none.
+#[test]
+fn dot_titles_carry_the_closure_line_of_an_open_file() {
+    for view in ["diagram", "structure", "topology", "rigid"] {
+        let (code, out, err) = mbsa(&["dot", &gap(), "--view", view]);
+        assert_eq!(code, 0, "{view}: {err}");
+        let label = out
+            .lines()
+            .find(|l| l.trim_start().starts_with("graph ["))
+            .unwrap_or_default();
+        assert!(
+            label.contains("\\nclosure (warning): the configuration misses closure by up to 1.000e-2 at 1 joint(s)")
+                && label.contains("\\n  joint C: 1.000e-2"),
+            "{view}: {label}"
+        );
+        if view == "diagram" {
+            snapshot("closure_dot_four-bar-gap", &out);
+        }
+    }
+    // Closed: the title alone.
+    let (code, out, err) = mbsa(&[
+        "dot",
+        "mechanisms/four-bar-3d-driven.toml",
+        "--view",
+        "structure",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("closure"), "{out}");
+}
+
+/// `rigid --finite` on an open file does not start from a configuration that is not one: it
+/// assembles first (as `mbsa assemble`), says so in the first note (table and JSON), and
+/// gives the same answer as on the assembled file.
+#[test]
+fn rigid_finite_on_an_open_file_assembles_first() {
+    for method in ["geometric", "counting"] {
+        let (code, out, err) = mbsa(&["rigid", &gap(), "--finite", "--method", method]);
+        assert_eq!(code, 0, "{method}: {err}");
+        assert!(
+            err.contains("misses closure by 1.000e-2"),
+            "{method}: {err}"
+        );
+        assert!(
+            out.contains("- the file's configuration misses closure by up to 1.000e-2 at joint(s) C: analysed at the assembled configuration"),
+            "{method}: {out}"
+        );
+    }
+    let v = json(&["rigid", &gap(), "--finite", "--format", "json"]);
+    let f = &v["finite"];
+    assert_eq!(f["assembled"], true, "{f}");
+    assert_eq!(
+        (f["first_order"].as_u64(), f["finite"].as_u64()),
+        (Some(1), Some(1)),
+        "{f}"
+    );
+    assert_eq!(f["verdict"], "overconstrained_moving", "{f}");
+    // The assembled file says the same, without the note.
+    let (code, closed, err) = mbsa(&["assemble", &gap()]);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = mbsa_stdin(&["rigid", "-", "--finite", "--format", "json"], &closed);
+    assert_eq!(code, 0, "{err}");
+    let w: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let g = &w["finite"];
+    assert!(g.get("assembled").is_none(), "{g}");
+    for k in ["count", "first_order", "finite", "verdict", "samples"] {
+        assert_eq!(f[k], g[k], "{k}");
+    }
+    // A closed file: no note, no flag.
+    let v = json(&[
+        "rigid",
+        "mechanisms/four-bar-3d-driven.toml",
+        "--finite",
+        "--format",
+        "json",
+    ]);
+    assert!(v["finite"].get("assembled").is_none(), "{v}");
+}
+
 #[test]
 fn a_gross_gap_is_an_error_naming_the_joint() {
     for cmd in ["analyze", "rigid", "dot", "transform", "check"] {

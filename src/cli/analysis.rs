@@ -306,9 +306,18 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
                 file.file
             )));
         }
-        let config = mbsa::position::Configuration::reference(m.bodies.len());
+        if geometric.is_none() {
+            // The geometric analysis checked the closure already.
+            args.geometry.closure_check(&file.file, &m)?;
+        }
+        // An open file is assembled first (the report's first note says so).
+        let scale = mbsa::position::residual::model_size(&m);
+        let tolerance = args
+            .geometry
+            .precision()?
+            .map(|p| mbsa::position::tolerance_for(scale, p));
         Some(
-            mbsa::position::finite_mobility(&m, &config, &Default::default())
+            mbsa::position::finite_mobility_of_file(&m, tolerance, &Default::default())
                 .map_err(|e| Failure::Input(format!("error: {}: {e}", file.file)))?,
         )
     } else {

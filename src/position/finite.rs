@@ -10,10 +10,11 @@
 //! bifurcation is found only if a sample falls near it; the samples see a neighbourhood of
 //! about `step` × model size.
 
-use super::closure::undriven;
+use super::closure::{ClosureStatus, assemble, check_closure, undriven};
 use super::newton::{NewtonOptions, System, Targets};
 use super::pose::Configuration;
 use super::residual::{ModelError, PositionModel};
+use super::solve::SolveError;
 use crate::mechanism::Mechanism;
 use crate::rng::SplitMix64;
 use nalgebra::{DMatrix, DVector};
@@ -81,6 +82,57 @@ pub struct FiniteMobility {
     pub locked_at_toggle: Vec<String>,
     /// Plain-language findings.
     pub notes: Vec<String>,
+    /// The configuration analysed is not the file's: the file's missed closure and was
+    /// assembled first ([`finite_mobility_of_file`]; the first note says by how much).
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub assembled: bool,
+}
+
+/// The finite-mobility test of a file, at the configuration it describes. A closed file is
+/// tested at its own configuration. A file that misses closure (joints with `second`
+/// geometry) does not describe a configuration of the mechanism: it is first assembled as
+/// `mbsa assemble` does it (Gauss–Newton from the file's configuration, least change, every
+/// body's own geometry kept), the test runs at the assembled configuration, and the first
+/// note says so (the gap, the joints, how far the bodies moved). `tolerance` is the closure
+/// tolerance in file units (default from the written precision); a configuration that cannot
+/// be assembled is the assembly's error.
+pub fn finite_mobility_of_file(
+    m: &Mechanism,
+    tolerance: Option<f64>,
+    opts: &FiniteOptions,
+) -> Result<FiniteMobility, SolveError> {
+    let reference = Configuration::reference(m.bodies.len());
+    let closure = check_closure(m, &reference, tolerance)?;
+    if closure.status == ClosureStatus::Closed {
+        return Ok(finite_mobility(m, &reference, opts)?);
+    }
+    let (config, _) = assemble(m, &reference, &NewtonOptions::default())?;
+    let scale = super::residual::model_size(m);
+    let moved = config
+        .poses
+        .iter()
+        .map(|p| {
+            let angle = nalgebra::Rotation3::from_matrix_unchecked(p.rotation).angle();
+            (p.translation.norm() * scale).max(angle * scale)
+        })
+        .fold(0.0f64, f64::max);
+    let mut f = finite_mobility(m, &config, opts)?;
+    f.assembled = true;
+    f.notes.insert(
+        0,
+        format!(
+            "the file's configuration misses closure by up to {:.3e} at joint(s) {}: analysed at the assembled configuration (the least change that closes it, as `mbsa assemble` writes it; bodies moved by up to {:.3e}, a rotation of ε rad counted as ε × the model size)",
+            closure.max_residual,
+            closure
+                .worst(super::closure::LISTED)
+                .iter()
+                .map(|j| j.joint.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            moved
+        ),
+    );
+    Ok(f)
 }
 
 /// Largest mechanism (bodies) the dense test handles.
@@ -110,57 +162,69 @@ fn null_basis(j: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
     DMatrix::from_fn(n, cols.len(), |r, c| vt[(cols[c], r)])
 }
 
+/// The slice coordinates `d(x)` of [`solve_sliced`] (each unknown body's rotation vector and
+/// translation change from `config`, its `B` embedded components) and their derivative with
+/// respect to the body twists (rotation vector ≈ ω, translation change dp = v + ω × p).
+fn slice_coords(
+    sys: &System,
+    model: &PositionModel,
+    config: &Configuration,
+    x: &Configuration,
+) -> (DVector<f64>, DMatrix<f64>) {
+    let b = model.b();
+    let cols = super::pose::embed_columns(model.space);
+    let n = sys.bodies.len() * b;
+
+    let mut d = DVector::zeros(n);
+    let mut jd = DMatrix::zeros(n, n);
+    for (i, &body) in sys.bodies.iter().enumerate() {
+        let p0 = &config.poses[body];
+        let p = &x.poses[body];
+        let rel = nalgebra::Rotation3::from_matrix_unchecked(p.rotation * p0.rotation.transpose());
+        let rv = rel.scaled_axis();
+        let dt = p.translation - p0.translation;
+        let full = [rv.x, rv.y, rv.z, dt.x, dt.y, dt.z];
+        // d(translation)/d(ω) = −[p]×, d/dv = I; d(rv)/dω ≈ I.
+        let t = p.translation;
+        let dfull = |row: usize, col: usize| -> f64 {
+            match (row, col) {
+                (r, c) if r < 3 && c < 3 => f64::from(u8::from(r == c)),
+                (r, c) if r >= 3 && c >= 3 => f64::from(u8::from(r == c)),
+                (r, c) if r >= 3 => {
+                    // −[t]× (r−3, c)
+                    let sk = [[0.0, t.z, -t.y], [-t.z, 0.0, t.x], [t.y, -t.x, 0.0]];
+                    sk[r - 3][c]
+                }
+                _ => 0.0,
+            }
+        };
+        for (a, &ra) in cols.iter().enumerate() {
+            d[i * b + a] = full[ra];
+            for (c, &cc) in cols.iter().enumerate() {
+                jd[(i * b + a, i * b + c)] = dfull(ra, cc);
+            }
+        }
+    }
+    (d, jd)
+}
+
 /// Solve the constraints together with `slices.len()` linear slices through `config`:
 /// `c_i · d(x) = o_i`, where `d(x)` stacks each unknown body's rotation vector and
 /// translation change from `config` (planar: its `B` embedded components). Dense Gauss–Newton
-/// with minimum-norm steps; the solution, or `None` when the residual stays above `1e-9`.
+/// with minimum-norm steps from `from`; the solution, or `None` when the residual stays above
+/// `1e-9`.
 fn solve_sliced(
     sys: &System,
     model: &PositionModel,
     targets: &Targets,
     config: &Configuration,
+    from: &Configuration,
     slices: &[(DVector<f64>, f64)],
 ) -> Option<Configuration> {
     let b = model.b();
-    let cols = super::pose::embed_columns(model.space);
     let n = sys.bodies.len() * b;
-    let mut x = config.clone();
-    // d(x) and its derivative per body: rotation vector (≈ ω) and translation change
-    // (dp = v + ω × p).
-    let coords = |x: &Configuration| -> (DVector<f64>, DMatrix<f64>) {
-        let mut d = DVector::zeros(n);
-        let mut jd = DMatrix::zeros(n, n);
-        for (i, &body) in sys.bodies.iter().enumerate() {
-            let p0 = &config.poses[body];
-            let p = &x.poses[body];
-            let rel =
-                nalgebra::Rotation3::from_matrix_unchecked(p.rotation * p0.rotation.transpose());
-            let rv = rel.scaled_axis();
-            let dt = p.translation - p0.translation;
-            let full = [rv.x, rv.y, rv.z, dt.x, dt.y, dt.z];
-            // d(translation)/d(ω) = −[p]×, d/dv = I; d(rv)/dω ≈ I.
-            let t = p.translation;
-            let dfull = |row: usize, col: usize| -> f64 {
-                match (row, col) {
-                    (r, c) if r < 3 && c < 3 => f64::from(u8::from(r == c)),
-                    (r, c) if r >= 3 && c >= 3 => f64::from(u8::from(r == c)),
-                    (r, c) if r >= 3 => {
-                        // −[t]× (r−3, c)
-                        let sk = [[0.0, t.z, -t.y], [-t.z, 0.0, t.x], [t.y, -t.x, 0.0]];
-                        sk[r - 3][c]
-                    }
-                    _ => 0.0,
-                }
-            };
-            for (a, &ra) in cols.iter().enumerate() {
-                d[i * b + a] = full[ra];
-                for (c, &cc) in cols.iter().enumerate() {
-                    jd[(i * b + a, i * b + c)] = dfull(ra, cc);
-                }
-            }
-        }
-        (d, jd)
-    };
+    let mut x = from.clone();
+    let coords = |x: &Configuration| slice_coords(sys, model, config, x);
     let eval = |x: &Configuration| -> (DVector<f64>, DMatrix<f64>) {
         let (r, j, _) = sys.evaluate(model, targets, x);
         let (d, jd) = coords(x);
@@ -252,6 +316,8 @@ pub fn finite_mobility(
         max_iterations: 40,
         ..NewtonOptions::default()
     };
+    // Whether a sample found a curve of solutions through `config` (local dimension >= 1).
+    let mut curve = false;
     if first_order > 0 {
         for _ in 0..opts.samples {
             let c = DVector::from_fn(first_order, |_, _| rng.next_signed());
@@ -269,6 +335,25 @@ pub fn finite_mobility(
             let (_, j1, _) = sys.evaluate(&model, &targets, &moved);
             let n1 = null_basis(&j1, opts.rank_tolerance);
             samples.push(n1.ncols());
+            // A curve of solutions through `config`: the projection from half the step along
+            // the same direction lands about half as far (an isolated point with a
+            // first-order flex pulls both back to itself; equations homogeneous to leading
+            // order at a singular point scale their solutions with the start).
+            let (d, _) = slice_coords(&sys, &model, config, &moved);
+            if !curve && d.norm() > 0.1 * opts.step {
+                let mut half = config.clone();
+                for (i, &body) in sys.bodies.iter().enumerate() {
+                    let t: Vec<f64> = (0..b)
+                        .map(|k| dir[i * b + k] / norm * 0.5 * opts.step)
+                        .collect();
+                    half.poses[body] = config.poses[body].moved_by(model.space, &t);
+                }
+                let out2 = sys.solve(&model, &targets, &mut half, &newton);
+                if out2.residual <= 1e-9 {
+                    let (d2, _) = slice_coords(&sys, &model, config, &half);
+                    curve = (0.3..=0.7).contains(&(d2.norm() / d.norm()));
+                }
+            }
             if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
                 best = Some((n1.ncols(), n1));
             }
@@ -279,7 +364,9 @@ pub fn finite_mobility(
     // dimension d meets a generic slice of codimension k ≤ d, and misses one of codimension
     // d + 1). Unlike the nullity at a nearby sample, this is not fooled by components along
     // which the Jacobian stays rank-deficient (the N-four-bar's branches with flat windows).
-    // Two tries per k; k runs up to the smallest sample nullity (an upper bound).
+    // Two random tries per k; each solution found is confirmed with its slices moved; k runs
+    // up to the smallest sample nullity (an upper bound). At least 1 when a sample saw a
+    // curve.
     let cap = best.as_ref().map(|(k, _)| *k).unwrap_or(first_order);
     let mut finite = 0;
     'dims: for k in 1..=cap {
@@ -296,7 +383,22 @@ pub fn finite_mobility(
                     (c, 10.0 * opts.step * rng.next_signed())
                 })
                 .collect();
-            if let Some(x) = solve_sliced(&sys, &model, &targets, config, &slices) {
+            let found = solve_sliced(&sys, &model, &targets, config, config, &slices);
+            // Confirm: a set of dimension k meets slices moved a little near the point found;
+            // a near miss of lower dimension (a union of very many curves, such as the 2^N
+            // branches of the N-four-bar at its flat pose, passes within 1e-9 of some
+            // codimension-k slices by chance) does not.
+            let confirmed = found.filter(|x| {
+                let moved: Vec<(DVector<f64>, f64)> = slices
+                    .iter()
+                    .map(|(c, o)| {
+                        let by = 0.25 * o.abs().max(opts.step) * rng.next_signed();
+                        (c.clone(), o + by)
+                    })
+                    .collect();
+                solve_sliced(&sys, &model, &targets, config, x, &moved).is_some()
+            });
+            if let Some(x) = confirmed {
                 let (_, j1, _) = sys.evaluate(&model, &targets, &x);
                 let n1 = null_basis(&j1, opts.rank_tolerance);
                 if best.as_ref().is_none_or(|(q, _)| n1.ncols() < *q) {
@@ -307,6 +409,12 @@ pub fn finite_mobility(
             }
         }
         break;
+    }
+    if curve {
+        // At a very singular point (the N-four-bar's flat pose: 2^40 branches along which
+        // the equations are not reduced) Newton on a random slice can creep and fail where
+        // the samples saw the curve.
+        finite = finite.max(1);
     }
     if first_order == 0 {
         finite = 0;
@@ -394,5 +502,6 @@ pub fn finite_mobility(
         singular_joints,
         locked_at_toggle,
         notes,
+        assembled: false,
     })
 }

@@ -30,10 +30,12 @@ pub use closure::{
     Closure, ClosureStatus, JointResidual, assemble, check_closure, closure_of, file_closure,
     moved_mechanism, tolerance_for,
 };
-pub use finite::{FiniteMobility, FiniteOptions, Verdict, finite_mobility};
+pub use finite::{
+    FiniteMobility, FiniteOptions, Verdict, finite_mobility, finite_mobility_of_file,
+};
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
 pub use pose::{Configuration, Pose, PoseReport};
-pub use realize::with_random_geometry;
+pub use realize::{Redrawn, with_random_geometry, with_random_geometry_away_from_folds};
 pub use residual::{ModelError, PositionModel};
 pub use solve::{
     JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,

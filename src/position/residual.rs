@@ -159,7 +159,16 @@ impl PositionModel {
         m: &Mechanism,
         joints: impl IntoIterator<Item = usize>,
     ) -> Result<PositionModel, ModelError> {
-        let scale = model_size(m);
+        Self::of_joints_scaled(m, joints, model_size(m))
+    }
+
+    /// [`PositionModel::of_joints`] with lengths divided by `scale` (a model size computed
+    /// once, for many small models of one mechanism).
+    pub fn of_joints_scaled(
+        m: &Mechanism,
+        joints: impl IntoIterator<Item = usize>,
+        scale: f64,
+    ) -> Result<PositionModel, ModelError> {
         let mut pairs = Vec::new();
         for ji in joints {
             let j = &m.joints[ji];

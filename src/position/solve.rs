@@ -9,6 +9,7 @@ use crate::mechanism::Mechanism;
 use crate::structure::Analysis;
 use rayon::prelude::*;
 use serde::Serialize;
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 /// One step of the schedule: a structural group (or the bodies no group holds).
@@ -24,11 +25,55 @@ pub struct Step {
     pub pairs: Vec<usize>,
 }
 
+/// A pair of a multiple joint that the model does not write but the schedule solves: the
+/// joint's features on `a` against those on `b` (see [`schedule`]).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Link {
+    /// Index of the joint in `Mechanism::joints`.
+    pub joint: usize,
+    /// A model pair of that joint (its equations, with `a` and `b` in place of its bodies).
+    pub like: usize,
+    /// First body (the joint's earliest known body).
+    pub a: usize,
+    /// Other body.
+    pub b: usize,
+}
+
 /// The solve order.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Schedule {
     /// Steps in order (levels ascending).
     pub steps: Vec<Step>,
+    /// Extra pairs of multiple joints: a step's pair index `model.pairs.len() + i` is
+    /// `links[i]`.
+    pub links: Vec<Link>,
+}
+
+impl Schedule {
+    /// `model` with the schedule's links appended as pairs (undriven), and `targets`
+    /// extended to match; borrowed as they are when there are no links.
+    pub fn extended<'a>(
+        &self,
+        model: &'a PositionModel,
+        targets: &'a Targets,
+    ) -> (Cow<'a, PositionModel>, Cow<'a, Targets>) {
+        if self.links.is_empty() {
+            return (Cow::Borrowed(model), Cow::Borrowed(targets));
+        }
+        let mut ext = model.clone();
+        let mut tg = targets.clone();
+        tg.resize(model.pairs.len(), Vec::new());
+        for l in &self.links {
+            let mut p = model.pairs[l.like].clone();
+            p.a = l.a;
+            p.b = l.b;
+            p.driven = 0;
+            p.offset = super::pose::Pose::identity();
+            ext.pairs.push(p);
+            tg.push(Vec::new());
+        }
+        (Cow::Owned(ext), Cow::Owned(tg))
+    }
 }
 
 /// The schedule of `m` from its structural analysis: the over-determined part first (it is
@@ -36,6 +81,17 @@ pub struct Schedule {
 /// holds (an under-determined part) as one last step `rest`; the first step is named
 /// `overdetermined`. A pair is solved by the first
 /// step after which both its bodies are known.
+///
+/// A multiple joint is written in the model as pairs from its first listed body to each
+/// other one; the structural analysis sees it symmetrically (a node that belongs to the group
+/// placing its first bodies). When a step places some of its bodies before its first listed
+/// body is known (issue 13's pin `P = [2, 3, 4]`, bodies 3 and 4 in `SG-II`, 2 in `SG-III`),
+/// those pairs cannot tie 3 and 4 together where the analysis does: that step would be
+/// under-determined and the later one over-determined (and inconsistent). Such a joint is
+/// rooted at its earliest known body instead ([`Schedule::links`]: root against each other
+/// body, solved where that body becomes known), and the model's pairs between the first body
+/// and the others are left out of the schedule unless driven. The equations are the same
+/// joint's, so the solution set is unchanged and independent of the listing order.
 pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule {
     let by_id: HashMap<String, usize> = (0..m.bodies.len())
         .map(|i| (m.body_id(i).to_string(), i))
@@ -96,15 +152,75 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
             known_at[b] = s;
         }
     }
-    for (p, pair) in model.pairs.iter().enumerate() {
-        let s = known_at[pair.a].max(known_at[pair.b]);
+    // Multiple joints whose first body is known after another of theirs: rooted at the
+    // earliest known body (ties: listing order, so the first body wins a tie).
+    let mut links = Vec::new();
+    let mut skip = vec![false; model.pairs.len()];
+    let mut p = 0;
+    while p < model.pairs.len() {
+        let joint = model.pairs[p].joint;
+        let mut e = p;
+        while e < model.pairs.len() && model.pairs[e].joint == joint {
+            e += 1;
+        }
+        if e - p >= 2 {
+            let first = model.pairs[p].a;
+            let others: Vec<usize> = (p..e).map(|q| model.pairs[q].b).collect();
+            let root = others
+                .iter()
+                .copied()
+                .filter(|&b| known_at[b] < known_at[first])
+                .min_by_key(|&b| known_at[b]);
+            if let Some(root) = root {
+                for (q, pair) in model.pairs.iter().enumerate().take(e).skip(p) {
+                    let b = pair.b;
+                    if b == root {
+                        continue;
+                    }
+                    skip[q] = pair.driven == 0;
+                    links.push((
+                        q,
+                        Link {
+                            joint,
+                            like: q,
+                            a: root,
+                            b,
+                        },
+                    ));
+                }
+            }
+        }
+        p = e;
+    }
+    let n = model.pairs.len();
+    let ends = model
+        .pairs
+        .iter()
+        .enumerate()
+        .filter(|(q, _)| !skip[*q])
+        .map(|(q, pair)| (q, pair.a, pair.b))
+        .chain(
+            links
+                .iter()
+                .enumerate()
+                .map(|(i, (_, l))| (n + i, l.a, l.b)),
+        )
+        .collect::<Vec<_>>();
+    for (q, a, b) in ends {
+        let s = known_at[a].max(known_at[b]);
         if let Some(step) = steps.get_mut(s)
-            && (step.bodies.contains(&pair.a) || step.bodies.contains(&pair.b))
+            && (step.bodies.contains(&a) || step.bodies.contains(&b))
         {
-            step.pairs.push(p);
+            step.pairs.push(q);
         }
     }
-    Schedule { steps }
+    for step in &mut steps {
+        step.pairs.sort_unstable();
+    }
+    Schedule {
+        steps,
+        links: links.into_iter().map(|(_, l)| l).collect(),
+    }
 }
 
 /// Why a solve failed.
@@ -297,6 +413,8 @@ pub fn solve_groups(
     start: &Configuration,
     opts: &NewtonOptions,
 ) -> Result<Solution, SolveError> {
+    let (model, targets) = sched.extended(model, targets);
+    let (model, targets) = (model.as_ref(), targets.as_ref());
     let mut config = start.clone();
     let mut reports = Vec::new();
     let mut meter = opts.budget.meter("the group-by-group position solve");

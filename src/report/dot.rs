@@ -35,8 +35,20 @@ pub fn render(view: View, m: &Mechanism, a: &Analysis) -> String {
     match view {
         View::Diagram => diagram(a),
         View::Structure => structure(m, a),
-        View::Topology | View::Rigid => topology(m),
+        View::Topology | View::Rigid => topology_titled(
+            m,
+            closure_note(a.geometry.as_ref().and_then(|g| g.closure.as_ref())),
+        ),
     }
+}
+
+/// The closure line under a view's title: `mbsa analyze`'s closure section
+/// ([`super::position::closure_lines`]: the largest residual, the tolerance, the worst
+/// joints) when the configuration analysed misses closure; nothing when it is closed or the
+/// file's geometry was not used (a closed file's pictures stay as they were).
+pub fn closure_note(c: Option<&crate::position::Closure>) -> Option<String> {
+    c.filter(|c| c.status != crate::position::ClosureStatus::Closed)
+        .map(super::position::closure_lines)
 }
 
 /// The rigid view: one dashed cluster per rigid part found by the geometric analysis (the
@@ -44,7 +56,8 @@ pub fn render(view: View, m: &Mechanism, a: &Analysis) -> String {
 /// the left null space, bodies with isolated freedoms double-circled.
 pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
     let mut out = String::new();
-    header(&mut out, &format!("{}: rigid parts", m.name), "TB");
+    let note = closure_note(r.geometry_used.closure.as_ref());
+    header(&mut out, &format!("{}: rigid parts", m.name), "TB", note);
     let _ = writeln!(out, "  edge [dir=none];");
     let ids: Vec<String> = m.bodies.iter().map(|b| b.id.to_string()).collect();
     let mut cluster_of: BTreeMap<&str, usize> = BTreeMap::new();
@@ -187,7 +200,13 @@ fn html(s: &str) -> String {
 /// depends on, and one `rank=same` row per level.
 pub fn diagram(a: &Analysis) -> String {
     let mut out = String::new();
-    header(&mut out, &format!("{}: structural diagram", a.name), "TB");
+    let note = closure_note(a.geometry.as_ref().and_then(|g| g.closure.as_ref()));
+    header(
+        &mut out,
+        &format!("{}: structural diagram", a.name),
+        "TB",
+        note,
+    );
     let _ = writeln!(
         out,
         "  frame [label=\"0\\nframe\", shape=doublecircle, style=filled, fillcolor=\"#dddddd\"];"
@@ -260,7 +279,13 @@ pub fn diagram(a: &Analysis) -> String {
 /// a group), driven joints bold, levels from top to bottom.
 pub fn structure(m: &Mechanism, a: &Analysis) -> String {
     let mut out = String::new();
-    header(&mut out, &format!("{}: structural graph", m.name), "TB");
+    let note = closure_note(a.geometry.as_ref().and_then(|g| g.closure.as_ref()));
+    header(
+        &mut out,
+        &format!("{}: structural graph", m.name),
+        "TB",
+        note,
+    );
     let (over, under) = troubled(a);
     // Body id -> group index; the frame and unsolved bodies have none.
     let mut group_of: BTreeMap<&str, usize> = BTreeMap::new();
@@ -387,13 +412,17 @@ pub fn quote(s: &str) -> String {
     out
 }
 
-/// Graph header shared by all views.
-pub(crate) fn header(out: &mut String, name: &str, rankdir: &str) {
+/// Graph header shared by all views; `note` (the closure line) goes under the title.
+pub(crate) fn header(out: &mut String, name: &str, rankdir: &str, note: Option<String>) {
     let _ = writeln!(out, "digraph {} {{", quote(name));
+    let label = match note {
+        Some(n) => format!("{name}\n{n}"),
+        None => name.to_string(),
+    };
     let _ = writeln!(
         out,
         "  graph [rankdir={rankdir}, newrank=true, fontname=\"Helvetica\", label={}, labelloc=t];",
-        quote(name)
+        quote(&label)
     );
     let _ = writeln!(out, "  node [fontname=\"Helvetica\", fontsize=11];");
     let _ = writeln!(out, "  edge [fontname=\"Helvetica\", fontsize=9];");
@@ -437,8 +466,13 @@ pub(crate) fn body_node(i: usize) -> String {
 /// pair labelled with the joint id and type, driven joints bold with their driven DOF, and a
 /// small hub node for each multiple joint.
 pub fn topology(m: &Mechanism) -> String {
+    topology_titled(m, None)
+}
+
+/// [`topology`] with a closure line under the title ([`closure_note`]).
+fn topology_titled(m: &Mechanism, note: Option<String>) -> String {
     let mut out = String::new();
-    header(&mut out, &format!("{}: topology", m.name), "TB");
+    header(&mut out, &format!("{}: topology", m.name), "TB", note);
     let _ = writeln!(out, "  edge [dir=none];");
     for (i, b) in m.bodies.iter().enumerate() {
         let label = match &b.label {
