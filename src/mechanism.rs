@@ -522,9 +522,8 @@ impl Mechanism {
             }
             k += n;
         }
-        let mut slots: Vec<Option<Joint>> = joints.into_iter().map(Some).collect();
-        let mut joints: Vec<Joint> = order.into_iter().filter_map(|i| slots[i].take()).collect();
-        drop(slots);
+        // In place (a second vector of joints would double the largest allocation).
+        permute(&mut joints, order);
         if renamed {
             joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
         }
@@ -536,6 +535,24 @@ impl Mechanism {
             bodies,
             joints,
             expect: Expect::default(),
+        }
+    }
+}
+
+/// Rearrange `v` so that its k-th item is the `order[k]`-th before (`order` a permutation),
+/// by following the cycles of `order` with swaps: no second vector.
+fn permute<T>(v: &mut [T], mut order: Vec<usize>) {
+    const DONE: usize = usize::MAX;
+    for i in 0..order.len() {
+        let mut j = i;
+        while order[j] != DONE {
+            let next = order[j];
+            order[j] = DONE;
+            if next == i {
+                break;
+            }
+            v.swap(j, next);
+            j = next;
         }
     }
 }
@@ -805,6 +822,25 @@ mod tests {
             let mut expected: Vec<usize> = (0..ids.len()).collect();
             expected.sort_by(|&a, &b| natural_cmp(ids[a], ids[b]));
             assert_eq!(natural_order(&joints), expected, "{ids:?}");
+        }
+    }
+
+    #[test]
+    fn permute_follows_the_order() {
+        for n in 0..9usize {
+            // A few permutations of n items: rotations and reversals of rotations.
+            for shift in 0..n.max(1) {
+                for rev in [false, true] {
+                    let mut order: Vec<usize> = (0..n).map(|k| (k + shift) % n.max(1)).collect();
+                    if rev {
+                        order.reverse();
+                    }
+                    let mut v: Vec<usize> = (0..n).map(|k| 10 * k).collect();
+                    let expected: Vec<usize> = order.iter().map(|&k| 10 * k).collect();
+                    permute(&mut v, order);
+                    assert_eq!(v, expected);
+                }
+            }
         }
     }
 
