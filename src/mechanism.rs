@@ -621,7 +621,7 @@ fn numeric_tokens(id: &str, out: &mut Vec<u64>) -> bool {
         while let Some(&b) = bytes.get(i)
             && b.is_ascii_digit()
         {
-            n = n * 10 + u64::from(b - b'0');
+            n = n.wrapping_mul(10).wrapping_add(u64::from(b - b'0')); // more than 18 digits is refused below
             i += 1;
         }
         let len = i - start;
@@ -877,5 +877,15 @@ mod tests {
         assert!(InputSpec::parse("A,,B").is_err());
         assert!(InputSpec::parse("A:x").is_err());
         assert!(InputSpec::parse(":2").is_err());
+    }
+
+    #[test]
+    fn long_numeric_ids_are_not_numbers_and_do_not_overflow() {
+        // 20 digits overflowed `n * 10` (a debug-build panic found by reliability_smoke).
+        let mut out = Vec::new();
+        assert!(!numeric_tokens("99999999999999999999", &mut out));
+        out.clear();
+        assert!(numeric_tokens("999999999999999999-2", &mut out));
+        assert_eq!(out, vec![999_999_999_999_999_999, u64::from(b'-'), 2]);
     }
 }
