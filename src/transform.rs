@@ -382,6 +382,13 @@ const LIST_MEMORY: usize = 256 << 20;
 /// Placements analysed per parallel batch (and between progress reports).
 const BATCH: usize = 512;
 
+/// Bytes of the search's flows a batch may hold (warm starts of the analyses).
+const BATCH_FLOW_BYTES: usize = 64 << 20;
+
+/// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
+/// (units of each pair into its two bodies).
+type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
+
 /// Enumerate the determined placements and stream them to `sink`, calling `progress` between
 /// batches. Returns the counts.
 ///
@@ -541,6 +548,12 @@ impl Summary {
     }
 }
 
+/// Work units charged for one structural analysis of `m` (a placement's, or the first one
+/// before the search): an estimate proportional to its size, made before it runs.
+fn analysis_work(m: &Mechanism) -> u64 {
+    (m.bodies.len() + m.joints.len()) as u64 * 50 + 100
+}
+
 /// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
 /// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the
 /// count-valid placements examined; the search goes on only to learn whether one more
@@ -563,11 +576,15 @@ fn place(
         ..Placed::default()
     };
     let limit = opts.limit.unwrap_or(usize::MAX);
-    let per_eval = (m.bodies.len() + m.joints.len()) as u64 * 50 + 100;
-    let mut batch: Vec<(usize, Vec<(usize, u32)>)> = Vec::new();
+    // The rank check's factorizations, shared by every analysis of one expansion: a placement
+    // re-factorizes only the blocks and bodies whose rows its inputs changed.
+    let caches: Vec<structure::AnalysisCache> = exps.iter().map(|_| Default::default()).collect();
+    let per_eval = analysis_work(m);
+    // (expansion, placement, the search's flow for a warm start of the analysis)
+    let mut batch: Vec<Leaf> = Vec::new();
     let mut stopped = false;
     // Analyse a batch in parallel and stream its determined placements in order.
-    let mut flush = |batch: &mut Vec<(usize, Vec<(usize, u32)>)>,
+    let mut flush = |batch: &mut Vec<Leaf>,
                      r: &mut Placed,
                      meter: &mut Meter,
                      stopped: &mut bool|
@@ -581,10 +598,10 @@ fn place(
             .par_iter()
             .map_init(
                 || exps.iter().map(|e| e.mech.clone()).collect::<Vec<_>>(),
-                |mechs, (x, w)| {
+                |mechs, (x, w, flow)| {
                     let e = &exps[*x];
                     let mech = &mut mechs[*x];
-                    let a = evaluate(mech, w, &opts.analysis, lib)?;
+                    let a = evaluate(mech, w, flow, &opts.analysis, lib, &caches[*x])?;
                     Some(placement(mech, e, *x, &a, w))
                 },
             )
@@ -618,8 +635,10 @@ fn place(
     let mut eval_meter = opts.budget.meter("the analysis of the placements");
     let mut found = 0usize;
     let mut batch_size = 1usize;
+    // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
+    let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
     for (x, e) in exps.iter().enumerate() {
-        let p = Problem::of(e, m, rules, opts);
+        let p = Problem::of(e, m, rules, opts, &caches[x], meter)?;
         if x == 0 {
             r.isolated = p.isolated;
             r.set_aside = p.set_aside;
@@ -630,7 +649,7 @@ fn place(
             }
         }
         let mut err: Option<BudgetExceeded> = None;
-        p.search(meter, &mut |w| {
+        p.search(meter, &mut |w, flow| {
             if found >= limit {
                 r.cut = true;
                 return false;
@@ -642,10 +661,13 @@ fn place(
                     .filter(|&q| w[q] > 0)
                     .map(|q| (q, w[q]))
                     .collect(),
+                flow.iter()
+                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                    .collect(),
             ));
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
-                batch_size = (batch_size * 2).min(BATCH);
+                batch_size = (batch_size * 2).min(max_batch);
                 if let Err(e) = flush(&mut batch, &mut r, &mut eval_meter, &mut stopped) {
                     err = Some(e);
                     return false;
@@ -1505,7 +1527,14 @@ struct Problem {
 }
 
 impl Problem {
-    fn of(e: &Expansion, orig: &Mechanism, rules: &Rules, opts: &TransformOptions) -> Problem {
+    fn of(
+        e: &Expansion,
+        orig: &Mechanism,
+        rules: &Rules,
+        opts: &TransformOptions,
+        cache: &structure::AnalysisCache,
+        meter: &mut Meter,
+    ) -> Result<Problem, BudgetExceeded> {
         let m = &e.mech;
         let nb = m.bodies.len();
         let b = m.b();
@@ -1526,8 +1555,12 @@ impl Problem {
                     pairs[x] += 1;
                 }
             }
-            // The geometry was checked before the enumeration: this analysis cannot fail.
-            let a = structure::analyze(m, &opts.analysis, &Library::empty()).ok();
+            // The geometry was checked before the enumeration: this analysis cannot fail. It
+            // is charged like the analysis of one placement.
+            meter.charge(analysis_work(m))?;
+            let a =
+                structure::analyze_cached(m, &opts.analysis, &Library::empty(), Some(cache), None)
+                    .ok();
             let a = a.as_ref();
             if let Some(a) = a {
                 for (q, &n) in a.set_aside.iter().enumerate() {
@@ -1607,14 +1640,14 @@ impl Problem {
                  can determine the mechanism",
                 -p.f
             ));
-            return p;
+            return Ok(p);
         }
         if kept > p.f {
             p.note = Some(format!(
                 "the kept inputs ({kept}) are more than the {} the mechanism takes",
                 p.f
             ));
-            return p;
+            return Ok(p);
         }
         p.need = (p.f - kept) as usize;
         let mut s = State {
@@ -1624,30 +1657,34 @@ impl Problem {
         let mut scratch = p.scratch();
         for (q, &n) in cons.iter().enumerate() {
             for _ in 0..n {
-                if p.augment(&mut s, &[q], &mut scratch).is_none() {
+                let r = p.augment(&mut s, &[q], &mut scratch);
+                meter.charge(scratch.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     p.note = Some(format!(
                         "the joints' own equations over-determine the bodies near joint {} (by \
                          count): no placement of inputs can determine the mechanism",
                         m.joints[q].id
                     ));
-                    return p;
+                    return Ok(p);
                 }
             }
         }
         for q in 0..nq {
             for _ in 0..p.lo[q] {
-                if p.augment(&mut s, &[q], &mut scratch).is_none() {
+                let r = p.augment(&mut s, &[q], &mut scratch);
+                meter.charge(scratch.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     p.note = Some(format!(
                         "the kept input on joint {} over-determines the bodies it joins: no \
                          placement keeping it is determined",
                         m.joints[q].id
                     ));
-                    return p;
+                    return Ok(p);
                 }
             }
         }
         p.root = Some(s);
-        p
+        Ok(p)
     }
 
     /// Pairs that may be driven (including kept ones).
@@ -1676,6 +1713,22 @@ impl Problem {
     /// Route one more equation unit from one of `sources` to a body with spare unknowns,
     /// rerouting earlier units along an augmenting path. Returns the source used.
     fn augment(&self, s: &mut State, sources: &[usize], sc: &mut Scratch) -> Option<usize> {
+        self.augment_marked(s, sources, sc, None)
+    }
+
+    /// [`Problem::augment`]; with `dead`, bodies from which an earlier call found no spare
+    /// unknown are skipped, and a failed call marks every body it reached. Sound while only
+    /// augmentations happen in between: an augmenting path changes flows between bodies that
+    /// all reach a spare unknown, so a body that reached none still reaches none (and spare
+    /// unknowns only get used up). A run of failures then costs one pass, not one each.
+    fn augment_marked(
+        &self,
+        s: &mut State,
+        sources: &[usize],
+        sc: &mut Scratch,
+        mut dead: Option<&mut [bool]>,
+    ) -> Option<usize> {
+        let alive = |dead: &Option<&mut [bool]>, x: usize| dead.as_ref().is_none_or(|d| !d[x]);
         sc.stamp = sc.stamp.wrapping_add(1);
         if sc.stamp == 0 {
             sc.seen.iter_mut().for_each(|v| *v = 0);
@@ -1684,7 +1737,7 @@ impl Problem {
         sc.queue.clear();
         for &q in sources {
             for x in [self.a[q], self.c[q]] {
-                if x != self.frame && sc.seen[x] != sc.stamp {
+                if x != self.frame && sc.seen[x] != sc.stamp && alive(&dead, x) {
                     sc.seen[x] = sc.stamp;
                     sc.prev[x] = (q as u32, NONE);
                     sc.queue.push(x);
@@ -1715,11 +1768,16 @@ impl Problem {
                     continue;
                 }
                 let y = self.other(q, x);
-                if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                if y != self.frame && y != x && sc.seen[y] != sc.stamp && alive(&dead, y) {
                     sc.seen[y] = sc.stamp;
                     sc.prev[y] = (q as u32, x as u32);
                     sc.queue.push(y);
                 }
+            }
+        }
+        if let Some(d) = dead.as_deref_mut() {
+            for &x in &sc.queue {
+                d[x] = true;
             }
         }
         None
@@ -1741,7 +1799,7 @@ impl Problem {
     fn search(
         &self,
         meter: &mut Meter,
-        leaf: &mut dyn FnMut(&[u32]) -> bool,
+        leaf: &mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool,
     ) -> Result<(), BudgetExceeded> {
         let Some(root) = &self.root else {
             return Ok(());
@@ -1753,13 +1811,19 @@ impl Problem {
             hi: self.hi.clone(),
             trail: Vec::new(),
             sc: self.scratch(),
+            dead: vec![0; self.u.len()],
+            version: 1,
         };
         // The greedy first placement: as many units as fit on each candidate in order.
         let mut placed = 0usize;
+        let mut full = vec![false; self.u.len()];
         for &q in &self.cand {
             while placed < self.need && t.w[q] < t.hi[q] {
-                meter.charge(self.u.len() as u64 / 8 + 1)?;
-                if self.augment(&mut t.s, &[q], &mut t.sc).is_none() {
+                // Bodies whose spare unknowns no unit reaches are marked `full` once, so a
+                // run of candidates that take no unit costs one pass (charged: bodies seen).
+                let r = self.augment_marked(&mut t.s, &[q], &mut t.sc, Some(&mut full));
+                meter.charge(t.sc.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     break;
                 }
                 t.w[q] += 1;
@@ -1825,7 +1889,7 @@ impl Problem {
                     .kept_groups
                     .iter()
                     .all(|(qs, min)| qs.iter().map(|&q| t.w[q]).sum::<u32>() >= *min);
-                if ok && !leaf(&t.w) {
+                if ok && !leaf(&t.w, &t.s.flow) {
                     return Ok(());
                 }
                 go_back = true;
@@ -1864,10 +1928,18 @@ impl Problem {
         meter: &mut Meter,
     ) -> Result<bool, BudgetExceeded> {
         let found = {
-            let Search { s, w, lo, sc, .. } = &mut *t;
+            let Search {
+                s,
+                w,
+                lo,
+                sc,
+                dead,
+                version,
+                ..
+            } = &mut *t;
             sc.next_stamp();
             for x in [self.a[q], self.c[q]] {
-                if x != self.frame && sc.seen[x] != sc.stamp {
+                if x != self.frame && sc.seen[x] != sc.stamp && dead[x] != *version {
                     sc.seen[x] = sc.stamp;
                     sc.prev[x] = (q as u32, NONE);
                     sc.queue.push(x);
@@ -1888,11 +1960,19 @@ impl Problem {
                         break 'bfs;
                     }
                     let y = self.other(r, x);
-                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                    if y != self.frame && y != x && sc.seen[y] != sc.stamp && dead[y] != *version {
                         sc.seen[y] = sc.stamp;
                         sc.prev[y] = (r as u32, x as u32);
                         sc.queue.push(y);
                     }
+                }
+            }
+            if found.is_none() {
+                // No free unit is reachable from any body this search reached: while the
+                // placement (flows, units, lower bounds) stays as it is, later exchanges skip
+                // them (a run of failed exchanges costs one pass over the bodies, not one each).
+                for &x in &sc.queue {
+                    dead[x] = *version;
                 }
             }
             found
@@ -1924,6 +2004,8 @@ impl Problem {
     fn cap(&self, t: &mut Search, q: usize, meter: &mut Meter) -> Result<bool, BudgetExceeded> {
         t.set_hi(q, t.lo[q]);
         while t.w[q] > t.hi[q] {
+            // Units move back to pairs below their upper bound: free units may appear.
+            t.version += 1;
             let side = usize::from(t.s.flow[q][0] == 0);
             let x = if side == 0 { self.a[q] } else { self.c[q] };
             t.flow_add(q, side, -1);
@@ -2005,6 +2087,13 @@ struct Search {
     hi: Vec<u32>,
     trail: Vec<(u8, u32, u32)>,
     sc: Scratch,
+    /// Bodies from which [`Problem::exchange_in`] found no free unit, valid while `dead[x] ==
+    /// version`. A successful exchange keeps them valid (it is an augmenting path towards a
+    /// free unit: it changes flows only between bodies that all reach one, so a body that
+    /// reached none still reaches none), and so does raising a lower bound (fewer free units);
+    /// removing units ([`Problem::cap`]) and undoing bump `version`.
+    dead: Vec<u64>,
+    version: u64,
 }
 
 impl Search {
@@ -2032,6 +2121,9 @@ impl Search {
                 break;
             };
             let q = q as usize;
+            if k < 4 {
+                self.version += 1;
+            }
             match k {
                 0 | 1 => self.s.flow[q][k as usize] = old,
                 2 => self.w[q] = old,
@@ -2049,8 +2141,10 @@ impl Search {
 fn evaluate(
     mech: &mut Mechanism,
     w: &[(usize, u32)],
+    flow: &[[u8; 2]],
     opts: &structure::Options,
     lib: &Library,
+    cache: &structure::AnalysisCache,
 ) -> Option<Analysis> {
     for j in &mut mech.joints {
         j.driven = 0;
@@ -2059,7 +2153,7 @@ fn evaluate(
         mech.joints[q].driven = n;
     }
     // The geometry was checked before the enumeration: this analysis cannot fail.
-    structure::analyze(mech, opts, lib)
+    structure::analyze_cached(mech, opts, lib, Some(cache), Some(flow))
         .ok()
         .filter(|a| a.status == Status::Determined)
 }
