@@ -10,8 +10,12 @@
 //! dependent and the partial placement over-determines some part), and a branch is cut as soon
 //! as the joints still to come cannot complete it (a matroid rank test by augmenting paths).
 //! Every leaf is thus a count-valid placement; each is then analysed in full
-//! ([`crate::structure::analyze`], with its rank check unless `count_only`), in parallel, and
-//! the ones the rank check rejects are excluded and counted. `docs/algorithms.md` has details.
+//! ([`crate::structure::analyze_cached`], with its rank check unless `count_only`), in
+//! parallel, and the ones the rank check rejects are excluded and counted. The analyses of one
+//! expansion share the rank check's factorizations (a placement re-factorizes only the bodies
+//! and blocks whose rows its inputs change) and start their maximum flow from the search's own
+//! matching, so a placement costs about one pass over the mechanism plus its new groups.
+//! `docs/algorithms.md` has details.
 
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::joint::JointType;
@@ -384,6 +388,10 @@ const BATCH: usize = 512;
 
 /// Bytes of the search's flows a batch may hold (warm starts of the analyses).
 const BATCH_FLOW_BYTES: usize = 64 << 20;
+
+/// The search's callback: a placement (units per pair) and its flow (units of each pair into
+/// its two bodies); `false` stops the search.
+type LeafFn<'a> = &'a mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool;
 
 /// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
 /// (units of each pair into its two bodies).
@@ -1726,7 +1734,7 @@ impl Problem {
         s: &mut State,
         sources: &[usize],
         sc: &mut Scratch,
-        mut dead: Option<&mut [bool]>,
+        dead: Option<&mut [bool]>,
     ) -> Option<usize> {
         let alive = |dead: &Option<&mut [bool]>, x: usize| dead.as_ref().is_none_or(|d| !d[x]);
         sc.stamp = sc.stamp.wrapping_add(1);
@@ -1775,7 +1783,7 @@ impl Problem {
                 }
             }
         }
-        if let Some(d) = dead.as_deref_mut() {
+        if let Some(d) = dead {
             for &x in &sc.queue {
                 d[x] = true;
             }
@@ -1795,12 +1803,12 @@ impl Problem {
     /// unit removed is refilled by an augmenting path). A branch whose bounds admit no
     /// placement is cut at once by a failed exchange, so there are no dead ends: the first
     /// placement comes after one greedy pass, and each further one after at most one
-    /// exchange per candidate. Changes are undone from a trail, so memory stays linear.
-    fn search(
-        &self,
-        meter: &mut Meter,
-        leaf: &mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool,
-    ) -> Result<(), BudgetExceeded> {
+    /// exchange per candidate. Changes are undone from a trail, so memory stays linear. A
+    /// failed exchange marks the bodies it reached (no free unit from there) until units move
+    /// back, so a run of candidates that take no unit costs one pass over the bodies, not one
+    /// each (with `--limit`, the work grows with the placements found, not with candidates ×
+    /// bodies).
+    fn search(&self, meter: &mut Meter, leaf: LeafFn<'_>) -> Result<(), BudgetExceeded> {
         let Some(root) = &self.root else {
             return Ok(());
         };
