@@ -576,23 +576,22 @@ fn place(
     progress: Option<ProgressFn<'_>>,
     sink: &mut dyn FnMut(Placement) -> bool,
 ) -> Result<Placed, TransformError> {
-    let (exps, total_exps) = expansions(m, opts.max_expansions);
+    let exps = Expansions::of(m, opts.max_expansions);
     let mut r = Placed {
-        expansions: exps.len(),
-        expansions_total: total_exps,
+        expansions: exps.len,
+        expansions_total: exps.total,
         f: crate::mobility::mobility(m).mobility.count,
         ..Placed::default()
     };
     let limit = opts.limit.unwrap_or(usize::MAX);
-    // The rank check's factorizations, shared by every analysis of one expansion: a placement
-    // re-factorizes only the blocks and bodies whose rows its inputs changed.
-    let caches: Vec<structure::AnalysisCache> = exps.iter().map(|_| Default::default()).collect();
     let per_eval = analysis_work(m);
     // (expansion, placement, the search's flow for a warm start of the analysis)
     let mut batch: Vec<Leaf> = Vec::new();
     let mut stopped = false;
     // Analyse a batch in parallel and stream its determined placements in order.
-    let mut flush = |batch: &mut Vec<Leaf>,
+    let mut flush = |e: &Expansion,
+                     cache: &structure::AnalysisCache,
+                     batch: &mut Vec<Leaf>,
                      r: &mut Placed,
                      meter: &mut Meter,
                      stopped: &mut bool|
@@ -605,11 +604,9 @@ fn place(
         let results: Vec<Option<Placement>> = batch
             .par_iter()
             .map_init(
-                || exps.iter().map(|e| e.mech.clone()).collect::<Vec<_>>(),
-                |mechs, (x, w, flow)| {
-                    let e = &exps[*x];
-                    let mech = &mut mechs[*x];
-                    let a = evaluate(mech, w, flow, &opts.analysis, lib, &caches[*x])?;
+                || e.mech.clone(),
+                |mech, (x, w, flow)| {
+                    let a = evaluate(mech, w, flow, &opts.analysis, lib, cache)?;
                     Some(placement(mech, e, *x, &a, w))
                 },
             )
@@ -645,8 +642,12 @@ fn place(
     let mut batch_size = 1usize;
     // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
     let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
-    for (x, e) in exps.iter().enumerate() {
-        let p = Problem::of(e, m, rules, opts, &caches[x], meter)?;
+    for x in 0..exps.len {
+        let e = &exps.get(x);
+        // The rank check's factorizations, shared by every analysis of this expansion: a
+        // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
+        let cache = structure::AnalysisCache::default();
+        let p = Problem::of(e, m, rules, opts, &cache, meter)?;
         if x == 0 {
             r.isolated = p.isolated;
             r.set_aside = p.set_aside;
@@ -676,8 +677,9 @@ fn place(
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
                 batch_size = (batch_size * 2).min(max_batch);
-                if let Err(e) = flush(&mut batch, &mut r, &mut eval_meter, &mut stopped) {
-                    err = Some(e);
+                if let Err(b) = flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)
+                {
+                    err = Some(b);
                     return false;
                 }
                 if stopped {
@@ -686,14 +688,15 @@ fn place(
             }
             true
         })?;
-        if let Some(e) = err {
-            return Err(e.into());
+        if let Some(b) = err {
+            return Err(b.into());
         }
+        // The rest of the batch belongs to this expansion: analysed before the next is built.
+        flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)?;
         if r.cut || stopped {
             break;
         }
     }
-    flush(&mut batch, &mut r, &mut eval_meter, &mut stopped)?;
     Ok(r)
 }
 
@@ -1380,44 +1383,68 @@ fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
     edges
 }
 
-/// Up to `max` expansions (at least one) and how many there are.
-fn expansions(m: &Mechanism, max: usize) -> (Vec<Expansion>, u64) {
-    let mut base = m.clone();
-    for j in &mut base.joints {
-        j.driven = 0;
+/// The binary expansions of `m`'s multiple joints, built one at a time ([`Expansions::get`]):
+/// only one expansion's mechanism is held at once.
+struct Expansions<'a> {
+    m: &'a Mechanism,
+    /// `m` with no joint driven.
+    base: Mechanism,
+    /// Multiple joints, and their spanning trees.
+    multi: Vec<usize>,
+    counts: Vec<u64>,
+    /// Expansions to explore (at least one).
+    len: usize,
+    /// Expansions there are (saturating).
+    total: u64,
+}
+
+impl<'a> Expansions<'a> {
+    /// Up to `max` expansions (at least one) and how many there are.
+    fn of(m: &'a Mechanism, max: usize) -> Expansions<'a> {
+        let mut base = m.clone();
+        for j in &mut base.joints {
+            j.driven = 0;
+        }
+        let multi: Vec<usize> = (0..m.joints.len())
+            .filter(|&j| m.joints[j].bodies.len() > 2)
+            .collect();
+        let counts: Vec<u64> = multi
+            .iter()
+            .map(|&j| trees(m.joints[j].bodies.len()))
+            .collect();
+        let total = counts.iter().fold(1u64, |t, &c| t.saturating_mul(c));
+        let len = (max.max(1) as u64).min(total) as usize;
+        Expansions {
+            m,
+            base,
+            multi,
+            counts,
+            len,
+            total,
+        }
     }
-    let multi: Vec<usize> = (0..m.joints.len())
-        .filter(|&j| m.joints[j].bodies.len() > 2)
-        .collect();
-    if multi.is_empty() {
-        let origin = (0..m.joints.len()).collect();
-        let e = Expansion {
-            label: None,
-            mech: base,
-            origin,
-        };
-        return (vec![e], 1);
-    }
-    let counts: Vec<u64> = multi
-        .iter()
-        .map(|&j| trees(m.joints[j].bodies.len()))
-        .collect();
-    let total = counts.iter().fold(1u64, |t, &c| t.saturating_mul(c));
-    let n = (max.max(1) as u64).min(total) as usize;
-    let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        // Mixed radix, the last multiple joint varying fastest.
+
+    /// Expansion `k` (mixed radix over the multiple joints' trees, the last varying fastest).
+    fn get(&self, k: usize) -> Expansion {
+        let m = self.m;
+        if self.multi.is_empty() {
+            return Expansion {
+                label: None,
+                mech: self.base.clone(),
+                origin: (0..m.joints.len()).collect(),
+            };
+        }
         let mut rest = k as u64;
-        let mut digits = vec![0u64; multi.len()];
-        for (d, &c) in digits.iter_mut().zip(&counts).rev() {
+        let mut digits = vec![0u64; self.multi.len()];
+        for (d, &c) in digits.iter_mut().zip(&self.counts).rev() {
             *d = rest % c.max(1);
             rest /= c.max(1);
         }
-        let mut mech = base.clone();
+        let mut mech = self.base.clone();
         let mut origin: Vec<usize> = (0..m.joints.len()).collect();
         let mut labels = Vec::new();
         let mut appended: Vec<Joint> = Vec::new();
-        for (&j, &d) in multi.iter().zip(&digits) {
+        for (&j, &d) in self.multi.iter().zip(&digits) {
             let joint = &m.joints[j];
             let edges = prufer_tree(joint.bodies.len(), d);
             let mut pairs = Vec::new();
@@ -1442,25 +1469,29 @@ fn expansions(m: &Mechanism, max: usize) -> (Vec<Expansion>, u64) {
             labels.push(format!("{}: {}", joint.id, pairs.join(", ")));
         }
         mech.joints.extend(appended);
-        out.push(Expansion {
+        Expansion {
             label: Some(labels.join("; ")),
             mech,
             origin,
-        });
+        }
     }
-    (out, total)
 }
 
 /// The file's own placement on the default expansion, as the analysis distributes a multiple
 /// joint's driven DOF: its pairs in order, at most k each, the last taking the rest.
 fn exps_default_inputs(m: &Mechanism, max: usize) -> Vec<Input> {
-    let (exps, _) = expansions(m, max.min(1));
-    let Some(e) = exps.first() else {
-        return Vec::new();
-    };
+    let e = &Expansions::of(m, max.min(1)).get(0);
     let mut w: Vec<(usize, u32)> = Vec::new();
+    // The pairs of each joint, in pair order (one pass: was a scan of every pair per joint,
+    // quadratic: 88 % of `transform --limit 3` on a 10^5-body linkage).
+    let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); m.joints.len()];
+    for (q, &o) in e.origin.iter().enumerate() {
+        if let Some(v) = pairs_of.get_mut(o) {
+            v.push(q);
+        }
+    }
     for (j, joint) in m.joints.iter().enumerate() {
-        let pairs: Vec<usize> = (0..e.origin.len()).filter(|&q| e.origin[q] == j).collect();
+        let pairs = &pairs_of[j];
         let mut left = joint.driven;
         for (p, &q) in pairs.iter().enumerate() {
             let share = if p + 1 == pairs.len() {
