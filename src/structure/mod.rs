@@ -285,7 +285,28 @@ pub struct GenericAnswer {
 /// Analyse the structure of `m`. Errors: the file geometry asked for (`--geometry file`) is
 /// missing or unusable (a joint model cannot be built).
 pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
-    let mut a = analyze_once(m, opts, lib)?;
+    analyze_cached(m, opts, lib, None, None)
+}
+
+/// What [`analyze_cached`] keeps between analyses of one mechanism under different inputs.
+pub type AnalysisCache = rank::Cache;
+
+/// [`analyze`], reusing the rank check's factorizations from earlier analyses of the same
+/// mechanism (other inputs) kept in `cache`, and starting the maximum flow from `flow` (per
+/// joint, the units of its equations and inputs routed into its first and its second body,
+/// as `mbsa transform`'s search has them; binary joints only). The groups, levels, types and
+/// the verdict are the same as without them (the decomposition does not depend on which
+/// maximum flow is found); only the lists of unsaturated pairs and short bodies of a mechanism
+/// that is not determined name one maximum flow's choice. Used by `mbsa transform`, which
+/// analyses many placements of one mechanism.
+pub fn analyze_cached(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+) -> Result<Analysis, MotionError> {
+    let mut a = analyze_once(m, opts, lib, cache, flow)?;
     // At the file's configuration, say what generic geometry would give when it differs.
     if let Some(used) = &a.geometry
         && used.is_file()
@@ -295,7 +316,7 @@ pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis,
             geometry: GeometrySource::Random { seed: 0 },
             ..*opts
         };
-        let g = analyze_once(m, &generic, lib)?;
+        let g = analyze_once(m, &generic, lib, cache, flow)?;
         let differs = g.status != a.status
             || g.groups.len() != a.groups.len()
             || g.uncontrolled != a.uncontrolled;
@@ -357,8 +378,26 @@ fn status_word(s: Status) -> &'static str {
     }
 }
 
-fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
+fn analyze_once(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+) -> Result<Analysis, MotionError> {
     let mut eqs = Equations::of(m);
+    if let Some(f) = flow {
+        eqs.hint = (0..eqs.len())
+            .map(|e| {
+                let j = eqs.joint[e];
+                let binary = m.joints.get(j).is_some_and(|j| j.bodies.len() == 2);
+                match f.get(j) {
+                    Some(&[a, c]) if binary && !eqs.input_only[e] => [u32::from(a), u32::from(c)],
+                    _ => [0, 0],
+                }
+            })
+            .collect();
+    }
     let mut u = eqs.unknowns(m);
     let mut isolated = Vec::new();
     let mut redundant = Vec::new();
@@ -378,7 +417,7 @@ fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis
                     .collect(),
             );
         }
-        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u);
+        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache);
         geometry = Some(used);
         isolated = r.isolated;
         redundant = r.redundant;

@@ -25,7 +25,9 @@ use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism};
 use crate::motion::{self, GeometryUsed};
 use nalgebra::{DMatrix, DMatrixViewMut};
-use std::collections::HashSet;
+use std::collections::{HashMap, HashSet};
+use std::hash::{DefaultHasher, Hasher};
+use std::sync::Mutex;
 
 /// What the rank check found, with the final decomposition.
 pub(crate) struct RankResult {
@@ -324,13 +326,138 @@ fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) 
     det > 1e-6 * frob2.sqrt() * sub2.sqrt().powi(b as i32 - 1)
 }
 
-/// Run the check; `eqs.cap` and `u` are lowered in place.
+/// Decisions of the rank check kept across analyses of one mechanism under different inputs
+/// (`mbsa transform` analyses many placements): a body's reduced unknowns and a sound block's
+/// verdict are functions of the rows involved (and the tolerance), so they are keyed by a
+/// 128-bit digest of exactly those rows and reused when the same rows come again. Deficient
+/// blocks are never cached (their explanation is recomputed), so a hit only skips a
+/// factorization whose result is known: the analysis is the same with or without a cache.
+#[derive(Default)]
+pub struct Cache {
+    bases: Mutex<HashMap<u128, Option<DMatrix<f64>>>>,
+    blocks: Mutex<HashMap<u128, Option<Unchecked>>>,
+}
+
+/// Entries a [`Cache`] keeps before it starts over (memory stays bounded).
+const CACHE_ENTRIES: usize = 1 << 21;
+
+impl Cache {
+    fn get_basis(&self, k: u128) -> Option<Option<DMatrix<f64>>> {
+        let g = self.bases.lock().unwrap_or_else(|e| e.into_inner());
+        g.get(&k).cloned()
+    }
+    fn put_basis(&self, k: u128, v: &Option<DMatrix<f64>>) {
+        let mut g = self.bases.lock().unwrap_or_else(|e| e.into_inner());
+        if g.len() >= CACHE_ENTRIES {
+            g.clear();
+        }
+        g.insert(k, v.clone());
+    }
+    fn get_block(&self, k: u128) -> Option<Option<Unchecked>> {
+        let g = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        g.get(&k).cloned()
+    }
+    fn put_block(&self, k: u128, v: Option<Unchecked>) {
+        let mut g = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        if g.len() >= CACHE_ENTRIES {
+            g.clear();
+        }
+        g.insert(k, v);
+    }
+}
+
+/// Two independent 64-bit SipHash streams (fixed keys: deterministic) fed the same words.
+struct Digest(DefaultHasher, DefaultHasher);
+
+impl Digest {
+    fn new(tag: u64) -> Digest {
+        let mut d = Digest(DefaultHasher::new(), DefaultHasher::new());
+        d.1.write_u64(0x9e37_79b9_7f4a_7c15);
+        d.word(tag);
+        d
+    }
+    fn word(&mut self, v: u64) {
+        self.0.write_u64(v);
+        self.1.write_u64(v);
+    }
+    fn wide(&mut self, v: u128) {
+        self.word(v as u64);
+        self.word((v >> 64) as u64);
+    }
+    fn matrix(&mut self, a: &DMatrix<f64>) {
+        self.word(a.nrows() as u64);
+        self.word(a.ncols() as u64);
+        for x in a.iter() {
+            self.word(x.to_bits());
+        }
+    }
+    fn finish(&self) -> u128 {
+        (u128::from(self.0.finish()) << 64) | u128::from(self.1.finish())
+    }
+}
+
+/// What a block's cache key is made of besides the block itself.
+struct KeyContext<'a> {
+    tol: &'a [u64; 3],
+    seed: Option<u64>,
+    qd: &'a [u128],
+    rd: &'a [u128],
+    orig_rows: &'a [usize],
+}
+
+impl KeyContext<'_> {
+    /// The key of a block: everything its verdict depends on (its part, bodies with their
+    /// unknowns, pairs with their bodies and rows, whether any pair was lowered).
+    fn block(
+        &self,
+        part: Part,
+        bodies: &[usize],
+        block_eqs: &[usize],
+        eqs: &Equations,
+        rows: &[DMatrix<f64>],
+    ) -> u128 {
+        let mut d = Digest::new(3);
+        self.tol.iter().for_each(|&w| d.word(w));
+        d.word(match part {
+            Part::Over => 0,
+            Part::Under => 1,
+            _ => 2,
+        });
+        d.word(self.seed.unwrap_or(u64::MAX));
+        d.word(bodies.len() as u64);
+        for &x in bodies {
+            d.word(x as u64);
+            d.wide(self.qd[x]);
+        }
+        d.word(block_eqs.len() as u64);
+        for &e in block_eqs {
+            let [h, o] = eqs.bodies(e);
+            d.word(e as u64);
+            d.word(h as u64);
+            d.word(o as u64);
+            d.wide(self.rd[e]);
+            d.word(u64::from(rows[e].nrows() == self.orig_rows[e]));
+        }
+        d.finish()
+    }
+}
+
+fn matrix_digest(a: &DMatrix<f64>) -> u128 {
+    let mut d = Digest::new(1);
+    d.matrix(a);
+    d.finish()
+}
+
+/// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced
+/// unknowns and sound blocks seen in an earlier analysis (same rows, same tolerance) are
+/// taken from it instead of being factorized again.
 pub(crate) fn check(
     m: &Mechanism,
     geoms: &[Geometry],
     used: &GeometryUsed,
     eqs: &mut Equations,
     u: &mut [u32],
+    cache: Option<&Cache>,
 ) -> RankResult {
     let b = m.b() as usize;
     let nb = eqs.nodes;
@@ -358,6 +485,12 @@ pub(crate) fn check(
         eqs.cap[e] = r.nrows() as u32;
     }
     let orig_rows: Vec<usize> = rows.iter().map(|r| r.nrows()).collect();
+    // Digests of every pair's rows (only with a cache), and of the tolerance.
+    let mut rd: Vec<u128> = match cache {
+        Some(_) => crate::par::map(rows.len(), |e| matrix_digest(&rows[e])),
+        None => Vec::new(),
+    };
+    let tol_words = [tol.rel.to_bits(), tol.abs.to_bits(), b as u64];
 
     // Pairs touching each body (compressed: `touch[start[x]..start[x + 1]]`), proper pairs
     // only (a pair of a body with itself constrains nothing).
@@ -422,7 +555,19 @@ pub(crate) fn check(
         if joints.len() < 2 {
             return None;
         }
-        reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol)
+        let Some(c) = cache else {
+            return reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol);
+        };
+        let mut d = Digest::new(2);
+        tol_words.iter().for_each(|&w| d.word(w));
+        mine.iter().for_each(|&e| d.wide(rd[e]));
+        let k = d.finish();
+        if let Some(hit) = c.get_basis(k) {
+            return hit;
+        }
+        let v = reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol);
+        c.put_basis(k, &v);
+        v
     });
     let mut q: Vec<Option<DMatrix<f64>>> = Vec::with_capacity(nb);
     let mut isolated = Vec::new();
@@ -440,6 +585,15 @@ pub(crate) fn check(
     }
     drop(touch);
     drop(start);
+    let qd: Vec<u128> = match cache {
+        Some(_) => crate::par::map(nb, |x| {
+            q[x].as_ref()
+                .map_or(0, |a| matrix_digest(a).wrapping_add(1))
+        }),
+        None => Vec::new(),
+    };
+    // The key of a block for the cache: everything its verdict depends on (its part, bodies
+    // with their unknowns, pairs with their bodies and rows, whether any pair was lowered).
 
     // (b)-(c) Decompose, check every block, lower, repeat.
     let mut redundant = configuration;
@@ -493,6 +647,7 @@ pub(crate) fn check(
         }
         // Blocks to check, in triangular order; already verified and oversized ones skipped.
         let mut todo: Vec<Pending> = Vec::new();
+        let mut keys: Vec<Option<u128>> = Vec::new();
         for i in 0..nblocks {
             let block_eqs = &beqs[bstart[i]..bstart[i + 1]];
             if block_eqs.is_empty() {
@@ -518,6 +673,23 @@ pub(crate) fn check(
             if verified.contains(&signature) {
                 continue;
             }
+            let key = cache.map(|_| {
+                let ctx = KeyContext {
+                    tol: &tol_words,
+                    seed: used.seed,
+                    qd: &qd,
+                    rd: &rd,
+                    orig_rows: &orig_rows,
+                };
+                ctx.block(part, bodies, block_eqs, eqs, &rows)
+            });
+            if let (Some(c), Some(k)) = (cache, key)
+                && let Some(hit) = c.get_block(k)
+            {
+                unchecked.extend(hit);
+                verified.insert(signature);
+                continue;
+            }
             let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
             if nrows.max(ncols) > MAX_DENSE_UNKNOWNS {
                 // Too large for the dense SVD. At a random realization its rank is decided
@@ -531,17 +703,25 @@ pub(crate) fn check(
                     && ncols <= MAX_EXACT_UNKNOWNS
                     && exact_rank(m, eqs, block_eqs, bodies, seed) >= needed
                 {
+                    if let (Some(c), Some(k)) = (cache, key) {
+                        c.put_block(k, None);
+                    }
                     verified.insert(signature);
                     continue;
                 }
-                unchecked.push(Unchecked {
+                let u = Unchecked {
                     bodies: bodies.len(),
                     unknowns: ncols,
                     equations: nrows,
-                });
+                };
+                if let (Some(c), Some(k)) = (cache, key) {
+                    c.put_block(k, Some(u.clone()));
+                }
+                unchecked.push(u);
                 verified.insert(signature);
                 continue;
             }
+            keys.push(key);
             todo.push((block_eqs, bodies, part, signature, (nrows, ncols)));
         }
         // Ranks of all of them in parallel (each depends on its own rows only); the first
@@ -553,19 +733,25 @@ pub(crate) fn check(
             })
         });
         let mut changed = false;
-        for ((block_eqs, bodies, part, signature, (nrows, ncols)), rank) in
-            todo.into_iter().zip(ranks)
+        for (((block_eqs, bodies, part, signature, (nrows, ncols)), rank), key) in
+            todo.into_iter().zip(ranks).zip(keys)
         {
+            let sound = |verified: &mut HashSet<Vec<usize>>, signature: Vec<usize>| {
+                if let (Some(c), Some(k)) = (cache, key) {
+                    c.put_block(k, None);
+                }
+                verified.insert(signature);
+            };
             // The over-determined block is tall: its surplus rows are the count's business
             // unless it also hides a freedom (a column deficit); then every dependent row goes,
             // so that the count sees the freedom.
             if part == Part::Over && rank >= ncols {
-                verified.insert(signature);
+                sound(&mut verified, signature);
                 continue;
             }
             let deficit = nrows.saturating_sub(rank);
             if deficit == 0 {
-                verified.insert(signature);
+                sound(&mut verified, signature);
                 continue;
             }
             let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
@@ -610,6 +796,9 @@ pub(crate) fn check(
             }
             let named: Vec<usize> = named.iter().map(|&(e, _)| e).collect();
             eqs.cap[lowered] = rows[lowered].nrows() as u32;
+            if let Some(d) = rd.get_mut(lowered) {
+                *d = matrix_digest(&rows[lowered]);
+            }
             changed = true;
             let mut joints: Vec<usize> = named.iter().map(|&e| eqs.joint[e]).collect();
             joints.sort_unstable();
