@@ -269,6 +269,149 @@ fn screen(
     (rank >= needed).then_some(rank)
 }
 
+/// Largest square block [`surely_nonsingular`] decides (on the stack).
+const SMALL_BLOCK: usize = 36;
+
+/// Whether a small square block surely has full rank at the SVD's threshold, decided without
+/// the heap: the block as [`block_matrix`] builds it, its inverse `X` by Gaussian elimination
+/// with partial pivoting, and a check of the residual `‖I − A·X‖_F ≤ 1/2`, which proves `A`
+/// invertible with `‖A⁻¹‖₂ ≤ 2‖X‖_F`, so `σ_min ≥ 1 / (2‖X‖_F)`. When that is
+/// [`SCREEN_MARGIN`] times above the SVD threshold (`n · rel · σ_max`, `σ_max ≤ ‖A‖_F`), the
+/// SVD would find full rank too. Anything else (or a precision-derived threshold) goes to
+/// [`screen`] and the SVD, as before. The structural groups of generated mechanisms (one to
+/// four bodies) all come here: the sparse screen allocated a few matrices per pair.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+fn surely_nonsingular(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &[DMatrix<f64>],
+    q: &[Option<DMatrix<f64>>],
+    t: &Tol,
+) -> bool {
+    const N: usize = SMALL_BLOCK;
+    if t.abs > 0.0 || bodies.len() > N {
+        return false;
+    }
+    let mut col = [0usize; N];
+    let mut n = 0;
+    for (k, &x) in bodies.iter().enumerate() {
+        col[k] = n;
+        n += width(b, q, x);
+    }
+    if n == 0 || n > N {
+        return false;
+    }
+    let mut a = [[0.0f64; N]; N];
+    let mut r0 = 0;
+    for &e in block_eqs {
+        let [h, o] = eqs.bodies(e);
+        let re = &rows[e];
+        if r0 + re.nrows() > n {
+            return false;
+        }
+        if h != o {
+            for (x, sign) in [(h, -1.0), (o, 1.0)] {
+                let Ok(k) = bodies.binary_search(&x) else {
+                    continue;
+                };
+                let c0 = col[k];
+                match &q[x] {
+                    None => {
+                        for i in 0..re.nrows() {
+                            for j in 0..b {
+                                a[r0 + i][c0 + j] = sign * re[(i, j)];
+                            }
+                        }
+                    }
+                    Some(qx) => {
+                        for i in 0..re.nrows() {
+                            for j in 0..qx.ncols() {
+                                let mut v = 0.0;
+                                for l in 0..b {
+                                    v += re[(i, l)] * qx[(l, j)];
+                                }
+                                a[r0 + i][c0 + j] = sign * v;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        r0 += re.nrows();
+    }
+    if r0 != n {
+        return false;
+    }
+    let frob: f64 = a[..n]
+        .iter()
+        .map(|r| r[..n].iter().map(|v| v * v).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    if !(frob > 0.0 && frob.is_finite()) {
+        return false;
+    }
+    // Inverse: [A | I] reduced to [I | X] with partial pivoting.
+    let mut lu = a;
+    let mut x = [[0.0f64; N]; N];
+    for i in 0..n {
+        x[i][i] = 1.0;
+    }
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| lu[i][c].abs().total_cmp(&lu[j][c].abs()))
+            .unwrap_or(c);
+        if lu[p][c] == 0.0 {
+            return false;
+        }
+        lu.swap(c, p);
+        x.swap(c, p);
+        let d = lu[c][c];
+        for j in 0..n {
+            lu[c][j] /= d;
+            x[c][j] /= d;
+        }
+        for i in 0..n {
+            if i == c {
+                continue;
+            }
+            let f = lu[i][c];
+            if f == 0.0 {
+                continue;
+            }
+            for j in 0..n {
+                lu[i][j] -= f * lu[c][j];
+                x[i][j] -= f * x[c][j];
+            }
+        }
+    }
+    let xf: f64 = x[..n]
+        .iter()
+        .map(|r| r[..n].iter().map(|v| v * v).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    if !xf.is_finite() {
+        return false;
+    }
+    // ‖I − A·X‖_F.
+    let mut res = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let mut v = if i == j { 1.0 } else { 0.0 };
+            for l in 0..n {
+                v -= a[i][l] * x[l][j];
+            }
+            res += v * v;
+        }
+    }
+    if res.is_nan() || res.sqrt() > 0.5 {
+        return false;
+    }
+    let sigma_min = 0.5 / xf;
+    sigma_min > SCREEN_MARGIN * t.cut(frob, n)
+}
+
 /// Whether the stacked `rows` (`b` columns) surely have full column rank, far from the SVD
 /// threshold. Gaussian elimination with partial pivoting picks `b` rows, a square submatrix
 /// `T` with `|det T|` the product of the pivots and `σ_min(T) ≥ |det T| / ‖T‖_F^(b−1)`;
@@ -548,6 +691,10 @@ pub(crate) fn check(
         // deficient one in order is then explained and lowered, as a serial pass would.
         let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
             let (block_eqs, bodies, part, ..) = &todo[i];
+            let (nrows, ncols) = todo[i].4;
+            if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, &rows, &q, &tol) {
+                return nrows;
+            }
             screen(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol).unwrap_or_else(|| {
                 rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q), &tol)
             })
