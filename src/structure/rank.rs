@@ -35,6 +35,10 @@ pub(crate) struct RankResult {
     pub isolated: Vec<Isolated>,
     pub redundant: Vec<Redundancy>,
     pub unchecked: Vec<Unchecked>,
+    /// Decompositions of the whole mechanism the check ran (its rounds): the scale test's
+    /// work measure.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub rounds: usize,
 }
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -590,7 +594,9 @@ pub(crate) fn check(
     // Blocks already found sound, keyed by their bodies and their pairs with row counts (a
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
+    let mut rounds = 0;
     loop {
+        rounds += 1;
         let dec = decompose(m, eqs, u);
         // Blocks in triangular order: over-determined part, groups, under-determined part.
         let over: Vec<usize> = (0..nb)
@@ -839,6 +845,7 @@ pub(crate) fn check(
                 isolated,
                 redundant,
                 unchecked,
+                rounds,
             };
         }
     }
