@@ -371,9 +371,12 @@ fn surely_nonsingular(
         }
         lu.swap(c, p);
         x.swap(c, p);
+        // Columns before `c` of row `c` are exact zeros by now: only `c..n` changes.
         let d = lu[c][c];
-        for j in 0..n {
+        for j in c..n {
             lu[c][j] /= d;
+        }
+        for j in 0..n {
             x[c][j] /= d;
         }
         for i in 0..n {
@@ -384,8 +387,10 @@ fn surely_nonsingular(
             if f == 0.0 {
                 continue;
             }
-            for j in 0..n {
+            for j in c..n {
                 lu[i][j] -= f * lu[c][j];
+            }
+            for j in 0..n {
                 x[i][j] -= f * x[c][j];
             }
         }
@@ -398,16 +403,20 @@ fn surely_nonsingular(
     if !xf.is_finite() {
         return false;
     }
-    // ‖I − A·X‖_F.
+    // ‖I − A·X‖_F, row by row (A has a few nonzeros per row: one or two bodies).
     let mut res = 0.0;
     for i in 0..n {
-        for j in 0..n {
-            let mut v = if i == j { 1.0 } else { 0.0 };
-            for l in 0..n {
-                v -= a[i][l] * x[l][j];
+        let mut r = [0.0f64; N];
+        r[i] = 1.0;
+        for l in 0..n {
+            let ail = a[i][l];
+            if ail != 0.0 {
+                for j in 0..n {
+                    r[j] -= ail * x[l][j];
+                }
             }
-            res += v * v;
         }
+        res += r[..n].iter().map(|v| v * v).sum::<f64>();
     }
     if res.is_nan() || res.sqrt() > 0.5 {
         return false;
