@@ -95,6 +95,8 @@ struct Graph {
     bars: Vec<(u32, u32)>,
     /// Joint index of each bar.
     joint: Vec<u32>,
+    /// Where the insertion order starts (the frame).
+    root: usize,
 }
 
 impl Graph {
@@ -107,6 +109,7 @@ impl Graph {
             n_bodies,
             bars: Vec::new(),
             joint: Vec::new(),
+            root: if Some(m.frame) == skip { 0 } else { m.frame },
         };
         for (ji, j) in m.joints.iter().enumerate() {
             // The reader validates indices; skipping bad ones keeps this panic-free anyway.
@@ -322,6 +325,9 @@ struct Fast {
     qmark: Vec<u32>,
     fmark: Vec<u32>,
     qepoch: u32,
+    /// Whether some contraction made a rigid set of at least two bodies but not all of them
+    /// (it stays rigid as bars are added: a proper rigid sub-chain).
+    proper: bool,
     /// Work units not yet charged to the meter.
     work: u64,
 }
@@ -350,8 +356,28 @@ impl Fast {
             qmark: vec![0; n],
             fmark: vec![0; n],
             qepoch: 0,
+            proper: false,
             work: 0,
         }
+    }
+
+    /// Whether a tight set of two or more vertices may hold both `x` and `y`, by degrees alone.
+    /// In a tight set T every vertex z has at least its weight of bars inside T (removing
+    /// z leaves at most w(T − z) − B bars if T − z spans one, and if not, z carries all
+    /// w(T) − B ≥ w(z) of them), and a body with fewer than B bars in T has only nodes beside
+    /// it (else the same count gives B).
+    fn may_be_tight(&self, x: u32, y: u32) -> bool {
+        let short = |z: u32| self.degree(z) < self.weight[z as usize] as usize;
+        let thin_body = |z: u32| self.is_body(z) && self.degree(z) < self.l as usize;
+        !(short(x)
+            || short(y)
+            || (thin_body(x) && self.is_body(y))
+            || (thin_body(y) && self.is_body(x)))
+    }
+
+    /// Bars at vertex `x` in the contracted graph.
+    fn degree(&self, x: u32) -> usize {
+        self.out[x as usize].len() + self.inn[x as usize].len()
     }
 
     fn is_body(&self, x: u32) -> bool {
@@ -475,6 +501,10 @@ impl Fast {
     /// Gather `target` free pebbles on {u, v}; on failure `visited` holds the rest of the
     /// minimal tight set containing u and v (closed: no out-edge leaves it).
     fn gather(&mut self, u: u32, v: u32, target: u8) -> bool {
+        // Fill first the end that holds more pebbles (fewer bars on a tie): usually the newer
+        // body, whose missing pebbles are near.
+        let key = |x: u32| (self.peb[x as usize], usize::MAX - self.degree(x));
+        let (u, v) = if key(v) > key(u) { (v, u) } else { (u, v) };
         while self.peb[u as usize] + self.peb[v as usize] < target {
             self.visited.clear();
             if self.peb[u as usize] < self.weight[u as usize] && self.find_pebble(u, u, v) {
@@ -589,49 +619,59 @@ impl Fast {
         let mut fixed = false;
         let mut waiting: Vec<u32> = Vec::new();
         let mut seen: Vec<u32> = Vec::new();
+        // A body with fewer than B bars is in no tight set with another body (removing it
+        // would leave more bars than the count allows, or it alone would carry all w(T) - B
+        // bars, so the rest is nodes), so the maximal tight set is the closed set the search
+        // found: the body and nodes pinned to it (the others were pinned to it before). No
+        // reverse search, which would scan every bar into a shared joint's node.
+        let lone = [u, v]
+            .into_iter()
+            .find(|&x| self.is_body(x) && self.degree(x) < self.l as usize);
         let mut qi = 0;
-        loop {
-            while qi < q.len() {
-                let x = q[qi];
-                qi += 1;
-                if self.is_body(x) {
-                    match big {
-                        None => big = Some(x),
-                        Some(b)
-                            if !fixed
-                                && self.inn[x as usize].len() > self.inn[b as usize].len() =>
-                        {
-                            big = Some(x);
-                            self.scan_in(b, q_e, &mut q, &mut seen);
+        if lone.is_none() {
+            loop {
+                while qi < q.len() {
+                    let x = q[qi];
+                    qi += 1;
+                    if self.is_body(x) {
+                        match big {
+                            None => big = Some(x),
+                            Some(b)
+                                if !fixed
+                                    && self.inn[x as usize].len() > self.inn[b as usize].len() =>
+                            {
+                                big = Some(x);
+                                self.scan_in(b, q_e, &mut q, &mut seen);
+                            }
+                            Some(b) if b == x => {}
+                            Some(_) => self.scan_in(x, q_e, &mut q, &mut seen),
                         }
-                        Some(b) if b == x => {}
-                        Some(_) => self.scan_in(x, q_e, &mut q, &mut seen),
+                    } else if x != u
+                        && x != v
+                        && (big.is_some_and(|b| self.pinned_to(x, b))
+                            || (!fixed && self.pinned_in_set(x, q_e)))
+                    {
+                        if !fixed {
+                            waiting.push(x);
+                        }
+                    } else {
+                        self.scan_in(x, q_e, &mut q, &mut seen);
                     }
-                } else if x != u
-                    && x != v
-                    && (big.is_some_and(|b| self.pinned_to(x, b))
-                        || (!fixed && self.pinned_in_set(x, q_e)))
-                {
-                    if !fixed {
-                        waiting.push(x);
-                    }
-                } else {
-                    self.scan_in(x, q_e, &mut q, &mut seen);
                 }
-            }
-            if fixed {
-                break;
-            }
-            fixed = true;
-            let k = big.unwrap_or(u);
-            big = Some(k);
-            for x in std::mem::take(&mut waiting) {
-                if !self.pinned_to(x, k) {
-                    self.scan_in(x, q_e, &mut q, &mut seen);
+                if fixed {
+                    break;
+                }
+                fixed = true;
+                let k = big.unwrap_or(u);
+                big = Some(k);
+                for x in std::mem::take(&mut waiting) {
+                    if !self.pinned_to(x, k) {
+                        self.scan_in(x, q_e, &mut q, &mut seen);
+                    }
                 }
             }
         }
-        let keep = big.unwrap_or(u);
+        let keep = lone.or(big).unwrap_or(u);
         // The set is closed: every out-bar of a member is inside it. Drop them all.
         for &x in &q {
             let outs = std::mem::take(&mut self.out[x as usize]);
@@ -670,7 +710,68 @@ impl Fast {
             }
         }
         self.peb[keep as usize] = self.l;
+        let size = self.members[keep as usize].len();
+        if size >= 2 && size < self.n_bodies {
+            self.proper = true;
+        }
     }
+}
+
+/// The order in which the contracted game inserts the bars: vertex by vertex in breadth-first
+/// order from the root (then from each vertex not yet reached, in index order), each vertex
+/// bringing its bars to the vertices before it. Every new vertex arrives with its own free
+/// pebbles next to the bars that need them, so searches stay short. The answers of the game
+/// (rank, rigid components, the regions) do not depend on the order.
+fn insertion_order(g: &Graph) -> Vec<u32> {
+    let n = g.weight.len();
+    let mut start = vec![0u32; n + 1];
+    for &(u, v) in &g.bars {
+        start[u as usize + 1] += 1;
+        if u != v {
+            start[v as usize + 1] += 1;
+        }
+    }
+    for x in 0..n {
+        start[x + 1] += start[x];
+    }
+    let mut fill = start.clone();
+    let mut adj = vec![0u32; start[n] as usize];
+    for (i, &(u, v)) in g.bars.iter().enumerate() {
+        adj[fill[u as usize] as usize] = i as u32;
+        fill[u as usize] += 1;
+        if u != v {
+            adj[fill[v as usize] as usize] = i as u32;
+            fill[v as usize] += 1;
+        }
+    }
+    // Position of each vertex in the order (u32::MAX: not reached yet).
+    let mut pos = vec![u32::MAX; n];
+    let mut queue: Vec<u32> = Vec::with_capacity(n);
+    let mut order = Vec::with_capacity(g.bars.len());
+    let roots = std::iter::once(g.root.min(n.saturating_sub(1))).chain(0..n);
+    for r in roots {
+        if n == 0 || pos[r] != u32::MAX {
+            continue;
+        }
+        pos[r] = queue.len() as u32;
+        queue.push(r as u32);
+        let mut qi = queue.len() - 1;
+        while qi < queue.len() {
+            let x = queue[qi] as usize;
+            qi += 1;
+            for &bar in &adj[start[x] as usize..start[x + 1] as usize] {
+                let (u, v) = g.bars[bar as usize];
+                let y = if u as usize == x { v } else { u } as usize;
+                if y == x || pos[y] < pos[x] {
+                    order.push(bar);
+                } else if pos[y] == u32::MAX {
+                    pos[y] = queue.len() as u32;
+                    queue.push(y as u32);
+                }
+            }
+        }
+    }
+    order
 }
 
 /// The outcome of the contracted game.
@@ -687,7 +788,11 @@ struct FastSolution {
 fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, BudgetExceeded> {
     let mut game = Fast::new(g.weight.clone(), g.n_bodies, l, g.bars.len());
     let mut accepted = vec![false; g.bars.len()];
-    for (i, &(u, v)) in g.bars.iter().enumerate() {
+    let order = insertion_order(g);
+    meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
+    for i in order {
+        let i = i as usize;
+        let (u, v) = g.bars[i];
         let (x, y) = (game.rep(u), game.rep(v));
         game.work += 1;
         if x == y {
@@ -697,7 +802,9 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
         } else if game.gather(x, y, l + 1) {
             game.insert(x, y);
             accepted[i] = true;
-            if !game.gather(x, y, l + 1) {
+            if !game.may_be_tight(x, y) {
+                // No tight set holds both ends: nothing to contract.
+            } else if !game.gather(x, y, l + 1) {
                 game.contract(x, y);
             }
         }
@@ -953,9 +1060,14 @@ pub fn analyze_within(
     let degenerate = if sol.components.iter().any(|c| c.len() >= 2 && c.len() < n) {
         true
     } else if n > 2 && sol.components.iter().any(|c| c.len() == n) {
-        // The whole chain is rigid: a proper rigid sub-chain avoids some body.
-        let mut found = false;
+        // The whole chain is rigid: a proper rigid sub-chain avoids some body. One that the
+        // game contracted on its way (a tight set stays tight as bars are added) settles it;
+        // otherwise the game runs again without each body in turn.
+        let mut found = sol.game.proper;
         for w in 0..n {
+            if found {
+                break;
+            }
             let g = Graph::build(m, opts, Some(w));
             meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
             if solve_fast(&g, l, &mut meter)?
@@ -1046,6 +1158,7 @@ fn regions_of_overconstrained(
         n_bodies: nb,
         bars: Vec::new(),
         joint: Vec::new(),
+        root: g.root,
     };
     for (i, &(u, v)) in g.bars.iter().enumerate() {
         let s = sol.rep[u as usize];
