@@ -467,7 +467,11 @@ fn build(
     twists: Option<&[nalgebra::DMatrix<f64>]>,
 ) -> Analysis {
     let nb = eqs.nodes;
-    let id = |b: usize| m.body_id(b).to_string();
+    let id = |b: usize| {
+        let mut s = String::new();
+        push_id(&mut s, m.body_id(b));
+        s
+    };
     // Solve-order key of every body: frame and over-determined part are known first, groups in
     // canonical order, the under-determined part (or unsolved bodies) last.
     let mut key = vec![i64::MAX; nb];
@@ -623,7 +627,11 @@ fn build(
             let mut s = String::with_capacity(list.len() * 8);
             for &(i, j, e) in list.iter() {
                 // Writing into a String cannot fail.
-                let _ = write!(s, "{}&{}{}.", m.body_id(i), m.body_id(j), code(e));
+                push_id(&mut s, m.body_id(i));
+                s.push('&');
+                push_id(&mut s, m.body_id(j));
+                s.push_str(code(e));
+                s.push('.');
             }
             s
         };
@@ -900,12 +908,15 @@ fn diagnose(
             .map(id)
             .collect();
         let mut cands: Vec<usize> = Vec::new();
+        // The element node of each multiple joint (a search per joint was quadratic).
+        let mut element_of = vec![usize::MAX; m.joints.len()];
+        for (i, &ji) in eqs.elements.iter().enumerate().rev() {
+            element_of[ji] = i;
+        }
         for (ji, j) in m.joints.iter().enumerate() {
             let spare = j.driven < j.grade() * j.pairs();
-            let element_in = eqs
-                .elements
-                .iter()
-                .position(|&x| x == ji)
+            let element_in = (element_of[ji] != usize::MAX)
+                .then_some(element_of[ji])
                 .is_some_and(|i| in_part[eqs.bodies + i]);
             if spare && (element_in || j.bodies.iter().any(|&b| in_part[b])) {
                 cands.push(ji);
@@ -947,6 +958,33 @@ fn diagnose(
     d
 }
 
+/// Append a body id as `Display` writes it, without the formatting machinery (the group
+/// lists of a 10^6-body mechanism write millions of ids).
+fn push_id(s: &mut String, id: &crate::mechanism::BodyId) {
+    match id {
+        crate::mechanism::BodyId::Int(i) => {
+            let mut buf = [0u8; 20];
+            let mut k = buf.len();
+            let mut v = i.unsigned_abs();
+            loop {
+                k -= 1;
+                buf[k] = b'0' + (v % 10) as u8;
+                v /= 10;
+                if v == 0 {
+                    break;
+                }
+            }
+            if *i < 0 {
+                s.push('-');
+            }
+            for &d in &buf[k..] {
+                s.push(char::from(d));
+            }
+        }
+        crate::mechanism::BodyId::Name(n) => s.push_str(n),
+    }
+}
+
 /// Upper-case Roman numeral (1 → `I`); plain digits beyond 3999.
 fn roman(mut n: usize) -> String {
     if n == 0 || n > 3999 {
@@ -975,4 +1013,47 @@ fn roman(mut n: usize) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    /// Scale regression: the rank check decomposes the whole mechanism once per round, and a
+    /// round lowers every deficient group it meets. The check before ran one round per
+    /// redundancy (9 here, 38 on the same family at 10^5 bodies): quadratic.
+    #[test]
+    fn rank_check_rounds_do_not_grow_with_redundancies() {
+        let (m, _) = crate::generate::random(20_000, false, 3).expect("valid parameters");
+        let mut eqs = super::Equations::of(&m);
+        let mut u = eqs.unknowns(&m);
+        let (geoms, used) =
+            super::motion::geometries(&m, super::GeometrySource::Random { seed: 0 }, None)
+                .expect("random geometry");
+        let r = super::rank::check(&m, &geoms, &used, &mut eqs, &mut u, None);
+        assert!(r.redundant.len() >= 5, "{} redundancies", r.redundant.len());
+        assert!(
+            r.rounds <= 3,
+            "{} rounds for {} redundancies",
+            r.rounds,
+            r.redundant.len()
+        );
+    }
+
+    #[test]
+    fn push_id_writes_what_display_writes() {
+        use crate::mechanism::BodyId;
+        for id in [
+            BodyId::Int(0),
+            BodyId::Int(7),
+            BodyId::Int(-13),
+            BodyId::Int(1_000_000),
+            BodyId::Int(i64::MAX),
+            BodyId::Int(i64::MIN),
+            BodyId::Name("crank".into()),
+            BodyId::Name(String::new()),
+        ] {
+            let mut s = String::from("x");
+            super::push_id(&mut s, &id);
+            assert_eq!(s, format!("x{id}"));
+        }
+    }
 }

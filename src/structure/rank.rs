@@ -37,6 +37,10 @@ pub(crate) struct RankResult {
     pub isolated: Vec<Isolated>,
     pub redundant: Vec<Redundancy>,
     pub unchecked: Vec<Unchecked>,
+    /// Decompositions of the whole mechanism the check ran (its rounds): the scale test's
+    /// work measure.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub rounds: usize,
 }
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -269,6 +273,158 @@ fn screen(
     let rank = Elimination::run(&sizes, blocks, tol).rank;
     let needed = if part == Part::Over { ncols } else { nrows };
     (rank >= needed).then_some(rank)
+}
+
+/// Largest square block [`surely_nonsingular`] decides (on the stack).
+const SMALL_BLOCK: usize = 36;
+
+/// Whether a small square block surely has full rank at the SVD's threshold, decided without
+/// the heap: the block as [`block_matrix`] builds it, its inverse `X` by Gaussian elimination
+/// with partial pivoting, and a check of the residual `‖I − A·X‖_F ≤ 1/2`, which proves `A`
+/// invertible with `‖A⁻¹‖₂ ≤ 2‖X‖_F`, so `σ_min ≥ 1 / (2‖X‖_F)`. When that is
+/// [`SCREEN_MARGIN`] times above the SVD threshold (`n · rel · σ_max`, `σ_max ≤ ‖A‖_F`), the
+/// SVD would find full rank too. Anything else (or a precision-derived threshold) goes to
+/// [`screen`] and the SVD, as before. The structural groups of generated mechanisms (one to
+/// four bodies) all come here: the sparse screen allocated a few matrices per pair.
+#[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
+fn surely_nonsingular(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &[DMatrix<f64>],
+    q: &[Option<DMatrix<f64>>],
+    t: &Tol,
+) -> bool {
+    const N: usize = SMALL_BLOCK;
+    if t.abs > 0.0 || bodies.len() > N {
+        return false;
+    }
+    let mut col = [0usize; N];
+    let mut n = 0;
+    for (k, &x) in bodies.iter().enumerate() {
+        col[k] = n;
+        n += width(b, q, x);
+    }
+    if n == 0 || n > N {
+        return false;
+    }
+    let mut a = [[0.0f64; N]; N];
+    let mut r0 = 0;
+    for &e in block_eqs {
+        let [h, o] = eqs.bodies(e);
+        let re = &rows[e];
+        if r0 + re.nrows() > n {
+            return false;
+        }
+        if h != o {
+            for (x, sign) in [(h, -1.0), (o, 1.0)] {
+                let Ok(k) = bodies.binary_search(&x) else {
+                    continue;
+                };
+                let c0 = col[k];
+                match &q[x] {
+                    None => {
+                        for i in 0..re.nrows() {
+                            for j in 0..b {
+                                a[r0 + i][c0 + j] = sign * re[(i, j)];
+                            }
+                        }
+                    }
+                    Some(qx) => {
+                        for i in 0..re.nrows() {
+                            for j in 0..qx.ncols() {
+                                let mut v = 0.0;
+                                for l in 0..b {
+                                    v += re[(i, l)] * qx[(l, j)];
+                                }
+                                a[r0 + i][c0 + j] = sign * v;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        r0 += re.nrows();
+    }
+    if r0 != n {
+        return false;
+    }
+    let frob: f64 = a[..n]
+        .iter()
+        .map(|r| r[..n].iter().map(|v| v * v).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    if !(frob > 0.0 && frob.is_finite()) {
+        return false;
+    }
+    // Inverse: [A | I] reduced to [I | X] with partial pivoting.
+    let mut lu = a;
+    let mut x = [[0.0f64; N]; N];
+    for i in 0..n {
+        x[i][i] = 1.0;
+    }
+    for c in 0..n {
+        let p = (c..n)
+            .max_by(|&i, &j| lu[i][c].abs().total_cmp(&lu[j][c].abs()))
+            .unwrap_or(c);
+        if lu[p][c] == 0.0 {
+            return false;
+        }
+        lu.swap(c, p);
+        x.swap(c, p);
+        // Columns before `c` of row `c` are exact zeros by now: only `c..n` changes.
+        let d = lu[c][c];
+        for j in c..n {
+            lu[c][j] /= d;
+        }
+        for j in 0..n {
+            x[c][j] /= d;
+        }
+        for i in 0..n {
+            if i == c {
+                continue;
+            }
+            let f = lu[i][c];
+            if f == 0.0 {
+                continue;
+            }
+            for j in c..n {
+                lu[i][j] -= f * lu[c][j];
+            }
+            for j in 0..n {
+                x[i][j] -= f * x[c][j];
+            }
+        }
+    }
+    let xf: f64 = x[..n]
+        .iter()
+        .map(|r| r[..n].iter().map(|v| v * v).sum::<f64>())
+        .sum::<f64>()
+        .sqrt();
+    if !xf.is_finite() {
+        return false;
+    }
+    // ‖I − A·X‖_F, row by row (A has a few nonzeros per row: one or two bodies).
+    let mut res = 0.0;
+    for i in 0..n {
+        let mut r = [0.0f64; N];
+        r[i] = 1.0;
+        for l in 0..n {
+            let ail = a[i][l];
+            if ail != 0.0 {
+                for j in 0..n {
+                    r[j] -= ail * x[l][j];
+                }
+            }
+        }
+        res += r[..n].iter().map(|v| v * v).sum::<f64>();
+    }
+    if res.is_nan() || res.sqrt() > 0.5 {
+        return false;
+    }
+    let sigma_min = 0.5 / xf;
+    sigma_min > SCREEN_MARGIN * t.cut(frob, n)
 }
 
 /// Whether the stacked `rows` (`b` columns) surely have full column rank, far from the SVD
@@ -601,7 +757,9 @@ pub(crate) fn check(
     // Blocks already found sound, keyed by their bodies and their pairs with row counts (a
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
+    let mut rounds = 0;
     loop {
+        rounds += 1;
         let dec = decompose(m, eqs, u);
         // Blocks in triangular order: over-determined part, groups, under-determined part.
         let over: Vec<usize> = (0..nb)
@@ -728,14 +886,37 @@ pub(crate) fn check(
         // deficient one in order is then explained and lowered, as a serial pass would.
         let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
             let (block_eqs, bodies, part, ..) = &todo[i];
+            let (nrows, ncols) = todo[i].4;
+            if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, &rows, &q, &tol) {
+                return nrows;
+            }
             screen(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol).unwrap_or_else(|| {
                 rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q), &tol)
             })
         });
         let mut changed = false;
+        // Several groups can lose rows in one round (see `Round`); what a lowered group
+        // reaches (its dependents, then the under-determined block) waits for the next one.
+        let mut round = Round::new(
+            b,
+            &q,
+            &rows,
+            &orig_rows,
+            &dec,
+            first_group,
+            &bstart,
+            &beqs,
+            &under,
+        );
         for (((block_eqs, bodies, part, signature, (nrows, ncols)), rank), key) in
             todo.into_iter().zip(ranks).zip(keys)
         {
+            match part {
+                Part::Group(g) if round.is_dead(g) => continue,
+                Part::Group(_) => {}
+                _ if changed => break,
+                _ => {}
+            }
             let sound = |verified: &mut HashSet<Vec<usize>>, signature: Vec<usize>| {
                 if let (Some(c), Some(k)) = (cache, key) {
                     c.put_block(k, None);
@@ -811,8 +992,46 @@ pub(crate) fn check(
                 lowered: m.joints[eqs.joint[lowered]].id.clone(),
                 configuration: false,
             });
-            // Later blocks were checked with this one assumed nonsingular: decompose again.
-            break;
+            // Later blocks were checked with this one assumed nonsingular: decompose again,
+            // unless it was a group (then only its dependents are affected: `Round`).
+            let Part::Group(g) = part else {
+                break;
+            };
+            // The lowered group and its dependents join the under-determined block. A round
+            // per lowering checked that grown block before anything else: when it is too
+            // large for the dense check, do what that round's first step did.
+            let Some((nrows, ncols, untouched)) = round.lower(b, g, &q, &rows, &orig_rows) else {
+                continue;
+            };
+            let mut exact = false;
+            if let Some(seed) = used.seed
+                && untouched
+                && nrows <= ncols
+                && ncols <= MAX_EXACT_UNKNOWNS
+            {
+                let (block_eqs, bodies) = round.under_lists(&rows);
+                let mut signature = Vec::with_capacity(bodies.len() + 1 + 2 * block_eqs.len());
+                signature.extend_from_slice(&bodies);
+                signature.push(usize::MAX);
+                for &e in &block_eqs {
+                    signature.push(e);
+                    signature.push(rows[e].nrows());
+                }
+                if verified.contains(&signature) {
+                    continue;
+                }
+                if exact_rank(m, eqs, &block_eqs, &bodies, seed) >= nrows {
+                    verified.insert(signature);
+                    exact = true;
+                }
+            }
+            if !exact {
+                unchecked.push(Unchecked {
+                    bodies: round.under_bodies,
+                    unknowns: ncols,
+                    equations: nrows,
+                });
+            }
         }
         if !changed {
             // Only the blocks of the final decomposition matter.
@@ -824,6 +1043,7 @@ pub(crate) fn check(
                 isolated,
                 redundant,
                 unchecked,
+                rounds,
             };
         }
     }
@@ -832,6 +1052,170 @@ pub(crate) fn check(
 /// Rows of every pair at the given joint geometry: its constraint rows with its share of the
 /// driven DOF fixed, and (when `with_free`, for the file's configuration) its constraint rows
 /// alone (no input; empty otherwise).
+/// One round of the rank check over one decomposition: the groups lowered so far and the
+/// under-determined block they grow.
+///
+/// Lowering a pair of a group leaves every other block as it was but the group's dependents:
+/// the flow less the lowered units is still maximum (the group's bodies are not reachable from
+/// the source), so the over-determined part stays, and the group with everything that depends
+/// on it, transitively, now reaches the sink: it joins the under-determined part. The other
+/// groups keep their bodies, pairs and levels, hence their order, so a round that goes on with
+/// them finds the deficits, in the order, that a new decomposition after each lowering would
+/// (that was quadratic: one decomposition of the whole mechanism per redundancy, 37 rounds
+/// on a random spatial mechanism of 10^5 bodies). The under-determined block itself waits for
+/// the next round.
+struct Round<'a> {
+    dec: &'a Decomposition,
+    first_group: usize,
+    bstart: &'a [usize],
+    beqs: &'a [usize],
+    /// Groups that joined the under-determined part in this round (and the order they did).
+    dead: Vec<bool>,
+    joined: Vec<usize>,
+    /// Groups that depend on each group (CSR), built at the first lowering.
+    dependents: Vec<usize>,
+    dependents_start: Vec<usize>,
+    /// The under-determined block as it grows: bodies, rows, columns, and how many of its
+    /// pairs have fewer rows than they started with.
+    under_bodies: usize,
+    under_rows: usize,
+    under_cols: usize,
+    under_touched: usize,
+    under: &'a [usize],
+    under_eqs: &'a [usize],
+}
+
+impl<'a> Round<'a> {
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        b: usize,
+        q: &[Option<DMatrix<f64>>],
+        rows: &[DMatrix<f64>],
+        orig_rows: &[usize],
+        dec: &'a Decomposition,
+        first_group: usize,
+        bstart: &'a [usize],
+        beqs: &'a [usize],
+        under: &'a [usize],
+    ) -> Round<'a> {
+        let ub = first_group + dec.groups.len();
+        let under_eqs: &[usize] = if under.is_empty() {
+            &[]
+        } else {
+            &beqs[bstart[ub]..bstart[ub + 1]]
+        };
+        Round {
+            dec,
+            first_group,
+            bstart,
+            beqs,
+            dead: vec![false; dec.groups.len()],
+            joined: Vec::new(),
+            dependents: Vec::new(),
+            dependents_start: Vec::new(),
+            under_bodies: under.len(),
+            under_rows: under_eqs.iter().map(|&e| rows[e].nrows()).sum(),
+            under_cols: under.iter().map(|&x| width(b, q, x)).sum(),
+            under_touched: under_eqs
+                .iter()
+                .filter(|&&e| rows[e].nrows() != orig_rows[e])
+                .count(),
+            under,
+            under_eqs,
+        }
+    }
+
+    fn is_dead(&self, g: usize) -> bool {
+        self.dead[g]
+    }
+
+    /// The pairs (with rows) of group `g`.
+    fn group_eqs(&self, g: usize) -> &'a [usize] {
+        let i = self.first_group + g;
+        &self.beqs[self.bstart[i]..self.bstart[i + 1]]
+    }
+
+    /// Group `g` lost rows: it and its dependents join the under-determined block. Returns
+    /// that block's (rows, columns, untouched) when it is too large for the dense check.
+    fn lower(
+        &mut self,
+        b: usize,
+        g: usize,
+        q: &[Option<DMatrix<f64>>],
+        rows: &[DMatrix<f64>],
+        orig_rows: &[usize],
+    ) -> Option<(usize, usize, bool)> {
+        let groups = &self.dec.groups;
+        if self.dependents_start.is_empty() {
+            let mut start = vec![0usize; groups.len() + 1];
+            for grp in groups {
+                for &d in &grp.deps {
+                    start[d + 1] += 1;
+                }
+            }
+            for i in 0..groups.len() {
+                start[i + 1] += start[i];
+            }
+            let mut fill = start.clone();
+            let mut dependents = vec![0usize; start[groups.len()]];
+            for (h, grp) in groups.iter().enumerate() {
+                for &d in &grp.deps {
+                    dependents[fill[d]] = h;
+                    fill[d] += 1;
+                }
+            }
+            self.dependents = dependents;
+            self.dependents_start = start;
+        }
+        let mut stack = Vec::new();
+        if !self.dead[g] {
+            self.dead[g] = true;
+            stack.push(g);
+        }
+        while let Some(h) = stack.pop() {
+            self.joined.push(h);
+            self.under_bodies += groups[h].bodies.len();
+            self.under_cols += groups[h]
+                .bodies
+                .iter()
+                .map(|&x| width(b, q, x))
+                .sum::<usize>();
+            for &e in self.group_eqs(h) {
+                let n = rows[e].nrows();
+                if n > 0 {
+                    self.under_rows += n;
+                    self.under_touched += usize::from(n != orig_rows[e]);
+                }
+            }
+            for &d in &self.dependents[self.dependents_start[h]..self.dependents_start[h + 1]] {
+                if !self.dead[d] {
+                    self.dead[d] = true;
+                    stack.push(d);
+                }
+            }
+        }
+        (self.under_rows.max(self.under_cols) > MAX_DENSE_UNKNOWNS).then_some((
+            self.under_rows,
+            self.under_cols,
+            self.under_touched == 0,
+        ))
+    }
+
+    /// The grown under-determined block's pairs (with rows) and bodies, ascending, as a new
+    /// decomposition would list them.
+    fn under_lists(&self, rows: &[DMatrix<f64>]) -> (Vec<usize>, Vec<usize>) {
+        let mut block_eqs = self.under_eqs.to_vec();
+        let mut bodies = self.under.to_vec();
+        for &h in &self.joined {
+            block_eqs.extend(self.group_eqs(h).iter().filter(|&&e| rows[e].nrows() > 0));
+            bodies.extend_from_slice(&self.dec.groups[h].bodies);
+        }
+        block_eqs.sort_unstable();
+        bodies.sort_unstable();
+        (block_eqs, bodies)
+    }
+}
+
 fn pair_rows(
     m: &Mechanism,
     geoms: &[Geometry],
