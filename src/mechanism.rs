@@ -522,9 +522,8 @@ impl Mechanism {
             }
             k += n;
         }
-        let mut slots: Vec<Option<Joint>> = joints.into_iter().map(Some).collect();
-        let mut joints: Vec<Joint> = order.into_iter().filter_map(|i| slots[i].take()).collect();
-        drop(slots);
+        // In place (a second vector of joints would double the largest allocation).
+        permute(&mut joints, order);
         if renamed {
             joints.sort_by(|a, b| natural_cmp(&a.id, &b.id));
         }
@@ -536,6 +535,24 @@ impl Mechanism {
             bodies,
             joints,
             expect: Expect::default(),
+        }
+    }
+}
+
+/// Rearrange `v` so that its k-th item is the `order[k]`-th before (`order` a permutation),
+/// by following the cycles of `order` with swaps: no second vector.
+fn permute<T>(v: &mut [T], mut order: Vec<usize>) {
+    const DONE: usize = usize::MAX;
+    for i in 0..order.len() {
+        let mut j = i;
+        while order[j] != DONE {
+            let next = order[j];
+            order[j] = DONE;
+            if next == i {
+                break;
+            }
+            v.swap(j, next);
+            j = next;
         }
     }
 }
@@ -604,7 +621,7 @@ fn numeric_tokens(id: &str, out: &mut Vec<u64>) -> bool {
         while let Some(&b) = bytes.get(i)
             && b.is_ascii_digit()
         {
-            n = n * 10 + u64::from(b - b'0');
+            n = n.wrapping_mul(10).wrapping_add(u64::from(b - b'0')); // more than 18 digits is refused below
             i += 1;
         }
         let len = i - start;
@@ -809,6 +826,25 @@ mod tests {
     }
 
     #[test]
+    fn permute_follows_the_order() {
+        for n in 0..9usize {
+            // A few permutations of n items: rotations and reversals of rotations.
+            for shift in 0..n.max(1) {
+                for rev in [false, true] {
+                    let mut order: Vec<usize> = (0..n).map(|k| (k + shift) % n.max(1)).collect();
+                    if rev {
+                        order.reverse();
+                    }
+                    let mut v: Vec<usize> = (0..n).map(|k| 10 * k).collect();
+                    let expected: Vec<usize> = order.iter().map(|&k| 10 * k).collect();
+                    permute(&mut v, order);
+                    assert_eq!(v, expected);
+                }
+            }
+        }
+    }
+
+    #[test]
     fn body_ids_sort_numbers_first() {
         let mut ids = [
             BodyId::Name("b".into()),
@@ -841,5 +877,15 @@ mod tests {
         assert!(InputSpec::parse("A,,B").is_err());
         assert!(InputSpec::parse("A:x").is_err());
         assert!(InputSpec::parse(":2").is_err());
+    }
+
+    #[test]
+    fn long_numeric_ids_are_not_numbers_and_do_not_overflow() {
+        // 20 digits overflowed `n * 10` (a debug-build panic found by reliability_smoke).
+        let mut out = Vec::new();
+        assert!(!numeric_tokens("99999999999999999999", &mut out));
+        out.clear();
+        assert!(numeric_tokens("999999999999999999-2", &mut out));
+        assert_eq!(out, vec![999_999_999_999_999_999, u64::from(b'-'), 2]);
     }
 }

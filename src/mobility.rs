@@ -116,6 +116,11 @@ impl Components {
                 c.union(w[0], w[1]);
             }
         }
+        // Every body straight to its root (a root is the smallest index of its component, so
+        // the parents of smaller indices are final already): `root` is then one step.
+        for i in 0..c.parent.len() {
+            c.parent[i] = c.parent[c.parent[i]];
+        }
         c
     }
 

@@ -10,8 +10,12 @@
 //! dependent and the partial placement over-determines some part), and a branch is cut as soon
 //! as the joints still to come cannot complete it (a matroid rank test by augmenting paths).
 //! Every leaf is thus a count-valid placement; each is then analysed in full
-//! ([`crate::structure::analyze`], with its rank check unless `count_only`), in parallel, and
-//! the ones the rank check rejects are excluded and counted. `docs/algorithms.md` has details.
+//! ([`crate::structure::analyze_cached`], with its rank check unless `count_only`), in
+//! parallel, and the ones the rank check rejects are excluded and counted. The analyses of one
+//! expansion share the rank check's factorizations (a placement re-factorizes only the bodies
+//! and blocks whose rows its inputs change) and start their maximum flow from the search's own
+//! matching, so a placement costs about one pass over the mechanism plus its new groups.
+//! `docs/algorithms.md` has details.
 
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::joint::JointType;
@@ -382,6 +386,17 @@ const LIST_MEMORY: usize = 256 << 20;
 /// Placements analysed per parallel batch (and between progress reports).
 const BATCH: usize = 512;
 
+/// Bytes of the search's flows a batch may hold (warm starts of the analyses).
+const BATCH_FLOW_BYTES: usize = 64 << 20;
+
+/// The search's callback: a placement (units per pair) and its flow (units of each pair into
+/// its two bodies); `false` stops the search.
+type LeafFn<'a> = &'a mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool;
+
+/// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
+/// (units of each pair into its two bodies).
+type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
+
 /// Enumerate the determined placements and stream them to `sink`, calling `progress` between
 /// batches. Returns the counts.
 ///
@@ -541,6 +556,12 @@ impl Summary {
     }
 }
 
+/// Work units charged for one structural analysis of `m` (a placement's, or the first one
+/// before the search): an estimate proportional to its size, made before it runs.
+fn analysis_work(m: &Mechanism) -> u64 {
+    (m.bodies.len() + m.joints.len()) as u64 * 50 + 100
+}
+
 /// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
 /// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the
 /// count-valid placements examined; the search goes on only to learn whether one more
@@ -555,19 +576,22 @@ fn place(
     progress: Option<ProgressFn<'_>>,
     sink: &mut dyn FnMut(Placement) -> bool,
 ) -> Result<Placed, TransformError> {
-    let (exps, total_exps) = expansions(m, opts.max_expansions);
+    let exps = Expansions::of(m, opts.max_expansions);
     let mut r = Placed {
-        expansions: exps.len(),
-        expansions_total: total_exps,
+        expansions: exps.len,
+        expansions_total: exps.total,
         f: crate::mobility::mobility(m).mobility.count,
         ..Placed::default()
     };
     let limit = opts.limit.unwrap_or(usize::MAX);
-    let per_eval = (m.bodies.len() + m.joints.len()) as u64 * 50 + 100;
-    let mut batch: Vec<(usize, Vec<(usize, u32)>)> = Vec::new();
+    let per_eval = analysis_work(m);
+    // (expansion, placement, the search's flow for a warm start of the analysis)
+    let mut batch: Vec<Leaf> = Vec::new();
     let mut stopped = false;
     // Analyse a batch in parallel and stream its determined placements in order.
-    let mut flush = |batch: &mut Vec<(usize, Vec<(usize, u32)>)>,
+    let mut flush = |e: &Expansion,
+                     cache: &structure::AnalysisCache,
+                     batch: &mut Vec<Leaf>,
                      r: &mut Placed,
                      meter: &mut Meter,
                      stopped: &mut bool|
@@ -580,11 +604,9 @@ fn place(
         let results: Vec<Option<Placement>> = batch
             .par_iter()
             .map_init(
-                || exps.iter().map(|e| e.mech.clone()).collect::<Vec<_>>(),
-                |mechs, (x, w)| {
-                    let e = &exps[*x];
-                    let mech = &mut mechs[*x];
-                    let a = evaluate(mech, w, &opts.analysis, lib)?;
+                || e.mech.clone(),
+                |mech, (x, w, flow)| {
+                    let a = evaluate(mech, w, flow, &opts.analysis, lib, cache)?;
                     Some(placement(mech, e, *x, &a, w))
                 },
             )
@@ -618,8 +640,14 @@ fn place(
     let mut eval_meter = opts.budget.meter("the analysis of the placements");
     let mut found = 0usize;
     let mut batch_size = 1usize;
-    for (x, e) in exps.iter().enumerate() {
-        let p = Problem::of(e, m, rules, opts);
+    // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
+    let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
+    for x in 0..exps.len {
+        let e = &exps.get(x);
+        // The rank check's factorizations, shared by every analysis of this expansion: a
+        // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
+        let cache = structure::AnalysisCache::default();
+        let p = Problem::of(e, m, rules, opts, &cache, meter)?;
         if x == 0 {
             r.isolated = p.isolated;
             r.set_aside = p.set_aside;
@@ -630,7 +658,7 @@ fn place(
             }
         }
         let mut err: Option<BudgetExceeded> = None;
-        p.search(meter, &mut |w| {
+        p.search(meter, &mut |w, flow| {
             if found >= limit {
                 r.cut = true;
                 return false;
@@ -642,12 +670,16 @@ fn place(
                     .filter(|&q| w[q] > 0)
                     .map(|q| (q, w[q]))
                     .collect(),
+                flow.iter()
+                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                    .collect(),
             ));
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
-                batch_size = (batch_size * 2).min(BATCH);
-                if let Err(e) = flush(&mut batch, &mut r, &mut eval_meter, &mut stopped) {
-                    err = Some(e);
+                batch_size = (batch_size * 2).min(max_batch);
+                if let Err(b) = flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)
+                {
+                    err = Some(b);
                     return false;
                 }
                 if stopped {
@@ -656,14 +688,15 @@ fn place(
             }
             true
         })?;
-        if let Some(e) = err {
-            return Err(e.into());
+        if let Some(b) = err {
+            return Err(b.into());
         }
+        // The rest of the batch belongs to this expansion: analysed before the next is built.
+        flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)?;
         if r.cut || stopped {
             break;
         }
     }
-    flush(&mut batch, &mut r, &mut eval_meter, &mut stopped)?;
     Ok(r)
 }
 
@@ -1350,44 +1383,68 @@ fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
     edges
 }
 
-/// Up to `max` expansions (at least one) and how many there are.
-fn expansions(m: &Mechanism, max: usize) -> (Vec<Expansion>, u64) {
-    let mut base = m.clone();
-    for j in &mut base.joints {
-        j.driven = 0;
+/// The binary expansions of `m`'s multiple joints, built one at a time ([`Expansions::get`]):
+/// only one expansion's mechanism is held at once.
+struct Expansions<'a> {
+    m: &'a Mechanism,
+    /// `m` with no joint driven.
+    base: Mechanism,
+    /// Multiple joints, and their spanning trees.
+    multi: Vec<usize>,
+    counts: Vec<u64>,
+    /// Expansions to explore (at least one).
+    len: usize,
+    /// Expansions there are (saturating).
+    total: u64,
+}
+
+impl<'a> Expansions<'a> {
+    /// Up to `max` expansions (at least one) and how many there are.
+    fn of(m: &'a Mechanism, max: usize) -> Expansions<'a> {
+        let mut base = m.clone();
+        for j in &mut base.joints {
+            j.driven = 0;
+        }
+        let multi: Vec<usize> = (0..m.joints.len())
+            .filter(|&j| m.joints[j].bodies.len() > 2)
+            .collect();
+        let counts: Vec<u64> = multi
+            .iter()
+            .map(|&j| trees(m.joints[j].bodies.len()))
+            .collect();
+        let total = counts.iter().fold(1u64, |t, &c| t.saturating_mul(c));
+        let len = (max.max(1) as u64).min(total) as usize;
+        Expansions {
+            m,
+            base,
+            multi,
+            counts,
+            len,
+            total,
+        }
     }
-    let multi: Vec<usize> = (0..m.joints.len())
-        .filter(|&j| m.joints[j].bodies.len() > 2)
-        .collect();
-    if multi.is_empty() {
-        let origin = (0..m.joints.len()).collect();
-        let e = Expansion {
-            label: None,
-            mech: base,
-            origin,
-        };
-        return (vec![e], 1);
-    }
-    let counts: Vec<u64> = multi
-        .iter()
-        .map(|&j| trees(m.joints[j].bodies.len()))
-        .collect();
-    let total = counts.iter().fold(1u64, |t, &c| t.saturating_mul(c));
-    let n = (max.max(1) as u64).min(total) as usize;
-    let mut out = Vec::with_capacity(n);
-    for k in 0..n {
-        // Mixed radix, the last multiple joint varying fastest.
+
+    /// Expansion `k` (mixed radix over the multiple joints' trees, the last varying fastest).
+    fn get(&self, k: usize) -> Expansion {
+        let m = self.m;
+        if self.multi.is_empty() {
+            return Expansion {
+                label: None,
+                mech: self.base.clone(),
+                origin: (0..m.joints.len()).collect(),
+            };
+        }
         let mut rest = k as u64;
-        let mut digits = vec![0u64; multi.len()];
-        for (d, &c) in digits.iter_mut().zip(&counts).rev() {
+        let mut digits = vec![0u64; self.multi.len()];
+        for (d, &c) in digits.iter_mut().zip(&self.counts).rev() {
             *d = rest % c.max(1);
             rest /= c.max(1);
         }
-        let mut mech = base.clone();
+        let mut mech = self.base.clone();
         let mut origin: Vec<usize> = (0..m.joints.len()).collect();
         let mut labels = Vec::new();
         let mut appended: Vec<Joint> = Vec::new();
-        for (&j, &d) in multi.iter().zip(&digits) {
+        for (&j, &d) in self.multi.iter().zip(&digits) {
             let joint = &m.joints[j];
             let edges = prufer_tree(joint.bodies.len(), d);
             let mut pairs = Vec::new();
@@ -1412,25 +1469,29 @@ fn expansions(m: &Mechanism, max: usize) -> (Vec<Expansion>, u64) {
             labels.push(format!("{}: {}", joint.id, pairs.join(", ")));
         }
         mech.joints.extend(appended);
-        out.push(Expansion {
+        Expansion {
             label: Some(labels.join("; ")),
             mech,
             origin,
-        });
+        }
     }
-    (out, total)
 }
 
 /// The file's own placement on the default expansion, as the analysis distributes a multiple
 /// joint's driven DOF: its pairs in order, at most k each, the last taking the rest.
 fn exps_default_inputs(m: &Mechanism, max: usize) -> Vec<Input> {
-    let (exps, _) = expansions(m, max.min(1));
-    let Some(e) = exps.first() else {
-        return Vec::new();
-    };
+    let e = &Expansions::of(m, max.min(1)).get(0);
     let mut w: Vec<(usize, u32)> = Vec::new();
+    // The pairs of each joint, in pair order (one pass: was a scan of every pair per joint,
+    // quadratic: 88 % of `transform --limit 3` on a 10^5-body linkage).
+    let mut pairs_of: Vec<Vec<usize>> = vec![Vec::new(); m.joints.len()];
+    for (q, &o) in e.origin.iter().enumerate() {
+        if let Some(v) = pairs_of.get_mut(o) {
+            v.push(q);
+        }
+    }
     for (j, joint) in m.joints.iter().enumerate() {
-        let pairs: Vec<usize> = (0..e.origin.len()).filter(|&q| e.origin[q] == j).collect();
+        let pairs = &pairs_of[j];
         let mut left = joint.driven;
         for (p, &q) in pairs.iter().enumerate() {
             let share = if p + 1 == pairs.len() {
@@ -1505,7 +1566,14 @@ struct Problem {
 }
 
 impl Problem {
-    fn of(e: &Expansion, orig: &Mechanism, rules: &Rules, opts: &TransformOptions) -> Problem {
+    fn of(
+        e: &Expansion,
+        orig: &Mechanism,
+        rules: &Rules,
+        opts: &TransformOptions,
+        cache: &structure::AnalysisCache,
+        meter: &mut Meter,
+    ) -> Result<Problem, BudgetExceeded> {
         let m = &e.mech;
         let nb = m.bodies.len();
         let b = m.b();
@@ -1526,8 +1594,12 @@ impl Problem {
                     pairs[x] += 1;
                 }
             }
-            // The geometry was checked before the enumeration: this analysis cannot fail.
-            let a = structure::analyze(m, &opts.analysis, &Library::empty()).ok();
+            // The geometry was checked before the enumeration: this analysis cannot fail. It
+            // is charged like the analysis of one placement.
+            meter.charge(analysis_work(m))?;
+            let a =
+                structure::analyze_cached(m, &opts.analysis, &Library::empty(), Some(cache), None)
+                    .ok();
             let a = a.as_ref();
             if let Some(a) = a {
                 for (q, &n) in a.set_aside.iter().enumerate() {
@@ -1607,14 +1679,14 @@ impl Problem {
                  can determine the mechanism",
                 -p.f
             ));
-            return p;
+            return Ok(p);
         }
         if kept > p.f {
             p.note = Some(format!(
                 "the kept inputs ({kept}) are more than the {} the mechanism takes",
                 p.f
             ));
-            return p;
+            return Ok(p);
         }
         p.need = (p.f - kept) as usize;
         let mut s = State {
@@ -1624,30 +1696,34 @@ impl Problem {
         let mut scratch = p.scratch();
         for (q, &n) in cons.iter().enumerate() {
             for _ in 0..n {
-                if p.augment(&mut s, &[q], &mut scratch).is_none() {
+                let r = p.augment(&mut s, &[q], &mut scratch);
+                meter.charge(scratch.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     p.note = Some(format!(
                         "the joints' own equations over-determine the bodies near joint {} (by \
                          count): no placement of inputs can determine the mechanism",
                         m.joints[q].id
                     ));
-                    return p;
+                    return Ok(p);
                 }
             }
         }
         for q in 0..nq {
             for _ in 0..p.lo[q] {
-                if p.augment(&mut s, &[q], &mut scratch).is_none() {
+                let r = p.augment(&mut s, &[q], &mut scratch);
+                meter.charge(scratch.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     p.note = Some(format!(
                         "the kept input on joint {} over-determines the bodies it joins: no \
                          placement keeping it is determined",
                         m.joints[q].id
                     ));
-                    return p;
+                    return Ok(p);
                 }
             }
         }
         p.root = Some(s);
-        p
+        Ok(p)
     }
 
     /// Pairs that may be driven (including kept ones).
@@ -1676,6 +1752,22 @@ impl Problem {
     /// Route one more equation unit from one of `sources` to a body with spare unknowns,
     /// rerouting earlier units along an augmenting path. Returns the source used.
     fn augment(&self, s: &mut State, sources: &[usize], sc: &mut Scratch) -> Option<usize> {
+        self.augment_marked(s, sources, sc, None)
+    }
+
+    /// [`Problem::augment`]; with `dead`, bodies from which an earlier call found no spare
+    /// unknown are skipped, and a failed call marks every body it reached. Sound while only
+    /// augmentations happen in between: an augmenting path changes flows between bodies that
+    /// all reach a spare unknown, so a body that reached none still reaches none (and spare
+    /// unknowns only get used up). A run of failures then costs one pass, not one each.
+    fn augment_marked(
+        &self,
+        s: &mut State,
+        sources: &[usize],
+        sc: &mut Scratch,
+        dead: Option<&mut [bool]>,
+    ) -> Option<usize> {
+        let alive = |dead: &Option<&mut [bool]>, x: usize| dead.as_ref().is_none_or(|d| !d[x]);
         sc.stamp = sc.stamp.wrapping_add(1);
         if sc.stamp == 0 {
             sc.seen.iter_mut().for_each(|v| *v = 0);
@@ -1684,7 +1776,7 @@ impl Problem {
         sc.queue.clear();
         for &q in sources {
             for x in [self.a[q], self.c[q]] {
-                if x != self.frame && sc.seen[x] != sc.stamp {
+                if x != self.frame && sc.seen[x] != sc.stamp && alive(&dead, x) {
                     sc.seen[x] = sc.stamp;
                     sc.prev[x] = (q as u32, NONE);
                     sc.queue.push(x);
@@ -1715,11 +1807,16 @@ impl Problem {
                     continue;
                 }
                 let y = self.other(q, x);
-                if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                if y != self.frame && y != x && sc.seen[y] != sc.stamp && alive(&dead, y) {
                     sc.seen[y] = sc.stamp;
                     sc.prev[y] = (q as u32, x as u32);
                     sc.queue.push(y);
                 }
+            }
+        }
+        if let Some(d) = dead {
+            for &x in &sc.queue {
+                d[x] = true;
             }
         }
         None
@@ -1737,12 +1834,12 @@ impl Problem {
     /// unit removed is refilled by an augmenting path). A branch whose bounds admit no
     /// placement is cut at once by a failed exchange, so there are no dead ends: the first
     /// placement comes after one greedy pass, and each further one after at most one
-    /// exchange per candidate. Changes are undone from a trail, so memory stays linear.
-    fn search(
-        &self,
-        meter: &mut Meter,
-        leaf: &mut dyn FnMut(&[u32]) -> bool,
-    ) -> Result<(), BudgetExceeded> {
+    /// exchange per candidate. Changes are undone from a trail, so memory stays linear. A
+    /// failed exchange marks the bodies it reached (no free unit from there) until units move
+    /// back, so a run of candidates that take no unit costs one pass over the bodies, not one
+    /// each (with `--limit`, the work grows with the placements found, not with candidates ×
+    /// bodies).
+    fn search(&self, meter: &mut Meter, leaf: LeafFn<'_>) -> Result<(), BudgetExceeded> {
         let Some(root) = &self.root else {
             return Ok(());
         };
@@ -1753,13 +1850,19 @@ impl Problem {
             hi: self.hi.clone(),
             trail: Vec::new(),
             sc: self.scratch(),
+            dead: vec![0; self.u.len()],
+            version: 1,
         };
         // The greedy first placement: as many units as fit on each candidate in order.
         let mut placed = 0usize;
+        let mut full = vec![false; self.u.len()];
         for &q in &self.cand {
             while placed < self.need && t.w[q] < t.hi[q] {
-                meter.charge(self.u.len() as u64 / 8 + 1)?;
-                if self.augment(&mut t.s, &[q], &mut t.sc).is_none() {
+                // Bodies whose spare unknowns no unit reaches are marked `full` once, so a
+                // run of candidates that take no unit costs one pass (charged: bodies seen).
+                let r = self.augment_marked(&mut t.s, &[q], &mut t.sc, Some(&mut full));
+                meter.charge(t.sc.queue.len() as u64 + 1)?;
+                if r.is_none() {
                     break;
                 }
                 t.w[q] += 1;
@@ -1825,7 +1928,7 @@ impl Problem {
                     .kept_groups
                     .iter()
                     .all(|(qs, min)| qs.iter().map(|&q| t.w[q]).sum::<u32>() >= *min);
-                if ok && !leaf(&t.w) {
+                if ok && !leaf(&t.w, &t.s.flow) {
                     return Ok(());
                 }
                 go_back = true;
@@ -1864,10 +1967,18 @@ impl Problem {
         meter: &mut Meter,
     ) -> Result<bool, BudgetExceeded> {
         let found = {
-            let Search { s, w, lo, sc, .. } = &mut *t;
+            let Search {
+                s,
+                w,
+                lo,
+                sc,
+                dead,
+                version,
+                ..
+            } = &mut *t;
             sc.next_stamp();
             for x in [self.a[q], self.c[q]] {
-                if x != self.frame && sc.seen[x] != sc.stamp {
+                if x != self.frame && sc.seen[x] != sc.stamp && dead[x] != *version {
                     sc.seen[x] = sc.stamp;
                     sc.prev[x] = (q as u32, NONE);
                     sc.queue.push(x);
@@ -1888,11 +1999,19 @@ impl Problem {
                         break 'bfs;
                     }
                     let y = self.other(r, x);
-                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                    if y != self.frame && y != x && sc.seen[y] != sc.stamp && dead[y] != *version {
                         sc.seen[y] = sc.stamp;
                         sc.prev[y] = (r as u32, x as u32);
                         sc.queue.push(y);
                     }
+                }
+            }
+            if found.is_none() {
+                // No free unit is reachable from any body this search reached: while the
+                // placement (flows, units, lower bounds) stays as it is, later exchanges skip
+                // them (a run of failed exchanges costs one pass over the bodies, not one each).
+                for &x in &sc.queue {
+                    dead[x] = *version;
                 }
             }
             found
@@ -1924,6 +2043,8 @@ impl Problem {
     fn cap(&self, t: &mut Search, q: usize, meter: &mut Meter) -> Result<bool, BudgetExceeded> {
         t.set_hi(q, t.lo[q]);
         while t.w[q] > t.hi[q] {
+            // Units move back to pairs below their upper bound: free units may appear.
+            t.version += 1;
             let side = usize::from(t.s.flow[q][0] == 0);
             let x = if side == 0 { self.a[q] } else { self.c[q] };
             t.flow_add(q, side, -1);
@@ -2005,6 +2126,13 @@ struct Search {
     hi: Vec<u32>,
     trail: Vec<(u8, u32, u32)>,
     sc: Scratch,
+    /// Bodies from which [`Problem::exchange_in`] found no free unit, valid while `dead[x] ==
+    /// version`. A successful exchange keeps them valid (it is an augmenting path towards a
+    /// free unit: it changes flows only between bodies that all reach one, so a body that
+    /// reached none still reaches none), and so does raising a lower bound (fewer free units);
+    /// removing units ([`Problem::cap`]) and undoing bump `version`.
+    dead: Vec<u64>,
+    version: u64,
 }
 
 impl Search {
@@ -2032,6 +2160,9 @@ impl Search {
                 break;
             };
             let q = q as usize;
+            if k < 4 {
+                self.version += 1;
+            }
             match k {
                 0 | 1 => self.s.flow[q][k as usize] = old,
                 2 => self.w[q] = old,
@@ -2049,8 +2180,10 @@ impl Search {
 fn evaluate(
     mech: &mut Mechanism,
     w: &[(usize, u32)],
+    flow: &[[u8; 2]],
     opts: &structure::Options,
     lib: &Library,
+    cache: &structure::AnalysisCache,
 ) -> Option<Analysis> {
     for j in &mut mech.joints {
         j.driven = 0;
@@ -2059,7 +2192,7 @@ fn evaluate(
         mech.joints[q].driven = n;
     }
     // The geometry was checked before the enumeration: this analysis cannot fail.
-    structure::analyze(mech, opts, lib)
+    structure::analyze_cached(mech, opts, lib, Some(cache), Some(flow))
         .ok()
         .filter(|a| a.status == Status::Determined)
 }

@@ -222,6 +222,19 @@ pub fn pairs_rank(
     pairs: impl Iterator<Item = (usize, usize, usize)>,
     group: impl Fn(usize) -> Option<usize>,
 ) -> usize {
+    pairs_factor(b, ngroups, rows, pairs, group).map_or(0, |f| f.rank())
+}
+
+/// The exact factorization behind [`pairs_rank`] (`None` when the pairs give no row): its
+/// rank, and random vectors of its null space (the motions, B columns per group in group
+/// order) through [`Factor::random_null_vectors`].
+pub fn pairs_factor(
+    b: usize,
+    ngroups: usize,
+    rows: &[DMatrix<Fp>],
+    pairs: impl Iterator<Item = (usize, usize, usize)>,
+    group: impl Fn(usize) -> Option<usize>,
+) -> Option<Factor> {
     let mut a = SparseMatrix::with_groups(vec![b; ngroups]);
     for (joint, hub, other) in pairs {
         let r = &rows[joint];
@@ -242,9 +255,69 @@ pub fn pairs_rank(
         }
     }
     if a.nrows() == 0 {
-        return 0;
+        return None;
     }
-    Factor::new(&a).rank()
+    Some(Factor::new(&a))
+}
+
+/// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, as
+/// in [`pairs_factor`]: a flag per pair, set when a random self-stress is nonzero on one of
+/// its rows (every self-stress has its support within these pairs; a random one reaches all
+/// of them except with probability at most (rows)/p). By the factorization of the
+/// transpose (the pairs' rows as unknowns, grouped by pair; one equation per body column).
+pub fn pairs_stress_support(
+    b: usize,
+    rows: &[DMatrix<Fp>],
+    pairs: &[(usize, usize, usize)],
+    group: impl Fn(usize) -> Option<usize>,
+    ngroups: usize,
+    seed: u64,
+) -> Vec<bool> {
+    let sizes: Vec<usize> = pairs.iter().map(|&(j, _, _)| rows[j].nrows()).collect();
+    let mut off = Vec::with_capacity(sizes.len());
+    let mut acc = 0u32;
+    for &s in &sizes {
+        off.push(acc);
+        acc += s as u32;
+    }
+    // Column (g, k) of the Jacobian: the entries of every row touching it.
+    let mut cols: Vec<Vec<(u32, Fp)>> = vec![Vec::new(); ngroups * b];
+    for (pi, &(joint, hub, other)) in pairs.iter().enumerate() {
+        if hub == other {
+            continue;
+        }
+        let r = &rows[joint];
+        for (x, sign) in [(hub, true), (other, false)] {
+            let Some(g) = group(x) else { continue };
+            for i in 0..r.nrows() {
+                for k in 0..b {
+                    let v = r[(i, k)];
+                    if !v.is_zero() {
+                        cols[g * b + k].push((off[pi] + i as u32, if sign { -v } else { v }));
+                    }
+                }
+            }
+        }
+    }
+    let mut t = SparseMatrix::with_groups(sizes.clone());
+    for c in cols {
+        let mut c = c;
+        c.sort_unstable_by_key(|e| e.0);
+        t.push_row(c);
+    }
+    let f = Factor::new(&t);
+    if f.nullity() == 0 {
+        return vec![false; pairs.len()];
+    }
+    let mut rng = crate::rng::SplitMix64::new(seed);
+    let y = f.random_null_vectors(1, &mut rng).pop().unwrap_or_default();
+    (0..pairs.len())
+        .map(|pi| {
+            let o = off[pi] as usize;
+            y.get(o..o + sizes[pi])
+                .is_some_and(|s| s.iter().any(|v| !v.is_zero()))
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -617,6 +617,45 @@ impl Factor {
             .collect()
     }
 
+    /// `k` random vectors of the null space {x : A x = 0}, dense: each free column gets a
+    /// random field element and the pivots follow by back substitution, record by record in
+    /// reverse elimination order (a record's rows involve its own group and groups
+    /// eliminated after it). The cost is `k` passes over the factor, whatever the nullity;
+    /// a linear map on the null space has the rank of its values on `k` such vectors (for
+    /// `k` at least that rank) except with probability at most `k / p`.
+    pub fn random_null_vectors(&self, k: usize, rng: &mut SplitMix64) -> Vec<Vec<Fp>> {
+        let total = self.ncols();
+        let mut out = Vec::with_capacity(k);
+        for _ in 0..k {
+            let mut x = vec![Fp::ZERO; total];
+            for rec in self.records.iter().rev() {
+                let off = self.offsets[rec.group];
+                for &q in &rec.free {
+                    x[off + q] = Fp::random(rng);
+                }
+                for (i, &pc) in rec.pivots.iter().enumerate() {
+                    let row = &rec.rows[i * rec.width..(i + 1) * rec.width];
+                    let mut s = Fp::ZERO;
+                    for &q in &rec.free {
+                        s += row[q] * x[off + q];
+                    }
+                    let mut c = self.sizes[rec.group];
+                    for &o in &rec.others {
+                        let so = self.sizes[o];
+                        let oo = self.offsets[o];
+                        for kk in 0..so {
+                            s += row[c + kk] * x[oo + kk];
+                        }
+                        c += so;
+                    }
+                    x[off + pc] = -s;
+                }
+            }
+            out.push(x);
+        }
+        out
+    }
+
     /// A basis of the null space {x : A x = 0}: `nullity()` sparse vectors, by back
     /// substitution from each free column through the groups it reaches. The vectors are
     /// as dense as the motions they describe (a serial chain's are long), so the cost is
@@ -1240,6 +1279,16 @@ mod tests {
         assert_eq!(f.rank(), r);
         let ns = f.null_space();
         assert_eq!(ns.len(), a.ncols - r);
+        // Random null vectors: in the null space, and spanning it (k = nullity of them).
+        let mut rng = SplitMix64::new(17);
+        let rv = f.random_null_vectors(ns.len(), &mut rng);
+        for x in &rv {
+            assert!(a.mul_dense(x).iter().all(|v| v.is_zero()));
+        }
+        if !rv.is_empty() {
+            let m = DMatrix::from_fn(a.ncols, rv.len(), |i, j| rv[j][i]);
+            assert_eq!(dense::rank(&m), rv.len());
+        }
         for x in &ns {
             assert!(a.mul_sparse(x).iter().all(|v| v.is_zero()));
         }

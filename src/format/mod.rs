@@ -5,6 +5,7 @@
 //! reference of format v1). [`load`] takes text; [`load_bytes`] also checks size and UTF-8.
 
 mod error;
+mod fast_toml;
 mod model;
 mod schema;
 mod tree;
@@ -173,6 +174,18 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
     let name = default_name(source_name);
     match format {
         Format::Toml => {
+            // The common shapes in one pass (`fast_toml`); anything it does not read, and any
+            // error, read again by the toml crate below, which finds and locates every error.
+            if let Some((root, joints)) = fast_toml::parse(text) {
+                let lazy = if joints.is_empty() {
+                    tree::Lazy::None
+                } else {
+                    tree::Lazy::TomlLines { text, joints }
+                };
+                if let Ok(m) = model::build(root, &name, lazy) {
+                    return Ok(m);
+                }
+            }
             // Large files: the joints read a piece at a time (see `tree::parse_toml_lazy`);
             // anything that way cannot join is read again whole.
             let fallback = AtomicBool::new(false);
@@ -184,14 +197,43 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             }
             model::build(tree::parse_toml(text)?, &name, tree::Lazy::None)
         }
-        Format::Yaml => match tree::parse_yaml(text)? {
-            Some(root) => model::build(root, &name, tree::Lazy::None),
-            None => Err(model::empty_document()),
-        },
-        Format::Json => {
-            let (root, lazy) = tree::parse_json(text)?;
-            model::build(root, &name, lazy)
+        Format::Yaml => {
+            // The joint list last (the common case): one read, the joints one at a time.
+            if let Some((root, lazy)) = tree::parse_yaml_resume(text)
+                && let Ok(m) = model::build(root, &name, lazy)
+            {
+                return Ok(m);
+            }
+            match tree::parse_yaml_lazy(text) {
+                // Otherwise the joints read one at a time from a second read of the text. Any
+                // error: found again by the whole read, in the order it finds them.
+                Ok(Some(root))
+                    if matches!(&root.value, tree::Value::Map(es)
+                        if es.iter().any(|e| matches!(e.value.value, tree::Value::Deferred))) =>
+                {
+                    match model::build(root, &name, tree::Lazy::Yaml { text }) {
+                        Ok(m) => Ok(m),
+                        Err(_) => yaml_whole(text, &name),
+                    }
+                }
+                _ => yaml_whole(text, &name),
+            }
         }
+        Format::Json => {
+            // One pass: the tree parser refuses whatever serde_json refuses; after an error,
+            // serde_json's check reports its own first (as when it ran before the tree).
+            tree::parse_json_tree(text)
+                .and_then(|(root, lazy)| model::build(root, &name, lazy))
+                .map_err(|e| tree::json_check(text).err().unwrap_or(e))
+        }
+    }
+}
+
+/// YAML read whole (one tree), as before the lazy read.
+fn yaml_whole(text: &str, name: &str) -> Result<Mechanism, LoadError> {
+    match tree::parse_yaml(text)? {
+        Some(root) => model::build(root, name, tree::Lazy::None),
+        None => Err(model::empty_document()),
     }
 }
 

@@ -534,6 +534,9 @@ impl Interner {
     }
 }
 
+/// Body lists up to this long are checked for a repeated body by a scan.
+const SCAN_BODIES: usize = 16;
+
 /// A joint list: its entry (for locations), its value taken out of the tree, and where its
 /// deferred items come from.
 type JointList<'e, 'a> = (&'e Entry<'a>, Option<Value<'a>>, Lazy<'a>);
@@ -588,18 +591,44 @@ fn build_joints<'a>(
         None => None,
     };
     let frame_index = interner.get(frame.clone());
-    let mut read: Vec<Joint> = Vec::new();
+    let mut read: Vec<Joint> = Vec::with_capacity(lazy.len_hint(&list));
     // The span that locates each joint in later errors.
     let mut joint_spans: Vec<Range<usize>> = Vec::new();
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
     let mut any_name = false;
+    // Per body: the last joint of more than SCAN_BODIES bodies that named it, and where.
+    let mut seen: Vec<(u32, u32)> = Vec::new();
+    // Per joint: whether its id is the default `a-b` (suffixed below).
+    let mut defaulted: Vec<bool> = Vec::with_capacity(read.capacity());
     lazy.for_each(list, &mut |j: Node<'a>| {
         let es = as_map(&j, "a joint")?;
-        check_keys(es, JOINT_KEYS, "joint")?;
+        // One pass over the keys: the entries looked up below, and whether any is unknown
+        // (then `check_keys` names it, as it would have first).
+        let (mut type_entry, mut bodies_entry, mut id_entry, mut driven_entry, mut second_entry) =
+            (None, None, None, None, None);
+        let mut unknown = false;
+        for e in es {
+            match e.key.as_ref() {
+                "type" => type_entry = Some(e),
+                "bodies" => bodies_entry = Some(e),
+                "id" => id_entry = Some(e),
+                "driven" => driven_entry = Some(e),
+                "second" => second_entry = Some(e),
+                "origin" | "origin2" | "axis" | "axis2" | "normal" | "pitch" => {}
+                _ => unknown = true,
+            }
+        }
+        if unknown {
+            check_keys(es, JOINT_KEYS, "joint")?;
+        }
         // Type.
-        let type_entry = required(es, "type", &j, "joint")?;
+        let type_entry = match type_entry {
+            Some(e) => e,
+            None => required(es, "type", &j, "joint")?,
+        };
         let type_text = as_str(&type_entry.value, "a joint `type`")?;
-        let kind = JointType::parse(type_text).ok_or_else(|| {
+        // A code as written (`R`, `SPSP`) first: `JointType::parse` normalizes every spelling.
+        let kind = exact_code(type_text).or_else(|| JointType::parse(type_text)).ok_or_else(|| {
             err(
                 ErrorKind::UnknownJointType,
                 format!("unknown joint type `{type_text}`"),
@@ -629,7 +658,10 @@ fn build_joints<'a>(
             ));
         }
         // Bodies.
-        let bodies_entry = required(es, "bodies", &j, "joint")?;
+        let bodies_entry = match bodies_entry {
+            Some(e) => e,
+            None => required(es, "bodies", &j, "joint")?,
+        };
         let items = as_seq(&bodies_entry.value, "a joint's `bodies`")?;
         if items.len() < 2 {
             return Err(err(
@@ -644,11 +676,29 @@ fn build_joints<'a>(
             ));
         }
         let mut ids: Vec<usize> = Vec::with_capacity(items.len());
+        // A body named twice in one joint: a scan for short lists, else a mark per body (the
+        // joint's number and the item's position), so that one joint of n bodies is linear.
+        let stamp = read.len() as u32;
+        // The default id `a-b` when no `id` is given, written while the ids are at hand.
+        let mut base = String::new();
         for (i, b) in items.iter().enumerate() {
             let id = as_id(b, "a body id")?;
             any_name |= matches!(id, BodyId::Name(_));
+            if id_entry.is_none() {
+                push_id(&mut base, i, &id);
+            }
             let k = interner.get(id);
-            if let Some(first) = ids.iter().position(|x| *x == k) {
+            let again = if items.len() <= SCAN_BODIES {
+                ids.iter().position(|x| *x == k)
+            } else {
+                if seen.len() <= k {
+                    seen.resize(interner.ids.len().max(k + 1), (u32::MAX, 0));
+                }
+                let (joint, at) = seen[k];
+                seen[k] = (stamp, i as u32);
+                (joint == stamp).then_some(at as usize)
+            };
+            if let Some(first) = again {
                 return Err(LoadError::new(
                     ErrorKind::RepeatedBody,
                     format!("body `{}` appears twice in one joint", interner.ids[k]),
@@ -674,7 +724,7 @@ fn build_joints<'a>(
         }
         // Driven DOF.
         let max = u32::from(kind.grade()) * (ids.len() as u32 - 1);
-        let driven = match get(es, "driven") {
+        let driven = match driven_entry {
             None => 0,
             Some(e) => {
                 let n = match as_int(&e.value, "`driven`") {
@@ -709,9 +759,10 @@ fn build_joints<'a>(
                 n as u32
             }
         };
-        // Id (empty: not given; an explicit id is never empty).
-        let id = match get(es, "id") {
-            None => String::new(),
+        // Id (an explicit id is never empty).
+        defaulted.push(id_entry.is_none());
+        let id = match id_entry {
+            None => base,
             Some(e) => {
                 let id = match &e.value.value {
                     Value::Int(i) => i.to_string(),
@@ -745,7 +796,7 @@ fn build_joints<'a>(
             }
         };
         let mut geometry = parse_geometry(es, space)?;
-        if let Some(e) = get(es, "second") {
+        if let Some(e) = second_entry {
             geometry.second = Some(parse_second(e, kind, space, ids.len())?);
         }
         joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
@@ -767,11 +818,36 @@ fn build_joints<'a>(
     // and a default that another joint's body list gives too is an error naming both.
     if explicit.is_empty() {
         default_joint_ids(&mut read, names, &joint_spans, !any_name)?;
+    } else if !any_name {
+        // Integer bodies: a default `a-b` or `a-b#n` has no other `#`, so defaults of two body
+        // lists never meet; the k-th default of a list takes the k-th suffix not taken by an
+        // explicit id (as the general loop below, without a set of every id).
+        let order = by_body_list(&read, |k| defaulted[k]);
+        let mut k = 0;
+        while k < order.len() {
+            let first = order[k] as usize;
+            let mut n = 1u64;
+            while k < order.len() && read[order[k] as usize].bodies == read[first].bodies {
+                let j = &mut read[order[k] as usize];
+                let base = j.id.len();
+                loop {
+                    j.id.truncate(base);
+                    if n > 1 {
+                        let _ = write!(j.id, "#{n}");
+                    }
+                    n += 1;
+                    if !explicit.contains_key(j.id.as_str()) {
+                        break;
+                    }
+                }
+                k += 1;
+            }
+        }
     } else {
         let mut taken: HashSet<String> = explicit.into_keys().collect();
-        for j in &mut read {
-            if j.id.is_empty() {
-                let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
+        for (j, _) in read.iter_mut().zip(&defaulted).filter(|(_, d)| **d) {
+            {
+                let base = std::mem::take(&mut j.id);
                 let mut id = base.clone();
                 let mut n = 1;
                 while taken.contains(&id) {
@@ -831,11 +907,67 @@ fn build_joints<'a>(
 fn joined_ids<'b>(bodies: impl IntoIterator<Item = &'b BodyId>) -> String {
     let mut base = String::new();
     for (i, b) in bodies.into_iter().enumerate() {
-        let sep = if i == 0 { "" } else { "-" };
-        // Writing into a String cannot fail.
-        let _ = write!(base, "{sep}{b}");
+        push_id(&mut base, i, b);
     }
     base
+}
+
+/// Append the `i`-th id of a joint's default id `a-b-...`.
+fn push_id(out: &mut String, i: usize, b: &BodyId) {
+    if i > 0 {
+        out.push('-');
+    }
+    match b {
+        // Integers by hand: the formatting machinery, a million times, showed in profiles.
+        BodyId::Int(n) => push_int(out, *n),
+        BodyId::Name(s) => out.push_str(s),
+    }
+}
+
+/// Append the decimal digits of `n` (as `n.to_string()`).
+fn push_int(out: &mut String, n: i64) {
+    let mut digits = [0u8; 20];
+    let mut at = digits.len();
+    let mut m = n.unsigned_abs();
+    loop {
+        at -= 1;
+        digits[at] = b'0' + (m % 10) as u8;
+        m /= 10;
+        if m == 0 {
+            break;
+        }
+    }
+    if n < 0 {
+        out.push('-');
+    }
+    // ASCII digits only.
+    out.push_str(std::str::from_utf8(&digits[at..]).unwrap_or_default());
+}
+
+/// The positions of the joints `keep` selects, sorted by body list, then by position: equal
+/// lists next to each other, in file order.
+fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> Vec<u32> {
+    // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
+    let mut pairs: Vec<(u64, u32)> = Vec::new();
+    let mut others: Vec<u32> = Vec::new();
+    for (k, j) in joints.iter().enumerate().filter(|(k, _)| keep(*k)) {
+        match j.bodies[..] {
+            [a, b] if a <= u32::MAX as usize && b <= u32::MAX as usize => {
+                pairs.push((((a as u64) << 32) | b as u64, k as u32));
+            }
+            _ => others.push(k as u32),
+        }
+    }
+    pairs.sort_unstable();
+    others.sort_unstable_by(|&a, &b| {
+        joints[a as usize]
+            .bodies
+            .cmp(&joints[b as usize].bodies)
+            .then(a.cmp(&b))
+    });
+    let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+    order.extend(others);
+    order
 }
 
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
@@ -853,26 +985,7 @@ fn default_joint_ids(
     // sorted by body list, then by position (a sort, not a hash map: no hash flooding).
     let mut nth = vec![1u32; joints.len()];
     {
-        // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
-        let mut pairs: Vec<(u64, u32)> = Vec::new();
-        let mut others: Vec<u32> = Vec::new();
-        for (k, j) in joints.iter().enumerate() {
-            match j.bodies[..] {
-                [a, b] if a <= u32::MAX as usize && b <= u32::MAX as usize => {
-                    pairs.push((((a as u64) << 32) | b as u64, k as u32));
-                }
-                _ => others.push(k as u32),
-            }
-        }
-        pairs.sort_unstable();
-        others.sort_unstable_by(|&a, &b| {
-            joints[a as usize]
-                .bodies
-                .cmp(&joints[b as usize].bodies)
-                .then(a.cmp(&b))
-        });
-        let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
-        order.extend(others);
+        let order = by_body_list(joints, |_| true);
         for w in 1..order.len() {
             let (a, b) = (order[w - 1] as usize, order[w] as usize);
             if joints[a].bodies == joints[b].bodies {
@@ -880,17 +993,19 @@ fn default_joint_ids(
             }
         }
     }
-    let mut ids: Vec<String> = Vec::with_capacity(joints.len());
-    for (j, &n) in joints.iter().zip(&nth) {
-        let base = joined_ids(j.bodies.iter().map(|&k| &names[k]));
-        ids.push(if n == 1 { base } else { format!("{base}#{n}") });
+    // The joints hold their base `a-b` already (written as they were read).
+    for (j, &n) in joints.iter_mut().zip(&nth) {
+        if n > 1 {
+            let _ = write!(j.id, "#{n}");
+        }
     }
     drop(nth);
+    let ids: Vec<&str> = joints.iter().map(|j| j.id.as_str()).collect();
     if !all_integers {
         let mut owner: std::collections::HashMap<&str, usize> =
             std::collections::HashMap::with_capacity(ids.len());
         for (k, id) in ids.iter().enumerate() {
-            if let Some(&first) = owner.get(id.as_str()) {
+            if let Some(&first) = owner.get(id) {
                 let (a, b) = (first.min(k), first.max(k));
                 let list = |i: usize| joined_ids(joints[i].bodies.iter().map(|&k| &names[k]));
                 return Err(LoadError::new(
@@ -915,10 +1030,12 @@ fn default_joint_ids(
             owner.insert(id, k);
         }
     }
-    for (j, id) in joints.iter_mut().zip(ids) {
-        j.id = id;
-    }
     Ok(())
+}
+
+/// The joint type whose code is exactly `text` (as [`JointType::parse`] reads it).
+fn exact_code(text: &str) -> Option<JointType> {
+    CATALOGUE.iter().find(|i| i.code == text).map(|i| i.kind)
 }
 
 fn c_name(code: &str) -> &'static str {
@@ -1329,4 +1446,26 @@ fn build_framework(
         .map(|id| Body { id, label: None })
         .collect();
     Ok(Mechanism::from_parts(name, space, frame, extra, specs))
+}
+
+#[cfg(test)]
+mod fast_tests {
+    use super::*;
+
+    #[test]
+    fn exact_codes_read_as_parse_reads_them() {
+        for i in CATALOGUE.iter() {
+            assert_eq!(exact_code(i.code), JointType::parse(i.code), "{}", i.code);
+        }
+        assert_eq!(exact_code("r"), None);
+    }
+
+    #[test]
+    fn push_int_is_to_string() {
+        for n in [0, 1, -1, 9, 10, -10, 12345, i64::MAX, i64::MIN, 1_000_000] {
+            let mut s = String::from("x");
+            push_int(&mut s, n);
+            assert_eq!(s, format!("x{n}"));
+        }
+    }
 }

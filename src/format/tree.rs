@@ -107,9 +107,42 @@ pub(crate) enum Lazy<'a> {
         rest: Vec<Range<usize>>,
         fallback: &'a std::sync::atomic::AtomicBool,
     },
+    /// YAML: the text is read a second time, the items of the top-level joint list built
+    /// one at a time (the first read built the rest, skipping them).
+    Yaml { text: &'a str },
+    /// YAML whose joint list is the last top-level key: the reader that stopped at the list
+    /// reads on, item by item ([`parse_yaml_resume`]); anything after the list is an error
+    /// (the caller then reads the text again).
+    YamlResume(Box<YamlReader<'a>>),
+    /// TOML read by [`super::fast_toml`]: the byte range of each `[[joint]]` table, read one
+    /// at a time. A table it does not read is an error (the caller then reads the text with
+    /// the toml crate).
+    TomlLines {
+        text: &'a str,
+        joints: Vec<Range<usize>>,
+    },
 }
 
 impl<'a> Lazy<'a> {
+    /// About how many items `list` holds (to size the joint vector once: growing a vector of
+    /// a million joints by doubling holds both copies at once). Counted, not parsed: the
+    /// `[[joint]]` headers of a TOML file, the `"bodies"` keys of a JSON list; bounded by the
+    /// text's length, so a wrong guess costs little.
+    pub(crate) fn len_hint(&self, list: &Value<'a>) -> usize {
+        match (list, self) {
+            (Value::Seq(items), _) => items.len(),
+            (Value::Deferred, Lazy::Json { text, span }) => text
+                .get(span.clone())
+                .map_or(0, |t| t.matches("\"bodies\"").count()),
+            (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
+            (Value::Deferred, Lazy::Yaml { text }) => text.matches("bodies").count(),
+            (Value::Deferred, Lazy::YamlResume(r)) => r.index.text.matches("bodies").count(),
+            // Every header but one at the very start follows a line break.
+            (Value::Deferred, Lazy::Toml { text, .. }) => text.matches(JOINT_HEADER).count() + 1,
+            _ => 0,
+        }
+    }
+
     /// Call `f` on every item of `list` (a `Seq`, or the `Deferred` list), in order, each item
     /// dropped after its call; stops at the first error.
     pub(crate) fn for_each(
@@ -176,6 +209,37 @@ impl<'a> Lazy<'a> {
                     }
                 }
                 failed.map_or(Ok(()), Err)
+            }
+            (Value::Deferred, Lazy::TomlLines { text, joints }) => {
+                for r in joints {
+                    match super::fast_toml::joint(text, r) {
+                        Some(item) => f(item)?,
+                        None => return Err(syntax("TOML", "read again", 0..0, "here")),
+                    }
+                }
+                Ok(())
+            }
+            (Value::Deferred, Lazy::Yaml { text }) => yaml_joint_items(text, f),
+            (Value::Deferred, Lazy::YamlResume(mut r)) => {
+                use saphyr_parser::Event;
+                loop {
+                    let next = r.next()?;
+                    if let Event::SequenceEnd = next.0 {
+                        break;
+                    }
+                    f(r.node(next, 3)?)?;
+                }
+                // Nothing after the list: the mapping, the document and the stream end.
+                if !matches!(r.next()?.0, Event::MappingEnd) {
+                    return Err(syntax("YAML", "read again", 0..0, "here"));
+                }
+                loop {
+                    match r.next()?.0 {
+                        Event::DocumentEnd | Event::Nothing => {}
+                        Event::StreamEnd => return Ok(()),
+                        _ => return Err(syntax("YAML", "read again", 0..0, "here")),
+                    }
+                }
             }
             (Value::Deferred, Lazy::None) => Ok(()),
             (_, _) => Ok(()),
@@ -285,7 +349,7 @@ pub(crate) fn parse_toml(text: &str) -> Result<Node<'_>, LoadError> {
     parse_toml_serial(text)
 }
 
-fn parse_toml_serial(text: &str) -> Result<Node<'_>, LoadError> {
+pub(crate) fn parse_toml_serial(text: &str) -> Result<Node<'_>, LoadError> {
     let table = toml::de::DeTable::parse(text).map_err(|e| {
         let span = e.span().unwrap_or(0..0);
         let msg = e.message().trim().to_string();
@@ -597,9 +661,11 @@ impl<'a> CharIndex<'a> {
     }
 }
 
-struct YamlReader<'a> {
+pub(crate) struct YamlReader<'a> {
     parser: saphyr_parser::Parser<'a, saphyr_parser::StrInput<'a>>,
     index: CharIndex<'a>,
+    /// Skip the first top-level joint list that is a sequence ([`parse_yaml_lazy`]).
+    defer: bool,
 }
 
 type YamlEvent<'a> = (saphyr_parser::Event<'a>, Range<usize>);
@@ -617,6 +683,23 @@ impl<'a> YamlReader<'a> {
                 Err(syntax("YAML", "unexpected end of input", end..end, "here"))
             }
         }
+    }
+
+    /// Consume the events of the node that starts with `ev`, building nothing.
+    fn skip(&mut self, ev: YamlEvent<'a>) -> Result<(), LoadError> {
+        use saphyr_parser::Event;
+        let mut open = match ev.0 {
+            Event::SequenceStart(..) | Event::MappingStart(..) => 1usize,
+            _ => return Ok(()),
+        };
+        while open > 0 {
+            match self.next()?.0 {
+                Event::SequenceStart(..) | Event::MappingStart(..) => open += 1,
+                Event::SequenceEnd | Event::MappingEnd => open -= 1,
+                _ => {}
+            }
+        }
+        Ok(())
     }
 
     fn node(&mut self, ev: YamlEvent<'a>, depth: usize) -> Result<Node<'a>, LoadError> {
@@ -694,7 +777,23 @@ impl<'a> YamlReader<'a> {
                         }
                     };
                     let value_ev = self.next()?;
-                    let value = self.node(value_ev, depth + 1)?;
+                    let value = if depth == 1
+                        && self.defer
+                        && is_joint_list(&key)
+                        && let Event::SequenceStart(..) = value_ev.0
+                    {
+                        // Skipped (read again item by item: `Lazy::Yaml`); its span is the
+                        // start of the list (its items' spans locate everything after).
+                        self.defer = false;
+                        let at = value_ev.1.clone();
+                        self.skip(value_ev)?;
+                        Node {
+                            span: at,
+                            value: Value::Deferred,
+                        }
+                    } else {
+                        self.node(value_ev, depth + 1)?
+                    };
                     push_entry(
                         &mut entries,
                         &mut index,
@@ -810,10 +909,122 @@ fn is_yaml_float(t: &str) -> bool {
 
 /// Parse YAML (one document) into a tree; `None` for a stream without a document.
 pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node<'_>>, LoadError> {
+    parse_yaml_with(text, false)
+}
+
+/// [`parse_yaml`] with the top-level joint list (if a sequence) left [`Value::Deferred`], its
+/// items read by [`Lazy::Yaml`]. The caller reads the text again with [`parse_yaml`] after any
+/// error: the order in which errors are found differs.
+pub(crate) fn parse_yaml_lazy(text: &str) -> Result<Option<Node<'_>>, LoadError> {
+    parse_yaml_with(text, true)
+}
+
+/// One read of YAML whose top-level joint list (a sequence) comes last: the top-level entries
+/// before it and the list [`Value::Deferred`], with the reader stopped at the list's first
+/// item. `None` at anything else (no such list, a document that is not a mapping, an error).
+pub(crate) fn parse_yaml_resume(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
     use saphyr_parser::Event;
     let mut r = YamlReader {
         parser: saphyr_parser::Parser::new_from_str(text),
         index: CharIndex::new(text),
+        defer: false,
+    };
+    let start = loop {
+        let (ev, span) = r.next().ok()?;
+        match ev {
+            Event::StreamStart | Event::DocumentStart(_) | Event::Nothing => {}
+            Event::MappingStart(_, None) => break span,
+            _ => return None,
+        }
+    };
+    let mut entries = Vec::new();
+    let mut index = None;
+    loop {
+        let (ev, key_span) = r.next().ok()?;
+        let Event::Scalar(key, ..) = ev else {
+            return None;
+        };
+        let value_ev = r.next().ok()?;
+        if is_joint_list(&key) && matches!(value_ev.0, Event::SequenceStart(_, None)) {
+            let value = Node {
+                span: value_ev.1,
+                value: Value::Deferred,
+            };
+            push_entry(
+                &mut entries,
+                &mut index,
+                Entry {
+                    key,
+                    key_span,
+                    value,
+                },
+            )
+            .ok()?;
+            let root = Node {
+                span: start.start..start.start,
+                value: Value::Map(entries),
+            };
+            return Some((root, Lazy::YamlResume(Box::new(r))));
+        }
+        let value = r.node(value_ev, 2).ok()?;
+        push_entry(
+            &mut entries,
+            &mut index,
+            Entry {
+                key,
+                key_span,
+                value,
+            },
+        )
+        .ok()?;
+    }
+}
+
+/// The second read of [`Lazy::Yaml`]: `f` on each item of the top-level joint list.
+fn yaml_joint_items<'a>(
+    text: &'a str,
+    f: &mut dyn FnMut(Node<'a>) -> Result<(), LoadError>,
+) -> Result<(), LoadError> {
+    use saphyr_parser::Event;
+    let mut r = YamlReader {
+        parser: saphyr_parser::Parser::new_from_str(text),
+        index: CharIndex::new(text),
+        defer: false,
+    };
+    let lost = || syntax("YAML", "read again", 0..0, "here");
+    // Down to the top-level mapping.
+    loop {
+        match r.next()?.0 {
+            Event::MappingStart(..) => break,
+            Event::StreamStart | Event::DocumentStart(_) | Event::Nothing => {}
+            _ => return Err(lost()),
+        }
+    }
+    loop {
+        let key = match r.next()?.0 {
+            Event::Scalar(k, ..) => k,
+            _ => return Err(lost()),
+        };
+        let value = r.next()?;
+        if is_joint_list(&key) && matches!(value.0, Event::SequenceStart(..)) {
+            loop {
+                let next = r.next()?;
+                if let Event::SequenceEnd = next.0 {
+                    return Ok(());
+                }
+                f(r.node(next, 3)?)?;
+            }
+        }
+        r.skip(value)?;
+    }
+}
+
+fn parse_yaml_with(text: &str, defer: bool) -> Result<Option<Node<'_>>, LoadError> {
+    use saphyr_parser::Event;
+    let mut r = YamlReader {
+        parser: saphyr_parser::Parser::new_from_str(text),
+        index: CharIndex::new(text),
+        defer,
     };
     let mut root = None;
     loop {
@@ -846,13 +1057,17 @@ pub(crate) fn parse_yaml(text: &str) -> Result<Option<Node<'_>>, LoadError> {
 
 /// Parse JSON into a tree: syntax checked by serde_json (good messages), tree built by a small
 /// spanned parser.
+#[cfg(test)]
 pub(crate) fn parse_json(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
-    // Both passes at once (two cores): serde_json's check, and the spanned tree.
-    let (check, tree) = rayon::join(
-        || serde_json::from_str::<serde::de::IgnoredAny>(text),
-        || parse_json_tree(text),
-    );
-    if let Err(e) = check {
+    json_check(text)?;
+    parse_json_tree(text)
+}
+
+/// serde_json's syntax check of the whole text (its messages are better than the tree
+/// parser's). The tree parser ([`parse_json_tree`]) refuses everything serde_json refuses, so
+/// the reader runs this check only after an error, to report serde_json's first.
+pub(crate) fn json_check(text: &str) -> Result<(), LoadError> {
+    if let Err(e) = serde_json::from_str::<serde::de::IgnoredAny>(text) {
         let at = offset_of(text, e.line(), e.column());
         let msg = e.to_string();
         // serde_json appends " at line L column C": the rendered location says it already.
@@ -862,11 +1077,11 @@ pub(crate) fn parse_json(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> 
             .to_string();
         return Err(syntax("JSON", msg, at..at, "here"));
     }
-    tree
+    Ok(())
 }
 
 /// The spanned tree of JSON text (its syntax errors are less precise than serde_json's).
-fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
+pub(crate) fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadError> {
     let mut p = JsonParser {
         text,
         bytes: text.as_bytes(),
@@ -945,101 +1160,126 @@ impl<'a> JsonParser<'a> {
         if depth > MAX_DEPTH {
             return Err(too_deep(start..start + 1));
         }
-        let value =
-            match self.bytes.get(self.pos) {
-                Some(b'{') => {
+        let value = match self.bytes.get(self.pos) {
+            Some(b'{') => {
+                self.pos += 1;
+                let mut entries = Vec::new();
+                let mut index = None;
+                self.ws();
+                if self.bytes.get(self.pos) == Some(&b'}') {
                     self.pos += 1;
-                    let mut entries = Vec::new();
-                    let mut index = None;
-                    self.ws();
-                    if self.bytes.get(self.pos) == Some(&b'}') {
-                        self.pos += 1;
-                    } else {
-                        loop {
-                            self.ws();
-                            let key_start = self.pos;
-                            let key = self.string()?;
-                            let key_span = key_start..self.pos;
-                            self.ws();
-                            self.eat(b':')?;
-                            self.ws();
-                            let value = if depth == 1
-                                && self.deferred.is_none()
-                                && is_joint_list(&key)
-                                && let Some(span) = self.skip_list()?
-                            {
-                                self.deferred = Some(span.clone());
-                                Node {
-                                    span,
-                                    value: Value::Deferred,
-                                }
-                            } else {
-                                self.value(depth + 1)?
-                            };
-                            push_entry(
-                                &mut entries,
-                                &mut index,
-                                Entry {
-                                    key,
-                                    key_span,
-                                    value,
-                                },
-                            )?;
-                            if self.list_end(b'}')? {
-                                break;
+                } else {
+                    loop {
+                        self.ws();
+                        let key_start = self.pos;
+                        let key = self.string()?;
+                        let key_span = key_start..self.pos;
+                        self.ws();
+                        self.eat(b':')?;
+                        self.ws();
+                        let value = if depth == 1
+                            && self.deferred.is_none()
+                            && is_joint_list(&key)
+                            && let Some(span) = self.skip_list()?
+                        {
+                            self.deferred = Some(span.clone());
+                            Node {
+                                span,
+                                value: Value::Deferred,
                             }
+                        } else {
+                            self.value(depth + 1)?
+                        };
+                        push_entry(
+                            &mut entries,
+                            &mut index,
+                            Entry {
+                                key,
+                                key_span,
+                                value,
+                            },
+                        )?;
+                        if self.list_end(b'}')? {
+                            break;
                         }
                     }
-                    Value::Map(entries)
                 }
-                Some(b'[') => {
+                Value::Map(entries)
+            }
+            Some(b'[') => {
+                self.pos += 1;
+                let mut items = Vec::new();
+                self.ws();
+                if self.bytes.get(self.pos) == Some(&b']') {
                     self.pos += 1;
-                    let mut items = Vec::new();
-                    self.ws();
-                    if self.bytes.get(self.pos) == Some(&b']') {
-                        self.pos += 1;
-                    } else {
-                        loop {
-                            self.ws();
-                            items.push(self.value(depth + 1)?);
-                            if self.list_end(b']')? {
-                                break;
-                            }
+                } else {
+                    loop {
+                        self.ws();
+                        items.push(self.value(depth + 1)?);
+                        if self.list_end(b']')? {
+                            break;
                         }
                     }
-                    Value::Seq(items)
                 }
-                Some(b'"') => Value::Str(self.string()?),
-                Some(b't') if self.bytes[self.pos..].starts_with(b"true") => {
-                    self.pos += 4;
-                    Value::Bool(true)
-                }
-                Some(b'f') if self.bytes[self.pos..].starts_with(b"false") => {
-                    self.pos += 5;
-                    Value::Bool(false)
-                }
-                Some(b'n') if self.bytes[self.pos..].starts_with(b"null") => {
-                    self.pos += 4;
-                    Value::Null
-                }
-                Some(b'-' | b'0'..=b'9') => {
-                    while self.bytes.get(self.pos).is_some_and(|b| {
-                        matches!(b, b'-' | b'+' | b'.' | b'e' | b'E' | b'0'..=b'9')
-                    }) {
-                        self.pos += 1;
+                Value::Seq(items)
+            }
+            Some(b'"') => Value::Str(self.string()?),
+            Some(b't') if self.bytes[self.pos..].starts_with(b"true") => {
+                self.pos += 4;
+                Value::Bool(true)
+            }
+            Some(b'f') if self.bytes[self.pos..].starts_with(b"false") => {
+                self.pos += 5;
+                Value::Bool(false)
+            }
+            Some(b'n') if self.bytes[self.pos..].starts_with(b"null") => {
+                self.pos += 4;
+                Value::Null
+            }
+            Some(b'-' | b'0'..=b'9') => {
+                // JSON's grammar exactly (`-?(0|[1-9][0-9]*)(.[0-9]+)?([eE][+-]?[0-9]+)?`),
+                // as serde_json: the text is checked by this parser alone unless it fails
+                // (`json_check`). `1e999` is infinite here (the model says so, located).
+                let b = self.bytes;
+                let digits = |mut i: usize| {
+                    while b.get(i).is_some_and(u8::is_ascii_digit) {
+                        i += 1;
                     }
-                    let s = &self.text[start..self.pos];
-                    if s.contains(['.', 'e', 'E']) {
-                        match s.parse::<f64>() {
-                            Ok(f) => Value::Float(f),
-                            Err(_) => return Err(self.error("invalid number")),
-                        }
-                    } else {
-                        int_or_big(s.parse::<i64>().ok(), s)
-                    }
+                    i
+                };
+                let mut i = start + usize::from(b[start] == b'-');
+                let int_end = digits(i);
+                let mut float = false;
+                let mut ok = int_end > i && (b[i] != b'0' || int_end == i + 1);
+                i = int_end;
+                if ok && b.get(i) == Some(&b'.') {
+                    let e = digits(i + 1);
+                    ok = e > i + 1;
+                    (i, float) = (e, true);
                 }
-                _ => return Err(self.error("expected a value")),
-            };
+                if ok && matches!(b.get(i), Some(b'e' | b'E')) {
+                    let from = i + 1 + usize::from(matches!(b.get(i + 1), Some(b'+' | b'-')));
+                    let e = digits(from);
+                    ok = e > from;
+                    (i, float) = (e, true);
+                }
+                if !ok {
+                    self.pos = i;
+                    return Err(self.error("invalid number"));
+                }
+                self.pos = i;
+                let s = &self.text[start..self.pos];
+                if float {
+                    match s.parse::<f64>() {
+                        Ok(f) => Value::Float(f),
+                        Err(_) => return Err(self.error("invalid number")),
+                    }
+                } else {
+                    int_or_big(s.parse::<i64>().ok(), s)
+                }
+            }
+            _ => return Err(self.error("expected a value")),
+        };
         Ok(Node {
             span: start..self.pos,
             value,
@@ -1108,11 +1348,12 @@ impl<'a> JsonParser<'a> {
     fn string(&mut self) -> Result<Cow<'a, str>, LoadError> {
         self.eat(b'"')?;
         let start = self.pos;
-        // The common case: no escape, borrowed from the text.
+        // The common case: no escape, borrowed from the text. A control character is an
+        // error (as in serde_json).
         while self
             .bytes
             .get(self.pos)
-            .is_some_and(|&b| b != b'"' && b != b'\\')
+            .is_some_and(|&b| b != b'"' && b != b'\\' && b >= 0x20)
         {
             self.pos += 1;
         }
@@ -1131,7 +1372,7 @@ impl<'a> JsonParser<'a> {
             while self
                 .bytes
                 .get(self.pos)
-                .is_some_and(|&b| b != b'"' && b != b'\\')
+                .is_some_and(|&b| b != b'"' && b != b'\\' && b >= 0x20)
             {
                 self.pos += 1;
             }
@@ -1304,6 +1545,55 @@ mod tests {
             resolve_plain(Cow::Borrowed("100000000000000000000000")),
             Value::BigInt(_)
         ));
+    }
+
+    /// Mutated JSON: whatever serde_json refuses, the tree parser refuses too (the reader runs
+    /// serde_json's check only after an error).
+    #[test]
+    fn json_tree_parser_is_as_strict_as_serde_json() {
+        let base = r#"{"name": "a\u00e9", "frame": 1, "joints": [{"type": "R", "bodies": [1, 2], "axis": [0.5, -1e3, 2E+2]}, {"type": "P", "bodies": [2, 3], "driven": 1}], "expect": {"mobility": 0, "determined": true, "x": null}}"#;
+        let alphabet = b" \t\n{}[]:,.\"\\-+0123456789eEtrufalsn\x01";
+        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut refused = 0;
+        for _ in 0..6000 {
+            let mut bytes = base.as_bytes().to_vec();
+            for _ in 0..1 + next() % 2 {
+                let at = (next() % bytes.len() as u64) as usize;
+                let c = alphabet[(next() % alphabet.len() as u64) as usize];
+                match next() % 3 {
+                    0 => bytes[at] = c,
+                    1 => bytes.insert(at, c),
+                    _ => {
+                        bytes.remove(at);
+                    }
+                }
+            }
+            let Ok(text) = String::from_utf8(bytes) else {
+                continue;
+            };
+            if json_check(&text).is_ok() {
+                continue;
+            }
+            refused += 1;
+            let ours = parse_json_tree(&text).and_then(|(root, lazy)| {
+                let list = match root.value {
+                    Value::Map(es) => es
+                        .into_iter()
+                        .find(|e| matches!(e.value.value, Value::Deferred))
+                        .map_or(Value::Null, |e| e.value.value),
+                    _ => Value::Null,
+                };
+                lazy.for_each(list, &mut |_| Ok(()))
+            });
+            assert!(ours.is_err(), "accepted what serde_json refuses: {text:?}");
+        }
+        assert!(refused > 1000, "{refused}");
     }
 
     #[test]

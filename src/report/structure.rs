@@ -36,38 +36,48 @@ pub fn table(a: &Analysis) -> String {
         let _ = writeln!(out, "{}", g.line());
     }
     if !a.groups.is_empty() {
-        let mut t = super::new_table();
-        t.set_header(vec![
+        let rows: Vec<Vec<String>> = a
+            .groups
+            .iter()
+            .map(|g| {
+                vec![
+                    g.name.clone(),
+                    wrap(&g.bodies.join(","), ','),
+                    g.nm.to_string(),
+                    g.inputs.to_string(),
+                    g.level.to_string(),
+                    g.kind.clone(),
+                    wrap(&dash(&g.from), '.'),
+                    wrap(&dash(&g.internal), '.'),
+                    wrap(&dash(&g.to), '.'),
+                ]
+            })
+            .collect();
+        let header = [
             "SG", "bodies", "Nm", "inputs", "level", "type", "from", "internal", "to",
-        ]);
-        for g in &a.groups {
-            t.add_row(vec![
-                g.name.clone(),
-                wrap(&g.bodies.join(","), ','),
-                g.nm.to_string(),
-                g.inputs.to_string(),
-                g.level.to_string(),
-                g.kind.clone(),
-                wrap(&dash(&g.from), '.'),
-                wrap(&dash(&g.internal), '.'),
-                wrap(&dash(&g.to), '.'),
-            ]);
-        }
-        let _ = writeln!(out, "{t}");
-        let mut t = super::new_table();
-        t.set_header(vec![
+        ]
+        .map(String::from);
+        plain_table(&mut out, &header, &rows);
+        out.push('\n');
+        drop(rows);
+        let header = [
             "SG type".to_string(),
             "SGs".to_string(),
             format!("in library ({})", a.library),
-        ]);
-        for ty in &a.types {
-            t.add_row(vec![
-                ty.kind.clone(),
-                ty.count.to_string(),
-                if ty.in_library { "yes" } else { "no" }.to_string(),
-            ]);
-        }
-        let _ = writeln!(out, "{t}");
+        ];
+        let rows: Vec<Vec<String>> = a
+            .types
+            .iter()
+            .map(|ty| {
+                vec![
+                    ty.kind.clone(),
+                    ty.count.to_string(),
+                    if ty.in_library { "yes" } else { "no" }.to_string(),
+                ]
+            })
+            .collect();
+        plain_table(&mut out, &header, &rows);
+        out.push('\n');
     }
     if !a.unchecked.is_empty() {
         let sizes: Vec<String> = a
@@ -128,4 +138,112 @@ fn wrap(text: &str, sep: char) -> String {
         line += n;
     }
     out
+}
+
+/// Append `header` and `rows` as [`super::new_table`] renders them (without the final newline),
+/// writing the lines straight into `out`. comfy-table builds every padded line of every cell as
+/// its own string and measures each with Unicode segmentation: seconds and hundreds of
+/// megabytes for the 250,000 groups of a 10^6-body mechanism. Printable ASCII (the ids of
+/// every generated and bundled mechanism) is one column per byte, so the layout is computed
+/// directly; anything else (wide or combining characters, control characters) goes through
+/// comfy-table itself, so the bytes are the same either way.
+fn plain_table(out: &mut String, header: &[String], rows: &[Vec<String>]) {
+    let ncols = header.len();
+    let simple = |c: &String| c.bytes().all(|b| b == b'\n' || (0x20..0x7f).contains(&b));
+    let fits = header.iter().all(simple)
+        && rows
+            .iter()
+            .all(|r| r.len() == ncols && r.iter().all(simple));
+    let mut width = vec![1usize; ncols];
+    if fits {
+        for row in std::iter::once(header).chain(rows.iter().map(Vec::as_slice)) {
+            for (c, cell) in row.iter().enumerate() {
+                for line in cell.split('\n') {
+                    width[c] = width[c].max(line.len());
+                }
+            }
+        }
+    }
+    // comfy-table keeps widths in u16: leave such tables to it.
+    if !fits || width.iter().any(|&w| w + 2 > usize::from(u16::MAX)) {
+        let mut t = super::new_table();
+        t.set_header(header.to_vec());
+        for r in rows {
+            t.add_row(r.clone());
+        }
+        let _ = write!(out, "{t}");
+        return;
+    }
+    let rule: usize = width.iter().map(|w| w + 2).sum::<usize>() + ncols.saturating_sub(1);
+    let hr = |out: &mut String| out.extend(std::iter::repeat_n('─', rule));
+    let put_row = |out: &mut String, row: &[String]| {
+        let mut lines: Vec<std::str::Split<'_, char>> = row.iter().map(|c| c.split('\n')).collect();
+        let height = row.iter().map(|c| c.split('\n').count()).max().unwrap_or(0);
+        for _ in 0..height {
+            out.push('\n');
+            for (c, it) in lines.iter_mut().enumerate() {
+                if c > 0 {
+                    out.push(' ');
+                }
+                let text = it.next().unwrap_or("");
+                out.push(' ');
+                out.push_str(text);
+                out.extend(std::iter::repeat_n(' ', width[c] - text.len() + 1));
+            }
+        }
+    };
+    hr(out);
+    put_row(out, header);
+    out.push('\n');
+    hr(out);
+    for r in rows {
+        put_row(out, r);
+    }
+    out.push('\n');
+    hr(out);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn comfy(header: &[String], rows: &[Vec<String>]) -> String {
+        let mut t = crate::report::new_table();
+        t.set_header(header.to_vec());
+        for r in rows {
+            t.add_row(r.clone());
+        }
+        t.to_string()
+    }
+
+    #[test]
+    fn plain_table_is_comfy_table_byte_for_byte() {
+        let mut rng = crate::rng::SplitMix64::new(3);
+        let alphabet = ["a", "7", "&", ".", ",", "-", " ", "\n", "", "é", "漢", "\t"];
+        for round in 0..400 {
+            let ncols = 1 + rng.below(5) as usize;
+            let nrows = rng.below(6) as usize;
+            let ascii_only = round % 2 == 0;
+            let mut cell = || {
+                let n = rng.below(12) as usize;
+                (0..n)
+                    .map(|_| {
+                        let k = rng.below(if ascii_only { 9 } else { 12 }) as usize;
+                        alphabet[k]
+                    })
+                    .collect::<String>()
+            };
+            let header: Vec<String> = (0..ncols).map(|_| cell()).collect();
+            let rows: Vec<Vec<String>> = (0..nrows)
+                .map(|_| (0..ncols).map(|_| cell()).collect())
+                .collect();
+            let mut mine = String::new();
+            plain_table(&mut mine, &header, &rows);
+            assert_eq!(
+                mine,
+                comfy(&header, &rows),
+                "round {round}: {header:?} {rows:?}"
+            );
+        }
+    }
 }

@@ -539,6 +539,303 @@ fn elim_work(e: &Elimination) -> u64 {
     e.work()
 }
 
+/// The rank of `d` with the columns of some more matrices beside it (over GF(p)).
+fn rank_with(d: DMatrix<Fp>, more: [Option<&DMatrix<Fp>>; 2]) -> usize {
+    let extra: usize = more.iter().flatten().map(|m| m.ncols()).sum();
+    if extra == 0 {
+        return crate::exact::dense::rank(&d);
+    }
+    let (b, k) = d.shape();
+    let mut a = d.resize_horizontally(k + extra, Fp::ZERO);
+    let mut c = k;
+    for m in more.into_iter().flatten() {
+        a.view_mut((0, c), (b, m.ncols())).copy_from(m);
+        c += m.ncols();
+    }
+    crate::exact::dense::rank(&a)
+}
+
+/// Parts with more unknowns than this are analysed exactly when the realization is random
+/// ([`ExactPart`]); smaller ones by the floating-point elimination and dense motions.
+const EXACT_PART_COLUMNS: usize = 1800;
+
+/// The exact analysis of one part at a random realization, for parts too large for dense
+/// motions: the rank, the locked DOF of its joints and its rigid clusters, over GF(p), from
+/// the sparse exact factorization of its rows (B columns per body, its root and the frame
+/// fixed) and `B` random motions (vectors of its null space). Cost: the factorization plus
+/// `B` back substitutions, then linear in the part's pairs and bodies.
+///
+/// Why `B` random motions are enough: every decision is about a linear map from the motions
+/// to one body's (or one pair's) twists, of rank at most `B`: the rank of the relative twist
+/// of a pair (used DOF of its joint), whether the twist difference of two bodies lies in the
+/// span of their own isolated motions (rigid together). Such a map has the same rank on `B`
+/// random vectors of its domain, except with probability at most `B / p` (p = 2^61 − 1). The
+/// full null space (isolated motions included) gives the same spans as the reduced one plus
+/// each body's isolated motions (what the floating-point path adds explicitly).
+struct ExactPart<'a> {
+    part: &'a Part,
+    pairs: &'a [Pair],
+    models: &'a [JointModel],
+    rows: &'a [DMatrix<Fp>],
+    iso: &'a [DMatrix<f64>],
+    incident: &'a [Vec<usize>],
+    frame: usize,
+    b: usize,
+}
+
+impl ExactPart<'_> {
+    /// The part's pairs carrying its self-stresses
+    /// ([`crate::exact::models::pairs_stress_support`]).
+    fn stress_support(&self, meter: &mut Meter) -> Result<Vec<bool>, BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let mut local: BTreeMap<usize, usize> = BTreeMap::new();
+        for &x in &part.bodies {
+            if x != self.frame && x != part.root {
+                let g = local.len();
+                local.insert(x, g);
+            }
+        }
+        meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+        let list: Vec<(usize, usize, usize)> = part
+            .pairs
+            .iter()
+            .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
+            .collect();
+        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        Ok(crate::exact::models::pairs_stress_support(
+            b,
+            self.rows,
+            &list,
+            |x| local.get(&x).copied(),
+            local.len(),
+            0x7374_7265_7373 ^ seed,
+        ))
+    }
+
+    /// The rank and the part's local union-find (a parent per body of `part.bodies`, each
+    /// pointing to its cluster's smallest member); locked DOF are added to `locked`.
+    fn run(
+        &self,
+        budget: &Budget,
+        meter: &mut Meter,
+        locked: &mut BTreeMap<usize, usize>,
+    ) -> Result<(usize, Vec<usize>), BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let fixed = |x: usize| x == self.frame || x == part.root;
+        let mut local: BTreeMap<usize, usize> = BTreeMap::new();
+        for &x in &part.bodies {
+            if !fixed(x) {
+                let g = local.len();
+                local.insert(x, g);
+            }
+        }
+        let ng = local.len();
+        let k = b;
+        let nl = part.bodies.len();
+        let what = || {
+            format!(
+                "the geometric rigidity analysis (exact motions of one rigid block of {nl} \
+                 bodies over {} unknowns)",
+                ng * b
+            )
+        };
+        // The sampled motions and each body's twists over them (k · B field elements each).
+        budget.check_memory(((ng * b * k + nl * b * k) as u64).saturating_mul(8), what)?;
+        meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+        let factor = crate::exact::models::pairs_factor(
+            b,
+            ng,
+            self.rows,
+            part.pairs
+                .iter()
+                .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other)),
+            |x| local.get(&x).copied(),
+        );
+        let rank = factor.as_ref().map_or(0, |f| f.rank());
+        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        let mut rng = crate::rng::SplitMix64::new(0x6765_6f72_6967_6964 ^ seed);
+        let samples: Vec<Vec<Fp>> = match &factor {
+            Some(f) => {
+                meter.charge((f.stats().factor_entries as u64 + (ng * b) as u64) * k as u64)?;
+                f.random_null_vectors(k, &mut rng)
+            }
+            None => (0..k)
+                .map(|_| (0..ng * b).map(|_| Fp::random(&mut rng)).collect())
+                .collect(),
+        };
+        drop(factor);
+        // sig[li]: body li's twists over the k motions, motion after motion (zero if fixed).
+        let bk = b * k;
+        let mut sig = vec![Fp::ZERO; nl * bk];
+        for (li, &x) in part.bodies.iter().enumerate() {
+            if let Some(&g) = local.get(&x) {
+                for (j, v) in samples.iter().enumerate() {
+                    sig[li * bk + j * b..li * bk + (j + 1) * b]
+                        .copy_from_slice(&v[g * b..(g + 1) * b]);
+                }
+            }
+        }
+        drop(samples);
+        #[cfg(test)]
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (x, y) = (
+                part.bodies.binary_search(&p.hub).unwrap_or(0),
+                part.bodies.binary_search(&p.other).unwrap_or(0),
+            );
+            let r = &self.rows[p.joint];
+            for j in 0..k {
+                for i in 0..r.nrows() {
+                    let mut s = Fp::ZERO;
+                    for c in 0..b {
+                        s += r[(i, c)] * (sig[y * bk + j * b + c] - sig[x * bk + j * b + c]);
+                    }
+                    assert!(s.is_zero(), "pair {pi} motion {j} row {i}");
+                }
+            }
+        }
+        let sig_of = |li: usize| &sig[li * bk..(li + 1) * bk];
+        let diff = |x: usize, y: usize| {
+            let (sx, sy) = (sig_of(x), sig_of(y));
+            DMatrix::from_fn(b, k, |i, j| sx[j * b + i] - sy[j * b + i])
+        };
+        let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
+
+        // Each body's own isolated motions, exactly (bodies the floating-point analysis
+        // found some for: the null space of its joints' rows with its neighbours fixed).
+        let mut eiso: BTreeMap<usize, DMatrix<Fp>> = BTreeMap::new();
+        for (li, &x) in part.bodies.iter().enumerate() {
+            if self.iso[x].ncols() == 0 {
+                continue;
+            }
+            let nrows: usize = self.incident[x]
+                .iter()
+                .map(|&pi| self.rows[pairs[pi].joint].nrows())
+                .sum();
+            meter.charge((nrows * b * b) as u64)?;
+            let mut a = DMatrix::from_element(nrows, b, Fp::ZERO);
+            let mut r0 = 0;
+            for &pi in &self.incident[x] {
+                let r = &self.rows[pairs[pi].joint];
+                a.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
+                r0 += r.nrows();
+            }
+            let n = crate::exact::dense::null_space(&a);
+            if n.ncols() > 0 {
+                eiso.insert(li, n);
+            }
+        }
+        // Locked DOF per joint: its allowed DOF minus the rank of the relative twist, with
+        // both bodies' own isolated motions (those of a fixed body, the frame or the part's
+        // root, are not among the part's motions).
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k) as u64))?;
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (h, o) = (lidx(p.hub), lidx(p.other));
+            let used = rank_with(diff(o, h), [eiso.get(&h), eiso.get(&o)]);
+            let allowed = self.models[p.joint].twists.ncols();
+            *locked.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
+        }
+        // Rigid together: the twist difference lies in the span of both bodies' isolated
+        // motions, for every motion.
+        let same = |x: usize, y: usize| {
+            let d = diff(x, y);
+            let (ix, iy) = (eiso.get(&x), eiso.get(&y));
+            if ix.is_none() && iy.is_none() {
+                return d.iter().all(|v| v.is_zero());
+            }
+            rank_with(d, [ix, iy]) == rank_with(DMatrix::from_element(b, 0, Fp::ZERO), [ix, iy])
+        };
+        let mut luf: Vec<usize> = (0..nl).collect();
+        fn find(uf: &mut [usize], x: usize) -> usize {
+            let mut r = x;
+            while uf[r] != r {
+                r = uf[r];
+            }
+            let mut y = x;
+            while uf[y] != r {
+                let n = uf[y];
+                uf[y] = r;
+                y = n;
+            }
+            r
+        }
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k) as u64))?;
+        // Neighbours first (as the floating-point path does).
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (x, y) = (lidx(p.hub), lidx(p.other));
+            if same(x, y) {
+                let (a, c) = (find(&mut luf, x), find(&mut luf, y));
+                luf[a.max(c)] = a.min(c);
+            }
+        }
+        // Then any two clusters whose representatives move alike: without isolated motions
+        // that is equal twists, found by sorting (the floating-point path compares every two
+        // representatives); a representative with isolated motions of its own is compared
+        // with the representatives of the clusters that share a joint with it.
+        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
+        meter.charge((reps.len() as u64).saturating_mul((bk * 20) as u64))?;
+        let mut plain: Vec<usize> = reps
+            .iter()
+            .copied()
+            .filter(|x| !eiso.contains_key(x))
+            .collect();
+        plain.sort_by(|&x, &y| sig_of(x).cmp(sig_of(y)).then(x.cmp(&y)));
+        for w in plain.windows(2) {
+            if sig_of(w[0]) == sig_of(w[1]) {
+                let (a, c) = (find(&mut luf, w[0]), find(&mut luf, w[1]));
+                luf[a.max(c)] = a.min(c);
+            }
+        }
+        if !eiso.is_empty() {
+            // The bodies of each joint of the part (a multiple joint's bodies are not all
+            // pairs of each other).
+            let mut of_joint: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+            for &pi in &part.pairs {
+                let p = pairs[pi];
+                let v = of_joint.entry(p.joint).or_default();
+                v.push(lidx(p.hub));
+                v.push(lidx(p.other));
+            }
+            for _ in 0..4 {
+                let mut changed = false;
+                for members in of_joint.values() {
+                    let mut roots: Vec<usize> =
+                        members.iter().map(|&x| find(&mut luf, x)).collect();
+                    roots.sort_unstable();
+                    roots.dedup();
+                    if !roots.iter().any(|r| eiso.contains_key(r)) {
+                        continue;
+                    }
+                    meter.charge((roots.len() as u64).saturating_mul(roots.len() as u64 * 64))?;
+                    for i in 0..roots.len() {
+                        for j in 0..i {
+                            let (a, c) = (roots[j], roots[i]);
+                            if find(&mut luf, a) == a
+                                && find(&mut luf, c) == c
+                                && (eiso.contains_key(&a) || eiso.contains_key(&c))
+                                && same(a, c)
+                            {
+                                luf[c] = a;
+                                changed = true;
+                            }
+                        }
+                    }
+                }
+                if !changed {
+                    break;
+                }
+            }
+        }
+        for x in 0..nl {
+            let r = find(&mut luf, x);
+            luf[x] = r;
+        }
+        Ok((rank, luf))
+    }
+}
+
 /// A part of the Jacobian: the pairs of one biconnected block of the body graph, its bodies
 /// (ascending, root included) and its root (the body held fixed: the frame, or the block's
 /// cut body nearest the frame or the first body of a floating component).
@@ -696,7 +993,7 @@ pub fn analyze_within(
     opts: &GeometricOptions,
     budget: &Budget,
 ) -> Result<GeometricReport, GeometricError> {
-    analyze_split(m, opts, budget, ONE_PART_COLUMNS)
+    analyze_split(m, opts, budget, ONE_PART_COLUMNS, EXACT_PART_COLUMNS)
 }
 
 /// [`analyze_within`], analysing mechanisms of at most `one_part` unknowns as one part.
@@ -705,6 +1002,7 @@ fn analyze_split(
     opts: &GeometricOptions,
     budget: &Budget,
     one_part: usize,
+    exact_from: usize,
 ) -> Result<GeometricReport, GeometricError> {
     let real = motion::realization(m, opts.geometry, opts.precision)?;
     // Full (undriven) twists for loop spatiality, at the same geometry.
@@ -737,6 +1035,7 @@ fn analyze_split(
         budget,
         &mut meter,
         one_part,
+        exact_from,
     )
     .map_err(GeometricError::Budget)
 }
@@ -776,6 +1075,7 @@ fn analyze_models(
     budget: &Budget,
     meter: &mut Meter,
     one_part: usize,
+    exact_from: usize,
 ) -> Result<GeometricReport, BudgetExceeded> {
     let geometry = match used.seed {
         Some(seed) => format!("random (seed {seed})"),
@@ -922,6 +1222,94 @@ fn analyze_models(
         let prows: usize = blocks.iter().map(|x| x.mat.nrows()).sum();
         let dmin = lcols.saturating_sub(prows) as u64;
         let nv = part.bodies.len() as u64;
+        if let Some(rows) = exact
+            && lcols > exact_from
+        {
+            let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
+            for (g, &x) in lbody.iter().enumerate() {
+                lgroup.insert(x, g);
+            }
+            let ctx = ExactPart {
+                part,
+                pairs: &pairs,
+                models,
+                rows,
+                iso: &iso,
+                incident: &incident,
+                frame,
+                b,
+            };
+            let (r, luf) = ctx.run(budget, meter, &mut locked_by_joint)?;
+            let prow: usize = part
+                .pairs
+                .iter()
+                .map(|&pi| models[pairs[pi].joint].rows.nrows())
+                .sum();
+            if prow > r {
+                // The self-stresses live on the pairs a random exact self-stress reaches:
+                // the floating-point ones (for the joints' weights) come from those rows
+                // alone, whose left null space is the whole one's.
+                let support = ctx.stress_support(meter)?;
+                let sub = Part {
+                    root: part.root,
+                    pairs: part
+                        .pairs
+                        .iter()
+                        .zip(&support)
+                        .filter(|(_, s)| **s)
+                        .map(|(&pi, _)| pi)
+                        .collect(),
+                    bodies: Vec::new(),
+                };
+                let srows: usize = sub
+                    .pairs
+                    .iter()
+                    .map(|&pi| models[pairs[pi].joint].rows.nrows())
+                    .sum();
+                let mut sbodies: Vec<usize> = sub
+                    .pairs
+                    .iter()
+                    .flat_map(|&pi| [pairs[pi].hub, pairs[pi].other])
+                    .collect();
+                sbodies.sort_unstable();
+                sbodies.dedup();
+                let mut sgroup: BTreeMap<usize, usize> = BTreeMap::new();
+                for &x in &sbodies {
+                    if lgroup.contains_key(&x) {
+                        let g = sgroup.len();
+                        sgroup.insert(x, g);
+                    }
+                }
+                let sub = Part {
+                    bodies: sbodies,
+                    ..sub
+                };
+                let target = srows.saturating_sub(prow - r);
+                self_stresses(
+                    &sub,
+                    &pairs,
+                    models,
+                    &comp,
+                    &sgroup,
+                    sgroup.len(),
+                    target,
+                    base_abs,
+                    Some(target),
+                    budget,
+                    meter,
+                    &mut w,
+                )?;
+            }
+            rank += r;
+            float_rank += r;
+            for (x, &l) in luf.iter().enumerate() {
+                if l != x {
+                    let (a, c) = (find(&mut uf, part.bodies[l]), find(&mut uf, part.bodies[x]));
+                    uf[a.max(c)] = a.min(c);
+                }
+            }
+            continue;
+        }
         budget.check_memory(
             dmin.saturating_mul(lcols as u64 + nv * b as u64)
                 .saturating_mul(16),
@@ -1035,65 +1423,21 @@ fn analyze_models(
         let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
 
         // Left null space (self-stresses) by the same elimination on the transpose.
-        let prow: usize = part
-            .pairs
-            .iter()
-            .map(|&pi| models[pairs[pi].joint].rows.nrows())
-            .sum();
-        if prow > target.unwrap_or(elim.rank) {
-            let psizes: Vec<usize> = part
-                .pairs
-                .iter()
-                .map(|&pi| models[pairs[pi].joint].rows.nrows())
-                .collect();
-            let mut poff = Vec::new();
-            let mut acc = 0;
-            for &s in &psizes {
-                poff.push(acc);
-                acc += s;
-            }
-            let mut linc: Vec<Vec<usize>> = vec![Vec::new(); lbody.len()];
-            for (lp, &pi) in part.pairs.iter().enumerate() {
-                for x in [pairs[pi].hub, pairs[pi].other] {
-                    if let Some(&g) = lgroup.get(&x)
-                        && linc[g].last() != Some(&lp)
-                    {
-                        linc[g].push(lp);
-                    }
-                }
-            }
-            let mut tblocks = Vec::new();
-            for (g, &body) in lbody.iter().enumerate() {
-                let s = comp[body].ncols();
-                let ps = std::mem::take(&mut linc[g]);
-                let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
-                let mut mat = DMatrix::zeros(s, width);
-                let mut c = 0;
-                for &lp in &ps {
-                    let blk = pair_block(&pairs, models, &comp, part.pairs[lp], body).transpose();
-                    mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
-                    c += blk.ncols();
-                }
-                tblocks.push(Block { groups: ps, mat });
-            }
-            let telim = eliminate(&psizes, tblocks, abs_tol, budget, part.bodies.len() as u64)?;
-            meter.charge(elim_work(&telim))?;
-            let e = prow.saturating_sub(telim.rank) as u64;
-            budget.check_memory(e.saturating_mul(prow as u64).saturating_mul(16), || {
-                format!(
-                    "the geometric rigidity analysis ({e} self-stresses over {prow} constraint \
-                     rows in one rigid block)"
-                )
-            })?;
-            meter.charge(e.saturating_mul(e).saturating_mul(prow as u64))?;
-            let stresses = orthonormalize(telim.null_space());
-            for y in &stresses {
-                for (lp, &pi) in part.pairs.iter().enumerate() {
-                    let s = y.rows(poff[lp], psizes[lp]).norm_squared();
-                    *w.entry(pairs[pi].joint).or_insert(0.0) += s;
-                }
-            }
-        }
+        let rank_here = target.unwrap_or(elim.rank);
+        self_stresses(
+            part,
+            &pairs,
+            models,
+            &comp,
+            &lgroup,
+            lbody.len(),
+            rank_here,
+            abs_tol,
+            None,
+            budget,
+            meter,
+            &mut w,
+        )?;
 
         // Locked DOF per joint: allowed dimension minus the rank used over all motions.
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * (d + 2 * b)) as u64))?;
@@ -1518,6 +1862,104 @@ fn analyze_models(
     })
 }
 
+/// The self-stresses of a part (the left null space of its rows, by the elimination on the
+/// transpose with the pairs as unknowns, orthonormalized), each joint's share of them added
+/// to `w`. With `retry`, the threshold moves (as for the motions) until the elimination's
+/// rank is that number, the rank decided exactly.
+#[allow(clippy::too_many_arguments)]
+fn self_stresses(
+    part: &Part,
+    pairs: &[Pair],
+    models: &[JointModel],
+    comp: &[DMatrix<f64>],
+    lgroup: &BTreeMap<usize, usize>,
+    ngroups: usize,
+    rank: usize,
+    abs_tol: f64,
+    retry: Option<usize>,
+    budget: &Budget,
+    meter: &mut Meter,
+    w: &mut BTreeMap<usize, f64>,
+) -> Result<(), BudgetExceeded> {
+    let prow: usize = part
+        .pairs
+        .iter()
+        .map(|&pi| models[pairs[pi].joint].rows.nrows())
+        .sum();
+    if prow <= rank {
+        return Ok(());
+    }
+    let psizes: Vec<usize> = part
+        .pairs
+        .iter()
+        .map(|&pi| models[pairs[pi].joint].rows.nrows())
+        .collect();
+    let mut poff = Vec::new();
+    let mut acc = 0;
+    for &s in &psizes {
+        poff.push(acc);
+        acc += s;
+    }
+    let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
+    for (lp, &pi) in part.pairs.iter().enumerate() {
+        for x in [pairs[pi].hub, pairs[pi].other] {
+            if let Some(&g) = lgroup.get(&x)
+                && linc[g].last() != Some(&lp)
+            {
+                linc[g].push(lp);
+            }
+        }
+    }
+    let mut tblocks = Vec::new();
+    let mut gbodies: Vec<(usize, usize)> = lgroup.iter().map(|(&x, &g)| (g, x)).collect();
+    gbodies.sort_unstable();
+    for &(g, body) in &gbodies {
+        let s = comp[body].ncols();
+        let ps = std::mem::take(&mut linc[g]);
+        let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+        let mut mat = DMatrix::zeros(s, width);
+        let mut c = 0;
+        for &lp in &ps {
+            let blk = pair_block(pairs, models, comp, part.pairs[lp], body).transpose();
+            mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+            c += blk.ncols();
+        }
+        tblocks.push(Block { groups: ps, mat });
+    }
+    let nv = part.bodies.len() as u64;
+    let mut telim = eliminate(&psizes, tblocks.clone(), abs_tol, budget, nv)?;
+    meter.charge(elim_work(&telim))?;
+    if let Some(target) = retry {
+        let mut tries = 0;
+        while telim.rank != target && tries < 16 {
+            tries += 1;
+            let t = if telim.rank > target {
+                telim.kept_min * (1.0 + 1e-9)
+            } else {
+                telim.dropped_max * (1.0 - 1e-9)
+            };
+            telim = eliminate(&psizes, tblocks.clone(), t, budget, nv)?;
+            meter.charge(elim_work(&telim))?;
+        }
+    }
+    let e = prow.saturating_sub(telim.rank) as u64;
+    budget.check_memory(e.saturating_mul(prow as u64).saturating_mul(16), || {
+        format!(
+            "the geometric rigidity analysis ({e} self-stresses over {prow} constraint rows in \
+             one rigid block)"
+        )
+    })?;
+    meter.charge(e.saturating_mul(e).saturating_mul(prow as u64))?;
+    let stresses = orthonormalize(telim.null_space());
+    for y in &stresses {
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            let s = y.rows(poff[lp], psizes[lp]).norm_squared();
+            *w.entry(pairs[pi].joint).or_insert(0.0) += s;
+        }
+    }
+    Ok(())
+}
+
 /// [`Elimination::run`] within the memory budget: fill-in on a large, densely coupled block
 /// can exceed any estimate made before eliminating, so the elimination stops itself. It may
 /// hold half the memory limit: the blocks it eliminates (and their copy kept for a retry at
@@ -1553,8 +1995,8 @@ mod tests {
 
     /// The block-by-block path agrees with the whole-Jacobian one on every number and list.
     fn same_both_ways(m: &Mechanism, opts: &GeometricOptions) {
-        let whole = analyze_split(m, opts, &Budget::UNLIMITED, usize::MAX);
-        let split = analyze_split(m, opts, &Budget::UNLIMITED, 0);
+        let whole = analyze_split(m, opts, &Budget::UNLIMITED, usize::MAX, usize::MAX);
+        let split = analyze_split(m, opts, &Budget::UNLIMITED, 0, usize::MAX);
         let (whole, split) = match (whole, split) {
             (Ok(a), Ok(b)) => (a, b),
             (Err(a), Err(b)) => {
@@ -1622,5 +2064,130 @@ mod tests {
         for m in &ms {
             same_both_ways(m, &GeometricOptions::default());
         }
+    }
+
+    /// The exact path (every part, however small) agrees with the floating-point one on
+    /// every answer: rank, mobility, redundancy and the redundant joints, locked DOF,
+    /// isolated motions, rigid clusters.
+    fn exact_path_agrees(m: &Mechanism, opts: &GeometricOptions) -> usize {
+        let mut compared = 0;
+        for one_part in [usize::MAX, 0] {
+            let float = analyze_split(m, opts, &Budget::UNLIMITED, one_part, usize::MAX);
+            let exact = analyze_split(m, opts, &Budget::UNLIMITED, one_part, 0);
+            let (float, exact) = match (float, exact) {
+                (Ok(a), Ok(b)) => (a, b),
+                (Err(a), Err(b)) => {
+                    assert_eq!(a, b);
+                    continue;
+                }
+                (a, b) => panic!("{}: {a:?} vs {b:?}", m.name),
+            };
+            let n = &m.name;
+            assert_eq!(float.rank, exact.rank, "{n}");
+            assert_eq!(float.mobility, exact.mobility, "{n}");
+            assert_eq!(float.redundant, exact.redundant, "{n}");
+            // The floating-point motions are only compared when they are reliable: the
+            // elimination kept exactly the rank decided exactly, without a warning.
+            let reliable = float.numeric.warning.is_none()
+                && float
+                    .numeric
+                    .exact
+                    .as_deref()
+                    .is_some_and(|e| !e.contains("approximate"));
+            if !reliable {
+                continue;
+            }
+            let only = |a: &Vec<JointCount>, b: &Vec<JointCount>| {
+                a.iter()
+                    .filter(|x| !b.contains(x))
+                    .cloned()
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                float.locked_joints,
+                exact.locked_joints,
+                "{n} ({one_part}): float only {:?}, exact only {:?}",
+                only(&float.locked_joints, &exact.locked_joints),
+                only(&exact.locked_joints, &float.locked_joints)
+            );
+            assert_eq!(float.isolated_motions, exact.isolated_motions, "{n}");
+            let onlyr = |a: &Vec<RigidCluster>, b: &Vec<RigidCluster>| {
+                a.iter()
+                    .filter(|x| !b.contains(x))
+                    .cloned()
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                float.rigid,
+                exact.rigid,
+                "{n} ({one_part}): float only {:?}, exact only {:?}",
+                onlyr(&float.rigid, &exact.rigid),
+                onlyr(&exact.rigid, &float.rigid)
+            );
+            let joints = |r: &GeometricReport| {
+                let mut v: Vec<String> =
+                    r.redundant_joints.iter().map(|j| j.joint.clone()).collect();
+                v.sort();
+                v
+            };
+            assert_eq!(joints(&float), joints(&exact), "{n}");
+            for (a, b) in float.redundant_joints.iter().zip(&exact.redundant_joints) {
+                if a.joint == b.joint {
+                    assert!((a.weight - b.weight).abs() < 1e-4, "{n}: {a:?} {b:?}");
+                }
+            }
+            compared += 1;
+        }
+        compared
+    }
+
+    #[test]
+    fn exact_path_agrees_on_the_examples() {
+        let mut compared = 0;
+        for name in crate::examples::names() {
+            let Some((file, text)) = crate::examples::find(name) else {
+                continue;
+            };
+            let Ok(m) = crate::format::load(file, text, crate::format::Format::sniff(text)) else {
+                continue;
+            };
+            if m.bodies.len() > 60 {
+                continue;
+            }
+            for seed in [1, 3] {
+                let opts = GeometricOptions {
+                    geometry: GeometrySource::Random { seed },
+                    ..Default::default()
+                };
+                compared += exact_path_agrees(&m, &opts);
+            }
+        }
+        assert!(compared >= 40, "{compared} comparisons");
+    }
+
+    #[test]
+    fn exact_path_agrees_on_random_mechanisms() {
+        let mut ms = vec![generate::stewart_stack(2).expect("small")];
+        for seed in 0..12 {
+            ms.push(generate::assur(1 + seed % 2, 6, seed as u64, Variant::A).expect("small"));
+            ms.push(generate::assur_spatial(2, 3, seed as u64, Variant::B).expect("small"));
+            ms.push(
+                generate::random(40, seed % 2 == 0, seed as u64)
+                    .expect("small")
+                    .0,
+            );
+            ms.push(
+                generate::random(120, seed % 2 == 1, seed as u64 + 100)
+                    .expect("small")
+                    .0,
+            );
+        }
+        let mut compared = 0;
+        for m in &ms {
+            compared += exact_path_agrees(m, &GeometricOptions::default());
+        }
+        // Most cases have reliable floating-point motions (those that do not are a reason
+        // for the exact path: the float elimination misses one pivot there).
+        assert!(compared >= 80, "{compared} of {} comparisons", 2 * ms.len());
     }
 }

@@ -31,6 +31,9 @@ pub(crate) struct Equations {
     pub elements: Vec<usize>,
     /// Number of bodies (element nodes come after them).
     pub bodies: usize,
+    /// A flow to start the maximum flow from (units of each pair into its hub and its other
+    /// node), or empty. Only a warm start: the decomposition is the same without it.
+    pub hint: Vec<[u32; 2]>,
 }
 
 impl Equations {
@@ -48,6 +51,7 @@ impl Equations {
             nodes: nb,
             elements: Vec::new(),
             bodies: nb,
+            hint: Vec::new(),
         };
         for (ji, j) in m.joints.iter().enumerate() {
             let k = j.grade();
@@ -207,6 +211,17 @@ pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposit
         }
     }
     let mut net = Network::new(2 + ne + nb, &edges);
+    if eqs.hint.len() == ne {
+        let mut start = Vec::new();
+        for (e, h) in eqs.hint.iter().enumerate() {
+            for (x, &d) in eqs.bodies(e).into_iter().zip(h) {
+                if x != m.frame && d > 0 {
+                    start.push((eq_node(e), body_node(x), d));
+                }
+            }
+        }
+        net.warm(src, sink, &start);
+    }
     net.max_flow(src, sink);
 
     // Read the flow back.

@@ -76,6 +76,39 @@ impl Network {
         self.cap[self.rev[e] as usize]
     }
 
+    /// Warm start for a three-layer network (s → left → right → t): push up to `d` units
+    /// along s-u-v-t for each `(u, v, d)`, as capacity allows. A maximum flow from there is a
+    /// maximum flow all the same (only the work to reach it changes).
+    pub(crate) fn warm(&mut self, s: usize, t: usize, paths: &[(usize, usize, u32)]) {
+        let n = self.nodes();
+        let mut from_s = vec![usize::MAX; n];
+        for e in self.edges(s) {
+            from_s[self.to[e] as usize] = e;
+        }
+        let mut to_t = vec![usize::MAX; n];
+        for e in self.edges(t) {
+            to_t[self.to[e] as usize] = self.rev[e] as usize;
+        }
+        for &(u, v, d) in paths {
+            let (e0, e2) = (from_s[u], to_t[v]);
+            if e0 == usize::MAX || e2 == usize::MAX {
+                continue;
+            }
+            // The forward edge u → v (only forward edges leave a left node towards the right).
+            let Some(e1) = self.edges(u).find(|&e| self.to[e] as usize == v) else {
+                continue;
+            };
+            let d = d.min(self.cap[e0]).min(self.cap[e1]).min(self.cap[e2]);
+            if d == 0 {
+                continue;
+            }
+            for e in [e0, e1, e2] {
+                self.cap[e] -= d;
+                self.cap[self.rev[e] as usize] += d;
+            }
+        }
+    }
+
     /// Greedy start for a three-layer network (s → left → right → t): push along every
     /// s-u-v-t path while capacity remains. On mechanisms listed in build order this finds
     /// almost all the flow, leaving few and short augmenting paths.

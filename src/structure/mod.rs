@@ -285,7 +285,28 @@ pub struct GenericAnswer {
 /// Analyse the structure of `m`. Errors: the file geometry asked for (`--geometry file`) is
 /// missing or unusable (a joint model cannot be built).
 pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
-    let mut a = analyze_once(m, opts, lib)?;
+    analyze_cached(m, opts, lib, None, None)
+}
+
+/// What [`analyze_cached`] keeps between analyses of one mechanism under different inputs.
+pub type AnalysisCache = rank::Cache;
+
+/// [`analyze`], reusing the rank check's factorizations from earlier analyses of the same
+/// mechanism (other inputs) kept in `cache`, and starting the maximum flow from `flow` (per
+/// joint, the units of its equations and inputs routed into its first and its second body,
+/// as `mbsa transform`'s search has them; binary joints only). The groups, levels, types and
+/// the verdict are the same as without them (the decomposition does not depend on which
+/// maximum flow is found); only the lists of unsaturated pairs and short bodies of a mechanism
+/// that is not determined name one maximum flow's choice. Used by `mbsa transform`, which
+/// analyses many placements of one mechanism.
+pub fn analyze_cached(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+) -> Result<Analysis, MotionError> {
+    let mut a = analyze_once(m, opts, lib, cache, flow)?;
     // At the file's configuration, say what generic geometry would give when it differs.
     if let Some(used) = &a.geometry
         && used.is_file()
@@ -295,7 +316,7 @@ pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis,
             geometry: GeometrySource::Random { seed: 0 },
             ..*opts
         };
-        let g = analyze_once(m, &generic, lib)?;
+        let g = analyze_once(m, &generic, lib, cache, flow)?;
         let differs = g.status != a.status
             || g.groups.len() != a.groups.len()
             || g.uncontrolled != a.uncontrolled;
@@ -357,8 +378,26 @@ fn status_word(s: Status) -> &'static str {
     }
 }
 
-fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis, MotionError> {
+fn analyze_once(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+) -> Result<Analysis, MotionError> {
     let mut eqs = Equations::of(m);
+    if let Some(f) = flow {
+        eqs.hint = (0..eqs.len())
+            .map(|e| {
+                let j = eqs.joint[e];
+                let binary = m.joints.get(j).is_some_and(|j| j.bodies.len() == 2);
+                match f.get(j) {
+                    Some(&[a, c]) if binary && !eqs.input_only[e] => [u32::from(a), u32::from(c)],
+                    _ => [0, 0],
+                }
+            })
+            .collect();
+    }
     let mut u = eqs.unknowns(m);
     let mut isolated = Vec::new();
     let mut redundant = Vec::new();
@@ -378,7 +417,7 @@ fn analyze_once(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis
                     .collect(),
             );
         }
-        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u);
+        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache);
         geometry = Some(used);
         isolated = r.isolated;
         redundant = r.redundant;
@@ -428,7 +467,11 @@ fn build(
     twists: Option<&[nalgebra::DMatrix<f64>]>,
 ) -> Analysis {
     let nb = eqs.nodes;
-    let id = |b: usize| m.body_id(b).to_string();
+    let id = |b: usize| {
+        let mut s = String::new();
+        push_id(&mut s, m.body_id(b));
+        s
+    };
     // Solve-order key of every body: frame and over-determined part are known first, groups in
     // canonical order, the under-determined part (or unsolved bodies) last.
     let mut key = vec![i64::MAX; nb];
@@ -584,7 +627,11 @@ fn build(
             let mut s = String::with_capacity(list.len() * 8);
             for &(i, j, e) in list.iter() {
                 // Writing into a String cannot fail.
-                let _ = write!(s, "{}&{}{}.", m.body_id(i), m.body_id(j), code(e));
+                push_id(&mut s, m.body_id(i));
+                s.push('&');
+                push_id(&mut s, m.body_id(j));
+                s.push_str(code(e));
+                s.push('.');
             }
             s
         };
@@ -861,12 +908,15 @@ fn diagnose(
             .map(id)
             .collect();
         let mut cands: Vec<usize> = Vec::new();
+        // The element node of each multiple joint (a search per joint was quadratic).
+        let mut element_of = vec![usize::MAX; m.joints.len()];
+        for (i, &ji) in eqs.elements.iter().enumerate().rev() {
+            element_of[ji] = i;
+        }
         for (ji, j) in m.joints.iter().enumerate() {
             let spare = j.driven < j.grade() * j.pairs();
-            let element_in = eqs
-                .elements
-                .iter()
-                .position(|&x| x == ji)
+            let element_in = (element_of[ji] != usize::MAX)
+                .then_some(element_of[ji])
                 .is_some_and(|i| in_part[eqs.bodies + i]);
             if spare && (element_in || j.bodies.iter().any(|&b| in_part[b])) {
                 cands.push(ji);
@@ -908,6 +958,33 @@ fn diagnose(
     d
 }
 
+/// Append a body id as `Display` writes it, without the formatting machinery (the group
+/// lists of a 10^6-body mechanism write millions of ids).
+fn push_id(s: &mut String, id: &crate::mechanism::BodyId) {
+    match id {
+        crate::mechanism::BodyId::Int(i) => {
+            let mut buf = [0u8; 20];
+            let mut k = buf.len();
+            let mut v = i.unsigned_abs();
+            loop {
+                k -= 1;
+                buf[k] = b'0' + (v % 10) as u8;
+                v /= 10;
+                if v == 0 {
+                    break;
+                }
+            }
+            if *i < 0 {
+                s.push('-');
+            }
+            for &d in &buf[k..] {
+                s.push(char::from(d));
+            }
+        }
+        crate::mechanism::BodyId::Name(n) => s.push_str(n),
+    }
+}
+
 /// Upper-case Roman numeral (1 → `I`); plain digits beyond 3999.
 fn roman(mut n: usize) -> String {
     if n == 0 || n > 3999 {
@@ -936,4 +1013,47 @@ fn roman(mut n: usize) -> String {
         }
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    /// Scale regression: the rank check decomposes the whole mechanism once per round, and a
+    /// round lowers every deficient group it meets. The check before ran one round per
+    /// redundancy (9 here, 38 on the same family at 10^5 bodies): quadratic.
+    #[test]
+    fn rank_check_rounds_do_not_grow_with_redundancies() {
+        let (m, _) = crate::generate::random(20_000, false, 3).expect("valid parameters");
+        let mut eqs = super::Equations::of(&m);
+        let mut u = eqs.unknowns(&m);
+        let (geoms, used) =
+            super::motion::geometries(&m, super::GeometrySource::Random { seed: 0 }, None)
+                .expect("random geometry");
+        let r = super::rank::check(&m, &geoms, &used, &mut eqs, &mut u, None);
+        assert!(r.redundant.len() >= 5, "{} redundancies", r.redundant.len());
+        assert!(
+            r.rounds <= 3,
+            "{} rounds for {} redundancies",
+            r.rounds,
+            r.redundant.len()
+        );
+    }
+
+    #[test]
+    fn push_id_writes_what_display_writes() {
+        use crate::mechanism::BodyId;
+        for id in [
+            BodyId::Int(0),
+            BodyId::Int(7),
+            BodyId::Int(-13),
+            BodyId::Int(1_000_000),
+            BodyId::Int(i64::MAX),
+            BodyId::Int(i64::MIN),
+            BodyId::Name("crank".into()),
+            BodyId::Name(String::new()),
+        ] {
+            let mut s = String::from("x");
+            super::push_id(&mut s, &id);
+            assert_eq!(s, format!("x{id}"));
+        }
+    }
 }
