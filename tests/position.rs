@@ -1147,7 +1147,8 @@ fn n_four_bar_40_singular_pose_planar_over_seeds() {
 }
 
 /// Measurement, not a check: the finite mobility of the N = 40 singular pose at the seeds in
-/// `MBSA_SEEDS` (default 0..=5), both files, one line per run.
+/// `MBSA_SEEDS` (default 0..=5), the files in `MBSA_FILES` (default both), one line per run;
+/// `MBSA_SAMPLES=0` turns the nearby samples (and so the curve guard) off: slicing alone.
 #[test]
 #[ignore = "measurement: run with --release --ignored --nocapture"]
 fn n_four_bar_40_seed_survey() {
@@ -1158,6 +1159,10 @@ fn n_four_bar_40_seed_survey() {
         .collect();
     let files =
         std::env::var("MBSA_FILES").unwrap_or_else(|_| "n-four-bar-40,n-four-bar-40-3d".into());
+    let samples = std::env::var("MBSA_SAMPLES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(FiniteOptions::default().samples);
     for name in files.split(',') {
         let (m, cfg) = n_four_bar_40_singular(name);
         for &seed in &seeds {
@@ -1167,16 +1172,20 @@ fn n_four_bar_40_seed_survey() {
                 &cfg,
                 &FiniteOptions {
                     seed,
+                    samples,
                     ..FiniteOptions::default()
                 },
             )
             .unwrap();
             eprintln!(
-                "{name} seed {seed}: first order {} finite {} samples {:?} notes {} ({:.1} s)",
+                "{name} seed {seed}: first order {} finite {} samples {:?} notes {:?} ({:.1} s)",
                 f.first_order,
                 f.finite,
                 f.samples,
-                f.notes.len(),
+                f.notes
+                    .iter()
+                    .map(|n| n.split(':').next().unwrap_or(""))
+                    .collect::<Vec<_>>(),
                 t.elapsed().as_secs_f64()
             );
         }
