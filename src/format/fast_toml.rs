@@ -427,30 +427,8 @@ mod tests {
         let base = format!("{SAMPLE}{}", &generated[joints..]);
         assert!(agrees(&base));
         let alphabet = b" \t\n\r#[]{}=,.\"'\\-+_0123456789eExjointrue";
-        let mut state: u64 = 0x9E37_79B9_7F4A_7C15;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
         let mut read = 0;
-        for _ in 0..4000 {
-            let mut bytes = base.clone().into_bytes();
-            for _ in 0..1 + next() % 3 {
-                let at = (next() % bytes.len() as u64) as usize;
-                let c = alphabet[(next() % alphabet.len() as u64) as usize];
-                match next() % 3 {
-                    0 => bytes[at] = c,
-                    1 => bytes.insert(at, c),
-                    _ => {
-                        bytes.remove(at);
-                    }
-                }
-            }
-            let Ok(text) = String::from_utf8(bytes) else {
-                continue;
-            };
+        for text in crate::format::mutated_texts(&base, alphabet, 0x9E37_79B9_7F4A_7C15, 4000, 3) {
             if agrees(&text) {
                 read += 1;
             }

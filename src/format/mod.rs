@@ -249,3 +249,42 @@ fn default_name(source_name: &str) -> String {
 
 #[cfg(test)]
 mod tests;
+
+/// Mutated copies of `base` for the reader's tests: `count` texts, each with 1 to
+/// `max_edits` random one-byte edits (replace, insert or remove, from `alphabet`), drawn by
+/// a xorshift stream from `seed`; texts that are not UTF-8 are skipped.
+#[cfg(test)]
+pub(crate) fn mutated_texts(
+    base: &str,
+    alphabet: &[u8],
+    seed: u64,
+    count: usize,
+    max_edits: u64,
+) -> Vec<String> {
+    let mut state = seed;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut out = Vec::new();
+    for _ in 0..count {
+        let mut bytes = base.as_bytes().to_vec();
+        for _ in 0..1 + next() % max_edits {
+            let at = (next() % bytes.len() as u64) as usize;
+            let c = alphabet[(next() % alphabet.len() as u64) as usize];
+            match next() % 3 {
+                0 => bytes[at] = c,
+                1 => bytes.insert(at, c),
+                _ => {
+                    bytes.remove(at);
+                }
+            }
+        }
+        if let Ok(text) = String::from_utf8(bytes) {
+            out.push(text);
+        }
+    }
+    out
+}

@@ -1553,30 +1553,8 @@ mod tests {
     fn json_tree_parser_is_as_strict_as_serde_json() {
         let base = r#"{"name": "a\u00e9", "frame": 1, "joints": [{"type": "R", "bodies": [1, 2], "axis": [0.5, -1e3, 2E+2]}, {"type": "P", "bodies": [2, 3], "driven": 1}], "expect": {"mobility": 0, "determined": true, "x": null}}"#;
         let alphabet = b" \t\n{}[]:,.\"\\-+0123456789eEtrufalsn\x01";
-        let mut state: u64 = 0x2545_F491_4F6C_DD1D;
-        let mut next = || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            state
-        };
         let mut refused = 0;
-        for _ in 0..6000 {
-            let mut bytes = base.as_bytes().to_vec();
-            for _ in 0..1 + next() % 2 {
-                let at = (next() % bytes.len() as u64) as usize;
-                let c = alphabet[(next() % alphabet.len() as u64) as usize];
-                match next() % 3 {
-                    0 => bytes[at] = c,
-                    1 => bytes.insert(at, c),
-                    _ => {
-                        bytes.remove(at);
-                    }
-                }
-            }
-            let Ok(text) = String::from_utf8(bytes) else {
-                continue;
-            };
+        for text in crate::format::mutated_texts(base, alphabet, 0x2545_F491_4F6C_DD1D, 6000, 2) {
             if json_check(&text).is_ok() {
                 continue;
             }
