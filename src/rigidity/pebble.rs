@@ -325,6 +325,15 @@ struct Fast {
     qmark: Vec<u32>,
     fmark: Vec<u32>,
     qepoch: u32,
+    /// When not u32::MAX, searches take a pebble from this vertex only.
+    only: u32,
+    /// Position of each vertex in the insertion order (searches try lower ones first).
+    rank: Vec<u32>,
+    /// Pebble moves kept for undoing, while `recording`: (source, target, start in `log`), and
+    /// the bars each move turned round.
+    moves: Vec<(u32, u32, u32)>,
+    log: Vec<u32>,
+    recording: bool,
     /// Whether some contraction made a rigid set of at least two bodies but not all of them
     /// (it stays rigid as bars are added: a proper rigid sub-chain).
     proper: bool,
@@ -356,6 +365,11 @@ impl Fast {
             qmark: vec![0; n],
             fmark: vec![0; n],
             qepoch: 0,
+            rank: vec![u32::MAX; n],
+            only: u32::MAX,
+            moves: Vec::new(),
+            log: Vec::new(),
+            recording: false,
             proper: false,
             work: 0,
         }
@@ -369,10 +383,62 @@ impl Fast {
     fn may_be_tight(&self, x: u32, y: u32) -> bool {
         let short = |z: u32| self.degree(z) < self.weight[z as usize] as usize;
         let thin_body = |z: u32| self.is_body(z) && self.degree(z) < self.l as usize;
+        let full_body = |z: u32| {
+            self.is_body(z) && self.degree(z) == self.l as usize && self.beside_two_bodies(z)
+        };
         !(short(x)
             || short(y)
             || (thin_body(x) && self.is_body(y))
-            || (thin_body(y) && self.is_body(x)))
+            || (thin_body(y) && self.is_body(x))
+            || full_body(x)
+            || full_body(y))
+    }
+
+    /// An end of the bar x–y that can take it without a search: a vertex `t` with fewer bars
+    /// than its weight makes the bar independent whatever the rest of the graph (any bar set
+    /// E′ through the new bar either has bars away from t, at most w(V′ − t) − B of them,
+    /// plus at most w(t) at t, or is a star at t, whose bars to each neighbour stay within
+    /// that neighbour's weight), and t has a free pebble to spend on it. Returns (tail, head):
+    /// the end with more spare bars, the later vertex in the insertion order as a rule.
+    fn fresh_end(&self, x: u32, y: u32) -> Option<(u32, u32)> {
+        let spare = |t: u32| (self.weight[t as usize] as usize).saturating_sub(self.degree(t));
+        let fits = |t: u32, h: u32| {
+            spare(t) > 0
+                && (!self.is_body(t)
+                    || self.is_body(h)
+                    || self.bars_between(h, t) < self.weight[h as usize] as usize)
+        };
+        let (a, b) = if spare(x) >= spare(y) { (x, y) } else { (y, x) };
+        if fits(a, b) {
+            Some((a, b))
+        } else if fits(b, a) {
+            Some((b, a))
+        } else {
+            None
+        }
+    }
+
+    /// Whether body `z`, with at most B bars, has two different (super-)bodies beside it. Then
+    /// no tight set holds z with another vertex: it would hold all of z's bars (a vertex
+    /// carries at least its weight of bars inside a tight set), so the rest would be a
+    /// tight set with two super-bodies before this bar (the game contracts every such set as
+    /// it forms), or a bar-free set of weight B.
+    fn beside_two_bodies(&self, z: u32) -> bool {
+        let mut first: Option<u32> = None;
+        let ends = self.out[z as usize]
+            .iter()
+            .map(|&b| self.head[b as usize])
+            .chain(self.inn[z as usize].iter().map(|&b| self.tail[b as usize]));
+        for y in ends {
+            if self.is_body(y) {
+                match first {
+                    None => first = Some(y),
+                    Some(f) if f != y => return true,
+                    Some(_) => {}
+                }
+            }
+        }
+        false
     }
 
     /// Bars at vertex `x` in the contracted graph.
@@ -480,13 +546,23 @@ impl Fast {
                 self.mark[y as usize] = e;
                 self.from[y as usize] = bar;
                 self.visited.push(y);
-                if y != a && y != b && self.peb[y as usize] > 0 {
+                if y != a
+                    && y != b
+                    && self.peb[y as usize] > 0
+                    && (self.only == u32::MAX || self.only == y)
+                {
                     self.peb[y as usize] -= 1;
+                    if self.recording {
+                        self.moves.push((y, s, self.log.len() as u32));
+                    }
                     let mut z = y;
                     while z != s {
                         let bar = self.from[z as usize];
                         z = self.tail[bar as usize];
                         self.flip(bar);
+                        if self.recording {
+                            self.log.push(bar);
+                        }
                         self.work += 1;
                     }
                     self.peb[s as usize] += 1;
@@ -518,15 +594,30 @@ impl Fast {
         true
     }
 
-    /// Insert the independent bar u–v (B + 1 pebbles gathered on u, v).
-    fn insert(&mut self, u: u32, v: u32) {
-        let (t, h) = if self.peb[u as usize] > 0 {
-            (u, v)
-        } else {
-            (v, u)
-        };
-        self.peb[t as usize] -= 1;
-        self.link(t, h);
+    /// Undo the recorded pebble moves after the first `mark`, last first: every pebble goes
+    /// back where it came from, every bar turns back.
+    fn undo_to(&mut self, mark: usize) {
+        while self.moves.len() > mark {
+            let Some((z, s, start)) = self.moves.pop() else {
+                break;
+            };
+            for k in start as usize..self.log.len() {
+                let bar = self.log[k];
+                self.flip(bar);
+                self.work += 1;
+            }
+            self.log.truncate(start as usize);
+            self.peb[s as usize] -= 1;
+            self.peb[z as usize] += 1;
+        }
+    }
+
+    /// Forget the recorded moves after `mark` (they stay made).
+    fn keep_moves(&mut self, mark: usize) {
+        if let Some(&(_, _, start)) = self.moves.get(mark) {
+            self.log.truncate(start as usize);
+        }
+        self.moves.truncate(mark);
     }
 
     /// Whether node `n` is pinned to super-body `k` (B − k bars between them).
@@ -717,63 +808,6 @@ impl Fast {
     }
 }
 
-/// The order in which the contracted game inserts the bars: vertex by vertex in breadth-first
-/// order from the root (then from each vertex not yet reached, in index order), each vertex
-/// bringing its bars to the vertices before it. Every new vertex arrives with its own free
-/// pebbles next to the bars that need them, so searches stay short. The answers of the game
-/// (rank, rigid components, the regions) do not depend on the order.
-fn insertion_order(g: &Graph) -> Vec<u32> {
-    let n = g.weight.len();
-    let mut start = vec![0u32; n + 1];
-    for &(u, v) in &g.bars {
-        start[u as usize + 1] += 1;
-        if u != v {
-            start[v as usize + 1] += 1;
-        }
-    }
-    for x in 0..n {
-        start[x + 1] += start[x];
-    }
-    let mut fill = start.clone();
-    let mut adj = vec![0u32; start[n] as usize];
-    for (i, &(u, v)) in g.bars.iter().enumerate() {
-        adj[fill[u as usize] as usize] = i as u32;
-        fill[u as usize] += 1;
-        if u != v {
-            adj[fill[v as usize] as usize] = i as u32;
-            fill[v as usize] += 1;
-        }
-    }
-    // Position of each vertex in the order (u32::MAX: not reached yet).
-    let mut pos = vec![u32::MAX; n];
-    let mut queue: Vec<u32> = Vec::with_capacity(n);
-    let mut order = Vec::with_capacity(g.bars.len());
-    let roots = std::iter::once(g.root.min(n.saturating_sub(1))).chain(0..n);
-    for r in roots {
-        if n == 0 || pos[r] != u32::MAX {
-            continue;
-        }
-        pos[r] = queue.len() as u32;
-        queue.push(r as u32);
-        let mut qi = queue.len() - 1;
-        while qi < queue.len() {
-            let x = queue[qi] as usize;
-            qi += 1;
-            for &bar in &adj[start[x] as usize..start[x + 1] as usize] {
-                let (u, v) = g.bars[bar as usize];
-                let y = if u as usize == x { v } else { u } as usize;
-                if y == x || pos[y] < pos[x] {
-                    order.push(bar);
-                } else if pos[y] == u32::MAX {
-                    pos[y] = queue.len() as u32;
-                    queue.push(y as u32);
-                }
-            }
-        }
-    }
-    order
-}
-
 /// The outcome of the contracted game.
 struct FastSolution {
     accepted: Vec<bool>,
@@ -788,8 +822,17 @@ struct FastSolution {
 fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, BudgetExceeded> {
     let mut game = Fast::new(g.weight.clone(), g.n_bodies, l, g.bars.len());
     let mut accepted = vec![false; g.bars.len()];
-    let order = insertion_order(g);
+    let order = 0..g.bars.len() as u32;
     meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
+    let mut next = 0;
+    for &(u, v) in &g.bars {
+        for z in [u, v] {
+            if game.rank[z as usize] == u32::MAX {
+                game.rank[z as usize] = next;
+                next += 1;
+            }
+        }
+    }
     for i in order {
         let i = i as usize;
         let (u, v) = g.bars[i];
@@ -799,13 +842,84 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
             // A bar from a body to itself, or inside one rigid component: redundant.
         } else if !game.is_body(y) && game.bars_between(y, x) >= game.weight[y as usize] as usize {
             // The node is pinned to the component: redundant.
-        } else if game.gather(x, y, l + 1) {
-            game.insert(x, y);
+        } else if let Some((t, h)) = game.fresh_end(x, y) {
+            // Independent without a search: the pebble comes from the end with room.
+            game.peb[t as usize] -= 1;
+            game.link(t, h);
             accepted[i] = true;
-            if !game.may_be_tight(x, y) {
-                // No tight set holds both ends: nothing to contract.
-            } else if !game.gather(x, y, l + 1) {
-                game.contract(x, y);
+            if game.may_be_tight(x, y) {
+                game.recording = true;
+                let ok = game.gather(x, y, l + 1);
+                game.recording = false;
+                if ok {
+                    game.undo_to(0);
+                } else {
+                    game.keep_moves(0);
+                    game.contract(x, y);
+                }
+            }
+        } else {
+            // One pebble for the bar itself, kept; the other B, only borrowed to show the bar
+            // independent (and then the pair not tight), go back where they came from. The
+            // kept one is the own pebble of an end, or else the one from the latest vertex in
+            // the insertion order (the local slack, not the pebbles of the old, settled part).
+            let (ox, oy) = (game.peb[x as usize], game.peb[y as usize]);
+            game.recording = true;
+            let ok = game.gather(x, y, l + 1);
+            game.recording = false;
+            if ok {
+                let (t, h) = if ox > 0 {
+                    (x, y)
+                } else if oy > 0 {
+                    (y, x)
+                } else {
+                    let (z, s) = game
+                        .moves
+                        .iter()
+                        .map(|m| (m.0, m.1))
+                        .max_by_key(|&(z, _)| game.rank[z as usize])
+                        .unwrap_or((u32::MAX, x));
+                    let (p, q) = if s == x { (x, y) } else { (y, x) };
+                    game.undo_to(0);
+                    game.visited.clear();
+                    game.only = z;
+                    let got = if game.find_pebble(p, x, y) {
+                        Some((p, q))
+                    } else if game.find_pebble(q, x, y) {
+                        Some((q, p))
+                    } else {
+                        None
+                    };
+                    game.only = u32::MAX;
+                    match got {
+                        Some(p) => p,
+                        None => {
+                            let _ = game.find_pebble(x, x, y) || game.find_pebble(y, x, y);
+                            if game.peb[x as usize] > 0 {
+                                (x, y)
+                            } else {
+                                (y, x)
+                            }
+                        }
+                    }
+                };
+                game.undo_to(0);
+                game.peb[t as usize] -= 1;
+                game.link(t, h);
+                accepted[i] = true;
+                if game.may_be_tight(x, y) {
+                    game.recording = true;
+                    let ok = game.gather(x, y, l + 1);
+                    game.recording = false;
+                    if ok {
+                        game.undo_to(0);
+                    } else {
+                        game.keep_moves(0);
+                        game.contract(x, y);
+                    }
+                }
+            } else {
+                game.undo_to(0);
             }
         }
         meter.charge(std::mem::take(&mut game.work))?;
@@ -1047,14 +1161,33 @@ pub fn analyze_within(
     budget: &Budget,
 ) -> Result<PebbleReport, BudgetExceeded> {
     let mut meter = budget.meter("the pebble game");
+    analyze_metered(m, opts, &mut meter)
+}
+
+/// The analysis and the work units it charged (no limit): for the scale tests and the
+/// benchmarks, which compare work (deterministic) rather than time.
+#[doc(hidden)]
+pub fn analyze_counting_work(m: &Mechanism, opts: &PebbleOptions) -> (PebbleReport, u64) {
+    let mut meter = Budget::UNLIMITED.meter("the pebble game");
+    match analyze_metered(m, opts, &mut meter) {
+        Ok(r) => (r, meter.used()),
+        Err(_) => (analyze_reference(m, opts), meter.used()),
+    }
+}
+
+fn analyze_metered(
+    m: &Mechanism,
+    opts: &PebbleOptions,
+    meter: &mut Meter,
+) -> Result<PebbleReport, BudgetExceeded> {
     let l = m.b() as u8;
     let g = Graph::build(m, opts, None);
     meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
-    let sol = solve_fast(&g, l, &mut meter)?;
+    let sol = solve_fast(&g, l, meter)?;
     let overconstrained = if sol.accepted.iter().all(|&a| a) {
         Vec::new()
     } else {
-        regions_of_overconstrained(m, &g, &sol, l, &mut meter)?
+        regions_of_overconstrained(m, &g, &sol, l, meter)?
     };
     let n = m.bodies.len();
     let degenerate = if sol.components.iter().any(|c| c.len() >= 2 && c.len() < n) {
@@ -1070,7 +1203,7 @@ pub fn analyze_within(
             }
             let g = Graph::build(m, opts, Some(w));
             meter.charge(g.bars.len() as u64 + g.weight.len() as u64)?;
-            if solve_fast(&g, l, &mut meter)?
+            if solve_fast(&g, l, meter)?
                 .components
                 .iter()
                 .any(|c| c.iter().filter(|&&x| x != w).count() >= 2)
