@@ -6,9 +6,15 @@
 //! quadratic on the flexible remainder); shared S, new < 2·10^6, old > 2·10^7 (each body's
 //! pin was contracted by a reverse search over every bar into the shared node). The budgets
 //! below leave the new game twice its need and stay below the old one's.
+//!
+//! Session 6: the planar Assur linkage of 10^5 bodies (99,998) (`mbsa generate assur --class 2 --groups
+//! 24999`, the growth.py family): one flexible piece, no rigid component to contract. Measured
+//! with `--max-work` on the release CLI: the new game fits 4·10^7 units, the session-5 game
+//! needs more than 1.6·10^8 (each bar fetched its B + 1 pebbles from wherever the few free ones
+//! had wandered).
 
 use mbsa::budget::Budget;
-use mbsa::generate;
+use mbsa::generate::{self, Variant};
 use mbsa::joint::JointType;
 use mbsa::rigidity::pebble::{PebbleOptions, analyze_within};
 use mbsa::{BodyId, Geometry, JointSpec, Mechanism, Space};
@@ -91,6 +97,17 @@ fn shared_spherical_joint_of_50000_bodies_fits_five_million_units() {
     assert_eq!(r.redundant, 0);
     assert_eq!(r.dof, 3 * 49_999);
     assert_eq!(r.rigid, [["1"]]);
+}
+
+#[test]
+fn planar_assur_of_100000_bodies_fits_sixty_million_units() {
+    let m = generate::assur(2, 24_999, 364, Variant::A).expect("valid");
+    assert_eq!(m.bodies.len(), 99_998);
+    let r = analyze_within(&m, &PebbleOptions::default(), &budget(60_000_000))
+        .expect("the near-linear game fits the budget");
+    assert_eq!((r.dof, r.redundant), (1, 0), "one crank, no redundancy");
+    assert_eq!(r.rigid, [["1"]], "no rigid component but the frame");
+    assert!(!r.degenerate);
 }
 
 #[test]
