@@ -95,8 +95,6 @@ struct Graph {
     bars: Vec<(u32, u32)>,
     /// Joint index of each bar.
     joint: Vec<u32>,
-    /// Where the insertion order starts (the frame).
-    root: usize,
 }
 
 impl Graph {
@@ -109,7 +107,6 @@ impl Graph {
             n_bodies,
             bars: Vec::new(),
             joint: Vec::new(),
-            root: if Some(m.frame) == skip { 0 } else { m.frame },
         };
         for (ji, j) in m.joints.iter().enumerate() {
             // The reader validates indices; skipping bad ones keeps this panic-free anyway.
@@ -295,7 +292,15 @@ impl Game {
 /// - after an independent bar uv is inserted, a failed gather of B + 1 pebbles on u, v gives
 ///   the minimal tight set, the reverse search grows it to the maximal one (Lee and Streinu),
 ///   and the parts are merged into the part with the most in-edges (the others' edges are
-///   relabelled: smaller into larger).
+///   relabelled: smaller into larger);
+/// - a bar with an end of fewer bars than its weight is inserted without a search (that end
+///   pays for it), and the tightness check after it is skipped when degrees rule a tight set
+///   out;
+/// - a bar that needs a search keeps one pebble (an end's own, or the one from the latest
+///   vertex) and gives the B borrowed ones back along the paths they came by, after the
+///   tightness check: on a flexible linkage the free pebbles stay at the frame and in the
+///   slack of the group being built, instead of wandering away with every search (session
+///   5's game: 1.76 growth exponent on Assur linkages).
 ///
 /// The answers (which bars are independent, the rigid components) are those of the plain game;
 /// `tests/pebble_props.rs` compares them on random graphs.
@@ -327,7 +332,8 @@ struct Fast {
     qepoch: u32,
     /// When not u32::MAX, searches take a pebble from this vertex only.
     only: u32,
-    /// Position of each vertex in the insertion order (searches try lower ones first).
+    /// Position of each vertex in the insertion order (first bar that names it): a closing
+    /// bar keeps the borrowed pebble of the latest vertex.
     rank: Vec<u32>,
     /// Pebble moves kept for undoing, while `recording`: (source, target, start in `log`), and
     /// the bars each move turned round.
@@ -399,7 +405,9 @@ impl Fast {
     /// E′ through the new bar either has bars away from t, at most w(V′ − t) − B of them,
     /// plus at most w(t) at t, or is a star at t, whose bars to each neighbour stay within
     /// that neighbour's weight), and t has a free pebble to spend on it. Returns (tail, head):
-    /// the end with more spare bars, the later vertex in the insertion order as a rule.
+    /// the end with more spare bars (usually the newer body; x on a tie, so that the frame
+    /// spends its pebbles on its first neighbour and the free ones sit on both, each
+    /// reachable from the other).
     fn fresh_end(&self, x: u32, y: u32) -> Option<(u32, u32)> {
         let spare = |t: u32| (self.weight[t as usize] as usize).saturating_sub(self.degree(t));
         let fits = |t: u32, h: u32| {
@@ -1291,7 +1299,6 @@ fn regions_of_overconstrained(
         n_bodies: nb,
         bars: Vec::new(),
         joint: Vec::new(),
-        root: g.root,
     };
     for (i, &(u, v)) in g.bars.iter().enumerate() {
         let s = sol.rep[u as usize];
