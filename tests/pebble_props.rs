@@ -10,20 +10,8 @@ use mbsa::joint::JointType;
 use mbsa::rigidity::pebble::{PebbleOptions, analyze, analyze_reference, analyze_within};
 use mbsa::{BodyId, Geometry, JointSpec, Mechanism, Space};
 
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
+mod common;
+use common::Rng;
 
 fn joint(kind: JointType, bodies: &[usize], driven: u32, id: usize) -> JointSpec {
     JointSpec {

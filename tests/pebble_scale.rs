@@ -17,56 +17,9 @@ use mbsa::budget::Budget;
 use mbsa::generate::{self, Variant};
 use mbsa::joint::JointType;
 use mbsa::rigidity::pebble::{PebbleOptions, analyze_within};
-use mbsa::{BodyId, Geometry, JointSpec, Mechanism, Space};
 
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
-/// The uniform Laman framework of tests/pebble_perf.rs: Henneberg type I steps on points
-/// chosen uniformly; bar k is body k, point p the revolute joining its bars.
-fn laman(points: usize, seed: u64) -> Mechanism {
-    let mut rng = Rng(seed);
-    let mut bars = vec![(0, 1)];
-    for i in 2..points {
-        let a = rng.below(i);
-        let mut b = rng.below(i);
-        while b == a {
-            b = rng.below(i);
-        }
-        bars.push((a, i));
-        bars.push((b, i));
-    }
-    let mut at: Vec<Vec<i64>> = vec![Vec::new(); points];
-    for (k, &(a, b)) in bars.iter().enumerate() {
-        at[a].push(k as i64 + 1);
-        at[b].push(k as i64 + 1);
-    }
-    let joints = at
-        .into_iter()
-        .enumerate()
-        .filter(|(_, bs)| bs.len() >= 2)
-        .map(|(p, bs)| JointSpec {
-            id: Some(format!("p{p}")),
-            kind: JointType::R,
-            bodies: bs.into_iter().map(BodyId::Int).collect(),
-            driven: 0,
-            geometry: Geometry::default(),
-        })
-        .collect();
-    Mechanism::from_parts("laman", Space::Planar, BodyId::Int(1), vec![], joints)
-}
+mod common;
+use common::laman;
 
 fn budget(max_work: u64) -> Budget {
     Budget {
@@ -77,7 +30,7 @@ fn budget(max_work: u64) -> Budget {
 
 #[test]
 fn laman_20000_points_fits_ten_million_units() {
-    let m = laman(20_000, 7);
+    let m = laman(20_000, false, 7);
     let r = analyze_within(&m, &PebbleOptions::default(), &budget(10_000_000))
         .expect("the component game fits the budget");
     assert_eq!((r.dof, r.redundant), (0, 0), "minimally rigid");
@@ -113,7 +66,7 @@ fn planar_assur_of_100000_bodies_fits_sixty_million_units() {
 #[test]
 fn the_budget_still_stops_a_large_game() {
     // The same framework with a budget far below its need: the typed error, not a wrong answer.
-    let m = laman(20_000, 7);
+    let m = laman(20_000, false, 7);
     let e = analyze_within(&m, &PebbleOptions::default(), &budget(100_000)).unwrap_err();
     assert!(e.to_string().contains("work units"), "{e}");
 }
