@@ -379,7 +379,7 @@ fn body_numbering_equals_from_parts() {
     for case in 0..240u64 {
         let n_joints = 1 + next(60) as usize;
         let odd = case % 6; // 0: dense, 1: sparse, 2: one large id, 3: negative, 4: names, 5: long joints
-        let mut pick = |next: &mut dyn FnMut(u64) -> u64| -> BodyId {
+        let pick = |next: &mut dyn FnMut(u64) -> u64| -> BodyId {
             match odd {
                 1 => BodyId::Int(7 * next(40) as i64 + 3),
                 2 if next(30) == 0 => BodyId::Int(1_000_000_007 + next(3) as i64),
