@@ -772,8 +772,11 @@ fn n_four_bar_40_singular_pose_planar() {
 /// out of the plane. In the plane, window k is a rhombus (ground, V_(k-1), H_k, V_k all of
 /// length 1) whose closure equation in the verticals' angles (a = V_(k-1), b = V_k, from the
 /// flat pose) is exactly -4 sin(a/2) cos(b/2) sin((b - a)/2) = 0: near the flat pose a = 0
-/// or a = b. Each of the 40 windows fixes one angle from the next: 2^40 branches, every one of
-/// dimension 1. So: first order 41 (no out-of-plane first-order motion either), finite 1, as
+/// or a = b. With a_0..a_40 the verticals' angles, window k says a_(k-1) = 0 or a_(k-1) = a_k:
+/// the first window from the top taking a_(k-1) = 0 forces every lower angle to 0, every
+/// window above it a_i = a_40, so the set is 41 lines (not 2^40 branches: the 2^40 choices
+/// give 41 distinct sets), L_j = {a_0..a_j = 0, a_(j+1)..a_40 = t}, j = -1..39, each of
+/// dimension 1, their directions spanning the 41 first-order motions. So: first order 41 (no out-of-plane first-order motion either), finite 1, as
 /// in the plane; the verdict adds "overconstrained by design" because the spatial count is
 /// -119 (3 redundant constraints per planar loop written in space), and at the parallelogram
 /// pose it is overconstrained-moving with 1 and 1.

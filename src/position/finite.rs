@@ -2,13 +2,15 @@
 //! first-order (instantaneous) mobility.
 //!
 //! The first-order mobility is the nullity of the constraint Jacobian (frame fixed, driven
-//! DOF not counted). To estimate the local dimension, the configuration is moved a small step
-//! along a few random first-order motions, projected back onto the constraints by
-//! Gauss–Newton, and the nullity is taken again there; the smallest nullity over the samples
-//! is the estimate (the nullity at a generic nearby point of a solution set of dimension d is
-//! d; at a singular point it is larger). Limits: a branch of dimension d through a
-//! bifurcation is found only if a sample falls near it; the samples see a neighbourhood of
-//! about `step` × model size.
+//! DOF not counted). The local dimension is found by curve tests on random tangent
+//! hyperplanes through the configuration ([`finite_mobility`]): it is at least k + 1 when the
+//! constraints with k such slices still have a curve of solutions through the configuration,
+//! certified by tracking a landed solution outward and inward along a fixed direction to a
+//! residual of 1e-14 ([`Curves::certified`]). The nullity at a few nearby samples is still
+//! reported (and used to name the joints of the instantaneous-only freedoms), but it is not
+//! the estimate: on a non-reduced component (the N-four-bar's flat pose) it overstates the
+//! dimension. `docs/algorithms.md` ("Finite mobility") gives the argument, the measurements
+//! and the limits.
 
 use super::closure::{ClosureStatus, assemble, check_closure, undriven};
 use super::newton::{NewtonOptions, System, Targets};
