@@ -561,6 +561,88 @@ fn four_bar_toggle_names_the_locked_joint() {
     assert!(f.notes.iter().any(|n| n.contains("toggle")));
 }
 
+/// A five-bar loop (two DOF) at a generic pose, in the plane and written in space with every
+/// axis along z: finite 2, so the curve test must pass level 1 (a curve inside one slice
+/// through the configuration) and fail level 2.
+#[test]
+fn five_bar_moves_with_finite_mobility_two() {
+    let pins = [
+        [0.0, 0.0, 0.0],
+        [0.3, 1.1, 0.0],
+        [1.6, 1.7, 0.0],
+        [2.9, 0.9, 0.0],
+        [2.2, -0.2, 0.0],
+    ];
+    for (space, axis, count, verdict) in [
+        (Space::Planar, None, 2, Verdict::Regular),
+        (
+            Space::Spatial,
+            Some([0.0, 0.0, 1.0]),
+            -1,
+            Verdict::OverconstrainedMoving,
+        ),
+    ] {
+        let joints = (0..5)
+            .map(|i| {
+                let a = 1 + i as i64;
+                let b = if i == 4 { 1 } else { a + 1 };
+                j(&format!("J{i}"), JointType::R, a, b, pins[i], axis)
+            })
+            .collect();
+        let m = Mechanism::from_parts("five-bar", space, BodyId::Int(1), vec![], joints);
+        for seed in 0..3 {
+            let f = finite_mobility(
+                &m,
+                &Configuration::reference(m.bodies.len()),
+                &FiniteOptions {
+                    seed,
+                    ..FiniteOptions::default()
+                },
+            )
+            .unwrap();
+            assert_eq!((f.count, f.first_order, f.finite), (count, 2, 2), "{f:?}");
+            assert_eq!(f.verdict, verdict, "{f:?}");
+        }
+    }
+}
+
+/// Two bars of length 1 pinned to the ground 2 apart and to each other: a flat triangle. The
+/// middle pin has a first-order flex (up and down) but the point is isolated, with a double
+/// root (a non-reduced point of dimension 0): landed points are near misses, which the curve
+/// test must not certify. In the plane and written in space.
+#[test]
+fn flat_triangle_is_rigid_with_a_first_order_flex() {
+    for (space, axis, count) in [
+        (Space::Planar, None, 0),
+        (Space::Spatial, Some([0.0, 0.0, 1.0]), -3),
+    ] {
+        let m = Mechanism::from_parts(
+            "flat-triangle",
+            space,
+            BodyId::Int(1),
+            vec![],
+            vec![
+                j("A", JointType::R, 1, 2, [0.0, 0.0, 0.0], axis),
+                j("B", JointType::R, 2, 3, [1.0, 0.0, 0.0], axis),
+                j("C", JointType::R, 3, 1, [2.0, 0.0, 0.0], axis),
+            ],
+        );
+        for seed in 0..3 {
+            let f = finite_mobility(
+                &m,
+                &Configuration::reference(m.bodies.len()),
+                &FiniteOptions {
+                    seed,
+                    ..FiniteOptions::default()
+                },
+            )
+            .unwrap();
+            assert_eq!((f.count, f.first_order, f.finite), (count, 1, 0), "{f:?}");
+            assert_eq!(f.verdict, Verdict::Singular, "{f:?}");
+        }
+    }
+}
+
 fn bundled(name: &str) -> Mechanism {
     let (file, text) = mbsa::examples::find(name).unwrap();
     mbsa::format::load(file, text, mbsa::format::Format::Toml).unwrap()

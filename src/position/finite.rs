@@ -651,7 +651,9 @@ pub fn finite_mobility(
         }
     }
     let singular = instantaneous_only > 0;
-    let over = (finite as i64) > count;
+    // Really moving: a configuration that does not move (finite 0) is not "moving" whatever
+    // the count (a rigid structure with redundant bars, a flat triangle written in space).
+    let over = finite > 0 && (finite as i64) > count;
     let verdict = match (singular, over) {
         (false, false) => Verdict::Regular,
         (true, false) => Verdict::Singular,
