@@ -814,6 +814,84 @@ fn n_four_bar_40_singular(name: &str) -> (Mechanism, Configuration) {
     (m, cfg)
 }
 
+/// The configuration of the N = 40 file with vertical V_k turned by `a[k]` from the flat
+/// pose (every H_k placed on the two tops it joins).
+fn n_four_bar_40_at(m: &Mechanism, a: &[f64; 41]) -> Configuration {
+    let scale = mbsa::position::residual::model_size(m);
+    let theta = -(0.8f64).atan2(0.6);
+    let rot = |x: f64| nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), x).into_inner();
+    // Top of V_k: its pivot (k, 0) plus the unit bar at angle a_k from the x axis.
+    let top = |k: usize| Vector3::new(k as f64 + a[k].cos(), a[k].sin(), 0.0);
+    let mut cfg = Configuration::reference(m.bodies.len());
+    for (i, pose) in cfg.poses.iter_mut().enumerate() {
+        let id: i64 = m.body_id(i).to_string().parse().unwrap();
+        if id == 1 {
+            continue;
+        }
+        if id % 2 == 0 {
+            let k = ((id - 2) / 2) as usize;
+            let c = Vector3::new(k as f64, 0.0, 0.0);
+            let r = rot(theta + a[k]);
+            *pose = Pose {
+                rotation: r,
+                translation: (c - r * c) / scale,
+            };
+        } else {
+            // H_k: its pin with V_(k-1) is at (k - 1 + 0.6, 0.8) in the file, H horizontal.
+            let k = ((id - 1) / 2) as usize;
+            let (p, q) = (top(k - 1), top(k));
+            let r = rot((q.y - p.y).atan2(q.x - p.x));
+            let pin = Vector3::new(k as f64 - 0.4, 0.8, 0.0);
+            *pose = Pose {
+                rotation: r,
+                translation: (p - r * pin) / scale,
+            };
+        }
+    }
+    cfg
+}
+
+/// The flat pose's solution set is 41 lines (docs/algorithms.md, "Finite mobility"):
+/// L_j = {a_0..a_j = 0, a_(j+1)..a_40 = t}, j = -1..39, not 2^40 branches. Each line is a
+/// set of solutions (closed to rounding at t = 0.3 rad), a point off them is not, and the
+/// Jacobian's nullity along L_j is j + 1 (the motion, and one for each of the j flat windows
+/// below it, whose equations keep a double root; 1 on L_-1): why the nullity at nearby
+/// samples overstates the dimension (planar file).
+#[test]
+fn n_four_bar_40_flat_pose_is_41_lines() {
+    let m = bundled("n-four-bar-40");
+    let free = mbsa::position::closure::undriven(&m);
+    let model = PositionModel::new(&free).unwrap();
+    let sys = System {
+        pairs: (0..model.pairs.len()).collect(),
+        bodies: (0..m.bodies.len()).filter(|&x| x != m.frame).collect(),
+    };
+    let targets: Targets = vec![Vec::new(); model.pairs.len()];
+    for j in [-1i64, 0, 1, 7, 20, 39] {
+        let mut a = [0.3; 41];
+        for x in a.iter_mut().take((j + 1) as usize) {
+            *x = 0.0;
+        }
+        let cfg = n_four_bar_40_at(&m, &a);
+        let c = check_closure(&m, &cfg, None).unwrap();
+        assert!(c.max_residual < 1e-12, "L_{j}: {c:?}");
+        let (_, jac, _) = sys.evaluate(&model, &targets, &cfg);
+        let s = nalgebra::SVD::new(jac.clone(), false, false).singular_values;
+        let top = s.max();
+        let rank = s.iter().filter(|&&x| x > 1e-8 * top).count();
+        assert_eq!(
+            jac.ncols() - rank,
+            (j + 1).max(1) as usize,
+            "nullity on L_{j}"
+        );
+    }
+    // Off the lines: only V_0 turned (window 1: a_0 != 0 and a_0 != a_1).
+    let mut a = [0.0; 41];
+    a[0] = 0.3;
+    let c = check_closure(&m, &n_four_bar_40_at(&m, &a), None).unwrap();
+    assert!(c.max_residual > 1e-3, "{c:?}");
+}
+
 fn n_four_bar_40_case(name: &str, singular: Verdict, regular: Verdict) {
     let (m, cfg) = n_four_bar_40_singular(name);
     let t = std::time::Instant::now();

@@ -299,7 +299,9 @@ fn regularized_step(j: &DMatrix<f64>, r: &DVector<f64>) -> Option<DVector<f64>> 
     rhs.rows_mut(0, m).copy_from(r);
     let qr = nalgebra::QR::new(a);
     let qtr = qr.q().transpose() * rhs;
-    let x = qr.r().solve_upper_triangular(&qtr.rows(0, n).into_owned())?;
+    let x = qr
+        .r()
+        .solve_upper_triangular(&qtr.rows(0, n).into_owned())?;
     Some(-x)
 }
 
