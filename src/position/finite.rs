@@ -474,7 +474,8 @@ impl Curves<'_> {
             };
             let (dz, _) = slice_coords(self.sys, self.model, self.config, &z);
             let cos = dz.dot(&prev) / (dz.norm() * prev.norm()).max(1e-300);
-            if !(dz.norm() <= 1.2 * s && cos >= 0.95) {
+            let in_cone = dz.norm() <= 1.2 * s && cos >= 0.95; // false for NaN too
+            if !in_cone {
                 return false;
             }
             prev = dz;
@@ -580,7 +581,8 @@ pub fn finite_mobility(
             let (d, _) = slice_coords(&sys, &model, config, &y);
             // Pulled back to the configuration (an isolated point, or the double roots of
             // a non-reduced one, attract Newton): no evidence either way.
-            if !(d.norm() >= 0.05 * opts.step) {
+            let away = d.norm() >= 0.05 * opts.step; // false for NaN too
+            if !away {
                 continue;
             }
             if curves.certified(&slices, &d) {
