@@ -1288,7 +1288,7 @@ fn random_geometry_away_from_folds_has_room_in_every_group() {
 /// The flat pose is non-reduced (every window has a double root there). Session 5's offset
 /// slices gave 2 at seed 1 for the planar file and 0 at seeds 2 and 5 for the 3D twin; the
 /// curve test on slices through the configuration must give 1 at every seed 0..=5, for both
-/// files (release, CPU: about 0.5 s a seed planar, 5 s a seed 3D).
+/// files (release, CPU: about 0.4 s a seed planar, 4.4 s a seed 3D).
 fn n_four_bar_40_over_seeds(name: &str) {
     let (m, cfg) = n_four_bar_40_singular(name);
     let mut got = Vec::new();
