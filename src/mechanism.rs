@@ -539,6 +539,31 @@ impl Mechanism {
     }
 }
 
+impl Mechanism {
+    /// [`Mechanism::from_indexed`] for joints whose ids are distinct and whose natural order
+    /// the caller knows already: `order[k]` is the position of the k-th joint in that order.
+    pub(crate) fn from_indexed_in_order(
+        name: impl Into<String>,
+        space: Space,
+        frame: usize,
+        bodies: Vec<Body>,
+        mut joints: Vec<Joint>,
+        order: Vec<u32>,
+    ) -> Mechanism {
+        debug_assert_eq!(order.len(), joints.len());
+        permute(&mut joints, order.into_iter().map(|k| k as usize).collect());
+        Mechanism {
+            name: name.into(),
+            description: None,
+            space,
+            frame,
+            bodies,
+            joints,
+            expect: Expect::default(),
+        }
+    }
+}
+
 /// Rearrange `v` so that its k-th item is the `order[k]`-th before (`order` a permutation),
 /// by following the cycles of `order` with swaps: no second vector.
 fn permute<T>(v: &mut [T], mut order: Vec<usize>) {

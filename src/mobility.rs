@@ -56,21 +56,24 @@ pub struct MobilityReport {
 /// Compute the mobility report.
 pub fn mobility(m: &Mechanism) -> MobilityReport {
     let b = m.b() as i64;
-    let pairs: u64 = m.joints.iter().map(|j| j.pairs() as u64).sum();
-    let constraints: u64 = m
-        .joints
-        .iter()
-        .map(|j| j.pairs() as u64 * (b as u64).saturating_sub(j.grade() as u64))
-        .sum();
+    // One pass over the joints (a million joints are hundreds of megabytes): the sums and
+    // the components together.
+    let (mut pairs, mut constraints, mut inputs) = (0u64, 0u64, 0u64);
+    let mut components = Components::new(m.bodies.len());
+    for j in &m.joints {
+        pairs += j.pairs() as u64;
+        constraints += j.pairs() as u64 * (b as u64).saturating_sub(j.grade() as u64);
+        inputs += j.driven as u64;
+        components.join(&j.bodies);
+    }
+    components.flatten();
     let count = b * m.movable() as i64 - constraints as i64;
-    let inputs = m.inputs();
     let verdict = match (inputs as i128).cmp(&(count as i128)) {
         std::cmp::Ordering::Equal => Verdict::Equal,
         std::cmp::Ordering::Less => Verdict::Fewer,
         std::cmp::Ordering::Greater => Verdict::More,
     };
 
-    let components = Components::of(m);
     let frame_root = components.root(m.frame);
     let disconnected = (0..m.bodies.len())
         .filter(|&i| components.root(i) != frame_root)
@@ -107,21 +110,35 @@ pub struct Components {
 impl Components {
     /// Components of the bodies linked by joints.
     pub fn of(m: &Mechanism) -> Components {
-        let mut c = Components {
-            parent: (0..m.bodies.len()).collect(),
-            count: m.bodies.len(),
-        };
+        let mut c = Components::new(m.bodies.len());
         for j in &m.joints {
-            for w in j.bodies.windows(2) {
-                c.union(w[0], w[1]);
-            }
+            c.join(&j.bodies);
         }
-        // Every body straight to its root (a root is the smallest index of its component, so
-        // the parents of smaller indices are final already): `root` is then one step.
-        for i in 0..c.parent.len() {
-            c.parent[i] = c.parent[c.parent[i]];
-        }
+        c.flatten();
         c
+    }
+
+    /// `n` bodies, each alone.
+    fn new(n: usize) -> Components {
+        Components {
+            parent: (0..n).collect(),
+            count: n,
+        }
+    }
+
+    /// Join the bodies of one joint.
+    fn join(&mut self, bodies: &[usize]) {
+        for w in bodies.windows(2) {
+            self.union(w[0], w[1]);
+        }
+    }
+
+    /// Every body straight to its root (a root is the smallest index of its component, so the
+    /// parents of smaller indices are final already): `root` is then one step.
+    fn flatten(&mut self) {
+        for i in 0..self.parent.len() {
+            self.parent[i] = self.parent[self.parent[i]];
+        }
     }
 
     /// Representative of `i`'s component.

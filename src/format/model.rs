@@ -484,29 +484,86 @@ fn joint_grade_help(space: Space) -> String {
     )
 }
 
-/// Body ids to dense indices, in order of first appearance.
+/// Body ids to indices. While every id is a non-negative integer of moderate size (`dense`),
+/// an id is its own index and only a bitmap of the ids met is kept: no table lookup per body
+/// (random lookups into a table of a million entries were 8 % of reading a 10^6-body file).
+/// The first other id switches to the general table, indices in order of first appearance;
+/// the renumbering of the indices handed out so far is then left in `renumbered` for the
+/// caller.
 struct Interner {
-    /// Index by small non-negative integer id (`u32::MAX`: none yet).
+    dense: bool,
+    /// Dense: bit `i` set once id `i` was met.
+    present: Vec<u64>,
+    /// Dense: how many ids were met.
+    count: usize,
+    /// Dense: about how many joints the file has (ids up to `4 * (hint + count + 4096)` stay
+    /// dense, so that the bitmap and the tables indexed by id stay proportional to the file).
+    hint: usize,
+    /// Set once, when the dense numbering is left: old index -> new index (`u32::MAX`: none).
+    renumbered: Option<Vec<u32>>,
+    /// General: index by small non-negative integer id (`u32::MAX`: none yet).
     small: Vec<u32>,
     map: std::collections::HashMap<BodyId, u32>,
     ids: Vec<BodyId>,
 }
 
 impl Interner {
-    fn new() -> Interner {
+    /// Dense numbering when `dense` (no declared bodies), sized for about `hint` joints.
+    fn new(dense: bool, hint: usize) -> Interner {
         Interner {
+            dense,
+            present: Vec::new(),
+            count: 0,
+            hint,
+            renumbered: None,
             small: Vec::new(),
             map: std::collections::HashMap::new(),
             ids: Vec::new(),
         }
     }
 
+    /// How many distinct ids were met.
+    fn len(&self) -> usize {
+        if self.dense {
+            self.count
+        } else {
+            self.ids.len()
+        }
+    }
+
+    /// The id of index `k`.
+    fn id(&self, k: usize) -> BodyId {
+        if self.dense {
+            BodyId::Int(k as i64)
+        } else {
+            self.ids[k].clone()
+        }
+    }
+
     /// The index of `id`, added if new.
     fn get(&mut self, id: BodyId) -> usize {
+        if self.dense {
+            if let BodyId::Int(i) = id
+                && let Ok(i) = usize::try_from(i)
+                && i / 4 < self.hint + self.count + 4096
+            {
+                let (w, bit) = (i / 64, 1u64 << (i % 64));
+                if w >= self.present.len() {
+                    let len = (w + 1).max(2 * self.present.len());
+                    self.present.resize(len, 0);
+                }
+                if self.present[w] & bit == 0 {
+                    self.present[w] |= bit;
+                    self.count += 1;
+                }
+                return i;
+            }
+            self.leave_dense();
+        }
         let next = self.ids.len() as u32;
         if let BodyId::Int(i) = id
             && let Ok(i) = usize::try_from(i)
-            && i < 8 * (self.ids.len() + 4096)
+            && (i < self.small.len() || i < 8 * (self.ids.len() + 4096))
         {
             if i >= self.small.len() {
                 let len = (i + 1).max(2 * self.small.len());
@@ -531,6 +588,34 @@ impl Interner {
         self.map.insert(id.clone(), next);
         self.ids.push(id);
         next as usize
+    }
+
+    /// Dense ids met, ascending.
+    fn dense_ids(&self) -> Vec<usize> {
+        let mut out = Vec::with_capacity(self.count);
+        for (w, &word) in self.present.iter().enumerate() {
+            let mut x = word;
+            while x != 0 {
+                out.push(64 * w + x.trailing_zeros() as usize);
+                x &= x - 1;
+            }
+        }
+        out
+    }
+
+    /// To the general table: the ids met so far numbered in ascending order (the small table
+    /// is that renumbering itself).
+    fn leave_dense(&mut self) {
+        let met = self.dense_ids();
+        let mut renumber = vec![u32::MAX; met.last().map_or(0, |&i| i + 1)];
+        for (k, &i) in met.iter().enumerate() {
+            renumber[i] = k as u32;
+            self.ids.push(BodyId::Int(i as i64));
+        }
+        self.small = renumber.clone();
+        self.renumbered = Some(renumber);
+        self.present = Vec::new();
+        self.dense = false;
     }
 }
 
@@ -578,7 +663,8 @@ fn build_joints<'a>(
     }
     // Bodies: the declared ones first (so that `index < n_declared` means declared), then the
     // frame, then in order of appearance.
-    let mut interner = Interner::new();
+    let hint = lazy.len_hint(&list);
+    let mut interner = Interner::new(declared.is_none(), hint);
     let mut labels: Vec<Option<String>> = Vec::new();
     let n_declared = match declared {
         Some(d) => {
@@ -586,12 +672,14 @@ fn build_joints<'a>(
                 interner.get(id);
                 labels.push(label);
             }
-            Some(interner.ids.len())
+            Some(interner.len())
         }
         None => None,
     };
-    let frame_index = interner.get(frame.clone());
-    let mut read: Vec<Joint> = Vec::with_capacity(lazy.len_hint(&list));
+    let mut frame_index = interner.get(frame.clone());
+    // A frame that leaves the dense numbering: no index was handed out before it.
+    interner.renumbered = None;
+    let mut read: Vec<Joint> = Vec::with_capacity(hint);
     // The span that locates each joint in later errors.
     let mut joint_spans: Vec<Range<usize>> = Vec::new();
     let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
@@ -680,7 +768,12 @@ fn build_joints<'a>(
         // joint's number and the item's position), so that one joint of n bodies is linear.
         let stamp = read.len() as u32;
         // The default id `a-b` when no `id` is given, written while the ids are at hand.
-        let mut base = String::new();
+        // 24 bytes: the smallest heap block holds them anyway, and `a-b#n` then fits at once.
+        let mut base = if id_entry.is_none() {
+            String::with_capacity(24)
+        } else {
+            String::new()
+        };
         for (i, b) in items.iter().enumerate() {
             let id = as_id(b, "a body id")?;
             any_name |= matches!(id, BodyId::Name(_));
@@ -688,11 +781,25 @@ fn build_joints<'a>(
                 push_id(&mut base, i, &id);
             }
             let k = interner.get(id);
+            if let Some(renumber) = interner.renumbered.take() {
+                // Out of the dense numbering (once): the indices handed out so far follow.
+                let to = |k: &mut usize| *k = renumber[*k] as usize;
+                read.iter_mut().flat_map(|j| j.bodies.iter_mut()).for_each(to);
+                ids.iter_mut().for_each(to);
+                to(&mut frame_index);
+                seen.clear();
+                if items.len() > SCAN_BODIES {
+                    seen.resize(interner.len(), (u32::MAX, 0));
+                    for (at, &x) in ids.iter().enumerate() {
+                        seen[x] = (stamp, at as u32);
+                    }
+                }
+            }
             let again = if items.len() <= SCAN_BODIES {
                 ids.iter().position(|x| *x == k)
             } else {
                 if seen.len() <= k {
-                    seen.resize(interner.ids.len().max(k + 1), (u32::MAX, 0));
+                    seen.resize(interner.len().max(k + 1).max(2 * seen.len()), (u32::MAX, 0));
                 }
                 let (joint, at) = seen[k];
                 seen[k] = (stamp, i as u32);
@@ -701,7 +808,7 @@ fn build_joints<'a>(
             if let Some(first) = again {
                 return Err(LoadError::new(
                     ErrorKind::RepeatedBody,
-                    format!("body `{}` appears twice in one joint", interner.ids[k]),
+                    format!("body `{}` appears twice in one joint", interner.id(k)),
                     vec![
                         label(&b.span, "again here"),
                         label(&items[first].span, "first here"),
@@ -812,22 +919,27 @@ fn build_joints<'a>(
     if !read.iter().any(|j| j.bodies.contains(&frame_index)) {
         return Err(frame_not_in_joint(&frame, frame_node));
     }
-    let names = &interner.ids;
+    // The joints' natural order, when the default ids give it at once (see below).
+    let mut in_order: Option<Vec<u32>> = None;
     // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too). Without
     // explicit ids, the n-th joint of a body list gets `#n` (as `Mechanism::from_parts` does),
     // and a default that another joint's body list gives too is an error naming both.
     if explicit.is_empty() {
-        default_joint_ids(&mut read, names, &joint_spans, !any_name)?;
+        let by_list = default_joint_ids(&mut read, &interner, &joint_spans, !any_name)?;
+        // Every id `a-b` or `a-b#n` with integer bodies numbered by their ids: the order by
+        // body list (then position, the suffix) is the natural order of the ids.
+        if interner.dense {
+            in_order = by_list;
+        }
     } else if !any_name {
         // Integer bodies: a default `a-b` or `a-b#n` has no other `#`, so defaults of two body
         // lists never meet; the k-th default of a list takes the k-th suffix not taken by an
         // explicit id (as the general loop below, without a set of every id).
-        let order = by_body_list(&read, |k| defaulted[k]);
+        let ByList { order, same, .. } = by_body_list(&read, |k| defaulted[k]);
         let mut k = 0;
         while k < order.len() {
-            let first = order[k] as usize;
             let mut n = 1u64;
-            while k < order.len() && read[order[k] as usize].bodies == read[first].bodies {
+            while k < order.len() && (n == 1 || same[k]) {
                 let j = &mut read[order[k] as usize];
                 let base = j.id.len();
                 loop {
@@ -861,6 +973,45 @@ fn build_joints<'a>(
     }
     drop(joint_spans);
     // Bodies sorted by id; the joints' indices follow.
+    if interner.dense {
+        // The ids are the indices: ascending already; a contiguous run needs no table.
+        let met = interner.dense_ids();
+        let (lo, hi) = (
+            met.first().copied().unwrap_or(0),
+            met.last().copied().unwrap_or(0),
+        );
+        let bodies: Vec<Body> = met
+            .iter()
+            .map(|&i| Body {
+                id: BodyId::Int(i as i64),
+                label: None,
+            })
+            .collect();
+        let frame = if hi - lo + 1 == met.len() {
+            if lo > 0 {
+                for b in read.iter_mut().flat_map(|j| j.bodies.iter_mut()) {
+                    *b -= lo;
+                }
+            }
+            frame_index - lo
+        } else {
+            let mut rank = vec![0u32; hi + 1];
+            for (r, &i) in met.iter().enumerate() {
+                rank[i] = r as u32;
+            }
+            for b in read.iter_mut().flat_map(|j| j.bodies.iter_mut()) {
+                *b = rank[*b] as usize;
+            }
+            rank[frame_index] as usize
+        };
+        drop(met);
+        return Ok(match in_order {
+            Some(order) => {
+                Mechanism::from_indexed_in_order(name, space, frame, bodies, read, order)
+            }
+            None => Mechanism::from_indexed(name, space, frame, bodies, read),
+        });
+    }
     let Interner { ids, .. } = interner;
     let order: Vec<u32> = if ids.iter().all(|b| matches!(b, BodyId::Int(_))) {
         let mut keyed: Vec<(i64, u32)> = ids
@@ -945,9 +1096,11 @@ fn push_int(out: &mut String, n: i64) {
 }
 
 /// The positions of the joints `keep` selects, sorted by body list, then by position: equal
-/// lists next to each other, in file order.
-fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> Vec<u32> {
-    // Two-body lists (nearly all) sorted by a packed key, in place; the others by list.
+/// lists next to each other, in file order; and for each whether its list is the one before
+/// it. Two-body lists (nearly all) come first, sorted and compared by a packed key (not by
+/// their vectors: a million scattered reads), then the others, by list; `pairs_only` when
+/// there are no others.
+fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> ByList {
     let mut pairs: Vec<(u64, u32)> = Vec::new();
     let mut others: Vec<u32> = Vec::new();
     for (k, j) in joints.iter().enumerate().filter(|(k, _)| keep(*k)) {
@@ -965,49 +1118,63 @@ fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> Vec<u32> {
             .cmp(&joints[b as usize].bodies)
             .then(a.cmp(&b))
     });
+    let mut same = Vec::with_capacity(pairs.len() + others.len());
+    same.extend((0..pairs.len()).map(|w| w > 0 && pairs[w - 1].0 == pairs[w].0));
+    same.extend((0..others.len()).map(|w| {
+        w > 0 && joints[others[w - 1] as usize].bodies == joints[others[w] as usize].bodies
+    }));
+    let pairs_only = others.is_empty();
     let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
     order.extend(others);
-    order
+    ByList {
+        order,
+        same,
+        pairs_only,
+    }
+}
+
+/// Joint positions by body list ([`by_body_list`]).
+struct ByList {
+    order: Vec<u32>,
+    same: Vec<bool>,
+    pairs_only: bool,
 }
 
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
 /// `a-b#n` (the first plain `a-b`). A default that two joints would get (the second `[1, 2]`
 /// and a `[1, "2#2"]` both give `1-2#2`) is an error naming both. With integer ids only, the
 /// defaults are distinct by construction (`a-b` reads back into its list; no `#` in it), and
-/// that check is skipped.
+/// that check is skipped. Gives the joints sorted by body list when every joint has two
+/// bodies (with bodies numbered by their integer ids, that is the natural order of the ids).
 fn default_joint_ids(
     joints: &mut [Joint],
-    names: &[BodyId],
+    names: &Interner,
     spans: &[Range<usize>],
     all_integers: bool,
-) -> Result<(), LoadError> {
+) -> Result<Option<Vec<u32>>, LoadError> {
     // The rank of each joint among the joints of its body list (1 for the first): joints
-    // sorted by body list, then by position (a sort, not a hash map: no hash flooding).
-    let mut nth = vec![1u32; joints.len()];
-    {
-        let order = by_body_list(joints, |_| true);
-        for w in 1..order.len() {
-            let (a, b) = (order[w - 1] as usize, order[w] as usize);
-            if joints[a].bodies == joints[b].bodies {
-                nth[b] = nth[a] + 1;
-            }
-        }
-    }
-    // The joints hold their base `a-b` already (written as they were read).
-    for (j, &n) in joints.iter_mut().zip(&nth) {
+    // sorted by body list, then by position (a sort, not a hash map: no hash flooding). The
+    // joints hold their base `a-b` already (written as they were read); only the repeated
+    // lists get a suffix.
+    let by_list = by_body_list(joints, |_| true);
+    let mut n = 1u32;
+    for (&k, &same) in by_list.order.iter().zip(&by_list.same) {
+        n = if same { n + 1 } else { 1 };
         if n > 1 {
-            let _ = write!(j.id, "#{n}");
+            let _ = write!(joints[k as usize].id, "#{n}");
         }
     }
-    drop(nth);
-    let ids: Vec<&str> = joints.iter().map(|j| j.id.as_str()).collect();
     if !all_integers {
         let mut owner: std::collections::HashMap<&str, usize> =
-            std::collections::HashMap::with_capacity(ids.len());
-        for (k, id) in ids.iter().enumerate() {
+            std::collections::HashMap::with_capacity(joints.len());
+        for (k, j) in joints.iter().enumerate() {
+            let id = j.id.as_str();
             if let Some(&first) = owner.get(id) {
                 let (a, b) = (first.min(k), first.max(k));
-                let list = |i: usize| joined_ids(joints[i].bodies.iter().map(|&k| &names[k]));
+                let list = |i: usize| {
+                    let ids: Vec<BodyId> = joints[i].bodies.iter().map(|&k| names.id(k)).collect();
+                    joined_ids(&ids)
+                };
                 return Err(LoadError::new(
                     ErrorKind::DuplicateJointId,
                     format!(
@@ -1030,7 +1197,7 @@ fn default_joint_ids(
             owner.insert(id, k);
         }
     }
-    Ok(())
+    Ok(by_list.pairs_only.then_some(by_list.order))
 }
 
 /// The joint type whose code is exactly `text` (as [`JointType::parse`] reads it).

@@ -356,3 +356,103 @@ fn default_ids_skip_explicit_suffixes_in_order() {
         assert_eq!(ids, expected, "named {named}");
     }
 }
+
+/// The reader's body numbering (dense integer ids as their own indices, left for the general
+/// table at the first other id, possibly in the middle of a long joint) and its shortcut to
+/// the natural order of default ids give the mechanism `Mechanism::from_parts` builds from
+/// the same joints: random files with small, sparse, large, negative and named ids, repeated
+/// pairs, multiple joints, and repeated bodies after the switch still found.
+#[test]
+fn body_numbering_equals_from_parts() {
+    use crate::mechanism::{JointSpec, Mechanism};
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move |n: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % n
+    };
+    let write = |b: &BodyId| match b {
+        BodyId::Int(i) => i.to_string(),
+        BodyId::Name(s) => format!("\"{s}\""),
+    };
+    for case in 0..240u64 {
+        let n_joints = 1 + next(60) as usize;
+        let odd = case % 6; // 0: dense, 1: sparse, 2: one large id, 3: negative, 4: names, 5: long joints
+        let pick = |next: &mut dyn FnMut(u64) -> u64| -> BodyId {
+            match odd {
+                1 => BodyId::Int(7 * next(40) as i64 + 3),
+                2 if next(30) == 0 => BodyId::Int(1_000_000_007 + next(3) as i64),
+                3 if next(5) == 0 => BodyId::Int(-(next(4) as i64) - 1),
+                4 if next(5) == 0 => BodyId::Name(format!("b{}", next(6))),
+                5 => BodyId::Int(next(60) as i64),
+                _ => BodyId::Int(next(25) as i64),
+            }
+        };
+        let frame = if odd == 4 && case % 12 == 4 {
+            BodyId::Name("b0".into())
+        } else {
+            BodyId::Int(0)
+        };
+        let mut specs: Vec<JointSpec> = Vec::new();
+        for k in 0..n_joints {
+            let len = if odd == 5 && next(4) == 0 {
+                17 + next(20) as usize
+            } else if next(8) == 0 {
+                3
+            } else {
+                2
+            };
+            let mut bodies: Vec<BodyId> = if k == 0 { vec![frame.clone()] } else { vec![] };
+            while bodies.len() < len {
+                let b = pick(&mut next);
+                if !bodies.contains(&b) {
+                    bodies.push(b);
+                }
+            }
+            specs.push(JointSpec {
+                id: None,
+                kind: JointType::R,
+                bodies,
+                driven: 0,
+                geometry: Default::default(),
+            });
+        }
+        // A repeated pair or two.
+        for _ in 0..next(3) {
+            let k = next(specs.len() as u64) as usize;
+            specs.push(specs[k].clone());
+        }
+        let mut toml = format!("name = \"t\"\nframe = {}\n", write(&frame));
+        let mut json = format!(
+            "{{\"name\": \"t\", \"frame\": {}, \"joints\": [",
+            write(&frame)
+        );
+        for (k, j) in specs.iter().enumerate() {
+            let list: Vec<String> = j.bodies.iter().map(write).collect();
+            let list = list.join(", ");
+            toml.push_str(&format!("\n[[joint]]\ntype = \"R\"\nbodies = [{list}]\n"));
+            let sep = if k > 0 { ", " } else { "" };
+            json.push_str(&format!("{sep}{{\"type\": \"R\", \"bodies\": [{list}]}}"));
+        }
+        json.push_str("]}");
+        let expected = Mechanism::from_parts("t", Space::Spatial, frame.clone(), vec![], specs);
+        for (text, format) in [(&toml, Format::Toml), (&json, Format::Json)] {
+            let m = load("t", text, format).unwrap_or_else(|e| panic!("{e:?}\n{text}"));
+            assert_eq!(m, expected, "case {case} {format:?}\n{text}");
+        }
+        // A body repeated in a long joint, after the numbering switched: still found.
+        if odd == 2 || odd == 5 {
+            let list: Vec<String> = (1..=20)
+                .map(|i| i.to_string())
+                .chain(["1000000009".into(), "\"x\"".into(), "7".into()])
+                .collect();
+            let text = format!(
+                "{toml}\n[[joint]]\ntype = \"R\"\nbodies = [{}]\n",
+                list.join(", ")
+            );
+            let e = load("t", &text, Format::Toml).unwrap_err();
+            assert_eq!(e.kind(), ErrorKind::RepeatedBody, "{text}");
+        }
+    }
+}

@@ -96,7 +96,12 @@ pub(crate) enum Lazy<'a> {
     /// Nothing deferred.
     None,
     /// JSON: the list's text (from `[` to `]`), parsed item by item.
-    Json { text: &'a str, span: Range<usize> },
+    Json {
+        text: &'a str,
+        span: Range<usize>,
+        /// The objects directly in the list, counted while it was skipped.
+        items: usize,
+    },
     /// TOML: the joints of the first piece, then later pieces of the text (each starts with a
     /// `[[joint]]` header and holds only joints), parsed in parallel a few at a time. A piece
     /// that holds anything else, or fails to parse, sets `fallback`: the caller then reads the
@@ -131,9 +136,7 @@ impl<'a> Lazy<'a> {
     pub(crate) fn len_hint(&self, list: &Value<'a>) -> usize {
         match (list, self) {
             (Value::Seq(items), _) => items.len(),
-            (Value::Deferred, Lazy::Json { text, span }) => text
-                .get(span.clone())
-                .map_or(0, |t| t.matches("\"bodies\"").count()),
+            (Value::Deferred, Lazy::Json { items, .. }) => *items,
             (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
             (Value::Deferred, Lazy::Yaml { text }) => text.matches("bodies").count(),
             (Value::Deferred, Lazy::YamlResume(r)) => r.index.text.matches("bodies").count(),
@@ -152,7 +155,7 @@ impl<'a> Lazy<'a> {
     ) -> Result<(), LoadError> {
         match (list, self) {
             (Value::Seq(items), _) => items.into_iter().try_for_each(f),
-            (Value::Deferred, Lazy::Json { text, span }) => {
+            (Value::Deferred, Lazy::Json { text, span, .. }) => {
                 let mut p = JsonParser {
                     text,
                     bytes: text.as_bytes(),
@@ -1095,7 +1098,7 @@ pub(crate) fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadEr
         return Err(p.error("trailing characters"));
     }
     let lazy = match p.deferred {
-        Some(span) => Lazy::Json { text, span },
+        Some((span, items)) => Lazy::Json { text, span, items },
         None => Lazy::None,
     };
     Ok((node, lazy))
@@ -1105,8 +1108,8 @@ struct JsonParser<'a> {
     text: &'a str,
     bytes: &'a [u8],
     pos: usize,
-    /// The top-level joint list, skipped (see [`Lazy::Json`]).
-    deferred: Option<Range<usize>>,
+    /// The top-level joint list, skipped (see [`Lazy::Json`]), and its objects.
+    deferred: Option<(Range<usize>, usize)>,
 }
 
 impl<'a> JsonParser<'a> {
@@ -1180,9 +1183,9 @@ impl<'a> JsonParser<'a> {
                         let value = if depth == 1
                             && self.deferred.is_none()
                             && is_joint_list(&key)
-                            && let Some(span) = self.skip_list()?
+                            && let Some((span, items)) = self.skip_list()?
                         {
-                            self.deferred = Some(span.clone());
+                            self.deferred = Some((span.clone(), items));
                             Node {
                                 span,
                                 value: Value::Deferred,
@@ -1287,9 +1290,10 @@ impl<'a> JsonParser<'a> {
     }
 
     /// At a non-empty array: move past it (brackets and strings matched, nothing else
-    /// checked: serde_json checks the syntax) and give its span; `None` (not moved) at anything
-    /// else.
-    fn skip_list(&mut self) -> Result<Option<Range<usize>>, LoadError> {
+    /// checked: the items are parsed later) and give its span and the number of objects
+    /// directly in it; `None` (not moved) at anything else. Eight bytes at a time: only
+    /// brackets, braces and quotes (and in strings, backslashes) stop the scan.
+    fn skip_list(&mut self) -> Result<Option<(Range<usize>, usize)>, LoadError> {
         let start = self.pos;
         if self.bytes.get(start) != Some(&b'[') {
             return Ok(None);
@@ -1307,28 +1311,40 @@ impl<'a> JsonParser<'a> {
         }
         // Inside the list's `[`.
         let mut depth = 1usize;
-        while let Some(&b) = self.bytes.get(i) {
+        let mut items = 0;
+        loop {
+            i = next_structural(self.bytes, i);
+            let Some(&b) = self.bytes.get(i) else {
+                break;
+            };
             i += 1;
             match b {
-                b'[' | b'{' => depth += 1,
+                b'{' => {
+                    items += usize::from(depth == 1);
+                    depth += 1;
+                }
+                b'[' => depth += 1,
                 b']' | b'}' => {
                     depth = depth.saturating_sub(1);
                     if depth == 0 {
                         self.pos = i;
-                        return Ok(Some(start..i));
+                        return Ok(Some((start..i, items)));
                     }
                 }
-                b'"' => {
-                    while let Some(&c) = self.bytes.get(i) {
-                        i += 1;
-                        match c {
-                            b'\\' => i += 1,
-                            b'"' => break,
-                            _ => {}
+                _ => {
+                    // A quote: to the closing one, past escapes.
+                    loop {
+                        i = next_quote_or_escape(self.bytes, i);
+                        match self.bytes.get(i) {
+                            Some(b'\\') => i += 2,
+                            Some(_) => {
+                                i += 1;
+                                break;
+                            }
+                            None => break,
                         }
                     }
                 }
-                _ => {}
             }
         }
         self.pos = self.bytes.len();
@@ -1419,6 +1435,62 @@ impl<'a> JsonParser<'a> {
             }
         }
     }
+}
+
+/// Eight bytes of `bytes` from `i` as a little-endian word (`None` near the end).
+fn word(bytes: &[u8], i: usize) -> Option<u64> {
+    let chunk = bytes.get(i..i + 8)?;
+    let mut w = [0u8; 8];
+    w.copy_from_slice(chunk);
+    Some(u64::from_le_bytes(w))
+}
+
+/// The high bit of each byte of `x` that is zero (exact in the lowest such byte, which is all
+/// the callers use).
+fn zero_bytes(x: u64) -> u64 {
+    x.wrapping_sub(0x0101_0101_0101_0101) & !x & 0x8080_8080_8080_8080
+}
+
+/// Each byte of a word equal to `b`.
+const fn splat(b: u8) -> u64 {
+    0x0101_0101_0101_0101 * b as u64
+}
+
+/// The position of the first `"`, `[`, `]`, `{` or `}` at or after `i` (`bytes.len()`: none).
+fn next_structural(bytes: &[u8], mut i: usize) -> usize {
+    while let Some(w) = word(bytes, i) {
+        // `[` and `{` differ in one bit (0x20), as `]` and `}`: no other byte meets them.
+        let folded = w | splat(0x20);
+        let hits = zero_bytes(w ^ splat(b'"'))
+            | zero_bytes(folded ^ splat(b'{'))
+            | zero_bytes(folded ^ splat(b'}'));
+        if hits != 0 {
+            return i + (hits.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    while bytes
+        .get(i)
+        .is_some_and(|b| !matches!(b, b'"' | b'[' | b']' | b'{' | b'}'))
+    {
+        i += 1;
+    }
+    i.min(bytes.len())
+}
+
+/// The position of the first `"` or `\\` at or after `i` (`bytes.len()`: none).
+fn next_quote_or_escape(bytes: &[u8], mut i: usize) -> usize {
+    while let Some(w) = word(bytes, i) {
+        let hits = zero_bytes(w ^ splat(b'"')) | zero_bytes(w ^ splat(b'\\'));
+        if hits != 0 {
+            return i + (hits.trailing_zeros() / 8) as usize;
+        }
+        i += 8;
+    }
+    while bytes.get(i).is_some_and(|b| !matches!(b, b'"' | b'\\')) {
+        i += 1;
+    }
+    i.min(bytes.len())
 }
 
 #[cfg(test)]
