@@ -393,9 +393,9 @@ impl Factor {
         let mut stamp_rescore = vec![0usize; n];
         let mut heap = BinaryHeap::with_capacity(n);
         let mut version = vec![0usize; n];
-        for g in 0..n {
+        for (g, &tg) in tier.iter().enumerate().take(n) {
             let s = pool.score(g, &mut stamp, &mut clock);
-            heap.push(Reverse((tier[g], s, g, 0usize)));
+            heap.push(Reverse((tg, s, g, 0usize)));
         }
         let mut done = vec![false; n];
         let mut records = Vec::with_capacity(n);
