@@ -72,16 +72,18 @@ fn spatial_assur_in_linear_work() {
 
 /// Random planar and spatial mechanisms (hundreds of motions in one block): the old path
 /// charged 2.2·10^4 and 2.0·10^5 units per body at 10^3 bodies and stopped on the memory
-/// budget at 10^4; here 3,000 (planar, 3·10^3 bodies) and 15,000 (spatial, 10^3 bodies)
-/// units per body (debug-sized; the release growth is in docs/benchmarks.md).
+/// budget at 10^4; here 10,000 (planar, 3·10^3 bodies) and 50,000 (spatial, 10^3 bodies)
+/// units per body (debug-sized; the release growth is in docs/benchmarks.md). Session 6:
+/// raised from 3,000 and 15,000, since the factorization now charges its real work (every
+/// front's rows × width per pivot), which was not charged before.
 #[test]
 fn random_mechanisms_answer_in_linear_work() {
     let (m, _) = generate::random(3000, true, 1).expect("generates");
-    let r = within(&m, 3000);
+    let r = within(&m, 10_000);
     consistent(&r);
     assert!(r.mobility > 0);
     let (m, _) = generate::random(1000, false, 1).expect("generates");
-    let r = within(&m, 15_000);
+    let r = within(&m, 50_000);
     consistent(&r);
     assert!(r.mobility > 0);
     assert!(!r.rigid.is_empty());

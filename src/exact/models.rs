@@ -11,7 +11,8 @@
 
 use super::dense::complement_rows;
 use super::field::Fp;
-use super::sparse::{Factor, SparseMatrix};
+use super::sparse::{Factor, Limits, SparseMatrix};
+use crate::budget::BudgetExceeded;
 use crate::joint::JointType;
 use crate::mechanism::{Mechanism, Space};
 use crate::motion::joint_seed;
@@ -222,19 +223,23 @@ pub fn pairs_rank(
     pairs: impl Iterator<Item = (usize, usize, usize)>,
     group: impl Fn(usize) -> Option<usize>,
 ) -> usize {
-    pairs_factor(b, ngroups, rows, pairs, group).map_or(0, |f| f.rank())
+    let a = pairs_matrix(b, ngroups, rows, pairs, group);
+    if a.nrows() == 0 {
+        0
+    } else {
+        Factor::new(&a).rank()
+    }
 }
 
-/// The exact factorization behind [`pairs_rank`] (`None` when the pairs give no row): its
-/// rank, and random vectors of its null space (the motions, B columns per group in group
-/// order) through [`Factor::random_null_vectors`].
-pub fn pairs_factor(
+/// The rows of some pairs as in [`pairs_rank`]: B columns per group, one row per row of each
+/// pair's joint.
+pub fn pairs_matrix(
     b: usize,
     ngroups: usize,
     rows: &[DMatrix<Fp>],
     pairs: impl Iterator<Item = (usize, usize, usize)>,
     group: impl Fn(usize) -> Option<usize>,
-) -> Option<Factor> {
+) -> SparseMatrix {
     let mut a = SparseMatrix::with_groups(vec![b; ngroups]);
     for (joint, hub, other) in pairs {
         let r = &rows[joint];
@@ -254,17 +259,38 @@ pub fn pairs_factor(
             a.push_row(entries);
         }
     }
+    a
+}
+
+/// The exact factorization behind [`pairs_rank`] (`None` when the pairs give no row), within
+/// `limits`: its rank, and random vectors of its null space (the motions, B columns per group
+/// in group order) through [`Factor::random_null_vectors`].
+pub fn pairs_factor(
+    b: usize,
+    ngroups: usize,
+    rows: &[DMatrix<Fp>],
+    pairs: impl Iterator<Item = (usize, usize, usize)>,
+    group: impl Fn(usize) -> Option<usize>,
+    limits: &mut Limits<'_>,
+) -> Result<Option<Factor>, BudgetExceeded> {
+    let a = pairs_matrix(b, ngroups, rows, pairs, group);
     if a.nrows() == 0 {
-        return None;
+        return Ok(None);
     }
-    Some(Factor::new(&a))
+    Factor::new_within(&a, limits).map(Some)
 }
 
 /// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, as
 /// in [`pairs_factor`]: a flag per pair, set when a random self-stress is nonzero on one of
 /// its rows (every self-stress has its support within these pairs; a random one reaches all
 /// of them except with probability at most (rows)/p). By the factorization of the
-/// transpose (the pairs' rows as unknowns, grouped by pair; one equation per body column).
+/// transpose (the pairs' rows as unknowns, grouped by pair; one equation per body column),
+/// within `limits`.
+///
+/// The transpose is over-determined (a body's B equations against the fewer rows of its
+/// pairs), so its block triangular order is one tier and the greedy order decides; ordering
+/// its pairs by the Jacobian's own tiers was tried and filled in far more (10^4 random
+/// spatial bodies: minutes instead of seconds).
 pub fn pairs_stress_support(
     b: usize,
     rows: &[DMatrix<Fp>],
@@ -272,7 +298,8 @@ pub fn pairs_stress_support(
     group: impl Fn(usize) -> Option<usize>,
     ngroups: usize,
     seed: u64,
-) -> Vec<bool> {
+    limits: &mut Limits<'_>,
+) -> Result<Vec<bool>, BudgetExceeded> {
     let sizes: Vec<usize> = pairs.iter().map(|&(j, _, _)| rows[j].nrows()).collect();
     let mut off = Vec::with_capacity(sizes.len());
     let mut acc = 0u32;
@@ -305,19 +332,22 @@ pub fn pairs_stress_support(
         c.sort_unstable_by_key(|e| e.0);
         t.push_row(c);
     }
-    let f = Factor::new(&t);
+    let f = Factor::new_within(&t, limits)?;
     if f.nullity() == 0 {
-        return vec![false; pairs.len()];
+        return Ok(vec![false; pairs.len()]);
     }
     let mut rng = crate::rng::SplitMix64::new(seed);
+    limits
+        .meter
+        .charge(f.stats().factor_entries as u64 + f.ncols() as u64)?;
     let y = f.random_null_vectors(1, &mut rng).pop().unwrap_or_default();
-    (0..pairs.len())
+    Ok((0..pairs.len())
         .map(|pi| {
             let o = off[pi] as usize;
             y.get(o..o + sizes[pi])
                 .is_some_and(|s| s.iter().any(|v| !v.is_zero()))
         })
-        .collect()
+        .collect())
 }
 
 #[cfg(test)]

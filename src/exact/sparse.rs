@@ -4,9 +4,23 @@
 //! [`Factor`] eliminates one column group at a time (multifrontal Gaussian elimination): the
 //! rows touching the group are gathered into a dense front, its columns are eliminated with
 //! any nonzero pivot (exact, so pivot choice is only about sparsity), and the remaining rows,
-//! compressed to echelon form, become a new block on the group's neighbours. The next group
-//! is the one with the smallest front (greedy minimum degree over the groups, ties by
-//! index), as in the floating-point elimination of the rank check.
+//! compressed to echelon form, become a new block on the group's neighbours.
+//!
+//! Order: first the block triangular form. A maximum matching of the rows to the column
+//! groups (a b-matching: a group takes as many rows as it has columns) and the strongly
+//! connected components of "the rows matched to `k` touch `h`" order the groups so that,
+//! when a group is eliminated, the only rows left on it are its own matched rows (and rows
+//! the matching left over): a mechanism built body by body onto earlier bodies (every
+//! generated random mechanism, an Assur linkage) is eliminated last body first with no fill
+//! at all. Within a component the next group is the one with the smallest front (greedy
+//! minimum degree over the groups, ties by index), as in the floating-point elimination of
+//! the rank check.
+//!
+//! Budget: [`Factor::new_within`] charges the real work (every front's rows × width per
+//! pivot, the compression of the rows left over) to a work [`Meter`] and checks the real
+//! memory (live blocks, the front being eliminated and the records kept) against the memory
+//! limit before each front, so that a matrix whose fill explodes stops with a
+//! [`BudgetExceeded`] instead of running on.
 //!
 //! [`RowBasis`] is the incremental counterpart for greedy redundancy removal: insert sparse
 //! rows one at a time and learn whether each is independent of the rows kept so far.
@@ -14,6 +28,7 @@
 //! Everything is deterministic: no hash maps, ties broken by index.
 
 use super::field::{Fp, axpy_sub, scale};
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::rng::SplitMix64;
 use nalgebra::DMatrix;
 use std::cmp::Reverse;
@@ -190,7 +205,15 @@ struct Blk {
     data: Vec<Fp>,
 }
 
+/// Bytes of one field element (and of one index) in the memory estimates.
+const FP_BYTES: u64 = 8;
+
 impl Blk {
+    /// Bytes it holds (entries and group list).
+    fn bytes(&self) -> u64 {
+        ((self.data.len() + self.groups.len()) as u64).saturating_mul(FP_BYTES)
+    }
+
     /// Its number of columns.
     fn width(&self) -> usize {
         self.data.len().checked_div(self.nrows).unwrap_or(0)
@@ -237,66 +260,62 @@ pub struct Factor {
 
 impl Factor {
     /// Factor a sparse matrix, eliminating by its column groups. Rows touching the same
-    /// set of groups are merged into one block first.
+    /// set of groups are merged into one block first. No budget: see
+    /// [`Factor::new_within`].
     pub fn new(a: &SparseMatrix) -> Factor {
-        let sizes = a.groups();
-        let mut offsets = Vec::with_capacity(sizes.len());
-        let mut group_of = Vec::with_capacity(a.ncols);
-        let mut acc = 0;
-        for (g, &s) in sizes.iter().enumerate() {
-            offsets.push(acc);
-            acc += s;
-            group_of.extend(std::iter::repeat_n(g, s));
-        }
-        // Rows by their group set (sorted, deterministic).
-        let mut keyed: Vec<(Vec<usize>, usize)> = a
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(_, r)| !r.is_empty())
-            .map(|(i, r)| {
-                let mut set: Vec<usize> = r.iter().map(|&(c, _)| group_of[c as usize]).collect();
-                set.dedup();
-                (set, i)
-            })
-            .collect();
-        keyed.sort();
-        let mut blocks = Vec::new();
-        let mut i = 0;
-        let mut local = vec![0usize; sizes.len()];
-        while i < keyed.len() {
-            let mut j = i;
-            while j < keyed.len() && keyed[j].0 == keyed[i].0 {
-                j += 1;
-            }
-            let groups = keyed[i].0.clone();
-            let mut width = 0;
-            for &g in &groups {
-                local[g] = width;
-                width += sizes[g];
-            }
-            let mut data = vec![Fp::ZERO; (j - i) * width];
-            for (k, (_, ri)) in keyed[i..j].iter().enumerate() {
-                for &(c, v) in &a.rows[*ri] {
-                    let g = group_of[c as usize];
-                    data[k * width + local[g] + c as usize - offsets[g]] = v;
-                }
-            }
-            blocks.push(Blk {
-                groups,
-                nrows: j - i,
-                data,
-            });
-            i = j;
-        }
-        let input = a.rows.iter().map(|r| r.len()).sum();
-        Factor::run(sizes, blocks, input)
+        let Ok(f) = Factor::build(a, None, &mut |_, _| Ok::<(), std::convert::Infallible>(()));
+        f
+    }
+
+    /// [`Factor::new`] within a budget: the elimination's work (each front's rows × width per
+    /// pivot, the ordering, the compression of leftover rows) is charged to the meter, and
+    /// before each front the memory then held (live blocks, the front, the records kept) is
+    /// checked against the memory limit.
+    pub fn new_within(a: &SparseMatrix, limits: &mut Limits<'_>) -> Result<Factor, BudgetExceeded> {
+        Factor::build(a, None, &mut |work, bytes| limits.charge(work, bytes))
+    }
+
+    /// [`Factor::new_within`] with the groups' elimination tiers given (lower first; within a
+    /// tier the greedy minimum-front order) instead of found from the matrix's block
+    /// triangular form ([`elimination_tiers`]); `tiers` has one entry per column group.
+    /// For a matrix whose own structure says little about a good order, such as the
+    /// transpose of a mechanism's Jacobian (see [`crate::exact::models::pairs_stress_support`]).
+    pub fn new_ordered_within(
+        a: &SparseMatrix,
+        tiers: &[u32],
+        limits: &mut Limits<'_>,
+    ) -> Result<Factor, BudgetExceeded> {
+        Factor::build(a, Some(tiers), &mut |work, bytes| {
+            limits.charge(work, bytes)
+        })
+    }
+
+    fn build<E>(
+        a: &SparseMatrix,
+        tiers: Option<&[u32]>,
+        charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
+    ) -> Result<Factor, E> {
+        let blocks = blocks_of(a);
+        let input: usize = a.rows.iter().map(|r| r.len()).sum();
+        charge((input + a.ncols + a.rows.len()) as u64, 0)?;
+        Factor::run(a.groups(), blocks, input, tiers, charge)
     }
 
     /// Factor a matrix given as dense blocks over column groups of the given sizes (the
     /// interface of the floating-point elimination). Groups repeated within a block, or
     /// out of range, are a caller's error.
     pub fn from_blocks(sizes: &[usize], blocks: Vec<FpBlock>) -> Factor {
+        let Ok(f) = Factor::from_blocks_charged(sizes, blocks, &mut |_, _| {
+            Ok::<(), std::convert::Infallible>(())
+        });
+        f
+    }
+
+    fn from_blocks_charged<E>(
+        sizes: &[usize],
+        blocks: Vec<FpBlock>,
+        charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
+    ) -> Result<Factor, E> {
         let mut input = 0;
         let blks = blocks
             .into_iter()
@@ -333,10 +352,18 @@ impl Factor {
                 }
             })
             .collect();
-        Factor::run(sizes.to_vec(), blks, input)
+        Factor::run(sizes.to_vec(), blks, input, None, charge)
     }
 
-    fn run(sizes: Vec<usize>, blocks: Vec<Blk>, input_entries: usize) -> Factor {
+    /// The elimination. `charge(work, bytes)` is called with the work of each step and the
+    /// memory held at its start (live blocks, the front about to be built, the records).
+    fn run<E>(
+        sizes: Vec<usize>,
+        blocks: Vec<Blk>,
+        input_entries: usize,
+        given_tiers: Option<&[u32]>,
+        charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
+    ) -> Result<Factor, E> {
         let n = sizes.len();
         let mut offsets = Vec::with_capacity(n);
         let mut acc = 0;
@@ -344,10 +371,21 @@ impl Factor {
             offsets.push(acc);
             acc += s;
         }
+        let (tier, order_work) = match given_tiers {
+            Some(t) => {
+                let mut t = t.to_vec();
+                t.resize(n, u32::MAX);
+                (t, n as u64)
+            }
+            None => tiers(&sizes, &blocks),
+        };
+        charge(order_work, 0)?;
         let mut pool = Pool::new(&sizes, blocks.len() * 2);
         for b in blocks {
             pool.add(b);
         }
+        // Bytes of the records kept so far.
+        let mut record_bytes = 0u64;
         // Scratch: a stamp per group (dedup) and the front column of each group.
         let mut stamp = vec![0usize; n];
         let mut clock = 0usize;
@@ -355,9 +393,9 @@ impl Factor {
         let mut stamp_rescore = vec![0usize; n];
         let mut heap = BinaryHeap::with_capacity(n);
         let mut version = vec![0usize; n];
-        for g in 0..n {
+        for (g, &tg) in tier.iter().enumerate().take(n) {
             let s = pool.score(g, &mut stamp, &mut clock);
-            heap.push(Reverse((s, g, 0usize)));
+            heap.push(Reverse((tg, s, g, 0usize)));
         }
         let mut done = vec![false; n];
         let mut records = Vec::with_capacity(n);
@@ -366,7 +404,7 @@ impl Factor {
             input_entries,
             ..FactorStats::default()
         };
-        while let Some(Reverse((_, g, ver))) = heap.pop() {
+        while let Some(Reverse((_, _, g, ver))) = heap.pop() {
             if done[g] || ver != version[g] {
                 continue;
             }
@@ -407,6 +445,18 @@ impl Factor {
                 width += sizes[h];
             }
             let nrows: usize = members.iter().map(|b| b.nrows).sum();
+            // The real cost of this front: the pivot loop passes over every row for each of
+            // the group's columns (`sg` passes of nrows × width at most), and the memory
+            // held while it is built (the blocks still live, the members and the front).
+            let front_len = (nrows as u64).saturating_mul(width as u64);
+            let member_bytes: u64 = members.iter().map(Blk::bytes).sum();
+            charge(
+                front_len.saturating_mul(sg as u64 + 1),
+                pool.bytes
+                    .saturating_add(member_bytes)
+                    .saturating_add(record_bytes)
+                    .saturating_add(front_len.saturating_mul(FP_BYTES)),
+            )?;
             let mut front = vec![Fp::ZERO; nrows * width];
             let mut r0 = 0;
             for b in &members {
@@ -496,6 +546,12 @@ impl Factor {
                         }
                     }
                     let kept = if n_in > bw {
+                        charge(
+                            (n_in as u64)
+                                .saturating_mul(bw as u64)
+                                .saturating_mul(bw as u64),
+                            0,
+                        )?;
                         echelon(&mut data, bw)
                     } else {
                         n_in
@@ -539,11 +595,15 @@ impl Factor {
             }
             drop(front);
             stats.factor_entries += rows.len();
+            record_bytes = record_bytes.saturating_add(
+                ((rows.len() + pivots.len() + free.len() + rec_others.len()) as u64)
+                    .saturating_mul(FP_BYTES),
+            );
             for &h in &others {
                 if !done[h] && stamp_rescore[h] == rescore_mark {
                     version[h] += 1;
                     let s = pool.score(h, &mut stamp, &mut clock);
-                    heap.push(Reverse((s, h, version[h])));
+                    heap.push(Reverse((tier[h], s, h, version[h])));
                 }
             }
             records.push(Record {
@@ -555,13 +615,13 @@ impl Factor {
                 width: rec_width,
             });
         }
-        Factor {
+        Ok(Factor {
             sizes,
             offsets,
             records,
             rank,
             stats,
-        }
+        })
     }
 
     /// The rank.
@@ -756,6 +816,220 @@ impl Factor {
     }
 }
 
+/// The rows of `a` as working blocks: rows touching the same set of groups merged, in the
+/// order of their sorted group sets (deterministic).
+fn blocks_of(a: &SparseMatrix) -> Vec<Blk> {
+    let sizes = a.groups();
+    let mut offsets = Vec::with_capacity(sizes.len());
+    let mut group_of = Vec::with_capacity(a.ncols);
+    let mut acc = 0;
+    for (g, &s) in sizes.iter().enumerate() {
+        offsets.push(acc);
+        acc += s;
+        group_of.extend(std::iter::repeat_n(g, s));
+    }
+    let mut keyed: Vec<(Vec<usize>, usize)> = a
+        .rows
+        .iter()
+        .enumerate()
+        .filter(|(_, r)| !r.is_empty())
+        .map(|(i, r)| {
+            let mut set: Vec<usize> = r.iter().map(|&(c, _)| group_of[c as usize]).collect();
+            set.dedup();
+            (set, i)
+        })
+        .collect();
+    keyed.sort();
+    let mut blocks = Vec::new();
+    let mut i = 0;
+    let mut local = vec![0usize; sizes.len()];
+    while i < keyed.len() {
+        let mut j = i;
+        while j < keyed.len() && keyed[j].0 == keyed[i].0 {
+            j += 1;
+        }
+        let groups = keyed[i].0.clone();
+        let mut width = 0;
+        for &g in &groups {
+            local[g] = width;
+            width += sizes[g];
+        }
+        let mut data = vec![Fp::ZERO; (j - i) * width];
+        for (k, (_, ri)) in keyed[i..j].iter().enumerate() {
+            for &(c, v) in &a.rows[*ri] {
+                let g = group_of[c as usize];
+                data[k * width + local[g] + c as usize - offsets[g]] = v;
+            }
+        }
+        blocks.push(Blk {
+            groups,
+            nrows: j - i,
+            data,
+        });
+        i = j;
+    }
+    blocks
+}
+
+/// The elimination tier of each column group of `a` that [`Factor::new`] uses (lower
+/// first): its block triangular order (module docs).
+pub fn elimination_tiers(a: &SparseMatrix) -> Vec<u32> {
+    let blocks = blocks_of(a);
+    tiers(&a.groups(), &blocks).0
+}
+
+/// The budget of one factorization: work charged to a meter, memory checked against the
+/// budget's limit, `what` naming the matrix in the message.
+pub struct Limits<'a> {
+    /// The memory limit.
+    pub budget: &'a Budget,
+    /// The work meter of the analysis.
+    pub meter: &'a mut Meter,
+    /// What is being factorized, for the message.
+    pub what: &'a dyn Fn() -> String,
+}
+
+impl Limits<'_> {
+    fn charge(&mut self, work: u64, bytes: u64) -> Result<(), BudgetExceeded> {
+        self.meter.charge(work)?;
+        self.budget.check_memory(bytes, self.what)
+    }
+}
+
+/// The elimination tier of every group (lower first) and the work spent finding it: the
+/// block triangular order. A maximum b-matching of the blocks' rows to the groups (a group
+/// takes at most as many rows as it has columns; [`crate::structure::flow`]) gives each
+/// group its own rows; group `k` must go before group `h` when rows matched to `k` touch
+/// `h` (otherwise they would still be live when `h` is eliminated, join its front and be
+/// left over onto its neighbours). The strongly connected components of that relation, in
+/// topological order, are the tiers: for a square generic matrix the blocks of its block
+/// triangular form, within which the greedy minimum-front order decides.
+fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
+    use crate::structure::flow::{INF, Network};
+    let n = sizes.len();
+    let nb = blocks.len();
+    if n == 0 || nb == 0 {
+        return (vec![0; n], 0);
+    }
+    let (s, t) = (0usize, nb + n + 1);
+    let group_node = |g: usize| (nb + 1 + g) as u32;
+    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(nb + n + 2 * nb);
+    for (i, b) in blocks.iter().enumerate() {
+        let u = (i + 1) as u32;
+        edges.push((s as u32, u, b.nrows.min(INF as usize) as u32));
+        // The last group first: a block of rows on a body and earlier bodies is then
+        // matched to its body by the greedy start.
+        for &g in b.groups.iter().rev() {
+            edges.push((u, group_node(g), INF));
+        }
+    }
+    for (g, &sz) in sizes.iter().enumerate() {
+        edges.push((group_node(g), t as u32, sz.min(INF as usize) as u32));
+    }
+    let mut net = Network::new(t + 1, &edges);
+    net.max_flow(s, t);
+    let mut work = edges.len() as u64 * 4;
+    // k -> h: rows matched to k touch h.
+    let mut adj_start = vec![0usize; n + 1];
+    let mut owners_of: Vec<Vec<usize>> = Vec::with_capacity(nb);
+    for (i, b) in blocks.iter().enumerate() {
+        let mut owners = Vec::new();
+        for e in net.edges(i + 1) {
+            let v = net.head(e);
+            if v > nb && v <= nb + n && net.reverse_residual(e) > 0 {
+                owners.push(v - nb - 1);
+            }
+        }
+        for &k in &owners {
+            adj_start[k + 1] += b.groups.len().saturating_sub(1);
+        }
+        owners_of.push(owners);
+    }
+    for g in 0..n {
+        adj_start[g + 1] += adj_start[g];
+    }
+    let mut adj = vec![0u32; adj_start[n]];
+    let mut fill = adj_start.clone();
+    for (b, owners) in blocks.iter().zip(&owners_of) {
+        for &k in owners {
+            for &h in &b.groups {
+                if h != k {
+                    adj[fill[k]] = h as u32;
+                    fill[k] += 1;
+                }
+            }
+        }
+    }
+    work += adj.len() as u64 * 4;
+    drop(owners_of);
+    // Tarjan's strongly connected components, iterative; a component is completed only
+    // after every component it reaches, so completion order is reverse topological.
+    const NONE: usize = usize::MAX;
+    let mut index = vec![NONE; n];
+    let mut low = vec![0usize; n];
+    let mut on_stack = vec![false; n];
+    let mut comp = vec![0u32; n];
+    let mut stack: Vec<usize> = Vec::new();
+    let mut calls: Vec<(usize, usize)> = Vec::new();
+    let mut next_index = 0usize;
+    let mut ncomp = 0u32;
+    for root in 0..n {
+        if index[root] != NONE {
+            continue;
+        }
+        calls.push((root, adj_start[root]));
+        index[root] = next_index;
+        low[root] = next_index;
+        next_index += 1;
+        stack.push(root);
+        on_stack[root] = true;
+        while let Some(&mut (v, ref mut pos)) = calls.last_mut() {
+            if *pos < adj_start[v + 1] {
+                let w = adj[*pos] as usize;
+                *pos += 1;
+                if index[w] == NONE {
+                    index[w] = next_index;
+                    low[w] = next_index;
+                    next_index += 1;
+                    stack.push(w);
+                    on_stack[w] = true;
+                    calls.push((w, adj_start[w]));
+                } else if on_stack[w] {
+                    low[v] = low[v].min(index[w]);
+                }
+                continue;
+            }
+            calls.pop();
+            if let Some(&(u, _)) = calls.last() {
+                low[u] = low[u].min(low[v]);
+            }
+            if low[v] == index[v] {
+                while let Some(w) = stack.pop() {
+                    on_stack[w] = false;
+                    comp[w] = ncomp;
+                    if w == v {
+                        break;
+                    }
+                }
+                ncomp += 1;
+            }
+        }
+    }
+    // The over-determined part: groups reachable from rows the matching left over (in the
+    // residual network: a row to any group it touches, a group to the rows matched to it).
+    // Left-over rows join every front they touch whatever the order, so there the order
+    // within is left to the greedy: one last tier.
+    let over = net.reachable_from(s);
+    for (g, c) in comp.iter_mut().enumerate() {
+        *c = if over[nb + 1 + g] {
+            ncomp
+        } else {
+            ncomp - 1 - *c
+        };
+    }
+    (comp, work)
+}
+
 /// The live blocks of an elimination, indexed by group, with per-group row and width sums
 /// kept up to date for the pivot order.
 struct Pool<'a> {
@@ -767,6 +1041,8 @@ struct Pool<'a> {
     nblk: Vec<usize>,
     rsum: Vec<usize>,
     wsum: Vec<usize>,
+    /// Bytes held by the live blocks.
+    bytes: u64,
 }
 
 /// Blocks on more groups than this are "wide" (a carried row): the pivot order treats them
@@ -786,6 +1062,7 @@ impl<'a> Pool<'a> {
             nblk: vec![0; n],
             rsum: vec![0; n],
             wsum: vec![0; n],
+            bytes: 0,
         }
     }
 
@@ -796,6 +1073,7 @@ impl<'a> Pool<'a> {
     fn add(&mut self, b: Blk) {
         let id = self.store.len();
         let w = self.width(&b);
+        self.bytes = self.bytes.saturating_add(b.bytes());
         for &g in &b.groups {
             self.of_group[g].push(id);
             self.nblk[g] += 1;
@@ -812,6 +1090,7 @@ impl<'a> Pool<'a> {
         for id in ids {
             if let Some(b) = self.store[id].take() {
                 let w = self.width(&b);
+                self.bytes = self.bytes.saturating_sub(b.bytes());
                 for &h in &b.groups {
                     self.nblk[h] -= 1;
                     self.rsum[h] -= b.nrows;

@@ -30,6 +30,7 @@
 use crate::budget::{Budget, BudgetExceeded, Limit, Meter};
 use crate::elimination::{Block, Elimination, sigma_max};
 use crate::exact::Fp;
+use crate::exact::sparse::Limits;
 use crate::mechanism::{Mechanism, Space};
 use crate::motion::{self, GeometryUsed, JointModel, MotionError};
 use nalgebra::{DMatrix, DVector};
@@ -586,7 +587,11 @@ struct ExactPart<'a> {
 impl ExactPart<'_> {
     /// The part's pairs carrying its self-stresses
     /// ([`crate::exact::models::pairs_stress_support`]).
-    fn stress_support(&self, meter: &mut Meter) -> Result<Vec<bool>, BudgetExceeded> {
+    fn stress_support(
+        &self,
+        budget: &Budget,
+        meter: &mut Meter,
+    ) -> Result<Vec<bool>, BudgetExceeded> {
         let (part, pairs, b) = (self.part, self.pairs, self.b);
         let mut local: BTreeMap<usize, usize> = BTreeMap::new();
         for &x in &part.bodies {
@@ -602,14 +607,26 @@ impl ExactPart<'_> {
             .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
             .collect();
         let seed = part.pairs.first().copied().unwrap_or(0) as u64;
-        Ok(crate::exact::models::pairs_stress_support(
+        let (nl, np) = (part.bodies.len(), list.len());
+        let what = move || {
+            format!(
+                "the geometric rigidity analysis (exact self-stresses of one rigid block of \
+                 {nl} bodies and {np} joint pairs)"
+            )
+        };
+        crate::exact::models::pairs_stress_support(
             b,
             self.rows,
             &list,
             |x| local.get(&x).copied(),
             local.len(),
             0x7374_7265_7373 ^ seed,
-        ))
+            &mut Limits {
+                budget,
+                meter,
+                what: &what,
+            },
+        )
     }
 
     /// The rank and the part's local union-find (a parent per body of `part.bodies`, each
@@ -650,7 +667,12 @@ impl ExactPart<'_> {
                 .iter()
                 .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other)),
             |x| local.get(&x).copied(),
-        );
+            &mut Limits {
+                budget,
+                meter,
+                what: &what,
+            },
+        )?;
         let rank = factor.as_ref().map_or(0, |f| f.rank());
         let seed = part.pairs.first().copied().unwrap_or(0) as u64;
         let mut rng = crate::rng::SplitMix64::new(0x6765_6f72_6967_6964 ^ seed);
@@ -1249,7 +1271,7 @@ fn analyze_models(
                 // The self-stresses live on the pairs a random exact self-stress reaches:
                 // the floating-point ones (for the joints' weights) come from those rows
                 // alone, whose left null space is the whole one's.
-                let support = ctx.stress_support(meter)?;
+                let support = ctx.stress_support(budget, meter)?;
                 let sub = Part {
                     root: part.root,
                     pairs: part

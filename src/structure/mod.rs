@@ -11,7 +11,7 @@
 
 mod count;
 pub mod exhaustive;
-mod flow;
+pub(crate) mod flow;
 pub mod library;
 mod rank;
 

@@ -1,0 +1,59 @@
+//! Issue 16 item 1, the exact factorization's budget: a boundedness regression test.
+//!
+//! Before, the sparse GF(p) factorization behind the exact geometric analysis
+//! (`exact::sparse::Factor`) charged nothing while it ran: its fill sat in pending fronts and
+//! blocks that no check saw, so on the 10^5-body random file `rigid --method geometric` ran
+//! over 200 s and 2.4 GB without answering or meeting a budget. Now every front charges its
+//! real work (rows × width per pivot) and checks the memory then held (live blocks, the
+//! front, the records kept) against the memory limit: a budget smaller than the
+//! factorization's real needs stops it with the usual error.
+
+use mbsa::budget::{Budget, Limit};
+use mbsa::generate;
+use mbsa::rigidity::geometric::{GeometricError, GeometricOptions, analyze_within};
+
+/// A random spatial mechanism of 10^3 bodies: its one large block is analysed exactly. The
+/// checks made before the factorization (its sampled motions: about 0.6 MB) fit in 700 KB;
+/// the factorization itself holds more (its records alone are over a million bytes), so it
+/// must stop on the memory limit. The old code, which checked only the motions, answered.
+#[test]
+fn the_factorization_stops_on_the_memory_limit() {
+    let (m, _) = generate::random(1000, false, 1).expect("generates");
+    let budget = Budget {
+        max_memory_bytes: 700 * 1024,
+        ..Budget::DEFAULT
+    };
+    match analyze_within(&m, &GeometricOptions::default(), &budget) {
+        Err(GeometricError::Budget(e)) => {
+            assert_eq!(e.limit, Limit::Memory, "{e}");
+            let msg = e.to_string();
+            assert!(msg.contains("exact"), "{msg}");
+            assert!(msg.contains("memory limit"), "{msg}");
+        }
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("answered within 700 KB"),
+    }
+    // With the default budget it answers.
+    assert!(analyze_within(&m, &GeometricOptions::default(), &Budget::DEFAULT).is_ok());
+}
+
+/// The work the factorization charges is its real work: a work limit just below what the
+/// whole analysis needs stops it (exit 2 at the command line), and the count is
+/// deterministic (the same mechanism charges the same units twice).
+#[test]
+fn the_factorization_charges_its_work() {
+    let (m, _) = generate::random(1000, false, 1).expect("generates");
+    let used = |max_work: u64| {
+        let budget = Budget {
+            max_work,
+            ..Budget::DEFAULT
+        };
+        analyze_within(&m, &GeometricOptions::default(), &budget)
+    };
+    assert!(used(Budget::DEFAULT.max_work).is_ok());
+    match used(100_000) {
+        Err(GeometricError::Budget(e)) => assert_eq!(e.limit, Limit::Work, "{e}"),
+        Err(e) => panic!("{e}"),
+        Ok(_) => panic!("answered within 10^5 work units"),
+    }
+}
