@@ -1012,25 +1012,36 @@ pub fn geometries(
     let used = choose(m, source, precision)?;
     let geoms = match used.seed {
         Some(seed) => (0..m.joints.len())
-            .map(|i| {
-                let j = &m.joints[i];
-                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(seed, i)))
-            })
+            .map(|i| random_joint_geometry(m, seed, i))
             .collect(),
-        None => m
-            .joints
-            .iter()
-            .enumerate()
-            .map(|(i, j)| {
-                if !modelled(j.kind, m.space) && j.geometry.is_empty() {
-                    random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
-                } else {
-                    j.geometry.clone()
-                }
-            })
-            .collect(),
+        None => file_geometries(m),
     };
     Ok((geoms, used))
+}
+
+/// Joint `i`'s geometry in the random realization `seed` ([`geometries`]' choice, one joint at
+/// a time: 10^6 joints need not hold them all).
+pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geometry {
+    random_geometry(
+        m.joints[i].kind,
+        m.space,
+        &mut SplitMix64::new(joint_seed(seed, i)),
+    )
+}
+
+/// Every joint's geometry when the file's is used ([`geometries`]).
+pub(crate) fn file_geometries(m: &Mechanism) -> Vec<Geometry> {
+    m.joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            if !modelled(j.kind, m.space) && j.geometry.is_empty() {
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+            } else {
+                j.geometry.clone()
+            }
+        })
+        .collect()
 }
 
 /// The model of one binary pair of joint `index` of `m` at geometry `g` with `driven` of its

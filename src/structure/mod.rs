@@ -409,7 +409,12 @@ fn analyze_once(
     let mut dec = if opts.count_only {
         count::decompose(m, &eqs, &u)
     } else {
-        let (geoms, used) = motion::geometries(m, opts.geometry, opts.precision)?;
+        // A random realization is drawn joint by joint where it is used.
+        let used = motion::choose(m, opts.geometry, opts.precision)?;
+        let geoms = match used.seed {
+            Some(_) => Vec::new(),
+            None => motion::file_geometries(m),
+        };
         if used.is_file() && m.space == crate::mechanism::Space::Spatial {
             twists = Some(
                 (0..m.joints.len())
@@ -520,7 +525,10 @@ fn build(
         }
     }
     drop(fill);
-    let code = |e: usize| m.joints[eqs.joint[e]].kind.code();
+    // Joint kinds in a table of their own (read from the joints, hundreds of bytes apart, each
+    // was a cache miss at 10^6 joints).
+    let kind_of: Vec<JointType> = m.joints.iter().map(|j| j.kind).collect();
+    let code = |e: usize| kind_of[eqs.joint[e]].code();
     // Each group's pair lists, type and inputs on its own (in parallel: they read shared
     // data only); then the types are numbered in order of first appearance.
     let rendered: Vec<(String, String, String, String, u32)> = crate::par::map(raw.len(), |g| {
@@ -537,7 +545,7 @@ fn build(
                 return;
             }
             active_joints.push(ji);
-            let jt = m.joints[ji].kind;
+            let jt = kind_of[ji];
             match kinds.iter_mut().find(|(k, _)| *k == jt) {
                 Some((_, c)) => *c += n,
                 None => kinds.push((jt, n)),

@@ -651,7 +651,8 @@ fn matrix_digest<S: RawStorage<f64, Dyn, Dyn>>(a: &nalgebra::Matrix<f64, Dyn, Dy
 
 /// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced
 /// unknowns and sound blocks seen in an earlier analysis (same rows, same tolerance) are
-/// taken from it instead of being factorized again.
+/// taken from it instead of being factorized again. `geoms` is the joints' geometry when the
+/// file's is used; a random realization (`used.seed`) is drawn joint by joint instead.
 pub(crate) fn check(
     m: &Mechanism,
     geoms: &[Geometry],
@@ -662,7 +663,7 @@ pub(crate) fn check(
 ) -> RankResult {
     let b = m.b() as usize;
     let nb = eqs.nodes;
-    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file());
+    let (mut rows, free) = pair_rows(m, geoms, used.seed, eqs, used.is_file());
     let tol = match used.precision {
         Some(delta) => Tol {
             rel: 1e-9,
@@ -1262,6 +1263,7 @@ impl<'a> Round<'a> {
 fn pair_rows(
     m: &Mechanism,
     geoms: &[Geometry],
+    seed: Option<u64>,
     eqs: &Equations,
     with_free: bool,
 ) -> (PairRows, PairRows) {
@@ -1279,7 +1281,13 @@ fn pair_rows(
             match memo[slot] {
                 Some((j, d, v)) if j == ji && d == driven => v,
                 _ => {
-                    let v = motion::pair_stack_model(m, ji, &geoms[ji], driven).rows;
+                    let v = match seed {
+                        Some(seed) => {
+                            let g = motion::random_joint_geometry(m, seed, ji);
+                            motion::pair_stack_model(m, ji, &g, driven).rows
+                        }
+                        None => motion::pair_stack_model(m, ji, &geoms[ji], driven).rows,
+                    };
                     memo[slot] = Some((ji, driven, v));
                     v
                 }
