@@ -1225,6 +1225,55 @@ mod tests {
         assert_eq!(stacked.rank(1e-9), b);
     }
 
+    /// [`complement`] projects every unit vector at once; bit for bit the same as one vector
+    /// at a time through [`project_out`] (the code it replaced), so rank decisions and every
+    /// output are unchanged.
+    #[test]
+    fn complement_equals_one_vector_at_a_time() {
+        fn reference(cols: &[Vb], b: usize) -> Vec<Vb> {
+            let mut basis: Vec<Vb> = orthonormal(cols, b).as_slice().to_vec();
+            let first_new = basis.len();
+            while basis.len() < b {
+                let mut best: Option<(Vb, f64)> = None;
+                for i in 0..b {
+                    let mut v = [0.0; MAX_B];
+                    v[i] = 1.0;
+                    project_out(&mut v, &basis, b);
+                    let n = norm(&v, b);
+                    if best.is_none_or(|(_, w)| n > w) {
+                        best = Some((v, n));
+                    }
+                }
+                let (v, _) = best.expect("b > 0");
+                basis.push(normalized(&v, b));
+            }
+            basis[first_new..].to_vec()
+        }
+        let mut rng = SplitMix64::new(7);
+        for trial in 0..3000 {
+            let b = [3, 6][trial % 2];
+            let d = trial % b;
+            let cols: Vec<Vb> = (0..d)
+                .map(|_| {
+                    let mut v = [0.0; MAX_B];
+                    for x in v.iter_mut().take(b) {
+                        // Some exact zeros, as joint twists have.
+                        let r = rng.next_signed();
+                        *x = if r.abs() < 0.2 { 0.0 } else { r };
+                    }
+                    v
+                })
+                .collect();
+            let got = complement(&cols, b);
+            let want = reference(&cols, b);
+            assert_eq!(got.len(), want.len());
+            for (g, w) in got.as_slice().iter().zip(&want) {
+                let bits = |v: &Vb| v.map(f64::to_bits);
+                assert_eq!(bits(g), bits(w), "trial {trial}");
+            }
+        }
+    }
+
     #[test]
     fn splitmix_vector() {
         let mut r = SplitMix64::new(0);
@@ -1332,7 +1381,7 @@ mod tests {
         assert_eq!(nullity, 1);
         // The spin: rotation about the line through both centres.
         let u = Vector3::new(0.9, -0.7, 0.4).normalize();
-        let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)));
+        let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)).to_vec());
         assert!((&stacked * t).norm() < 1e-12);
     }
 

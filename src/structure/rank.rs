@@ -1857,3 +1857,91 @@ fn describe(
         ids.join(", ")
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::GeometrySource;
+
+    /// The flat rows of every pair (built chunk by chunk, each joint's model once per chunk,
+    /// the random geometry drawn where it is used) are exactly the rows of the pair's own
+    /// model, the heap matrix per pair they replaced: random mechanisms of mixed joint types,
+    /// and a shared joint with inputs (element pairs and input-only pairs).
+    #[test]
+    fn pair_rows_are_the_pair_models() {
+        let mut cases = Vec::new();
+        for (planar, seed) in [(false, 2), (true, 5)] {
+            cases.push(
+                crate::generate::random(3000, planar, seed)
+                    .expect("valid")
+                    .0,
+            );
+        }
+        cases.push(crate::generate::star(2500, JointType::S, false, true, true).expect("valid"));
+        for m in &cases {
+            let eqs = Equations::of(m);
+            let (geoms, used) =
+                motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
+            assert!(eqs.len() > 2 * PAIRS_PER_CHUNK, "several chunks");
+            let (rows, free) = pair_rows(m, &[], used.seed, &eqs, false);
+            assert_eq!(rows.len(), eqs.len());
+            assert_eq!(free.len(), 0);
+            // The file's geometry (here the same values, given), with the rows without input.
+            let (file_rows, free) = pair_rows(m, &geoms, None, &eqs, true);
+            assert_eq!(free.len(), eqs.len());
+            for e in 0..eqs.len() {
+                let ji = eqs.joint[e];
+                let want = if eqs.input_only[e] {
+                    let own = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
+                    let f = motion::pair_model(m, ji, &geoms[ji], 0).rows;
+                    input_rows(view(&own), view(&f))
+                } else {
+                    motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows
+                };
+                assert_eq!(rows.get(e).into_owned(), want, "pair {e}");
+                assert_eq!(file_rows.get(e).into_owned(), want, "pair {e}");
+                let want_free = if eqs.input_only[e] {
+                    DMatrix::zeros(0, m.b() as usize)
+                } else {
+                    motion::pair_model(m, ji, &geoms[ji], 0).rows
+                };
+                assert_eq!(free.get(e).into_owned(), want_free, "pair {e}");
+            }
+        }
+    }
+
+    fn view(a: &DMatrix<f64>) -> RowsView<'_> {
+        RowsView::from_slice_with_strides(a.as_slice(), a.nrows(), a.ncols(), 1, a.nrows())
+    }
+
+    /// Rows replaced by more than their room, and rows removed, read back as a matrix would.
+    #[test]
+    fn pair_rows_set_and_remove() {
+        let mut c = Chunk::default();
+        c.push_rows(&[[1.0, 2.0, 3.0, 0.0, 0.0, 0.0]], 3);
+        c.push_rows(
+            &[
+                [4.0, 5.0, 6.0, 0.0, 0.0, 0.0],
+                [7.0, 8.0, 9.0, 0.0, 0.0, 0.0],
+            ],
+            3,
+        );
+        let mut rows = PairRows::from_chunks(3, vec![c]);
+        let bigger = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        rows.set(0, &bigger);
+        assert_eq!(rows.get(0).into_owned(), bigger);
+        assert_eq!(
+            rows.get(1).into_owned(),
+            DMatrix::from_row_slice(2, 3, &[4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+        );
+        rows.remove_row(0, 1);
+        assert_eq!(rows.get(0).into_owned(), bigger.clone().remove_row(1));
+        rows.remove_row(1, 0);
+        assert_eq!(
+            rows.get(1).into_owned(),
+            DMatrix::from_row_slice(1, 3, &[7.0, 8.0, 9.0])
+        );
+        assert_eq!(rows.nrows(1), 1);
+        assert!(rows.try_get(2).is_none());
+    }
+}
