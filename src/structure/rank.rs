@@ -1746,7 +1746,9 @@ fn put(
 ) {
     match qx {
         None => dst.copy_from(&rows),
-        Some(qx) => dst.copy_from(&(rows * qx)),
+        // An owned copy: nalgebra's product reads a row-major view's columns past the slice it
+        // makes of them (a debug build's bounds check stops it); the same product as before.
+        Some(qx) => dst.copy_from(&(rows.into_owned() * qx)),
     }
     *dst *= sign;
 }
