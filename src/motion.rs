@@ -181,17 +181,22 @@ pub fn perpendicular_pair(u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
     (e1, e2)
 }
 
-fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vec<f64> {
+fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vb {
     let m = p.cross(u);
-    vec![u.x, u.y, u.z, m.x, m.y, m.z]
+    [u.x, u.y, u.z, m.x, m.y, m.z]
 }
 
-fn spatial_trans(u: &Vector3<f64>) -> Vec<f64> {
-    vec![0.0, 0.0, 0.0, u.x, u.y, u.z]
+fn spatial_trans(u: &Vector3<f64>) -> Vb {
+    [0.0, 0.0, 0.0, u.x, u.y, u.z]
+}
+
+/// A vector of a 3-dimensional motion space (the rest zero).
+fn v3b(a: f64, b: f64, c: f64) -> Vb {
+    [a, b, c, 0.0, 0.0, 0.0]
 }
 
 /// The rotations about the world x, y, z axes through `c` (the turns of a ball).
-fn world_turns(c: &Vector3<f64>) -> [Vec<f64>; 3] {
+fn world_turns(c: &Vector3<f64>) -> [Vb; 3] {
     [Vector3::x(), Vector3::y(), Vector3::z()].map(|e| spatial_rot(&e, c))
 }
 
@@ -213,8 +218,13 @@ fn in_plane(
     Ok(w / w.norm())
 }
 
-fn columns(b: usize, cols: &[Vec<f64>]) -> DMatrix<f64> {
+fn columns(b: usize, cols: &[Vb]) -> DMatrix<f64> {
     DMatrix::from_fn(b, cols.len(), |i, j| cols[j][i])
+}
+
+/// The vectors as the rows of a matrix.
+fn as_rows(b: usize, rows: &[Vb]) -> DMatrix<f64> {
+    DMatrix::from_fn(rows.len(), b, |i, j| rows[i][j])
 }
 
 // The Gram-Schmidt helpers run on stack vectors of the motion space (B <= 6): they are called
@@ -226,6 +236,44 @@ fn columns(b: usize, cols: &[Vec<f64>]) -> DMatrix<f64> {
 const MAX_B: usize = 6;
 
 type Vb = [f64; MAX_B];
+
+/// Up to [`MAX_B`] vectors of the motion space, on the stack (a joint's twists or rows).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct Vecs {
+    v: [Vb; MAX_B],
+    n: usize,
+}
+
+impl Vecs {
+    const EMPTY: Vecs = Vecs {
+        v: [[0.0; MAX_B]; MAX_B],
+        n: 0,
+    };
+
+    fn of(list: &[Vb]) -> Vecs {
+        let mut out = Vecs::EMPTY;
+        list.iter().for_each(|&x| out.push(x));
+        out
+    }
+
+    /// Append `x` (never more than [`MAX_B`] vectors: motion spaces have no more).
+    fn push(&mut self, x: Vb) {
+        if let Some(slot) = self.v.get_mut(self.n) {
+            *slot = x;
+            self.n += 1;
+        }
+    }
+
+    /// The vectors.
+    pub(crate) fn as_slice(&self) -> &[Vb] {
+        &self.v[..self.n]
+    }
+
+    /// Number of vectors.
+    pub(crate) fn len(&self) -> usize {
+        self.n
+    }
+}
 
 fn dot(a: &Vb, b: &Vb, n: usize) -> f64 {
     let mut r = 0.0;
@@ -260,64 +308,67 @@ fn normalized(v: &Vb, n: usize) -> Vb {
     out
 }
 
-/// Orthonormal basis (as rows) of the orthogonal complement of the column space of `a`
-/// (`b × d`, full column rank): greedy Gram-Schmidt on the unit vectors, always taking the one
-/// with the largest residual, so no threshold is involved.
-fn complement_rows(a: &DMatrix<f64>) -> DMatrix<f64> {
-    let b = a.nrows();
-    assert!(b <= MAX_B, "motion spaces have at most {MAX_B} dimensions");
-    let mut basis: Vec<Vb> = orthonormal(a);
+/// Orthonormal basis of the orthogonal complement of the span of `cols` (vectors of the
+/// `b`-dimensional motion space, independent): greedy Gram-Schmidt on the unit vectors,
+/// always taking the one with the largest residual, so no threshold is involved.
+fn complement(cols: &[Vb], b: usize) -> Vecs {
+    let mut basis = orthonormal(cols, b);
     let first_new = basis.len();
     while basis.len() < b {
-        let mut best: Option<(Vb, f64)> = None;
-        for i in 0..b {
-            let mut v = [0.0; MAX_B];
-            v[i] = 1.0;
-            project_out(&mut v, &basis, b);
-            let n = norm(&v, b);
-            if best.is_none_or(|(_, w)| n > w) {
-                best = Some((v, n));
+        // Every unit vector projected out of the basis as [`project_out`] does, the same
+        // operations in the same order for each, interleaved across the vectors (each dot
+        // product is a chain of dependent additions: one vector at a time waited on them).
+        let mut v = [[0.0; MAX_B]; MAX_B];
+        for (i, vi) in v.iter_mut().enumerate().take(b) {
+            vi[i] = 1.0;
+        }
+        for _ in 0..2 {
+            for q in basis.as_slice() {
+                let mut d = [0.0; MAX_B];
+                for k in 0..b {
+                    for i in 0..b {
+                        d[i] += q[k] * v[i][k];
+                    }
+                }
+                for i in 0..b {
+                    for k in 0..b {
+                        v[i][k] -= q[k] * d[i];
+                    }
+                }
             }
         }
-        let (v, _) = best.expect("b > basis.len() >= 0 so the loop ran");
+        let mut best: Option<(Vb, f64)> = None;
+        for vi in v.iter().take(b) {
+            let n = norm(vi, b);
+            if best.is_none_or(|(_, w)| n > w) {
+                best = Some((*vi, n));
+            }
+        }
+        let Some((v, _)) = best else {
+            break;
+        };
         basis.push(normalized(&v, b));
     }
-    DMatrix::from_fn(b - first_new, b, |i, j| basis[first_new + i][j])
+    Vecs::of(&basis.as_slice()[first_new..])
 }
 
-/// Orthonormalize the columns of `a` (modified Gram-Schmidt, twice); columns that vanish are
-/// dropped.
-fn orthonormal(a: &DMatrix<f64>) -> Vec<Vb> {
-    let b = a.nrows();
-    assert!(b <= MAX_B, "motion spaces have at most {MAX_B} dimensions");
-    // `a.norm()`: the column dot products summed in order.
+/// Orthonormalize `cols` (modified Gram-Schmidt, twice); vectors that vanish are dropped.
+fn orthonormal(cols: &[Vb], b: usize) -> Vecs {
+    // The norm of all of them: the dot products summed in order.
     let mut sq = 0.0;
-    let cols: Vec<Vb> = a
-        .column_iter()
-        .map(|c| {
-            let mut v = [0.0; MAX_B];
-            for k in 0..b {
-                v[k] = c[k];
-            }
-            sq += dot(&v, &v, b);
-            v
-        })
-        .collect();
+    for v in cols {
+        sq += dot(v, v, b);
+    }
     let scale = sq.sqrt().max(1e-300);
-    let mut out: Vec<Vb> = Vec::with_capacity(cols.len());
-    for mut v in cols {
-        project_out(&mut v, &out, b);
+    let mut out = Vecs::EMPTY;
+    for &c in cols {
+        let mut v = c;
+        project_out(&mut v, out.as_slice(), b);
         if norm(&v, b) > 1e-10 * scale {
             out.push(normalized(&v, b));
         }
     }
     out
-}
-
-/// [`orthonormal`] as the columns of a matrix.
-fn orthonormal_columns(a: &DMatrix<f64>) -> DMatrix<f64> {
-    let out = orthonormal(a);
-    DMatrix::from_fn(a.nrows(), out.len(), |i, j| out[j][i])
 }
 
 fn mix_seed(g: &Geometry) -> u64 {
@@ -347,12 +398,12 @@ fn random_unit(rng: &mut SplitMix64) -> Vector3<f64> {
 }
 
 /// The generic contact model: `B − k` lines.
-fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> DMatrix<f64> {
+fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> Vecs {
     let b = space.b() as usize;
     let k = (kind.grade() as usize).min(b);
     let mut rng = SplitMix64::new(mix_seed(g));
     let base = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
-    let mut rows: Vec<Vec<f64>> = Vec::new();
+    let mut rows = Vecs::EMPTY;
     for i in 0..b - k {
         let (q, mut d) = if i == 0 {
             (
@@ -371,7 +422,7 @@ fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> DMatrix<f64> {
         let row = match space {
             Space::Spatial => {
                 let m = q.cross(&d);
-                vec![m.x, m.y, m.z, d.x, d.y, d.z]
+                [m.x, m.y, m.z, d.x, d.y, d.z]
             }
             Space::Planar => {
                 let d2 = if d.x.abs() + d.y.abs() < 1e-9 {
@@ -379,28 +430,27 @@ fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> DMatrix<f64> {
                 } else {
                     d
                 };
-                vec![q.x * d2.y - q.y * d2.x, d2.x, d2.y]
+                v3b(q.x * d2.y - q.y * d2.x, d2.x, d2.y)
             }
             Space::Spherical => {
                 let m = q.cross(&d);
                 if m.norm() > 1e-9 {
-                    vec![m.x, m.y, m.z]
+                    v3b(m.x, m.y, m.z)
                 } else {
                     let r = random_unit(&mut rng);
-                    vec![r.x, r.y, r.z]
+                    v3b(r.x, r.y, r.z)
                 }
             }
         };
         rows.push(row);
     }
-    let r = columns(b, &rows);
     // Orthonormal rows spanning the same lines; random lines are independent in practice, and
     // a dependent draw only yields fewer rows (never a panic).
-    orthonormal_columns(&r).transpose()
+    orthonormal(rows.as_slice(), b)
 }
 
 /// All allowed twists of `kind` in driven-DOF order (before removing driven ones).
-fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f64>>, MotionError> {
+fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, MotionError> {
     use JointType::*;
     let code = kind.code();
     let origin = |g: &Geometry| need(kind, "origin", g.origin).map(v3);
@@ -409,8 +459,8 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
         |g: &Geometry| need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
     match space {
         Space::Spatial => Ok(match kind {
-            R => vec![spatial_rot(&axis(g)?, &origin(g)?)],
-            P => vec![spatial_trans(&axis(g)?)],
+            R => Vecs::of(&[spatial_rot(&axis(g)?, &origin(g)?)]),
+            P => Vecs::of(&[spatial_trans(&axis(g)?)]),
             H => {
                 let (u, p) = (axis(g)?, origin(g)?);
                 let h = need(kind, "pitch", g.pitch)?;
@@ -421,23 +471,23 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                     });
                 }
                 let m = p.cross(&u) + u * h;
-                vec![vec![u.x, u.y, u.z, m.x, m.y, m.z]]
+                Vecs::of(&[[u.x, u.y, u.z, m.x, m.y, m.z]])
             }
             C => {
                 let (u, p) = (axis(g)?, origin(g)?);
-                vec![spatial_trans(&u), spatial_rot(&u, &p)]
+                Vecs::of(&[spatial_trans(&u), spatial_rot(&u, &p)])
             }
             ER => {
                 let (u, p) = (axis(g)?, origin(g)?);
                 let (e1, e2) = perpendicular_pair(&u);
-                vec![spatial_rot(&e1, &p), spatial_rot(&e2, &p)]
+                Vecs::of(&[spatial_rot(&e1, &p), spatial_rot(&e2, &p)])
             }
             U => {
                 let (u, p) = (axis(g)?, origin(g)?);
                 let u2 = unit(kind, "axis2", need(kind, "axis2", g.axis2)?)?;
-                vec![spatial_rot(&u, &p), spatial_rot(&u2, &p)]
+                Vecs::of(&[spatial_rot(&u, &p), spatial_rot(&u2, &p)])
             }
-            S => world_turns(&origin(g)?).to_vec(),
+            S => Vecs::of(&world_turns(&origin(g)?)),
             PL | FP => {
                 let n = match (kind, g.normal) {
                     (_, Some(n)) => unit(kind, "normal", n)?,
@@ -446,22 +496,22 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 };
                 let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
                 let (e1, e2) = perpendicular_pair(&n);
-                vec![spatial_trans(&e1), spatial_trans(&e2), spatial_rot(&n, &p)]
+                Vecs::of(&[spatial_trans(&e1), spatial_trans(&e2), spatial_rot(&n, &p)])
             }
             SP => {
                 // Sphere (second body) on a plane (first body): slides in the plane, then the
                 // three turns about the centre.
                 let (c, n) = (origin(g)?, normal(g)?);
                 let (e1, e2) = perpendicular_pair(&n);
-                let mut out = vec![spatial_trans(&e1), spatial_trans(&e2)];
-                out.extend(world_turns(&c));
+                let mut out = Vecs::of(&[spatial_trans(&e1), spatial_trans(&e2)]);
+                world_turns(&c).into_iter().for_each(|t| out.push(t));
                 out
             }
             SC => {
                 // Sphere centre kept on the cylinder axis: the slide, then the three turns.
                 let (c, u) = (origin(g)?, axis(g)?);
-                let mut out = vec![spatial_trans(&u)];
-                out.extend(world_turns(&c));
+                let mut out = Vecs::of(&[spatial_trans(&u)]);
+                world_turns(&c).into_iter().for_each(|t| out.push(t));
                 out
             }
             PC => {
@@ -470,23 +520,23 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
                 let u = in_plane(kind, &u, &n, "`axis` must not be parallel to `normal`")?;
                 let (e1, e2) = perpendicular_pair(&n);
-                vec![
+                Vecs::of(&[
                     spatial_trans(&e1),
                     spatial_trans(&e2),
                     spatial_rot(&n, &p),
                     spatial_rot(&u, &p),
-                ]
+                ])
             }
             CR => {
                 // Cylinder in a slot: slide along the axis, slide across the slot, turn about
                 // the axis.
                 let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
                 let n = in_plane(kind, &n, &u, "`normal` must not be parallel to `axis`")?;
-                vec![
+                Vecs::of(&[
                     spatial_trans(&u),
                     spatial_trans(&n.cross(&u)),
                     spatial_rot(&u, &p),
-                ]
+                ])
             }
             SPSP => {
                 // One force along the line of centres; the allowed motions are its annihilator.
@@ -501,14 +551,10 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 }
                 let d = d / d.norm();
                 let m = c1.cross(&d);
-                let row = DMatrix::from_row_slice(1, 6, &[m.x, m.y, m.z, d.x, d.y, d.z]);
-                let t = complement_rows(&row.transpose());
-                (0..t.nrows())
-                    .map(|i| t.row(i).iter().copied().collect())
-                    .collect()
+                complement(&[[m.x, m.y, m.z, d.x, d.y, d.z]], 6)
             }
             F => {
-                let mut out = Vec::new();
+                let mut out = Vecs::EMPTY;
                 for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
                     out.push(spatial_trans(&e));
                 }
@@ -517,27 +563,23 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
                 }
                 out
             }
-            _ => Vec::new(),
+            _ => Vecs::EMPTY,
         }),
         Space::Planar => Ok(match kind {
             R => {
                 let p = origin(g)?;
-                vec![vec![1.0, p.y, -p.x]]
+                Vecs::of(&[v3b(1.0, p.y, -p.x)])
             }
             P => {
                 let a = need(kind, "axis", g.axis)?;
                 let u = unit(kind, "axis", [a[0], a[1], 0.0])?;
-                vec![vec![0.0, u.x, u.y]]
+                Vecs::of(&[v3b(0.0, u.x, u.y)])
             }
             FP => {
                 let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
-                vec![
-                    vec![0.0, 1.0, 0.0],
-                    vec![0.0, 0.0, 1.0],
-                    vec![1.0, p.y, -p.x],
-                ]
+                Vecs::of(&[v3b(0.0, 1.0, 0.0), v3b(0.0, 0.0, 1.0), v3b(1.0, p.y, -p.x)])
             }
-            k if is_contact(k) => Vec::new(),
+            k if is_contact(k) => Vecs::EMPTY,
             _ => {
                 return Err(MotionError::InvalidInSpace {
                     kind: code,
@@ -548,14 +590,10 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vec<Vec<f6
         Space::Spherical => Ok(match kind {
             R => {
                 let u = axis(g)?;
-                vec![vec![u.x, u.y, u.z]]
+                Vecs::of(&[v3b(u.x, u.y, u.z)])
             }
-            FP => vec![
-                vec![1.0, 0.0, 0.0],
-                vec![0.0, 1.0, 0.0],
-                vec![0.0, 0.0, 1.0],
-            ],
-            k if is_contact(k) => Vec::new(),
+            FP => Vecs::of(&[v3b(1.0, 0.0, 0.0), v3b(0.0, 1.0, 0.0), v3b(0.0, 0.0, 1.0)]),
+            k if is_contact(k) => Vecs::EMPTY,
             _ => {
                 return Err(MotionError::InvalidInSpace {
                     kind: code,
@@ -573,6 +611,38 @@ pub fn joint_model(
     space: Space,
     driven: u32,
 ) -> Result<JointModel, MotionError> {
+    stack_model(kind, g, space, driven).map(|s| s.matrices())
+}
+
+/// A joint model on the stack ([`JointModel`] without the heap): the constraint rows and the
+/// allowed twists as vectors of the motion space. Analyses that build a model for each of
+/// 10^6 joints use it directly.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct StackModel {
+    /// Dimension of the motion space.
+    pub b: usize,
+    /// Constraint rows.
+    pub rows: Vecs,
+    /// Allowed twists (driven DOF removed), in driven-DOF order.
+    pub twists: Vecs,
+}
+
+impl StackModel {
+    fn matrices(&self) -> JointModel {
+        JointModel {
+            rows: as_rows(self.b, self.rows.as_slice()),
+            twists: columns(self.b, self.twists.as_slice()),
+        }
+    }
+}
+
+/// [`joint_model`] on the stack.
+pub(crate) fn stack_model(
+    kind: JointType,
+    g: &Geometry,
+    space: Space,
+    driven: u32,
+) -> Result<StackModel, MotionError> {
     let b = space.b() as usize;
     let grade = kind.grade() as u32;
     if grade as usize > b {
@@ -590,32 +660,27 @@ pub fn joint_model(
     }
     if !modelled(kind, space) {
         let rows = contact_rows(kind, g, space);
-        if rows.nrows() != b - grade as usize {
+        if rows.len() != b - grade as usize {
             return Err(MotionError::Degenerate {
                 kind: kind.code(),
                 reason: "the contact lines are dependent",
             });
         }
-        let all = complement_rows(&rows.transpose()).transpose();
-        let twists = all
-            .columns(driven as usize, all.ncols() - driven as usize)
-            .into_owned();
-        let rows = complement_rows(&twists);
-        return Ok(JointModel { rows, twists });
+        let all = complement(rows.as_slice(), b);
+        let twists = Vecs::of(all.as_slice().get(driven as usize..).unwrap_or(&[]));
+        let rows = complement(twists.as_slice(), b);
+        return Ok(StackModel { b, rows, twists });
     }
     let full = full_twists(kind, g, space)?;
-    let all = columns(b, &full);
-    if orthonormal_columns(&all).ncols() != all.ncols() {
+    if orthonormal(full.as_slice(), b).len() != full.len() {
         return Err(MotionError::Degenerate {
             kind: kind.code(),
             reason: "its motion directions are dependent (parallel axes?)",
         });
     }
-    let twists = all
-        .columns(driven as usize, all.ncols() - driven as usize)
-        .into_owned();
-    let rows = complement_rows(&twists);
-    Ok(JointModel { rows, twists })
+    let twists = Vecs::of(full.as_slice().get(driven as usize..).unwrap_or(&[]));
+    let rows = complement(twists.as_slice(), b);
+    Ok(StackModel { b, rows, twists })
 }
 
 /// Random generic geometry for a joint of `kind`: every field set (origin, unit axis, unit
@@ -663,19 +728,24 @@ pub fn joint_seed(seed: u64, index: usize) -> u64 {
 
 /// A model that cannot fail: the generic contact model with the joint's grade (capped at B)
 /// and driven DOF (capped at the grade). Used by [`realize`] for joints no model fits.
-fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> JointModel {
+fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> StackModel {
     let b = space.b() as usize;
     let k = (kind.grade() as usize).min(b);
     let mut rng = SplitMix64::new(seed);
-    let rows: Vec<Vec<f64>> = (0..b - k)
-        .map(|_| (0..b).map(|_| rng.next_signed()).collect())
-        .collect();
-    let rows = orthonormal_columns(&columns(b, &rows)).transpose();
-    let all = complement_rows(&rows.transpose()).transpose();
-    let d = (driven as usize).min(all.ncols());
-    let twists = all.columns(d, all.ncols() - d).into_owned();
-    let rows = complement_rows(&twists);
-    JointModel { rows, twists }
+    let mut rows = Vecs::EMPTY;
+    for _ in 0..b - k {
+        let mut r = [0.0; MAX_B];
+        for x in r.iter_mut().take(b) {
+            *x = rng.next_signed();
+        }
+        rows.push(r);
+    }
+    let rows = orthonormal(rows.as_slice(), b);
+    let all = complement(rows.as_slice(), b);
+    let d = (driven as usize).min(all.len());
+    let twists = Vecs::of(&all.as_slice()[d..]);
+    let rows = complement(twists.as_slice(), b);
+    StackModel { b, rows, twists }
 }
 
 /// One model per joint at random generic geometry (the file geometry is ignored), seeded per
@@ -687,8 +757,9 @@ pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
         let s = joint_seed(seed, i);
         let mut rng = SplitMix64::new(s);
         let g = random_geometry(j.kind, m.space, &mut rng);
-        joint_model(j.kind, &g, m.space, j.driven)
+        stack_model(j.kind, &g, m.space, j.driven)
             .unwrap_or_else(|_| fallback_model(j.kind, m.space, j.driven, s))
+            .matrices()
     })
 }
 
@@ -818,10 +889,10 @@ pub fn choose(
             closure: Some(file_closure(m, precision)?),
         })
     };
-    let lack = lacking(m);
     match source {
         GeometrySource::Random { seed } => Ok(random(seed, None)),
         GeometrySource::File => {
+            let lack = lacking(m);
             let note = (!lack.is_empty()).then(|| {
                 format!(
                     "no geometric model for {}: generic contact lines used",
@@ -833,7 +904,7 @@ pub fn choose(
             });
             file(note)
         }
-        GeometrySource::Auto { seed } if lack.is_empty() => {
+        GeometrySource::Auto { seed } if !m.joints.iter().any(|j| lacks(m, j)) => {
             match file(Some("every joint has its geometry".into())) {
                 Ok(r) => Ok(r),
                 // A configuration that is not assembled is the user's to fix, not a reason
@@ -848,16 +919,23 @@ pub fn choose(
             }
         }
         GeometrySource::Auto { seed } => {
+            // The first few named, the rest counted (an entry per joint cost 10^6 strings).
             const SHOWN: usize = 5;
-            let mut names: Vec<String> = lack.iter().take(SHOWN).map(|l| l.describe()).collect();
-            if lack.len() > SHOWN {
-                names.push(format!("{} more", lack.len() - SHOWN));
+            let mut names: Vec<String> = m
+                .joints
+                .iter()
+                .filter_map(|j| lacking_of(m, j))
+                .take(SHOWN)
+                .map(|l| l.describe())
+                .collect();
+            let total = m.joints.iter().filter(|j| lacks(m, j)).count();
+            if total > SHOWN {
+                names.push(format!("{} more", total - SHOWN));
             }
             Ok(random(
                 seed,
                 Some(format!(
-                    "{} joint(s) lack geometry: {}; `--geometry file` needs it",
-                    lack.len(),
+                    "{total} joint(s) lack geometry: {}; `--geometry file` needs it",
                     names.join(", ")
                 )),
             ))
@@ -934,33 +1012,54 @@ pub fn geometries(
     let used = choose(m, source, precision)?;
     let geoms = match used.seed {
         Some(seed) => (0..m.joints.len())
-            .map(|i| {
-                let j = &m.joints[i];
-                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(seed, i)))
-            })
+            .map(|i| random_joint_geometry(m, seed, i))
             .collect(),
-        None => m
-            .joints
-            .iter()
-            .enumerate()
-            .map(|(i, j)| {
-                if !modelled(j.kind, m.space) && j.geometry.is_empty() {
-                    random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
-                } else {
-                    j.geometry.clone()
-                }
-            })
-            .collect(),
+        None => file_geometries(m),
     };
     Ok((geoms, used))
+}
+
+/// Joint `i`'s geometry in the random realization `seed` ([`geometries`]' choice, one joint at
+/// a time: 10^6 joints need not hold them all).
+pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geometry {
+    random_geometry(
+        m.joints[i].kind,
+        m.space,
+        &mut SplitMix64::new(joint_seed(seed, i)),
+    )
+}
+
+/// Every joint's geometry when the file's is used ([`geometries`]).
+pub(crate) fn file_geometries(m: &Mechanism) -> Vec<Geometry> {
+    m.joints
+        .iter()
+        .enumerate()
+        .map(|(i, j)| {
+            if !modelled(j.kind, m.space) && j.geometry.is_empty() {
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+            } else {
+                j.geometry.clone()
+            }
+        })
+        .collect()
 }
 
 /// The model of one binary pair of joint `index` of `m` at geometry `g` with `driven` of its
 /// DOF fixed; a joint no model fits (the reader rejects such files) gets a generic model of
 /// its grade, so analyses of mechanisms built in code never fail here.
 pub fn pair_model(m: &Mechanism, index: usize, g: &Geometry, driven: u32) -> JointModel {
+    pair_stack_model(m, index, g, driven).matrices()
+}
+
+/// [`pair_model`] on the stack.
+pub(crate) fn pair_stack_model(
+    m: &Mechanism,
+    index: usize,
+    g: &Geometry,
+    driven: u32,
+) -> StackModel {
     let j = &m.joints[index];
-    joint_model(j.kind, g, m.space, driven)
+    stack_model(j.kind, g, m.space, driven)
         .unwrap_or_else(|_| fallback_model(j.kind, m.space, driven, joint_seed(0, index)))
 }
 
@@ -1011,37 +1110,50 @@ impl Lacking {
 /// The joints that lack geometry fields their kind needs, and those whose kind has no
 /// geometric model: a mechanism has its geometry only when this is empty.
 pub fn lacking(m: &Mechanism) -> Vec<Lacking> {
-    m.joints
+    m.joints.iter().filter_map(|j| lacking_of(m, j)).collect()
+}
+
+/// Whether joint `j` of `m` lacks the geometry field `f` (a name from its kind's list).
+fn field_missing(m: &Mechanism, j: &crate::mechanism::Joint, f: &str) -> bool {
+    let g = &j.geometry;
+    match f {
+        "origin" => g.origin.is_none() && m.space != Space::Spherical,
+        "origin2" => g.origin2.is_none(),
+        "axis" => g.axis.is_none() && !(m.space == Space::Planar && j.kind == JointType::R),
+        "axis2" => g.axis2.is_none(),
+        "normal" => g.normal.is_none(),
+        "pitch" => g.pitch.is_none(),
+        _ => false,
+    }
+}
+
+/// Whether joint `j` would be listed by [`lacking`] (without building its entry).
+fn lacks(m: &Mechanism, j: &crate::mechanism::Joint) -> bool {
+    (!modelled(j.kind, m.space) && j.kind != JointType::FP)
+        || j.kind
+            .info()
+            .geometry
+            .iter()
+            .any(|f| field_missing(m, j, f))
+}
+
+/// Joint `j`'s entry of [`lacking`], if it has one.
+fn lacking_of(m: &Mechanism, j: &crate::mechanism::Joint) -> Option<Lacking> {
+    let fields: Vec<&'static str> = j
+        .kind
+        .info()
+        .geometry
         .iter()
-        .filter_map(|j| {
-            let g = &j.geometry;
-            let fields: Vec<&'static str> = j
-                .kind
-                .info()
-                .geometry
-                .iter()
-                .copied()
-                .filter(|f| match *f {
-                    "origin" => g.origin.is_none() && m.space != Space::Spherical,
-                    "origin2" => g.origin2.is_none(),
-                    "axis" => {
-                        g.axis.is_none() && !(m.space == Space::Planar && j.kind == JointType::R)
-                    }
-                    "axis2" => g.axis2.is_none(),
-                    "normal" => g.normal.is_none(),
-                    "pitch" => g.pitch.is_none(),
-                    _ => false,
-                })
-                .collect();
-            let no_model = !modelled(j.kind, m.space) && j.kind != JointType::FP;
-            (no_model || !fields.is_empty()).then(|| Lacking {
-                joint: j.id.clone(),
-                kind: j.kind.code(),
-                fields,
-                no_model,
-            })
-        })
-        .collect()
+        .copied()
+        .filter(|f| field_missing(m, j, f))
+        .collect();
+    let no_model = !modelled(j.kind, m.space) && j.kind != JointType::FP;
+    (no_model || !fields.is_empty()).then(|| Lacking {
+        joint: j.id.clone(),
+        kind: j.kind.code(),
+        fields,
+        no_model,
+    })
 }
 
 /// Whether every joint has the geometry fields its kind needs ([`lacking`] is empty).
@@ -1111,6 +1223,55 @@ mod tests {
             }
         });
         assert_eq!(stacked.rank(1e-9), b);
+    }
+
+    /// [`complement`] projects every unit vector at once; bit for bit the same as one vector
+    /// at a time through [`project_out`] (the code it replaced), so rank decisions and every
+    /// output are unchanged.
+    #[test]
+    fn complement_equals_one_vector_at_a_time() {
+        fn reference(cols: &[Vb], b: usize) -> Vec<Vb> {
+            let mut basis: Vec<Vb> = orthonormal(cols, b).as_slice().to_vec();
+            let first_new = basis.len();
+            while basis.len() < b {
+                let mut best: Option<(Vb, f64)> = None;
+                for i in 0..b {
+                    let mut v = [0.0; MAX_B];
+                    v[i] = 1.0;
+                    project_out(&mut v, &basis, b);
+                    let n = norm(&v, b);
+                    if best.is_none_or(|(_, w)| n > w) {
+                        best = Some((v, n));
+                    }
+                }
+                let (v, _) = best.expect("b > 0");
+                basis.push(normalized(&v, b));
+            }
+            basis[first_new..].to_vec()
+        }
+        let mut rng = SplitMix64::new(7);
+        for trial in 0..3000 {
+            let b = [3, 6][trial % 2];
+            let d = trial % b;
+            let cols: Vec<Vb> = (0..d)
+                .map(|_| {
+                    let mut v = [0.0; MAX_B];
+                    for x in v.iter_mut().take(b) {
+                        // Some exact zeros, as joint twists have.
+                        let r = rng.next_signed();
+                        *x = if r.abs() < 0.2 { 0.0 } else { r };
+                    }
+                    v
+                })
+                .collect();
+            let got = complement(&cols, b);
+            let want = reference(&cols, b);
+            assert_eq!(got.len(), want.len());
+            for (g, w) in got.as_slice().iter().zip(&want) {
+                let bits = |v: &Vb| v.map(f64::to_bits);
+                assert_eq!(bits(g), bits(w), "trial {trial}");
+            }
+        }
     }
 
     #[test]
@@ -1220,7 +1381,7 @@ mod tests {
         assert_eq!(nullity, 1);
         // The spin: rotation about the line through both centres.
         let u = Vector3::new(0.9, -0.7, 0.4).normalize();
-        let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)));
+        let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)).to_vec());
         assert!((&stacked * t).norm() < 1e-12);
     }
 

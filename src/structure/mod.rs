@@ -409,7 +409,12 @@ fn analyze_once(
     let mut dec = if opts.count_only {
         count::decompose(m, &eqs, &u)
     } else {
-        let (geoms, used) = motion::geometries(m, opts.geometry, opts.precision)?;
+        // A random realization is drawn joint by joint where it is used.
+        let used = motion::choose(m, opts.geometry, opts.precision)?;
+        let geoms = match used.seed {
+            Some(_) => Vec::new(),
+            None => motion::file_geometries(m),
+        };
         if used.is_file() && m.space == crate::mechanism::Space::Spatial {
             twists = Some(
                 (0..m.joints.len())
@@ -467,11 +472,17 @@ fn build(
     twists: Option<&[nalgebra::DMatrix<f64>]>,
 ) -> Analysis {
     let nb = eqs.nodes;
-    let id = |b: usize| {
-        let mut s = String::new();
-        push_id(&mut s, m.body_id(b));
-        s
-    };
+    // Every body id written once, in body order; the group lists copy them from here (read
+    // from the bodies, 48 bytes apart, each id was a cache miss at 10^6 bodies).
+    let mut id_text = String::with_capacity(8 * m.bodies.len());
+    let mut id_at = Vec::with_capacity(m.bodies.len() + 1);
+    id_at.push(0);
+    for body in &m.bodies {
+        push_id(&mut id_text, &body.id);
+        id_at.push(id_text.len());
+    }
+    let id_of = |b: usize| &id_text[id_at[b]..id_at[b + 1]];
+    let id = |b: usize| id_of(b).to_string();
     // Solve-order key of every body: frame and over-determined part are known first, groups in
     // canonical order, the under-determined part (or unsolved bodies) last.
     let mut key = vec![i64::MAX; nb];
@@ -514,7 +525,10 @@ fn build(
         }
     }
     drop(fill);
-    let code = |e: usize| m.joints[eqs.joint[e]].kind.code();
+    // Joint kinds in a table of their own (read from the joints, hundreds of bytes apart, each
+    // was a cache miss at 10^6 joints).
+    let kind_of: Vec<JointType> = m.joints.iter().map(|j| j.kind).collect();
+    let code = |e: usize| kind_of[eqs.joint[e]].code();
     // Each group's pair lists, type and inputs on its own (in parallel: they read shared
     // data only); then the types are numbered in order of first appearance.
     let rendered: Vec<(String, String, String, String, u32)> = crate::par::map(raw.len(), |g| {
@@ -531,7 +545,7 @@ fn build(
                 return;
             }
             active_joints.push(ji);
-            let jt = m.joints[ji].kind;
+            let jt = kind_of[ji];
             match kinds.iter_mut().find(|(k, _)| *k == jt) {
                 Some((_, c)) => *c += n,
                 None => kinds.push((jt, n)),
@@ -627,9 +641,9 @@ fn build(
             let mut s = String::with_capacity(list.len() * 8);
             for &(i, j, e) in list.iter() {
                 // Writing into a String cannot fail.
-                push_id(&mut s, m.body_id(i));
+                s.push_str(id_of(i));
                 s.push('&');
-                push_id(&mut s, m.body_id(j));
+                s.push_str(id_of(j));
                 s.push_str(code(e));
                 s.push('.');
             }
@@ -977,9 +991,8 @@ fn push_id(s: &mut String, id: &crate::mechanism::BodyId) {
             if *i < 0 {
                 s.push('-');
             }
-            for &d in &buf[k..] {
-                s.push(char::from(d));
-            }
+            // ASCII digits: always UTF-8.
+            s.push_str(std::str::from_utf8(&buf[k..]).unwrap_or_default());
         }
         crate::mechanism::BodyId::Name(n) => s.push_str(n),
     }

@@ -24,7 +24,10 @@ use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism};
 use crate::motion::{self, GeometryUsed};
-use nalgebra::{DMatrix, DMatrixViewMut};
+use nalgebra::{DMatrix, DMatrixViewMut, Dyn, MatrixView, RawStorage};
+
+/// A pair's rows as [`PairRows`] stores them (row-major).
+type RowsView<'a> = MatrixView<'a, f64, Dyn, Dyn, Dyn, Dyn>;
 use std::collections::{HashMap, HashSet};
 use std::hash::{DefaultHasher, Hasher};
 use std::sync::Mutex;
@@ -157,20 +160,20 @@ const TALL_STACK_ROWS: usize = 96;
 /// too. Anything else goes to the padded SVD.
 fn reduced_basis<'a>(
     b: usize,
-    rows: impl Iterator<Item = &'a DMatrix<f64>> + Clone,
+    rows: impl Iterator<Item = RowsView<'a>> + Clone,
     t: &Tol,
 ) -> Option<DMatrix<f64>> {
     let total: usize = rows.clone().map(|r| r.nrows()).sum();
     if total == 0 {
         return Some(DMatrix::zeros(b, 0));
     }
-    if total >= b && t.abs == 0.0 && surely_full_rank(b, rows.clone()) {
+    if total >= b && t.abs == 0.0 && surely_full_rank(b, total, rows.clone()) {
         return None;
     }
     let mut s = DMatrix::<f64>::zeros(total, b);
     let mut r0 = 0;
     for r in rows {
-        s.view_mut((r0, 0), (r.nrows(), b)).copy_from(r);
+        s.view_mut((r0, 0), (r.nrows(), b)).copy_from(&r);
         r0 += r.nrows();
     }
     // Only V is needed: skipping U leaves V and the singular values unchanged. A body held
@@ -219,7 +222,7 @@ fn screen(
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
-    rows: &[DMatrix<f64>],
+    rows: &PairRows,
     q: &[Option<DMatrix<f64>>],
     part: Part,
     t: &Tol,
@@ -233,12 +236,12 @@ fn screen(
     if ncols <= SCREEN_UNKNOWNS {
         return None;
     }
-    let nrows: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+    let nrows: usize = block_eqs.iter().map(|&e| rows.nrows(e)).sum();
     let mut blocks = Vec::with_capacity(block_eqs.len());
     let mut frob2 = 0.0;
     for &e in block_eqs {
         let [h, o] = eqs.bodies(e);
-        let n = rows[e].nrows();
+        let n = rows.nrows(e);
         if h == o || n == 0 {
             continue;
         }
@@ -258,7 +261,7 @@ fn screen(
         for &(x, k, sign) in &sides {
             put(
                 &mut mat.view_mut((0, c0), (n, sizes[k])),
-                &rows[e],
+                rows.get(e),
                 &q[x],
                 sign,
             );
@@ -292,7 +295,7 @@ fn surely_nonsingular(
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
-    rows: &[DMatrix<f64>],
+    rows: &PairRows,
     q: &[Option<DMatrix<f64>>],
     t: &Tol,
 ) -> bool {
@@ -306,14 +309,42 @@ fn surely_nonsingular(
         col[k] = n;
         n += width(b, q, x);
     }
-    if n == 0 || n > N {
-        return false;
+    // The arrays sized to the block (zeroing 36 × 36 arrays for a block of 12 cost more than
+    // the elimination).
+    let col = &col[..bodies.len()];
+    let args = (b, block_eqs, bodies, eqs, rows, q, t);
+    match n {
+        0 => false,
+        1..=6 => nonsingular_within::<6>(n, col, args),
+        7..=12 => nonsingular_within::<12>(n, col, args),
+        13..=18 => nonsingular_within::<18>(n, col, args),
+        19..=24 => nonsingular_within::<24>(n, col, args),
+        25..=N => nonsingular_within::<N>(n, col, args),
+        _ => false,
     }
+}
+
+/// [`surely_nonsingular`] with arrays of `N × N` (`n ≤ N`), `col` the first column of each
+/// body.
+#[allow(clippy::needless_range_loop, clippy::type_complexity)]
+fn nonsingular_within<const N: usize>(
+    n: usize,
+    col: &[usize],
+    (b, block_eqs, bodies, eqs, rows, q, t): (
+        usize,
+        &[usize],
+        &[usize],
+        &Equations,
+        &PairRows,
+        &[Option<DMatrix<f64>>],
+        &Tol,
+    ),
+) -> bool {
     let mut a = [[0.0f64; N]; N];
     let mut r0 = 0;
     for &e in block_eqs {
         let [h, o] = eqs.bodies(e);
-        let re = &rows[e];
+        let re = rows.get(e);
         if r0 + re.nrows() > n {
             return false;
         }
@@ -433,8 +464,22 @@ fn surely_nonsingular(
 /// removing rows never raises `σ_min`, and `σ_max ≤ F`, the Frobenius norm of all rows. So
 /// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, far above the SVD
 /// threshold (`n ·` [`REL_TOL`] with n ≤ 48 rows here). Runs for every body, on the stack.
-fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) -> bool {
-    const MAX_ROWS: usize = 48;
+fn surely_full_rank<'a>(b: usize, total: usize, rows: impl Iterator<Item = RowsView<'a>>) -> bool {
+    // The arrays sized to the stack of rows (zeroing 48 rows for a body held by two pairs
+    // cost as much as the elimination).
+    match total {
+        0..=8 => full_rank_within::<8>(b, rows),
+        9..=16 => full_rank_within::<16>(b, rows),
+        _ => full_rank_within::<48>(b, rows),
+    }
+}
+
+/// [`surely_full_rank`] with arrays of `MAX_ROWS` rows (fewer rows than that in `rows`, or
+/// the answer is `false`).
+fn full_rank_within<'a, const MAX_ROWS: usize>(
+    b: usize,
+    rows: impl Iterator<Item = RowsView<'a>>,
+) -> bool {
     let mut a = [[0.0f64; 6]; MAX_ROWS];
     let mut norm2 = [0.0f64; MAX_ROWS];
     let mut n = 0;
@@ -540,7 +585,7 @@ impl Digest {
         self.word(v as u64);
         self.word((v >> 64) as u64);
     }
-    fn matrix(&mut self, a: &DMatrix<f64>) {
+    fn matrix<S: RawStorage<f64, Dyn, Dyn>>(&mut self, a: &nalgebra::Matrix<f64, Dyn, Dyn, S>) {
         self.word(a.nrows() as u64);
         self.word(a.ncols() as u64);
         for x in a.iter() {
@@ -570,7 +615,7 @@ impl KeyContext<'_> {
         bodies: &[usize],
         block_eqs: &[usize],
         eqs: &Equations,
-        rows: &[DMatrix<f64>],
+        rows: &PairRows,
     ) -> u128 {
         let mut d = Digest::new(3);
         self.tol.iter().for_each(|&w| d.word(w));
@@ -592,13 +637,13 @@ impl KeyContext<'_> {
             d.word(h as u64);
             d.word(o as u64);
             d.wide(self.rd[e]);
-            d.word(u64::from(rows[e].nrows() == self.orig_rows[e]));
+            d.word(u64::from(rows.nrows(e) == self.orig_rows[e]));
         }
         d.finish()
     }
 }
 
-fn matrix_digest(a: &DMatrix<f64>) -> u128 {
+fn matrix_digest<S: RawStorage<f64, Dyn, Dyn>>(a: &nalgebra::Matrix<f64, Dyn, Dyn, S>) -> u128 {
     let mut d = Digest::new(1);
     d.matrix(a);
     d.finish()
@@ -606,7 +651,8 @@ fn matrix_digest(a: &DMatrix<f64>) -> u128 {
 
 /// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced
 /// unknowns and sound blocks seen in an earlier analysis (same rows, same tolerance) are
-/// taken from it instead of being factorized again.
+/// taken from it instead of being factorized again. `geoms` is the joints' geometry when the
+/// file's is used; a random realization (`used.seed`) is drawn joint by joint instead.
 pub(crate) fn check(
     m: &Mechanism,
     geoms: &[Geometry],
@@ -617,7 +663,7 @@ pub(crate) fn check(
 ) -> RankResult {
     let b = m.b() as usize;
     let nb = eqs.nodes;
-    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file());
+    let (mut rows, free) = pair_rows(m, geoms, used.seed, eqs, used.is_file());
     let tol = match used.precision {
         Some(delta) => Tol {
             rel: 1e-9,
@@ -637,13 +683,13 @@ pub(crate) fn check(
     } else {
         Vec::new()
     };
-    for (e, r) in rows.iter().enumerate() {
-        eqs.cap[e] = r.nrows() as u32;
+    for (e, cap) in eqs.cap.iter_mut().enumerate() {
+        *cap = rows.nrows(e) as u32;
     }
-    let orig_rows: Vec<usize> = rows.iter().map(|r| r.nrows()).collect();
+    let orig_rows: Vec<usize> = (0..rows.len()).map(|e| rows.nrows(e)).collect();
     // Digests of every pair's rows (only with a cache), and of the tolerance.
     let mut rd: Vec<u128> = match cache {
-        Some(_) => crate::par::map(rows.len(), |e| matrix_digest(&rows[e])),
+        Some(_) => crate::par::map(rows.len(), |e| matrix_digest(&rows.get(e))),
         None => Vec::new(),
     };
     let tol_words = [tol.rel.to_bits(), tol.abs.to_bits(), b as u64];
@@ -693,26 +739,24 @@ pub(crate) fn check(
             // the joint's full rows are in `free` then.)
             let e = pin_pair[body - eqs.bodies];
             return Some(
-                free.get(e)
-                    .or(rows.get(e))
+                free.try_get(e)
+                    .or(rows.try_get(e))
                     .map_or_else(|| DMatrix::zeros(b, 0), |r| r.transpose()),
             );
         }
         let mine = &touch[start[body]..start[body + 1]];
         // Isolated means undrivable: a motion across a cut of two or more constraining joints.
         // A body on one joint moves by that joint's own DOF, which an input drives.
-        let mut joints: Vec<usize> = mine
+        let mut joints = mine
             .iter()
-            .filter(|&&e| rows[e].nrows() > 0)
-            .map(|&e| eqs.joint[e])
-            .collect();
-        joints.sort_unstable();
-        joints.dedup();
-        if joints.len() < 2 {
+            .filter(|&&e| rows.nrows(e) > 0)
+            .map(|&e| eqs.joint[e]);
+        let first = joints.next();
+        if !joints.any(|j| Some(j) != first) {
             return None;
         }
         let Some(c) = cache else {
-            return reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol);
+            return reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol);
         };
         let mut d = Digest::new(2);
         tol_words.iter().for_each(|&w| d.word(w));
@@ -721,7 +765,7 @@ pub(crate) fn check(
         if let Some(hit) = c.get_basis(k) {
             return hit;
         }
-        let v = reduced_basis(b, mine.iter().map(|&e| &rows[e]), &tol);
+        let v = reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol);
         c.put_basis(k, &v);
         v
     });
@@ -781,8 +825,8 @@ pub(crate) fn check(
         };
         // Pairs of every block in one pass (compressed by block).
         let mut bstart = vec![0usize; nblocks + 1];
-        for (e, r) in rows.iter().enumerate() {
-            if r.nrows() == 0 {
+        for e in 0..rows.len() {
+            if rows.nrows(e) == 0 {
                 continue;
             }
             if let Some(i) = block_of(dec.eq_part[e]) {
@@ -794,8 +838,8 @@ pub(crate) fn check(
         }
         let mut bfill = bstart.clone();
         let mut beqs = vec![0usize; bstart[nblocks]];
-        for (e, r) in rows.iter().enumerate() {
-            if r.nrows() == 0 {
+        for e in 0..rows.len() {
+            if rows.nrows(e) == 0 {
                 continue;
             }
             if let Some(i) = block_of(dec.eq_part[e]) {
@@ -826,7 +870,7 @@ pub(crate) fn check(
             signature.push(usize::MAX);
             for &e in block_eqs {
                 signature.push(e);
-                signature.push(rows[e].nrows());
+                signature.push(rows.nrows(e));
             }
             if verified.contains(&signature) {
                 continue;
@@ -854,7 +898,7 @@ pub(crate) fn check(
                 // exactly, by sparse elimination over GF(2^61 − 1), unless a pair of it was
                 // already lowered (its exact rows would not be the ones kept).
                 let needed = if part == Part::Over { ncols } else { nrows };
-                let untouched = block_eqs.iter().all(|&e| rows[e].nrows() == orig_rows[e]);
+                let untouched = block_eqs.iter().all(|&e| rows.nrows(e) == orig_rows[e]);
                 if let Some(seed) = used.seed
                     && untouched
                     && needed <= nrows.min(ncols)
@@ -949,7 +993,7 @@ pub(crate) fn check(
             let mut named: Vec<(usize, f64)> = Vec::new();
             let mut r0 = 0;
             for &e in block_eqs {
-                let n = rows[e].nrows();
+                let n = rows.nrows(e);
                 let w: f64 = (r0..r0 + n)
                     .map(|r| null.iter().map(|&k| svd.u[(r, k)].powi(2)).sum::<f64>())
                     .sum();
@@ -976,9 +1020,9 @@ pub(crate) fn check(
                 continue;
             }
             let named: Vec<usize> = named.iter().map(|&(e, _)| e).collect();
-            eqs.cap[lowered] = rows[lowered].nrows() as u32;
+            eqs.cap[lowered] = rows.nrows(lowered) as u32;
             if let Some(d) = rd.get_mut(lowered) {
-                *d = matrix_digest(&rows[lowered]);
+                *d = matrix_digest(&rows.get(lowered));
             }
             changed = true;
             let mut joints: Vec<usize> = named.iter().map(|&e| eqs.joint[e]).collect();
@@ -1015,7 +1059,7 @@ pub(crate) fn check(
                 signature.push(usize::MAX);
                 for &e in &block_eqs {
                     signature.push(e);
-                    signature.push(rows[e].nrows());
+                    signature.push(rows.nrows(e));
                 }
                 if verified.contains(&signature) {
                     continue;
@@ -1090,7 +1134,7 @@ impl<'a> Round<'a> {
     fn new(
         b: usize,
         q: &[Option<DMatrix<f64>>],
-        rows: &[DMatrix<f64>],
+        rows: &PairRows,
         orig_rows: &[usize],
         dec: &'a Decomposition,
         first_group: usize,
@@ -1114,11 +1158,11 @@ impl<'a> Round<'a> {
             dependents: Vec::new(),
             dependents_start: Vec::new(),
             under_bodies: under.len(),
-            under_rows: under_eqs.iter().map(|&e| rows[e].nrows()).sum(),
+            under_rows: under_eqs.iter().map(|&e| rows.nrows(e)).sum(),
             under_cols: under.iter().map(|&x| width(b, q, x)).sum(),
             under_touched: under_eqs
                 .iter()
-                .filter(|&&e| rows[e].nrows() != orig_rows[e])
+                .filter(|&&e| rows.nrows(e) != orig_rows[e])
                 .count(),
             under,
             under_eqs,
@@ -1142,7 +1186,7 @@ impl<'a> Round<'a> {
         b: usize,
         g: usize,
         q: &[Option<DMatrix<f64>>],
-        rows: &[DMatrix<f64>],
+        rows: &PairRows,
         orig_rows: &[usize],
     ) -> Option<(usize, usize, bool)> {
         let groups = &self.dec.groups;
@@ -1181,7 +1225,7 @@ impl<'a> Round<'a> {
                 .map(|&x| width(b, q, x))
                 .sum::<usize>();
             for &e in self.group_eqs(h) {
-                let n = rows[e].nrows();
+                let n = rows.nrows(e);
                 if n > 0 {
                     self.under_rows += n;
                     self.under_touched += usize::from(n != orig_rows[e]);
@@ -1203,11 +1247,11 @@ impl<'a> Round<'a> {
 
     /// The grown under-determined block's pairs (with rows) and bodies, ascending, as a new
     /// decomposition would list them.
-    fn under_lists(&self, rows: &[DMatrix<f64>]) -> (Vec<usize>, Vec<usize>) {
+    fn under_lists(&self, rows: &PairRows) -> (Vec<usize>, Vec<usize>) {
         let mut block_eqs = self.under_eqs.to_vec();
         let mut bodies = self.under.to_vec();
         for &h in &self.joined {
-            block_eqs.extend(self.group_eqs(h).iter().filter(|&&e| rows[e].nrows() > 0));
+            block_eqs.extend(self.group_eqs(h).iter().filter(|&&e| rows.nrows(e) > 0));
             bodies.extend_from_slice(&self.dec.groups[h].bodies);
         }
         block_eqs.sort_unstable();
@@ -1219,57 +1263,201 @@ impl<'a> Round<'a> {
 fn pair_rows(
     m: &Mechanism,
     geoms: &[Geometry],
+    seed: Option<u64>,
     eqs: &Equations,
     with_free: bool,
-) -> (Vec<DMatrix<f64>>, Vec<DMatrix<f64>>) {
+) -> (PairRows, PairRows) {
+    use rayon::prelude::*;
     let b = m.b() as usize;
-    // One model per joint with its own driven DOF (and one without), in parallel.
-    let mut base: Vec<(DMatrix<f64>, Option<DMatrix<f64>>)> =
-        crate::par::map(m.joints.len(), |ji| {
-            let j = &m.joints[ji];
-            let own = motion::pair_model(m, ji, &geoms[ji], j.driven).rows;
-            let free = (with_free || j.bodies.len() > 2).then(|| {
-                if j.driven == 0 {
-                    own.clone()
-                } else {
-                    motion::pair_model(m, ji, &geoms[ji], 0).rows
+    let n = eqs.len();
+    // Chunks of consecutive pairs, each built on its own (in parallel): a joint's models are
+    // built once per chunk (its pairs are consecutive), on the stack.
+    let chunk = |c: usize| {
+        let mut rows = Chunk::default();
+        let mut free = Chunk::default();
+        let mut memo: [Option<(usize, u32, motion::Vecs)>; 2] = [None, None];
+        let mut model = |ji: usize, driven: u32| {
+            let slot = usize::from(driven == 0);
+            match memo[slot] {
+                Some((j, d, v)) if j == ji && d == driven => v,
+                _ => {
+                    let v = match seed {
+                        Some(seed) => {
+                            let g = motion::random_joint_geometry(m, seed, ji);
+                            motion::pair_stack_model(m, ji, &g, driven).rows
+                        }
+                        None => motion::pair_stack_model(m, ji, &geoms[ji], driven).rows,
+                    };
+                    memo[slot] = Some((ji, driven, v));
+                    v
                 }
-            });
-            (own, free)
-        });
-    let empty = || DMatrix::zeros(0, b);
-    let mut rows = Vec::with_capacity(eqs.len());
-    let mut free = Vec::with_capacity(if with_free { eqs.len() } else { 0 });
-    for e in 0..eqs.len() {
-        let ji = eqs.joint[e];
-        // A joint's pairs are consecutive: its last pair takes the rows instead of copying.
-        let last = e + 1 == eqs.len() || eqs.joint[e + 1] != ji;
-        let j = &m.joints[ji];
-        let (r, f) = if eqs.input_only[e] {
-            // A multiple joint's inputs between two of its bodies: the driven rows alone.
-            let driven = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
-            let f = base[ji].1.as_ref().map_or_else(empty, |f| f.clone());
-            (input_rows(&driven, &f), empty())
-        } else if eqs.driven[e] == j.driven {
-            let own = if last {
-                std::mem::replace(&mut base[ji].0, empty())
-            } else {
-                base[ji].0.clone()
-            };
-            (own, base[ji].1.clone().unwrap_or_else(empty))
-        } else if eqs.driven[e] == 0 {
-            let f = base[ji].1.clone().unwrap_or_else(empty);
-            (f.clone(), f)
-        } else {
-            let own = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
-            (own, base[ji].1.clone().unwrap_or_else(empty))
+            }
         };
-        rows.push(r);
-        if with_free {
-            free.push(f);
+        for e in c * PAIRS_PER_CHUNK..n.min((c + 1) * PAIRS_PER_CHUNK) {
+            let ji = eqs.joint[e];
+            if eqs.input_only[e] {
+                // A multiple joint's inputs between two of its bodies: the driven rows alone.
+                let driven = model(ji, eqs.driven[e]);
+                let f = model(ji, 0);
+                let flat = |v: &motion::Vecs| -> Vec<f64> {
+                    v.as_slice()
+                        .iter()
+                        .flat_map(|r| r[..b].iter().copied())
+                        .collect()
+                };
+                let (dv, fv) = (flat(&driven), flat(&f));
+                let r = input_rows(
+                    RowsView::from_slice_with_strides(&dv, driven.len(), b, b, 1),
+                    RowsView::from_slice_with_strides(&fv, f.len(), b, b, 1),
+                );
+                rows.push_matrix(&r);
+                if with_free {
+                    free.push_rows(&[], b);
+                }
+            } else {
+                // A pair's rows with its own share of the driven DOF fixed; without input.
+                let own = model(ji, eqs.driven[e]);
+                rows.push_rows(own.as_slice(), b);
+                if with_free {
+                    let f = model(ji, 0);
+                    free.push_rows(f.as_slice(), b);
+                }
+            }
+        }
+        (rows, free)
+    };
+    let chunks = n.div_ceil(PAIRS_PER_CHUNK);
+    let built: Vec<(Chunk, Chunk)> = if n >= 2 * PAIRS_PER_CHUNK {
+        (0..chunks).into_par_iter().map(chunk).collect()
+    } else {
+        (0..chunks).map(chunk).collect()
+    };
+    let (rows, free): (Vec<Chunk>, Vec<Chunk>) = built.into_iter().unzip();
+    let free = if with_free {
+        PairRows::from_chunks(b, free)
+    } else {
+        PairRows::from_chunks(b, Vec::new())
+    };
+    (PairRows::from_chunks(b, rows), free)
+}
+
+/// Pairs per chunk of [`PairRows`].
+const PAIRS_PER_CHUNK: usize = 1024;
+
+/// The rows of consecutive pairs, as they are built.
+#[derive(Default)]
+struct Chunk {
+    values: Vec<f64>,
+    counts: Vec<u32>,
+}
+
+impl Chunk {
+    fn push_rows(&mut self, rows: &[[f64; 6]], b: usize) {
+        for r in rows {
+            self.values.extend_from_slice(&r[..b]);
+        }
+        self.counts.push(rows.len() as u32);
+    }
+
+    fn push_matrix(&mut self, a: &DMatrix<f64>) {
+        for i in 0..a.nrows() {
+            self.values.extend(a.row(i).iter().copied());
+        }
+        self.counts.push(a.nrows() as u32);
+    }
+}
+
+/// Every pair's constraint rows (`n × B`, row-major), stored flat in chunks of
+/// [`PAIRS_PER_CHUNK`] consecutive pairs: a small heap matrix per pair cost seconds at 10^6
+/// pairs. A pair keeps the room of its first rows; rows that replace them and need more room
+/// move to the end of its chunk.
+pub(crate) struct PairRows {
+    b: usize,
+    /// Per pair: its first value within its chunk, its rows now, the rows its room holds.
+    start: Vec<u32>,
+    n: Vec<u32>,
+    room: Vec<u32>,
+    chunks: Vec<Vec<f64>>,
+}
+
+impl PairRows {
+    fn from_chunks(b: usize, built: Vec<Chunk>) -> PairRows {
+        let total: usize = built.iter().map(|c| c.counts.len()).sum();
+        let mut start = Vec::with_capacity(total);
+        let mut n = Vec::with_capacity(total);
+        let mut chunks = Vec::with_capacity(built.len());
+        for c in built {
+            let mut at = 0u32;
+            for &k in &c.counts {
+                start.push(at);
+                n.push(k);
+                at += k * b as u32;
+            }
+            chunks.push(c.values);
+        }
+        PairRows {
+            b,
+            start,
+            room: n.clone(),
+            n,
+            chunks,
         }
     }
-    (rows, free)
+
+    /// Number of pairs.
+    fn len(&self) -> usize {
+        self.n.len()
+    }
+
+    /// Rows of pair `e`.
+    fn nrows(&self, e: usize) -> usize {
+        self.n[e] as usize
+    }
+
+    fn values(&self, e: usize) -> &[f64] {
+        let s = self.start[e] as usize;
+        &self.chunks[e / PAIRS_PER_CHUNK][s..s + self.nrows(e) * self.b]
+    }
+
+    /// Pair `e`'s rows as a matrix.
+    fn get(&self, e: usize) -> RowsView<'_> {
+        RowsView::from_slice_with_strides(self.values(e), self.nrows(e), self.b, self.b, 1)
+    }
+
+    /// [`PairRows::get`], `None` past the last pair.
+    fn try_get(&self, e: usize) -> Option<RowsView<'_>> {
+        (e < self.len()).then(|| self.get(e))
+    }
+
+    /// Replace pair `e`'s rows by those of `a` (`B` columns).
+    fn set(&mut self, e: usize, a: &DMatrix<f64>) {
+        let b = self.b;
+        let k = a.nrows();
+        let chunk = &mut self.chunks[e / PAIRS_PER_CHUNK];
+        if k > self.room[e] as usize {
+            self.start[e] = chunk.len() as u32;
+            self.room[e] = k as u32;
+            chunk.resize(chunk.len() + k * b, 0.0);
+        }
+        let s = self.start[e] as usize;
+        for i in 0..k {
+            for j in 0..b {
+                chunk[s + i * b + j] = a[(i, j)];
+            }
+        }
+        self.n[e] = k as u32;
+    }
+
+    /// Remove row `r` of pair `e`.
+    fn remove_row(&mut self, e: usize, r: usize) {
+        let b = self.b;
+        let (s, k) = (self.start[e] as usize, self.nrows(e));
+        if r >= k {
+            return;
+        }
+        self.chunks[e / PAIRS_PER_CHUNK].copy_within(s + (r + 1) * b..s + k * b, s + r * b);
+        self.n[e] -= 1;
+    }
 }
 
 /// The exact rank, over GF(2^61 − 1) at the random realization `seed`, of a block's rows
@@ -1349,8 +1537,8 @@ fn lever(m: &Mechanism) -> f64 {
 fn redundant_at_configuration(
     m: &Mechanism,
     eqs: &Equations,
-    rows: &mut [DMatrix<f64>],
-    free: &[DMatrix<f64>],
+    rows: &mut PairRows,
+    free: &PairRows,
     tol: &Tol,
     set_aside: &mut [u32],
 ) -> Vec<Redundancy> {
@@ -1399,14 +1587,14 @@ fn redundant_at_configuration(
         });
         // Greedy independent rows: Gram-Schmidt against the kept rows, a row kept when its
         // residual exceeds the threshold (relative to the rows' unit norm).
-        let nrows: usize = block.iter().map(|&e| free[e].nrows()).sum();
+        let nrows: usize = block.iter().map(|&e| free.nrows(e)).sum();
         let cut = tol.cut(1.0, nrows.max(ncols));
         let mut basis: Vec<Vec<f64>> = Vec::new();
         let mut kept: Vec<(usize, Vec<usize>)> = Vec::new();
         let mut dropped = 0usize;
         for &e in &order {
             let [h, o] = eqs.bodies(e);
-            let r = &free[e];
+            let r = free.get(e);
             let mut mine = Vec::new();
             for i in 0..r.nrows() {
                 let mut v = vec![0.0; ncols];
@@ -1442,20 +1630,20 @@ fn redundant_at_configuration(
         // Replace each pair's rows by its kept constraint rows plus its input rows.
         let mut lowered: Vec<usize> = Vec::new();
         for (e, mine) in &kept {
-            if mine.len() == free[*e].nrows() {
+            if mine.len() == free.nrows(*e) {
                 continue;
             }
             lowered.push(eqs.joint[*e]);
-            set_aside[eqs.joint[*e]] += (free[*e].nrows() - mine.len()) as u32;
-            let inputs = input_rows(&rows[*e], &free[*e]);
+            set_aside[eqs.joint[*e]] += (free.nrows(*e) - mine.len()) as u32;
+            let inputs = input_rows(rows.get(*e), free.get(*e));
             let mut r = DMatrix::<f64>::zeros(mine.len() + inputs.nrows(), b);
             for (k, &i) in mine.iter().enumerate() {
-                r.set_row(k, &free[*e].row(i));
+                r.set_row(k, &free.get(*e).row(i));
             }
             for i in 0..inputs.nrows() {
                 r.set_row(mine.len() + i, &inputs.row(i));
             }
-            rows[*e] = r;
+            rows.set(*e, &r);
         }
         let mut joints: Vec<usize> = block.iter().map(|&e| eqs.joint[e]).collect();
         joints.sort_unstable();
@@ -1486,7 +1674,7 @@ fn redundant_at_configuration(
 
 /// The rows of `own` (a pair's rows with its driven DOF fixed) outside the span of `free` (its
 /// rows with no input): its input rows, orthonormal.
-fn input_rows(own: &DMatrix<f64>, free: &DMatrix<f64>) -> DMatrix<f64> {
+fn input_rows(own: RowsView<'_>, free: RowsView<'_>) -> DMatrix<f64> {
     let b = own.ncols();
     let mut basis: Vec<Vec<f64>> = (0..free.nrows())
         .map(|i| free.row(i).iter().copied().collect())
@@ -1535,10 +1723,10 @@ fn block_shape(
     b: usize,
     block_eqs: &[usize],
     bodies: &[usize],
-    rows: &[DMatrix<f64>],
+    rows: &PairRows,
     q: &[Option<DMatrix<f64>>],
 ) -> (usize, usize) {
-    let nrows = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+    let nrows = block_eqs.iter().map(|&e| rows.nrows(e)).sum();
     let ncols = bodies.iter().map(|&x| width(b, q, x)).sum();
     (nrows, ncols)
 }
@@ -1552,13 +1740,15 @@ fn width(b: usize, q: &[Option<DMatrix<f64>>], x: usize) -> usize {
 /// the identity basis), times `sign`, written into `dst`.
 fn put(
     dst: &mut DMatrixViewMut<'_, f64>,
-    rows: &DMatrix<f64>,
+    rows: RowsView<'_>,
     qx: &Option<DMatrix<f64>>,
     sign: f64,
 ) {
     match qx {
-        None => dst.copy_from(rows),
-        Some(qx) => dst.copy_from(&(rows * qx)),
+        None => dst.copy_from(&rows),
+        // An owned copy: nalgebra's product reads a row-major view's columns past the slice it
+        // makes of them (a debug build's bounds check stops it); the same product as before.
+        Some(qx) => dst.copy_from(&(rows.into_owned() * qx)),
     }
     *dst *= sign;
 }
@@ -1570,7 +1760,7 @@ fn block_matrix(
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
-    rows: &[DMatrix<f64>],
+    rows: &PairRows,
     q: &[Option<DMatrix<f64>>],
 ) -> DMatrix<f64> {
     debug_assert!(bodies.is_sorted());
@@ -1581,12 +1771,12 @@ fn block_matrix(
         col.push(ncols);
         ncols += width(x);
     }
-    let nrows: usize = block_eqs.iter().map(|&e| rows[e].nrows()).sum();
+    let nrows: usize = block_eqs.iter().map(|&e| rows.nrows(e)).sum();
     let mut a = DMatrix::<f64>::zeros(nrows, ncols);
     let mut r0 = 0;
     for &e in block_eqs {
         let [h, o] = eqs.bodies(e);
-        let n = rows[e].nrows();
+        let n = rows.nrows(e);
         if h != o {
             for (x, sign) in [(h, -1.0), (o, 1.0)] {
                 let Ok(k) = bodies.binary_search(&x) else {
@@ -1597,7 +1787,7 @@ fn block_matrix(
                 }
                 put(
                     &mut a.view_mut((r0, col[k]), (n, width(x))),
-                    &rows[e],
+                    rows.get(e),
                     &q[x],
                     sign,
                 );
@@ -1617,22 +1807,22 @@ fn drop_rows(
     block_eqs: &[usize],
     bodies: &[usize],
     eqs: &Equations,
-    rows: &mut [DMatrix<f64>],
+    rows: &mut PairRows,
     q: &[Option<DMatrix<f64>>],
     rank: usize,
     t: &Tol,
 ) -> usize {
     let mut removed = 0;
-    let mut r = rows[e].nrows();
+    let mut r = rows.nrows(e);
     while r > 0 && removed < count {
         r -= 1;
-        let saved = rows[e].clone();
-        rows[e] = saved.clone().remove_row(r);
+        let saved = rows.get(e).into_owned();
+        rows.remove_row(e, r);
         let a = block_matrix(b, block_eqs, bodies, eqs, rows, q);
         if rank_of(&a, t) == rank {
             removed += 1;
         } else {
-            rows[e] = saved;
+            rows.set(e, &saved);
         }
     }
     removed
@@ -1668,4 +1858,92 @@ fn describe(
         "bodies {{{}}} keep {count} freedom(s) that no input controls",
         ids.join(", ")
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::GeometrySource;
+
+    /// The flat rows of every pair (built chunk by chunk, each joint's model once per chunk,
+    /// the random geometry drawn where it is used) are exactly the rows of the pair's own
+    /// model, the heap matrix per pair they replaced: random mechanisms of mixed joint types,
+    /// and a shared joint with inputs (element pairs and input-only pairs).
+    #[test]
+    fn pair_rows_are_the_pair_models() {
+        let mut cases = Vec::new();
+        for (planar, seed) in [(false, 2), (true, 5)] {
+            cases.push(
+                crate::generate::random(3000, planar, seed)
+                    .expect("valid")
+                    .0,
+            );
+        }
+        cases.push(crate::generate::star(2500, JointType::S, false, true, true).expect("valid"));
+        for m in &cases {
+            let eqs = Equations::of(m);
+            let (geoms, used) =
+                motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
+            assert!(eqs.len() > 2 * PAIRS_PER_CHUNK, "several chunks");
+            let (rows, free) = pair_rows(m, &[], used.seed, &eqs, false);
+            assert_eq!(rows.len(), eqs.len());
+            assert_eq!(free.len(), 0);
+            // The file's geometry (here the same values, given), with the rows without input.
+            let (file_rows, free) = pair_rows(m, &geoms, None, &eqs, true);
+            assert_eq!(free.len(), eqs.len());
+            for e in 0..eqs.len() {
+                let ji = eqs.joint[e];
+                let want = if eqs.input_only[e] {
+                    let own = motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows;
+                    let f = motion::pair_model(m, ji, &geoms[ji], 0).rows;
+                    input_rows(view(&own), view(&f))
+                } else {
+                    motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows
+                };
+                assert_eq!(rows.get(e).into_owned(), want, "pair {e}");
+                assert_eq!(file_rows.get(e).into_owned(), want, "pair {e}");
+                let want_free = if eqs.input_only[e] {
+                    DMatrix::zeros(0, m.b() as usize)
+                } else {
+                    motion::pair_model(m, ji, &geoms[ji], 0).rows
+                };
+                assert_eq!(free.get(e).into_owned(), want_free, "pair {e}");
+            }
+        }
+    }
+
+    fn view(a: &DMatrix<f64>) -> RowsView<'_> {
+        RowsView::from_slice_with_strides(a.as_slice(), a.nrows(), a.ncols(), 1, a.nrows())
+    }
+
+    /// Rows replaced by more than their room, and rows removed, read back as a matrix would.
+    #[test]
+    fn pair_rows_set_and_remove() {
+        let mut c = Chunk::default();
+        c.push_rows(&[[1.0, 2.0, 3.0, 0.0, 0.0, 0.0]], 3);
+        c.push_rows(
+            &[
+                [4.0, 5.0, 6.0, 0.0, 0.0, 0.0],
+                [7.0, 8.0, 9.0, 0.0, 0.0, 0.0],
+            ],
+            3,
+        );
+        let mut rows = PairRows::from_chunks(3, vec![c]);
+        let bigger = DMatrix::from_row_slice(3, 3, &[1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0]);
+        rows.set(0, &bigger);
+        assert_eq!(rows.get(0).into_owned(), bigger);
+        assert_eq!(
+            rows.get(1).into_owned(),
+            DMatrix::from_row_slice(2, 3, &[4.0, 5.0, 6.0, 7.0, 8.0, 9.0])
+        );
+        rows.remove_row(0, 1);
+        assert_eq!(rows.get(0).into_owned(), bigger.clone().remove_row(1));
+        rows.remove_row(1, 0);
+        assert_eq!(
+            rows.get(1).into_owned(),
+            DMatrix::from_row_slice(1, 3, &[7.0, 8.0, 9.0])
+        );
+        assert_eq!(rows.nrows(1), 1);
+        assert!(rows.try_get(2).is_none());
+    }
 }
