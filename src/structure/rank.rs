@@ -29,8 +29,30 @@ use std::collections::{HashMap, HashSet};
 use std::hash::{DefaultHasher, Hasher};
 use std::sync::Mutex;
 
+/// What the caller of [`check`] knows or needs beyond the plain check (`mbsa transform`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Shortcut {
+    /// The plain rank check.
+    None,
+    /// The whole system is known to have full row rank: no factorization is needed when the
+    /// count has no over-determined part.
+    Certified,
+    /// Only whether the mechanism is determined matters: when the count does not find it
+    /// determined, the check ends at once (`deficient`); when it does, the groups up to
+    /// [`MAX_DENSE_UNKNOWNS`] are checked first, and a deficient one ends the check,
+    /// unexplained (the larger groups would have been factorized for nothing).
+    Determined,
+}
+
 /// What the rank check found, with the final decomposition.
 pub(crate) struct RankResult {
+    /// [`Shortcut::Determined`] stopped at a deficient group: the mechanism is not determined
+    /// (the rest of the result is not meaningful).
+    pub deficient: bool,
+    /// Work units of the blocks' rank decisions this check made (a dense factorization of
+    /// `n` unknowns `n^3`, an exact sparse one its factor's entries, the sparse screen
+    /// `64 (rows + columns)`); blocks taken from the cache or certified cost nothing.
+    pub work: u64,
     pub decomposition: Decomposition,
     /// Constraint equations set aside at the file's configuration, per joint.
     pub set_aside: Vec<u32>,
@@ -492,12 +514,38 @@ fn surely_full_rank<'a>(b: usize, rows: impl Iterator<Item = &'a DMatrix<f64>>) 
 pub struct Cache {
     bases: Mutex<HashMap<u128, Option<DMatrix<f64>>>>,
     blocks: Mutex<HashMap<u128, Option<Unchecked>>>,
+    /// Every joint's rows with no input at a random realization (the seed, the numbers of
+    /// joints and bodies they were made for): most joints carry no input in a placement.
+    free_rows: Mutex<Option<FreeRows>>,
 }
+
+/// See [`Cache::free_rows`].
+type FreeRows = ((u64, usize, usize), std::sync::Arc<Vec<DMatrix<f64>>>);
 
 /// Entries a [`Cache`] keeps before it starts over (memory stays bounded).
 const CACHE_ENTRIES: usize = 1 << 21;
 
 impl Cache {
+    /// The rows of every joint of `m` with no input at the realization `seed` (made by
+    /// `make` the first time).
+    fn free_rows(
+        &self,
+        m: &Mechanism,
+        seed: u64,
+        make: impl FnOnce() -> Vec<DMatrix<f64>>,
+    ) -> std::sync::Arc<Vec<DMatrix<f64>>> {
+        let tag = (seed, m.joints.len(), m.bodies.len());
+        let mut g = self.free_rows.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((t, rows)) = g.as_ref()
+            && *t == tag
+        {
+            return rows.clone();
+        }
+        let rows = std::sync::Arc::new(make());
+        *g = Some((tag, rows.clone()));
+        rows
+    }
+
     fn get_basis(&self, k: u128) -> Option<Option<DMatrix<f64>>> {
         let g = self.bases.lock().unwrap_or_else(|e| e.into_inner());
         g.get(&k).cloned()
@@ -614,10 +662,22 @@ pub(crate) fn check(
     eqs: &mut Equations,
     u: &mut [u32],
     cache: Option<&Cache>,
+    shortcut: Shortcut,
 ) -> RankResult {
+    let certified = shortcut == Shortcut::Certified;
     let b = m.b() as usize;
     let nb = eqs.nodes;
-    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file());
+    // At a random realization a joint's rows depend on its kind, index and driven DOF only:
+    // those with no input are shared by every analysis with the cache.
+    let zero = match (cache, used.seed) {
+        (Some(c), Some(seed)) => Some(c.free_rows(m, seed, || {
+            crate::par::map(m.joints.len(), |ji| {
+                motion::pair_model(m, ji, &geoms[ji], 0).rows
+            })
+        })),
+        _ => None,
+    };
+    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file(), zero.as_ref().map(|z| z.as_slice()));
     let tol = match used.precision {
         Some(delta) => Tol {
             rel: 1e-9,
@@ -758,6 +818,7 @@ pub(crate) fn check(
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
     let mut rounds = 0;
+    let mut work = 0u64;
     loop {
         rounds += 1;
         let dec = decompose(m, eqs, u);
@@ -765,6 +826,131 @@ pub(crate) fn check(
         let over: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Over)
             .collect();
+        if certified && over.is_empty() && redundant.is_empty() {
+            // The caller proved the whole system of full row rank: with no over-determined
+            // part the blocks are square groups (nonsingular) and the under-determined block
+            // (full row rank), in block triangular order. Nothing to factorize.
+            return RankResult {
+                deficient: false,
+                work,
+                decomposition: dec,
+                set_aside,
+                isolated,
+                redundant,
+                unchecked,
+                rounds,
+            };
+        }
+        if shortcut == Shortcut::Determined
+            && rounds == 1
+            && (!over.is_empty() || (0..nb).any(|x| dec.body_part[x] == Part::Under))
+        {
+            // Not determined by count: the check only lowers equations, so it cannot become
+            // determined (an over-determined block loses rows only when it hides a freedom,
+            // which then shows as missing DOF).
+            return RankResult {
+                deficient: true,
+                work,
+                decomposition: dec,
+                set_aside,
+                isolated,
+                redundant,
+                unchecked,
+                rounds,
+            };
+        }
+        if shortcut == Shortcut::Determined && rounds == 1 {
+            // Determined by count: any deficient group makes it under-determined. The small
+            // groups first (most are in the cache), before any large one is factorized.
+            let mut gstart = vec![0usize; dec.groups.len() + 1];
+            for (e, r) in rows.iter().enumerate() {
+                if r.nrows() > 0
+                    && let Part::Group(g) = dec.eq_part[e]
+                    && g < dec.groups.len()
+                {
+                    gstart[g + 1] += 1;
+                }
+            }
+            for g in 0..dec.groups.len() {
+                gstart[g + 1] += gstart[g];
+            }
+            let mut gfill = gstart.clone();
+            let mut geqs = vec![0usize; gstart[dec.groups.len()]];
+            for (e, r) in rows.iter().enumerate() {
+                if r.nrows() > 0
+                    && let Part::Group(g) = dec.eq_part[e]
+                    && g < dec.groups.len()
+                {
+                    geqs[gfill[g]] = e;
+                    gfill[g] += 1;
+                }
+            }
+            let small: Vec<(usize, u128)> = (0..dec.groups.len())
+                .filter_map(|g| {
+                    let block_eqs = &geqs[gstart[g]..gstart[g + 1]];
+                    let bodies = &dec.groups[g].bodies;
+                    if block_eqs.is_empty() {
+                        return None;
+                    }
+                    let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+                    if nrows.max(ncols) > MAX_DENSE_UNKNOWNS {
+                        return None;
+                    }
+                    let key = cache.map_or(0, |_| {
+                        KeyContext {
+                            tol: &tol_words,
+                            seed: used.seed,
+                            qd: &qd,
+                            rd: &rd,
+                            orig_rows: &orig_rows,
+                        }
+                        .block(Part::Group(g), bodies, block_eqs, eqs, &rows)
+                    });
+                    if let Some(c) = cache
+                        && c.get_block(key).is_some()
+                    {
+                        return None;
+                    }
+                    Some((g, key))
+                })
+                .collect();
+            let sound: Vec<(bool, u64)> = crate::par::map(small.len(), |i| {
+                let g = small[i].0;
+                let block_eqs = &geqs[gstart[g]..gstart[g + 1]];
+                let bodies = &dec.groups[g].bodies;
+                let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+                let (rank, cost) = block_rank(
+                    b,
+                    block_eqs,
+                    bodies,
+                    eqs,
+                    &rows,
+                    &q,
+                    Part::Group(g),
+                    &tol,
+                    (nrows, ncols),
+                );
+                (rank >= nrows, cost)
+            });
+            work = work.saturating_add(sound.iter().map(|s| s.1).sum());
+            if sound.iter().any(|&(s, _)| !s) {
+                return RankResult {
+                    deficient: true,
+                    work,
+                    decomposition: dec,
+                    set_aside,
+                    isolated,
+                    redundant,
+                    unchecked,
+                    rounds,
+                };
+            }
+            if let Some(c) = cache {
+                for &(_, key) in &small {
+                    c.put_block(key, None);
+                }
+            }
+        }
         let under: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Under)
             .collect();
@@ -859,7 +1045,7 @@ pub(crate) fn check(
                     && untouched
                     && needed <= nrows.min(ncols)
                     && ncols <= MAX_EXACT_UNKNOWNS
-                    && exact_rank(m, eqs, block_eqs, bodies, seed) >= needed
+                    && exact_rank(m, eqs, block_eqs, bodies, seed, &mut work) >= needed
                 {
                     if let (Some(c), Some(k)) = (cache, key) {
                         c.put_block(k, None);
@@ -884,16 +1070,12 @@ pub(crate) fn check(
         }
         // Ranks of all of them in parallel (each depends on its own rows only); the first
         // deficient one in order is then explained and lowered, as a serial pass would.
-        let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
+        let ranks: Vec<(usize, u64)> = crate::par::map(todo.len(), |i| {
             let (block_eqs, bodies, part, ..) = &todo[i];
-            let (nrows, ncols) = todo[i].4;
-            if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, &rows, &q, &tol) {
-                return nrows;
-            }
-            screen(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol).unwrap_or_else(|| {
-                rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q), &tol)
-            })
+            block_rank(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol, todo[i].4)
         });
+        work = work.saturating_add(ranks.iter().map(|r| r.1).sum());
+        let ranks: Vec<usize> = ranks.into_iter().map(|r| r.0).collect();
         let mut changed = false;
         // Several groups can lose rows in one round (see `Round`); what a lowered group
         // reaches (its dependents, then the under-determined block) waits for the next one.
@@ -937,6 +1119,7 @@ pub(crate) fn check(
             }
             let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
             let svd = Svd::of(&a, &tol);
+            work = work.saturating_add(cube(a.nrows().max(a.ncols())));
             debug_assert_eq!(
                 svd.rank(),
                 rank,
@@ -1020,7 +1203,7 @@ pub(crate) fn check(
                 if verified.contains(&signature) {
                     continue;
                 }
-                if exact_rank(m, eqs, &block_eqs, &bodies, seed) >= nrows {
+                if exact_rank(m, eqs, &block_eqs, &bodies, seed, &mut work) >= nrows {
                     verified.insert(signature);
                     exact = true;
                 }
@@ -1038,6 +1221,8 @@ pub(crate) fn check(
             unchecked.sort_by_key(|x| (std::cmp::Reverse(x.unknowns), x.bodies, x.equations));
             unchecked.dedup();
             return RankResult {
+                deficient: false,
+                work,
                 decomposition: dec,
                 set_aside,
                 isolated,
@@ -1221,18 +1406,28 @@ fn pair_rows(
     geoms: &[Geometry],
     eqs: &Equations,
     with_free: bool,
+    zero: Option<&[DMatrix<f64>]>,
 ) -> (Vec<DMatrix<f64>>, Vec<DMatrix<f64>>) {
     let b = m.b() as usize;
+    // Each joint's model with no input, from `zero` when given.
+    let model0 = |ji: usize| match zero.and_then(|z| z.get(ji)) {
+        Some(r) => r.clone(),
+        None => motion::pair_model(m, ji, &geoms[ji], 0).rows,
+    };
     // One model per joint with its own driven DOF (and one without), in parallel.
     let mut base: Vec<(DMatrix<f64>, Option<DMatrix<f64>>)> =
         crate::par::map(m.joints.len(), |ji| {
             let j = &m.joints[ji];
-            let own = motion::pair_model(m, ji, &geoms[ji], j.driven).rows;
+            let own = if j.driven == 0 {
+                model0(ji)
+            } else {
+                motion::pair_model(m, ji, &geoms[ji], j.driven).rows
+            };
             let free = (with_free || j.bodies.len() > 2).then(|| {
                 if j.driven == 0 {
                     own.clone()
                 } else {
-                    motion::pair_model(m, ji, &geoms[ji], 0).rows
+                    model0(ji)
                 }
             });
             (own, free)
@@ -1282,6 +1477,7 @@ fn exact_rank(
     block_eqs: &[usize],
     bodies: &[usize],
     seed: u64,
+    work: &mut u64,
 ) -> usize {
     use crate::exact::{Fp, SparseMatrix, dense, models};
     let b = m.b() as usize;
@@ -1326,7 +1522,41 @@ fn exact_rank(
             a.push_row(entries);
         }
     }
-    crate::exact::Factor::new(&a).rank()
+    let f = crate::exact::Factor::new(&a);
+    let st = f.stats();
+    *work = work.saturating_add((st.factor_entries + st.input_entries) as u64);
+    f.rank()
+}
+
+/// `n^3`, the work units of a dense factorization of `n` unknowns.
+fn cube(n: usize) -> u64 {
+    (n as u64).saturating_mul(n as u64).saturating_mul(n as u64)
+}
+
+/// The rank of a block that is not too large for the dense check, and its work units: small
+/// square blocks on the stack, then the sparse screen, then the dense SVD.
+#[allow(clippy::too_many_arguments)]
+fn block_rank(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &[DMatrix<f64>],
+    q: &[Option<DMatrix<f64>>],
+    part: Part,
+    tol: &Tol,
+    (nrows, ncols): (usize, usize),
+) -> (usize, u64) {
+    if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, rows, q, tol) {
+        return (nrows, cube(nrows));
+    }
+    match screen(b, block_eqs, bodies, eqs, rows, q, part, tol) {
+        Some(r) => (r, 64 * (nrows + ncols) as u64),
+        None => (
+            rank_of(&block_matrix(b, block_eqs, bodies, eqs, rows, q), tol),
+            64 * (nrows + ncols) as u64 + cube(nrows.max(ncols)),
+        ),
+    }
 }
 
 /// The largest coordinate of a joint point: the lever arm that turns an uncertainty in an axis
