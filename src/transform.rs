@@ -602,23 +602,26 @@ fn place(
             return Ok(());
         }
         meter.charge(per_eval.saturating_mul(batch.len() as u64))?;
-        let results: Vec<Option<Placement>> = batch
+        let results: Vec<(Option<Placement>, u64)> = batch
             .par_iter()
             .map_init(
                 || e.mech.clone(),
                 |mech, (x, w, flow)| {
                     let certified = match oracle.decide(mech, w) {
-                        Some(false) => return None,
+                        Some(false) => return (None, 0),
                         Some(true) => true,
                         None => false,
                     };
-                    let a = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified)?;
-                    Some(placement(mech, e, *x, &a, w))
+                    let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
+                    (a.map(|a| placement(mech, e, *x, &a, w)), work)
                 },
             )
             .collect();
+        // The rank decisions' own work (dense factorizations of growing groups above all).
+        meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
+        let results = results.into_iter().map(|r| r.0);
         let done = r.count_valid;
-        for (i, p) in results.into_iter().enumerate() {
+        for (i, p) in results.enumerate() {
             r.count_valid += 1;
             match p {
                 Some(mut p) => {
@@ -683,8 +686,15 @@ fn place(
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
                 batch_size = (batch_size * 2).min(max_batch);
-                if let Err(b) = flush(e, &cache, &p.oracle, &mut batch, &mut r, &mut eval_meter, &mut stopped)
-                {
+                if let Err(b) = flush(
+                    e,
+                    &cache,
+                    &p.oracle,
+                    &mut batch,
+                    &mut r,
+                    &mut eval_meter,
+                    &mut stopped,
+                ) {
                     err = Some(b);
                     return false;
                 }
@@ -698,7 +708,15 @@ fn place(
             return Err(b.into());
         }
         // The rest of the batch belongs to this expansion: analysed before the next is built.
-        flush(e, &cache, &p.oracle, &mut batch, &mut r, &mut eval_meter, &mut stopped)?;
+        flush(
+            e,
+            &cache,
+            &p.oracle,
+            &mut batch,
+            &mut r,
+            &mut eval_meter,
+            &mut stopped,
+        )?;
         if r.cut || stopped {
             break;
         }
@@ -2187,7 +2205,8 @@ impl Search {
 // ---------------------------------------------------------------------------------------------
 // Full analysis of a placement
 
-/// Analyse `mech` with the placement `w`; the analysis if it is determined.
+/// Analyse `mech` with the placement `w`; the analysis if it is determined, and the work
+/// units of the rank decisions it made.
 fn evaluate(
     mech: &mut Mechanism,
     w: &[(usize, u32)],
@@ -2196,7 +2215,7 @@ fn evaluate(
     lib: &Library,
     cache: &structure::AnalysisCache,
     certified: bool,
-) -> Option<Analysis> {
+) -> (Option<Analysis>, u64) {
     for j in &mut mech.joints {
         j.driven = 0;
     }
@@ -2204,10 +2223,10 @@ fn evaluate(
         mech.joints[q].driven = n;
     }
     // The geometry was checked before the enumeration: this analysis cannot fail.
-    structure::analyze_placement(mech, opts, lib, Some(cache), Some(flow), certified)
-        .ok()
-        .flatten()
-        .filter(|a| a.status == Status::Determined)
+    match structure::analyze_placement(mech, opts, lib, Some(cache), Some(flow), certified) {
+        Ok((a, work)) => (a.filter(|a| a.status == Status::Determined), work),
+        Err(_) => (None, 0),
+    }
 }
 
 fn placement(

@@ -307,10 +307,12 @@ pub fn analyze_cached(
     flow: Option<&[[u8; 2]]>,
 ) -> Result<Analysis, MotionError> {
     // The plain check always answers (`None` comes only from `Shortcut::Determined`).
-    analyze_at(m, opts, lib, cache, flow, rank::Shortcut::None)?.ok_or(MotionError::Degenerate {
-        kind: "any",
-        reason: "the rank check stopped early",
-    })
+    analyze_at(m, opts, lib, cache, flow, rank::Shortcut::None, &mut 0)?.ok_or(
+        MotionError::Degenerate {
+            kind: "any",
+            reason: "the rank check stopped early",
+        },
+    )
 }
 
 /// [`analyze_cached`] for `mbsa transform`, which keeps a placement only when it is
@@ -326,6 +328,10 @@ pub fn analyze_cached(
 /// unknowns are still computed). The answer is the one the rank check would give unless a
 /// block is numerically rank deficient at the floating-point realization while generically of
 /// full rank (the exact rank is the generic one). Ignored at the file's geometry.
+///
+/// Also returns the work units of the rank decisions made (a dense factorization of `n`
+/// unknowns costs `n^3`, an exact sparse one its factor's entries; cached and certified blocks
+/// nothing), for `mbsa transform`'s work budget.
 pub fn analyze_placement(
     m: &Mechanism,
     opts: &Options,
@@ -333,13 +339,15 @@ pub fn analyze_placement(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
     certified: bool,
-) -> Result<Option<Analysis>, MotionError> {
+) -> Result<(Option<Analysis>, u64), MotionError> {
     let shortcut = if certified {
         rank::Shortcut::Certified
     } else {
         rank::Shortcut::Determined
     };
-    analyze_at(m, opts, lib, cache, flow, shortcut)
+    let mut work = 0;
+    let a = analyze_at(m, opts, lib, cache, flow, shortcut, &mut work)?;
+    Ok((a, work))
 }
 
 fn analyze_at(
@@ -349,8 +357,9 @@ fn analyze_at(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
     shortcut: rank::Shortcut,
+    work: &mut u64,
 ) -> Result<Option<Analysis>, MotionError> {
-    let Some(mut a) = analyze_once(m, opts, lib, cache, flow, shortcut)? else {
+    let Some(mut a) = analyze_once(m, opts, lib, cache, flow, shortcut, work)? else {
         return Ok(None);
     };
     // At the file's configuration, say what generic geometry would give when it differs.
@@ -362,7 +371,8 @@ fn analyze_at(
             geometry: GeometrySource::Random { seed: 0 },
             ..*opts
         };
-        let Some(g) = analyze_once(m, &generic, lib, cache, flow, rank::Shortcut::None)? else {
+        let Some(g) = analyze_once(m, &generic, lib, cache, flow, rank::Shortcut::None, work)?
+        else {
             return Ok(Some(a));
         };
         let differs = g.status != a.status
@@ -433,6 +443,7 @@ fn analyze_once(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
     shortcut: rank::Shortcut,
+    work: &mut u64,
 ) -> Result<Option<Analysis>, MotionError> {
     let mut eqs = Equations::of(m);
     if let Some(f) = flow {
@@ -471,6 +482,7 @@ fn analyze_once(
             s => s,
         };
         let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache, shortcut);
+        *work = work.saturating_add(r.work);
         if r.deficient {
             return Ok(None);
         }

@@ -677,7 +677,13 @@ pub(crate) fn check(
         })),
         _ => None,
     };
-    let (mut rows, free) = pair_rows(m, geoms, eqs, used.is_file(), zero.as_ref().map(|z| z.as_slice()));
+    let (mut rows, free) = pair_rows(
+        m,
+        geoms,
+        eqs,
+        used.is_file(),
+        zero.as_ref().map(|z| z.as_slice()),
+    );
     let tol = match used.precision {
         Some(delta) => Tol {
             rel: 1e-9,
@@ -904,7 +910,13 @@ pub(crate) fn check(
                             rd: &rd,
                             orig_rows: &orig_rows,
                         }
-                        .block(Part::Group(g), bodies, block_eqs, eqs, &rows)
+                        .block(
+                            Part::Group(g),
+                            bodies,
+                            block_eqs,
+                            eqs,
+                            &rows,
+                        )
                     });
                     if let Some(c) = cache
                         && c.get_block(key).is_some()
