@@ -2427,63 +2427,6 @@ pub fn compare(
     })
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn prufer_trees_are_spanning_and_distinct() {
-        for n in 2..=5 {
-            let mut seen = std::collections::BTreeSet::new();
-            for i in 0..trees(n) {
-                let t = prufer_tree(n, i);
-                assert_eq!(t.len(), n - 1);
-                // Connected: union-find over the edges.
-                let mut p: Vec<usize> = (0..n).collect();
-                fn root(p: &mut [usize], mut x: usize) -> usize {
-                    while p[x] != x {
-                        x = p[x];
-                    }
-                    x
-                }
-                for &(a, b) in &t {
-                    let (ra, rb) = (root(&mut p, a), root(&mut p, b));
-                    assert_ne!(ra, rb, "cycle in tree {i} of K{n}");
-                    p[ra] = rb;
-                }
-                assert!(seen.insert(t));
-            }
-            assert_eq!(seen.len() as u64, trees(n));
-        }
-        // Index 0 is the star on the hub.
-        assert_eq!(prufer_tree(4, 0), vec![(0, 1), (0, 2), (0, 3)]);
-    }
-
-    #[test]
-    fn parses_criteria_and_types() {
-        assert_eq!(
-            Criterion::parse_list("groups,library,max-size,levels").unwrap(),
-            Criterion::DEFAULT.to_vec()
-        );
-        assert_eq!(
-            Criterion::parse_list("levels, groups,levels").unwrap(),
-            vec![Criterion::Levels, Criterion::Groups]
-        );
-        assert!(matches!(
-            Criterion::parse("size"),
-            Err(TransformError::UnknownCriterion { .. })
-        ));
-        assert_eq!(
-            TransformOptions::parse_on("R,P").unwrap(),
-            vec![JointType::R, JointType::P]
-        );
-        assert!(matches!(
-            TransformOptions::parse_on("R,Q"),
-            Err(TransformError::UnknownType { .. })
-        ));
-    }
-}
-
 // ---------------------------------------------------------------------------------------------
 // The exact rank of a placement's whole system
 
@@ -2675,5 +2618,62 @@ impl Oracle {
                 Some(dense::rank(&a) == f)
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn prufer_trees_are_spanning_and_distinct() {
+        for n in 2..=5 {
+            let mut seen = std::collections::BTreeSet::new();
+            for i in 0..trees(n) {
+                let t = prufer_tree(n, i);
+                assert_eq!(t.len(), n - 1);
+                // Connected: union-find over the edges.
+                let mut p: Vec<usize> = (0..n).collect();
+                fn root(p: &mut [usize], mut x: usize) -> usize {
+                    while p[x] != x {
+                        x = p[x];
+                    }
+                    x
+                }
+                for &(a, b) in &t {
+                    let (ra, rb) = (root(&mut p, a), root(&mut p, b));
+                    assert_ne!(ra, rb, "cycle in tree {i} of K{n}");
+                    p[ra] = rb;
+                }
+                assert!(seen.insert(t));
+            }
+            assert_eq!(seen.len() as u64, trees(n));
+        }
+        // Index 0 is the star on the hub.
+        assert_eq!(prufer_tree(4, 0), vec![(0, 1), (0, 2), (0, 3)]);
+    }
+
+    #[test]
+    fn parses_criteria_and_types() {
+        assert_eq!(
+            Criterion::parse_list("groups,library,max-size,levels").unwrap(),
+            Criterion::DEFAULT.to_vec()
+        );
+        assert_eq!(
+            Criterion::parse_list("levels, groups,levels").unwrap(),
+            vec![Criterion::Levels, Criterion::Groups]
+        );
+        assert!(matches!(
+            Criterion::parse("size"),
+            Err(TransformError::UnknownCriterion { .. })
+        ));
+        assert_eq!(
+            TransformOptions::parse_on("R,P").unwrap(),
+            vec![JointType::R, JointType::P]
+        );
+        assert!(matches!(
+            TransformOptions::parse_on("R,Q"),
+            Err(TransformError::UnknownType { .. })
+        ));
     }
 }
