@@ -591,6 +591,7 @@ fn place(
     // Analyse a batch in parallel and stream its determined placements in order.
     let mut flush = |e: &Expansion,
                      cache: &structure::AnalysisCache,
+                     oracle: &Oracle,
                      batch: &mut Vec<Leaf>,
                      r: &mut Placed,
                      meter: &mut Meter,
@@ -601,18 +602,26 @@ fn place(
             return Ok(());
         }
         meter.charge(per_eval.saturating_mul(batch.len() as u64))?;
-        let results: Vec<Option<Placement>> = batch
+        let results: Vec<(Option<Placement>, u64)> = batch
             .par_iter()
             .map_init(
                 || e.mech.clone(),
                 |mech, (x, w, flow)| {
-                    let a = evaluate(mech, w, flow, &opts.analysis, lib, cache)?;
-                    Some(placement(mech, e, *x, &a, w))
+                    let certified = match oracle.decide(mech, w) {
+                        Some(false) => return (None, 0),
+                        Some(true) => true,
+                        None => false,
+                    };
+                    let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
+                    (a.map(|a| placement(mech, e, *x, &a, w)), work)
                 },
             )
             .collect();
+        // The rank decisions' own work (dense factorizations of growing groups above all).
+        meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
+        let results = results.into_iter().map(|r| r.0);
         let done = r.count_valid;
-        for (i, p) in results.into_iter().enumerate() {
+        for (i, p) in results.enumerate() {
             r.count_valid += 1;
             match p {
                 Some(mut p) => {
@@ -677,8 +686,15 @@ fn place(
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
                 batch_size = (batch_size * 2).min(max_batch);
-                if let Err(b) = flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)
-                {
+                if let Err(b) = flush(
+                    e,
+                    &cache,
+                    &p.oracle,
+                    &mut batch,
+                    &mut r,
+                    &mut eval_meter,
+                    &mut stopped,
+                ) {
                     err = Some(b);
                     return false;
                 }
@@ -692,7 +708,15 @@ fn place(
             return Err(b.into());
         }
         // The rest of the batch belongs to this expansion: analysed before the next is built.
-        flush(e, &cache, &mut batch, &mut r, &mut eval_meter, &mut stopped)?;
+        flush(
+            e,
+            &cache,
+            &p.oracle,
+            &mut batch,
+            &mut r,
+            &mut eval_meter,
+            &mut stopped,
+        )?;
         if r.cut || stopped {
             break;
         }
@@ -1563,6 +1587,8 @@ struct Problem {
     /// placement can exist.
     root: Option<State>,
     note: Option<String>,
+    /// The exact decision of each placement, where one is made before its analysis.
+    oracle: Oracle,
 }
 
 impl Problem {
@@ -1580,6 +1606,7 @@ impl Problem {
         let mut u = vec![b; nb];
         u[m.frame] = 0;
         let mut isolated = 0u32;
+        let mut oracle = Oracle::Undecided;
         // Constraint equations dependent at the file's configuration fix nothing: inputs take
         // their place (a planar four-bar written in space takes one input, not none).
         let mut set_aside = vec![0u32; m.joints.len()];
@@ -1605,6 +1632,7 @@ impl Problem {
                 for (q, &n) in a.set_aside.iter().enumerate() {
                     set_aside[q] = n;
                 }
+                oracle = Oracle::of(m, a, meter)?;
             }
             for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
                 let id = crate::mechanism::BodyId::from_text(&iso.body);
@@ -1633,6 +1661,7 @@ impl Problem {
             need: 0,
             root: None,
             note: None,
+            oracle,
         };
         let mut cons = vec![0u32; nq];
         let mut group_pairs: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
@@ -2176,7 +2205,8 @@ impl Search {
 // ---------------------------------------------------------------------------------------------
 // Full analysis of a placement
 
-/// Analyse `mech` with the placement `w`; the analysis if it is determined.
+/// Analyse `mech` with the placement `w`; the analysis if it is determined, and the work
+/// units of the rank decisions it made.
 fn evaluate(
     mech: &mut Mechanism,
     w: &[(usize, u32)],
@@ -2184,7 +2214,8 @@ fn evaluate(
     opts: &structure::Options,
     lib: &Library,
     cache: &structure::AnalysisCache,
-) -> Option<Analysis> {
+    certified: bool,
+) -> (Option<Analysis>, u64) {
     for j in &mut mech.joints {
         j.driven = 0;
     }
@@ -2192,9 +2223,10 @@ fn evaluate(
         mech.joints[q].driven = n;
     }
     // The geometry was checked before the enumeration: this analysis cannot fail.
-    structure::analyze_cached(mech, opts, lib, Some(cache), Some(flow))
-        .ok()
-        .filter(|a| a.status == Status::Determined)
+    match structure::analyze_placement(mech, opts, lib, Some(cache), Some(flow), certified) {
+        Ok((a, work)) => (a.filter(|a| a.status == Status::Determined), work),
+        Err(_) => (None, 0),
+    }
 }
 
 fn placement(
@@ -2393,6 +2425,200 @@ pub fn compare(
         given,
         changes,
     })
+}
+
+// ---------------------------------------------------------------------------------------------
+// The exact rank of a placement's whole system
+
+/// Null vectors of the constraint system an [`Oracle`] keeps at most (its per-placement test is
+/// a dense rank of about `6 f` rows by this many columns).
+const ORACLE_NULLITY: usize = 64;
+
+/// What the exact rank at the analysis's random realization (over GF(p), as the rank check's
+/// large blocks and the geometric rigidity use it) decides for every placement of one
+/// expansion, before its analysis. A placement `P` is determined exactly when its square
+/// system `M_P` (every pair's constraint rows and its inputs' rows, frame fixed) is
+/// nonsingular on the reduced unknowns; that needs `M_P` of full row rank (reducing the
+/// unknowns of a body by its isolated freedom keeps the rank). With `J` the constraint rows
+/// alone: `rank M_P = rank J + rank` of the inputs' rows on the null space of `J`.
+/// - `J` has dependent rows: no placement is determined (each `M_P` has them too).
+/// - `J` has full row rank and a small null space (`mbsa` keeps `N ≤` [`ORACLE_NULLITY`]
+///   random null vectors, which span it except with probability `N / p`): a placement is
+///   rejected when its inputs' rows on those vectors have rank below `f`, and otherwise
+///   certified: its analysis skips the rank check's factorizations
+///   ([`structure::analyze_placement`]).
+/// - Otherwise the analysis decides alone, as before.
+///
+/// Each decision is the generic rank (probability of error at most rows / p), which the
+/// floating-point rank check also finds except on a block so badly conditioned that its
+/// tolerance takes it for singular.
+enum Oracle {
+    Undecided,
+    Reject,
+    Motions {
+        seed: u64,
+        /// Column of each body's first unknown (`usize::MAX`: the frame).
+        col: Vec<usize>,
+        /// Random null vectors of `J`.
+        v: Vec<Vec<crate::exact::Fp>>,
+    },
+}
+
+impl Oracle {
+    /// The oracle of `m` (an expansion, binary joints, no inputs) given its first analysis `a`
+    /// (no inputs either). `cols_minus_rows` is the count's nullity of `J`.
+    fn of(m: &Mechanism, a: &Analysis, meter: &mut Meter) -> Result<Oracle, BudgetExceeded> {
+        use crate::exact::{Factor, Fp, SparseMatrix, models};
+        let Some(seed) = a.geometry.as_ref().and_then(|g| g.seed) else {
+            return Ok(Oracle::Undecided);
+        };
+        let b = m.b() as usize;
+        let pair = |q: usize| match m.joints[q].bodies[..] {
+            [x, y] => Some((x, y)),
+            _ => None,
+        };
+        if m.joints.iter().any(|j| j.bodies.len() != 2) {
+            return Ok(Oracle::Undecided);
+        }
+        // A dependency the analysis named among the constraint rows alone: the rows of the
+        // named joints, exactly.
+        for r in a.redundant.iter().filter(|r| !r.configuration) {
+            let named: std::collections::HashSet<&str> =
+                r.joints.iter().map(String::as_str).collect();
+            let qs: Vec<usize> = (0..m.joints.len())
+                .filter(|&q| named.contains(m.joints[q].id.as_str()))
+                .collect();
+            meter.charge(m.joints.len() as u64 / 8 + 1)?;
+            let mut bodies: Vec<usize> = qs
+                .iter()
+                .filter_map(|&q| pair(q))
+                .flat_map(|(x, y)| [x, y])
+                .filter(|&x| x != m.frame)
+                .collect();
+            bodies.sort_unstable();
+            bodies.dedup();
+            let rows: Vec<_> = qs
+                .iter()
+                .map(|&q| models::joint_rows(m, q, seed, 0))
+                .collect();
+            let total: usize = rows.iter().map(|r| r.nrows()).sum();
+            let rank = models::pairs_rank(
+                b,
+                bodies.len(),
+                &rows,
+                qs.iter().enumerate().filter_map(|(i, &q)| {
+                    let (x, y) = pair(q)?;
+                    Some((i, x, y))
+                }),
+                |x| bodies.binary_search(&x).ok(),
+            );
+            if rank < total {
+                return Ok(Oracle::Reject);
+            }
+        }
+        // The count's nullity of J: unknowns less constraint rows.
+        let movable = m.bodies.len().saturating_sub(1);
+        let cons: usize = m
+            .joints
+            .iter()
+            .map(|j| b.saturating_sub(j.grade() as usize))
+            .sum();
+        let ncols = movable * b;
+        if cons > ncols || ncols - cons > ORACLE_NULLITY {
+            return Ok(Oracle::Undecided);
+        }
+        let mut col = vec![usize::MAX; m.bodies.len()];
+        let mut c = 0;
+        for (x, slot) in col.iter_mut().enumerate() {
+            if x != m.frame {
+                *slot = c;
+                c += b;
+            }
+        }
+        meter.charge(50 * (m.bodies.len() + m.joints.len()) as u64)?;
+        let mut j = SparseMatrix::with_groups(vec![b; movable]);
+        for q in 0..m.joints.len() {
+            let Some((x, y)) = pair(q) else { continue };
+            let rows = models::joint_rows(m, q, seed, 0);
+            for r in 0..rows.nrows() {
+                let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+                for (z, negate) in [(x, true), (y, false)] {
+                    if x == y || col[z] == usize::MAX {
+                        continue;
+                    }
+                    for k in 0..b {
+                        let v = rows[(r, k)];
+                        entries.push(((col[z] + k) as u32, if negate { -v } else { v }));
+                    }
+                }
+                j.push_row(entries);
+            }
+        }
+        let nrows = j.nrows();
+        let f = Factor::new(&j);
+        if f.rank() < nrows {
+            return Ok(Oracle::Reject);
+        }
+        let n = f.nullity();
+        if n > ORACLE_NULLITY {
+            return Ok(Oracle::Undecided);
+        }
+        let mut rng = crate::rng::SplitMix64::new(seed ^ 0x7A4E_5F0B_0C1E_0000);
+        let v = f.random_null_vectors(n, &mut rng);
+        Ok(Oracle::Motions { seed, col, v })
+    }
+
+    /// `Some(false)`: placement `w` (units per pair of `m`) is not determined; `Some(true)`:
+    /// its whole system has full row rank; `None`: the analysis decides.
+    fn decide(&self, m: &Mechanism, w: &[(usize, u32)]) -> Option<bool> {
+        use crate::exact::{Fp, dense, models};
+        match self {
+            Oracle::Undecided => None,
+            Oracle::Reject => Some(false),
+            Oracle::Motions { seed, col, v } => {
+                let b = m.b() as usize;
+                let f: usize = w.iter().map(|&(_, n)| n as usize).sum();
+                if f > v.len() {
+                    return Some(false);
+                }
+                let mut stacked: Vec<Vec<Fp>> = Vec::new();
+                for &(q, d) in w {
+                    let [x, y] = m.joints[q].bodies[..] else {
+                        return None;
+                    };
+                    let rows = models::joint_rows(m, q, *seed, d);
+                    for r in 0..rows.nrows() {
+                        let line: Vec<Fp> = v
+                            .iter()
+                            .map(|vl| {
+                                let mut s = Fp::ZERO;
+                                for k in 0..b {
+                                    let ty = if col[y] == usize::MAX {
+                                        Fp::ZERO
+                                    } else {
+                                        vl[col[y] + k]
+                                    };
+                                    let tx = if col[x] == usize::MAX {
+                                        Fp::ZERO
+                                    } else {
+                                        vl[col[x] + k]
+                                    };
+                                    s += rows[(r, k)] * (ty - tx);
+                                }
+                                s
+                            })
+                            .collect();
+                        stacked.push(line);
+                    }
+                }
+                if stacked.is_empty() {
+                    return Some(f == 0);
+                }
+                let a = nalgebra::DMatrix::from_fn(stacked.len(), v.len(), |i, l| stacked[i][l]);
+                Some(dense::rank(&a) == f)
+            }
+        }
+    }
 }
 
 #[cfg(test)]

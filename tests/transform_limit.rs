@@ -117,6 +117,14 @@ fn cached_equals_plain(m: &Mechanism, limit: usize) {
         // Twice: the second analysis takes every factorization from the cache.
         let again = structure::analyze_cached(&pm, &opts, &lib, Some(&cache), None).unwrap();
         assert_eq!(plain, again, "{spec}");
+        // `transform`'s analysis: certified (its inputs' exact rank is full: it is determined)
+        // or not, it answers the same.
+        for certified in [true, false] {
+            let (a, _) =
+                structure::analyze_placement(&pm, &opts, &lib, Some(&cache), Some(hint), certified)
+                    .unwrap();
+            assert_eq!(Some(&plain), a.as_ref(), "{spec} certified {certified}");
+        }
     }
 }
 
@@ -155,4 +163,49 @@ fn cached_analyses_equal_plain_ones_on_a_shared_s_joint() {
     let hint = vec![[6u8, 6]; m.joints.len()];
     let cached = structure::analyze_cached(&m, &opts, &lib, Some(&cache), Some(&hint)).unwrap();
     assert_eq!(plain, cached);
+}
+
+/// `--limit 100` with the rank check on a planar Assur II linkage of 4,002 bodies: each
+/// placement found moves the input down the linkage, and the group above it grows (hundreds
+/// of bodies, ill-conditioned loops the sparse screen declines). Their rank was a dense SVD
+/// per placement (`n^3` work units: 10^8 to 10^9 each for groups of 300 to 1,000 unknowns);
+/// now the exact rank over GF(p) of the inputs on the linkage's one motion certifies each
+/// placement before its analysis, which then factorizes nothing new. The work units of the
+/// rank decisions are charged to the budget (deterministic): the whole run fits in 10^8.
+#[test]
+fn limit_100_with_the_rank_check_on_an_assur_linkage_fits_a_small_work_budget() {
+    let m = generate::assur(2, 1_000, 364, Variant::A).unwrap();
+    assert_eq!(m.bodies.len(), 4_002);
+    let o = TransformOptions {
+        limit: Some(100),
+        budget: Budget {
+            max_work: 100_000_000,
+            ..Budget::DEFAULT
+        },
+        ..TransformOptions::default()
+    };
+    let t = transform(&m, &o, &Library::builtin(), None).unwrap();
+    assert_eq!(t.summary.count_valid, 100);
+    assert_eq!(t.placements.len(), 100);
+    assert!(t.summary.truncated);
+    // The largest group of the placements listed: the growth the old check paid for.
+    let largest = t.placements.iter().map(|p| p.scores.largest).max().unwrap();
+    assert!(largest >= 300, "largest group {largest}");
+}
+
+/// The random families: every count-valid placement the search finds has a group whose
+/// rank is deficient (the count and rank matroids differ). The check now stops at the first
+/// deficient group the count calls well-determined (before factorizing the giant one exactly,
+/// about a second per placement at 10^4 bodies), or at once when the count itself is not
+/// determined: the verdicts are the full check's (every placement excluded, as before).
+#[test]
+fn rejected_placements_of_a_random_mechanism_keep_their_verdict() {
+    let (m, _) = generate::random(2_000, true, 1).unwrap();
+    let o = TransformOptions {
+        limit: Some(30),
+        ..TransformOptions::default()
+    };
+    let t = transform(&m, &o, &Library::builtin(), None).unwrap();
+    assert_eq!(t.summary.count_valid, 30);
+    assert_eq!(t.summary.excluded_by_rank, 30);
 }

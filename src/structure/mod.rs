@@ -306,7 +306,62 @@ pub fn analyze_cached(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
 ) -> Result<Analysis, MotionError> {
-    let mut a = analyze_once(m, opts, lib, cache, flow)?;
+    // The plain check always answers (`None` comes only from `Shortcut::Determined`).
+    analyze_at(m, opts, lib, cache, flow, rank::Shortcut::None, &mut 0)?.ok_or(
+        MotionError::Degenerate {
+            kind: "any",
+            reason: "the rank check stopped early",
+        },
+    )
+}
+
+/// [`analyze_cached`] for `mbsa transform`, which keeps a placement only when it is
+/// determined: `None` when it is surely not (a group the count finds well-determined is rank
+/// deficient), found without explaining the deficit or factorizing the other groups; else
+/// the analysis [`analyze_cached`] gives.
+///
+/// `certified`: the caller has proved the placement's whole constraint system (every pair's
+/// rows with its inputs, frame fixed) of full row rank at the random realization (`mbsa
+/// transform` decides it over GF(p), see `docs/algorithms.md`). Then every group block is
+/// nonsingular and the under-determined block has full row rank: when the count has no
+/// over-determined part, the rank check skips the blocks' factorizations (the reduced
+/// unknowns are still computed). The answer is the one the rank check would give unless a
+/// block is numerically rank deficient at the floating-point realization while generically of
+/// full rank (the exact rank is the generic one). Ignored at the file's geometry.
+///
+/// Also returns the work units of the rank decisions made (a dense factorization of `n`
+/// unknowns costs `n^3`, an exact sparse one its factor's entries; cached and certified blocks
+/// nothing), for `mbsa transform`'s work budget.
+pub fn analyze_placement(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+    certified: bool,
+) -> Result<(Option<Analysis>, u64), MotionError> {
+    let shortcut = if certified {
+        rank::Shortcut::Certified
+    } else {
+        rank::Shortcut::Determined
+    };
+    let mut work = 0;
+    let a = analyze_at(m, opts, lib, cache, flow, shortcut, &mut work)?;
+    Ok((a, work))
+}
+
+fn analyze_at(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    cache: Option<&AnalysisCache>,
+    flow: Option<&[[u8; 2]]>,
+    shortcut: rank::Shortcut,
+    work: &mut u64,
+) -> Result<Option<Analysis>, MotionError> {
+    let Some(mut a) = analyze_once(m, opts, lib, cache, flow, shortcut, work)? else {
+        return Ok(None);
+    };
     // At the file's configuration, say what generic geometry would give when it differs.
     if let Some(used) = &a.geometry
         && used.is_file()
@@ -316,7 +371,10 @@ pub fn analyze_cached(
             geometry: GeometrySource::Random { seed: 0 },
             ..*opts
         };
-        let g = analyze_once(m, &generic, lib, cache, flow)?;
+        let Some(g) = analyze_once(m, &generic, lib, cache, flow, rank::Shortcut::None, work)?
+        else {
+            return Ok(Some(a));
+        };
         let differs = g.status != a.status
             || g.groups.len() != a.groups.len()
             || g.uncontrolled != a.uncontrolled;
@@ -350,7 +408,7 @@ pub fn analyze_cached(
             }
         }
     }
-    Ok(a)
+    Ok(Some(a))
 }
 
 /// Mechanisms up to this size also get the comparison with generic geometry.
@@ -384,7 +442,9 @@ fn analyze_once(
     lib: &Library,
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
-) -> Result<Analysis, MotionError> {
+    shortcut: rank::Shortcut,
+    work: &mut u64,
+) -> Result<Option<Analysis>, MotionError> {
     let mut eqs = Equations::of(m);
     if let Some(f) = flow {
         eqs.hint = (0..eqs.len())
@@ -422,7 +482,15 @@ fn analyze_once(
                     .collect(),
             );
         }
-        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache);
+        let shortcut = match shortcut {
+            rank::Shortcut::Certified if used.seed.is_none() => rank::Shortcut::None,
+            s => s,
+        };
+        let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache, shortcut);
+        *work = work.saturating_add(r.work);
+        if r.deficient {
+            return Ok(None);
+        }
         geometry = Some(used);
         isolated = r.isolated;
         redundant = r.redundant;
@@ -455,7 +523,7 @@ fn analyze_once(
     a.unchecked = unchecked;
     a.geometry = geometry;
     a.set_aside = set_aside;
-    Ok(a)
+    Ok(Some(a))
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -1041,7 +1109,15 @@ mod tests {
         let (geoms, used) =
             super::motion::geometries(&m, super::GeometrySource::Random { seed: 0 }, None)
                 .expect("random geometry");
-        let r = super::rank::check(&m, &geoms, &used, &mut eqs, &mut u, None);
+        let r = super::rank::check(
+            &m,
+            &geoms,
+            &used,
+            &mut eqs,
+            &mut u,
+            None,
+            super::rank::Shortcut::None,
+        );
         assert!(r.redundant.len() >= 5, "{} redundancies", r.redundant.len());
         assert!(
             r.rounds <= 3,

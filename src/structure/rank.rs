@@ -32,8 +32,30 @@ use std::collections::{HashMap, HashSet};
 use std::hash::{DefaultHasher, Hasher};
 use std::sync::Mutex;
 
+/// What the caller of [`check`] knows or needs beyond the plain check (`mbsa transform`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Shortcut {
+    /// The plain rank check.
+    None,
+    /// The whole system is known to have full row rank: no factorization is needed when the
+    /// count has no over-determined part.
+    Certified,
+    /// Only whether the mechanism is determined matters: when the count does not find it
+    /// determined, the check ends at once (`deficient`); when it does, the groups up to
+    /// [`MAX_DENSE_UNKNOWNS`] are checked first, and a deficient one ends the check,
+    /// unexplained (the larger groups would have been factorized for nothing).
+    Determined,
+}
+
 /// What the rank check found, with the final decomposition.
 pub(crate) struct RankResult {
+    /// [`Shortcut::Determined`] stopped at a deficient group: the mechanism is not determined
+    /// (the rest of the result is not meaningful).
+    pub deficient: bool,
+    /// Work units of the blocks' rank decisions this check made (a dense factorization of
+    /// `n` unknowns `n^3`, an exact sparse one its factor's entries, the sparse screen
+    /// `64 (rows + columns)`); blocks taken from the cache or certified cost nothing.
+    pub work: u64,
     pub decomposition: Decomposition,
     /// Constraint equations set aside at the file's configuration, per joint.
     pub set_aside: Vec<u32>,
@@ -660,7 +682,9 @@ pub(crate) fn check(
     eqs: &mut Equations,
     u: &mut [u32],
     cache: Option<&Cache>,
+    shortcut: Shortcut,
 ) -> RankResult {
+    let certified = shortcut == Shortcut::Certified;
     let b = m.b() as usize;
     let nb = eqs.nodes;
     let (mut rows, free) = pair_rows(m, geoms, used.seed, eqs, used.is_file());
@@ -802,6 +826,7 @@ pub(crate) fn check(
     // block's rank depends on nothing else), so a repeat pass only checks what changed.
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
     let mut rounds = 0;
+    let mut work = 0u64;
     loop {
         rounds += 1;
         let dec = decompose(m, eqs, u);
@@ -809,6 +834,137 @@ pub(crate) fn check(
         let over: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Over)
             .collect();
+        if certified && over.is_empty() && redundant.is_empty() {
+            // The caller proved the whole system of full row rank: with no over-determined
+            // part the blocks are square groups (nonsingular) and the under-determined block
+            // (full row rank), in block triangular order. Nothing to factorize.
+            return RankResult {
+                deficient: false,
+                work,
+                decomposition: dec,
+                set_aside,
+                isolated,
+                redundant,
+                unchecked,
+                rounds,
+            };
+        }
+        if shortcut == Shortcut::Determined
+            && rounds == 1
+            && (!over.is_empty() || (0..nb).any(|x| dec.body_part[x] == Part::Under))
+        {
+            // Not determined by count: the check only lowers equations, so it cannot become
+            // determined (an over-determined block loses rows only when it hides a freedom,
+            // which then shows as missing DOF).
+            return RankResult {
+                deficient: true,
+                work,
+                decomposition: dec,
+                set_aside,
+                isolated,
+                redundant,
+                unchecked,
+                rounds,
+            };
+        }
+        if shortcut == Shortcut::Determined && rounds == 1 {
+            // Determined by count: any deficient group makes it under-determined. The small
+            // groups first (most are in the cache), before any large one is factorized.
+            let mut gstart = vec![0usize; dec.groups.len() + 1];
+            for e in 0..rows.len() {
+                if rows.nrows(e) > 0
+                    && let Part::Group(g) = dec.eq_part[e]
+                    && g < dec.groups.len()
+                {
+                    gstart[g + 1] += 1;
+                }
+            }
+            for g in 0..dec.groups.len() {
+                gstart[g + 1] += gstart[g];
+            }
+            let mut gfill = gstart.clone();
+            let mut geqs = vec![0usize; gstart[dec.groups.len()]];
+            for e in 0..rows.len() {
+                if rows.nrows(e) > 0
+                    && let Part::Group(g) = dec.eq_part[e]
+                    && g < dec.groups.len()
+                {
+                    geqs[gfill[g]] = e;
+                    gfill[g] += 1;
+                }
+            }
+            let small: Vec<(usize, u128)> = (0..dec.groups.len())
+                .filter_map(|g| {
+                    let block_eqs = &geqs[gstart[g]..gstart[g + 1]];
+                    let bodies = &dec.groups[g].bodies;
+                    if block_eqs.is_empty() {
+                        return None;
+                    }
+                    let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+                    if nrows.max(ncols) > MAX_DENSE_UNKNOWNS {
+                        return None;
+                    }
+                    let key = cache.map_or(0, |_| {
+                        KeyContext {
+                            tol: &tol_words,
+                            seed: used.seed,
+                            qd: &qd,
+                            rd: &rd,
+                            orig_rows: &orig_rows,
+                        }
+                        .block(
+                            Part::Group(g),
+                            bodies,
+                            block_eqs,
+                            eqs,
+                            &rows,
+                        )
+                    });
+                    if let Some(c) = cache
+                        && c.get_block(key).is_some()
+                    {
+                        return None;
+                    }
+                    Some((g, key))
+                })
+                .collect();
+            let sound: Vec<(bool, u64)> = crate::par::map(small.len(), |i| {
+                let g = small[i].0;
+                let block_eqs = &geqs[gstart[g]..gstart[g + 1]];
+                let bodies = &dec.groups[g].bodies;
+                let (nrows, ncols) = block_shape(b, block_eqs, bodies, &rows, &q);
+                let (rank, cost) = block_rank(
+                    b,
+                    block_eqs,
+                    bodies,
+                    eqs,
+                    &rows,
+                    &q,
+                    Part::Group(g),
+                    &tol,
+                    (nrows, ncols),
+                );
+                (rank >= nrows, cost)
+            });
+            work = work.saturating_add(sound.iter().map(|s| s.1).sum());
+            if sound.iter().any(|&(s, _)| !s) {
+                return RankResult {
+                    deficient: true,
+                    work,
+                    decomposition: dec,
+                    set_aside,
+                    isolated,
+                    redundant,
+                    unchecked,
+                    rounds,
+                };
+            }
+            if let Some(c) = cache {
+                for &(_, key) in &small {
+                    c.put_block(key, None);
+                }
+            }
+        }
         let under: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Under)
             .collect();
@@ -903,7 +1059,7 @@ pub(crate) fn check(
                     && untouched
                     && needed <= nrows.min(ncols)
                     && ncols <= MAX_EXACT_UNKNOWNS
-                    && exact_rank(m, eqs, block_eqs, bodies, seed) >= needed
+                    && exact_rank(m, eqs, block_eqs, bodies, seed, &mut work) >= needed
                 {
                     if let (Some(c), Some(k)) = (cache, key) {
                         c.put_block(k, None);
@@ -928,16 +1084,12 @@ pub(crate) fn check(
         }
         // Ranks of all of them in parallel (each depends on its own rows only); the first
         // deficient one in order is then explained and lowered, as a serial pass would.
-        let ranks: Vec<usize> = crate::par::map(todo.len(), |i| {
+        let ranks: Vec<(usize, u64)> = crate::par::map(todo.len(), |i| {
             let (block_eqs, bodies, part, ..) = &todo[i];
-            let (nrows, ncols) = todo[i].4;
-            if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, &rows, &q, &tol) {
-                return nrows;
-            }
-            screen(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol).unwrap_or_else(|| {
-                rank_of(&block_matrix(b, block_eqs, bodies, eqs, &rows, &q), &tol)
-            })
+            block_rank(b, block_eqs, bodies, eqs, &rows, &q, *part, &tol, todo[i].4)
         });
+        work = work.saturating_add(ranks.iter().map(|r| r.1).sum());
+        let ranks: Vec<usize> = ranks.into_iter().map(|r| r.0).collect();
         let mut changed = false;
         // Several groups can lose rows in one round (see `Round`); what a lowered group
         // reaches (its dependents, then the under-determined block) waits for the next one.
@@ -981,6 +1133,7 @@ pub(crate) fn check(
             }
             let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
             let svd = Svd::of(&a, &tol);
+            work = work.saturating_add(cube(a.nrows().max(a.ncols())));
             debug_assert_eq!(
                 svd.rank(),
                 rank,
@@ -1064,7 +1217,7 @@ pub(crate) fn check(
                 if verified.contains(&signature) {
                     continue;
                 }
-                if exact_rank(m, eqs, &block_eqs, &bodies, seed) >= nrows {
+                if exact_rank(m, eqs, &block_eqs, &bodies, seed, &mut work) >= nrows {
                     verified.insert(signature);
                     exact = true;
                 }
@@ -1082,6 +1235,8 @@ pub(crate) fn check(
             unchecked.sort_by_key(|x| (std::cmp::Reverse(x.unknowns), x.bodies, x.equations));
             unchecked.dedup();
             return RankResult {
+                deficient: false,
+                work,
                 decomposition: dec,
                 set_aside,
                 isolated,
@@ -1470,6 +1625,7 @@ fn exact_rank(
     block_eqs: &[usize],
     bodies: &[usize],
     seed: u64,
+    work: &mut u64,
 ) -> usize {
     use crate::exact::{Fp, SparseMatrix, dense, models};
     let b = m.b() as usize;
@@ -1514,7 +1670,41 @@ fn exact_rank(
             a.push_row(entries);
         }
     }
-    crate::exact::Factor::new(&a).rank()
+    let f = crate::exact::Factor::new(&a);
+    let st = f.stats();
+    *work = work.saturating_add((st.factor_entries + st.input_entries) as u64);
+    f.rank()
+}
+
+/// `n^3`, the work units of a dense factorization of `n` unknowns.
+fn cube(n: usize) -> u64 {
+    (n as u64).saturating_mul(n as u64).saturating_mul(n as u64)
+}
+
+/// The rank of a block that is not too large for the dense check, and its work units: small
+/// square blocks on the stack, then the sparse screen, then the dense SVD.
+#[allow(clippy::too_many_arguments)]
+fn block_rank(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &PairRows,
+    q: &[Option<DMatrix<f64>>],
+    part: Part,
+    tol: &Tol,
+    (nrows, ncols): (usize, usize),
+) -> (usize, u64) {
+    if nrows == ncols && surely_nonsingular(b, block_eqs, bodies, eqs, rows, q, tol) {
+        return (nrows, cube(nrows));
+    }
+    match screen(b, block_eqs, bodies, eqs, rows, q, part, tol) {
+        Some(r) => (r, 64 * (nrows + ncols) as u64),
+        None => (
+            rank_of(&block_matrix(b, block_eqs, bodies, eqs, rows, q), tol),
+            64 * (nrows + ncols) as u64 + cube(nrows.max(ncols)),
+        ),
+    }
 }
 
 /// The largest coordinate of a joint point: the lever arm that turns an uncertainty in an axis
