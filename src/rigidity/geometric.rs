@@ -383,25 +383,34 @@ fn axis_of(space: Space, t: &[f64]) -> Option<Axis> {
     }
 }
 
+/// The root of `x` in the union-find forest `uf`, compressing the path.
+fn find(uf: &mut [usize], x: usize) -> usize {
+    let mut r = x;
+    while uf[r] != r {
+        r = uf[r];
+    }
+    let mut y = x;
+    while uf[y] != r {
+        let n = uf[y];
+        uf[y] = r;
+        y = n;
+    }
+    r
+}
+
+/// Join the sets of `x` and `y`, the smaller root staying the root (clusters are named by
+/// their first body, so the output order does not depend on the merge order).
+fn union_min(uf: &mut [usize], x: usize, y: usize) {
+    let (a, c) = (find(uf, x), find(uf, y));
+    uf[a.max(c)] = a.min(c);
+}
+
 /// Minimum cycle basis by Horton's algorithm on an undirected multigraph (`edges` as node
 /// pairs). Returns each cycle as a sorted list of edge indices. `None` when the candidate set
 /// would be too large.
 fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<Vec<Vec<usize>>> {
     // Cycle space dimension per connected component.
     let mut uf: Vec<usize> = (0..nodes).collect();
-    fn find(uf: &mut [usize], x: usize) -> usize {
-        let mut r = x;
-        while uf[r] != r {
-            r = uf[r];
-        }
-        let mut y = x;
-        while uf[y] != r {
-            let n = uf[y];
-            uf[y] = r;
-            y = n;
-        }
-        r
-    }
     let mut comps = nodes;
     for &(a, b) in edges {
         let (ra, rb) = (find(&mut uf, a), find(&mut uf, b));
@@ -769,27 +778,13 @@ impl ExactPart<'_> {
             rank_with(d, [ix, iy]) == rank_with(DMatrix::from_element(b, 0, Fp::ZERO), [ix, iy])
         };
         let mut luf: Vec<usize> = (0..nl).collect();
-        fn find(uf: &mut [usize], x: usize) -> usize {
-            let mut r = x;
-            while uf[r] != r {
-                r = uf[r];
-            }
-            let mut y = x;
-            while uf[y] != r {
-                let n = uf[y];
-                uf[y] = r;
-                y = n;
-            }
-            r
-        }
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k) as u64))?;
         // Neighbours first (as the floating-point path does).
         for &pi in &part.pairs {
             let p = pairs[pi];
             let (x, y) = (lidx(p.hub), lidx(p.other));
             if same(x, y) {
-                let (a, c) = (find(&mut luf, x), find(&mut luf, y));
-                luf[a.max(c)] = a.min(c);
+                union_min(&mut luf, x, y);
             }
         }
         // Then any two clusters whose representatives move alike: without isolated motions
@@ -806,8 +801,7 @@ impl ExactPart<'_> {
         plain.sort_by(|&x, &y| sig_of(x).cmp(sig_of(y)).then(x.cmp(&y)));
         for w in plain.windows(2) {
             if sig_of(w[0]) == sig_of(w[1]) {
-                let (a, c) = (find(&mut luf, w[0]), find(&mut luf, w[1]));
-                luf[a.max(c)] = a.min(c);
+                union_min(&mut luf, w[0], w[1]);
             }
         }
         if !eiso.is_empty() {
@@ -1216,19 +1210,6 @@ fn analyze_models(
     let mut w: BTreeMap<usize, f64> = BTreeMap::new();
     let mut locked_by_joint: BTreeMap<usize, usize> = BTreeMap::new();
     let mut uf: Vec<usize> = (0..nb).collect();
-    fn find(uf: &mut [usize], x: usize) -> usize {
-        let mut r = x;
-        while uf[r] != r {
-            r = uf[r];
-        }
-        let mut y = x;
-        while uf[y] != r {
-            let n = uf[y];
-            uf[y] = r;
-            y = n;
-        }
-        r
-    }
     let one_part = parts.len() == 1;
     for (part, bp) in parts.iter().zip(built) {
         let Built {
@@ -1326,8 +1307,7 @@ fn analyze_models(
             float_rank += r;
             for (x, &l) in luf.iter().enumerate() {
                 if l != x {
-                    let (a, c) = (find(&mut uf, part.bodies[l]), find(&mut uf, part.bodies[x]));
-                    uf[a.max(c)] = a.min(c);
+                    union_min(&mut uf, part.bodies[l], part.bodies[x]);
                 }
             }
             continue;
@@ -1507,8 +1487,7 @@ fn analyze_models(
             let p = pairs[pi];
             let (x, y) = (lidx(p.hub), lidx(p.other));
             if same(x, y) {
-                let (a, c) = (find(&mut luf, x), find(&mut luf, y));
-                luf[a.max(c)] = a.min(c);
+                union_min(&mut luf, x, y);
             }
         }
         let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
@@ -1529,8 +1508,7 @@ fn analyze_models(
         for x in 0..nl {
             let r = find(&mut luf, x);
             if r != x {
-                let (a, c) = (find(&mut uf, part.bodies[r]), find(&mut uf, part.bodies[x]));
-                uf[a.max(c)] = a.min(c);
+                union_min(&mut uf, part.bodies[r], part.bodies[x]);
             }
         }
     }
