@@ -582,6 +582,25 @@ impl Fast {
         false
     }
 
+    /// Insert the independent bar between the representatives `x` and `y`, paid by a pebble
+    /// of `t` and directed from `t` to `h`; then, when the pair may be tight (no `l + 1`
+    /// pebbles can be gathered on it), contract the new rigid component.
+    fn insert_bar(&mut self, t: u32, h: u32, x: u32, y: u32) {
+        self.peb[t as usize] -= 1;
+        self.link(t, h);
+        if self.may_be_tight(x, y) {
+            self.recording = true;
+            let ok = self.gather(x, y, self.l + 1);
+            self.recording = false;
+            if ok {
+                self.undo_to(0);
+            } else {
+                self.keep_moves(0);
+                self.contract(x, y);
+            }
+        }
+    }
+
     /// Gather `target` free pebbles on {u, v}; on failure `visited` holds the rest of the
     /// minimal tight set containing u and v (closed: no out-edge leaves it).
     fn gather(&mut self, u: u32, v: u32, target: u8) -> bool {
@@ -852,20 +871,8 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
             // The node is pinned to the component: redundant.
         } else if let Some((t, h)) = game.fresh_end(x, y) {
             // Independent without a search: the pebble comes from the end with room.
-            game.peb[t as usize] -= 1;
-            game.link(t, h);
+            game.insert_bar(t, h, x, y);
             accepted[i] = true;
-            if game.may_be_tight(x, y) {
-                game.recording = true;
-                let ok = game.gather(x, y, l + 1);
-                game.recording = false;
-                if ok {
-                    game.undo_to(0);
-                } else {
-                    game.keep_moves(0);
-                    game.contract(x, y);
-                }
-            }
         } else {
             // One pebble for the bar itself, kept; the other B, only borrowed to show the bar
             // independent (and then the pair not tight), go back where they came from. The
@@ -912,20 +919,8 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
                     }
                 };
                 game.undo_to(0);
-                game.peb[t as usize] -= 1;
-                game.link(t, h);
+                game.insert_bar(t, h, x, y);
                 accepted[i] = true;
-                if game.may_be_tight(x, y) {
-                    game.recording = true;
-                    let ok = game.gather(x, y, l + 1);
-                    game.recording = false;
-                    if ok {
-                        game.undo_to(0);
-                    } else {
-                        game.keep_moves(0);
-                        game.contract(x, y);
-                    }
-                }
             } else {
                 game.undo_to(0);
             }
