@@ -534,6 +534,11 @@ pub fn finite_mobility(
         config,
         step: opts.step,
     };
+    // Full row rank at the configuration: the constraints are a submersion there, so the
+    // solution set is locally a manifold of dimension `first_order` (implicit function
+    // theorem). Only the first level runs then, for the nearby samples; without this an open
+    // chain of a few hundred joints ran one level per freedom (minutes).
+    let regular = j0.ncols() - first_order == j0.nrows();
     let mut finite = 0;
     let mut slices: Vec<(DVector<f64>, f64)> = Vec::new();
     while finite < first_order {
@@ -598,6 +603,10 @@ pub fn finite_mobility(
                     break;
                 }
             }
+        }
+        if regular {
+            finite = first_order;
+            break;
         }
         if !found {
             break;
