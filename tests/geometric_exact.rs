@@ -4,8 +4,9 @@
 //! with floating point and a size-scaled tolerance it came out with mobility 1 and one
 //! redundant bar at some seeds.
 
-use mbsa::joint::JointType;
-use mbsa::mechanism::{BodyId, Geometry, JointSpec, Mechanism, Space};
+mod common;
+
+use mbsa::mechanism::Mechanism;
 use mbsa::rigidity::geometric::{GeometricOptions, GeometrySource, analyze};
 use mbsa::rng::SplitMix64;
 
@@ -13,36 +14,17 @@ use mbsa::rng::SplitMix64;
 /// points. Bars are bodies, points multiple revolute joints (no geometry: random realization).
 fn laman(points: usize, seed: u64) -> Mechanism {
     let mut rng = SplitMix64::new(seed);
-    let mut at: Vec<Vec<i64>> = vec![Vec::new(); points];
-    let mut bars = 0i64;
-    let mut bar = |a: usize, b: usize, at: &mut Vec<Vec<i64>>| {
-        bars += 1;
-        at[a].push(bars);
-        at[b].push(bars);
-    };
-    bar(0, 1, &mut at);
+    let mut bars = vec![(0, 1)];
     for p in 2..points {
         let a = rng.below(p as u64) as usize;
         let mut b = rng.below(p as u64 - 1) as usize;
         if b >= a {
             b += 1;
         }
-        bar(p, a, &mut at);
-        bar(p, b, &mut at);
+        bars.push((p, a));
+        bars.push((p, b));
     }
-    let joints = at
-        .into_iter()
-        .enumerate()
-        .filter(|(_, bs)| bs.len() >= 2)
-        .map(|(p, bs)| JointSpec {
-            id: Some(format!("p{p}")),
-            kind: JointType::R,
-            bodies: bs.into_iter().map(BodyId::Int).collect(),
-            driven: 0,
-            geometry: Geometry::default(),
-        })
-        .collect();
-    Mechanism::from_parts("laman", Space::Planar, BodyId::Int(1), vec![], joints)
+    common::bar_framework("laman", points, &bars)
 }
 
 #[test]
