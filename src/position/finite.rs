@@ -111,7 +111,7 @@ pub fn finite_mobility_of_file(
     let reference = Configuration::reference(m.bodies.len());
     let closure = check_closure(m, &reference, tolerance)?;
     if closure.status == ClosureStatus::Closed {
-        return Ok(finite_mobility(m, &reference, opts)?);
+        return finite_mobility(m, &reference, opts);
     }
     let (config, _) = assemble(m, &reference, &NewtonOptions::default())?;
     let scale = super::residual::model_size(m);

@@ -411,7 +411,7 @@ impl SparsePart<'_> {
         // Representatives without isolated motions of their own: sorted on a random
         // projection of their sampled twists; equal twists project within same_tol.
         let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
-        let mut rng = crate::rng::SplitMix64::new(0x636c_7573_7465_72 ^ seed);
+        let mut rng = crate::rng::SplitMix64::new(0x0063_6c75_7374_6572 ^ seed);
         let mut dir: Vec<f64> = (0..b * k).map(|_| rng.next_signed()).collect();
         let dn = dir
             .iter()
@@ -436,7 +436,7 @@ impl SparsePart<'_> {
                     break;
                 }
                 compared += 1;
-                if compared % 4096 == 0 {
+                if compared.is_multiple_of(4096) {
                     meter.charge(4096 * (b * k * 4) as u64)?;
                 }
                 let (a, c) = (plain[i].1, plain[j].1);
