@@ -1013,6 +1013,39 @@ fn split_pair(m: &Mechanism, text: &str) -> Option<(usize, usize)> {
 mod tests {
     use super::*;
 
+    #[test]
+    fn a_joint_stays_small_and_reads_as_before() {
+        // 240 bytes with the inline geometry and a body vector: 10^6 joints touched 360 MB.
+        assert!(
+            std::mem::size_of::<Joint>() <= 64,
+            "{}",
+            std::mem::size_of::<Joint>()
+        );
+        let mut j = Joint {
+            id: "1-2".into(),
+            kind: JointType::R,
+            bodies: vec![3, 4].into(),
+            driven: 0,
+            geometry: Geometry::default().into(),
+        };
+        assert!(j.geometry.is_empty() && j.geometry.origin.is_none());
+        assert_eq!(j.bodies[..], [3, 4]);
+        j.geometry.origin = Some([1.0, 2.0, 3.0]);
+        assert_eq!(j.geometry.origin, Some([1.0, 2.0, 3.0]));
+        assert_ne!(j.geometry, Geometry::default());
+        let many: JointBodies = (0..5).collect();
+        assert_eq!(many[..], [0, 1, 2, 3, 4]);
+        assert_eq!(
+            many.clone().into_iter().collect::<Vec<_>>(),
+            vec![0, 1, 2, 3, 4]
+        );
+        assert_eq!(j.bodies.clone().into_iter().collect::<Vec<_>>(), vec![3, 4]);
+        assert_eq!(
+            serde_json::to_string(&j).ok(),
+            Some(r#"{"id":"1-2","kind":"R","bodies":[3,4],"driven":0,"geometry":{"origin":[1.0,2.0,3.0]}}"#.to_string())
+        );
+    }
+
     /// The packed-key and flat-token fast paths of `natural_order` agree with `natural_cmp`.
     #[test]
     fn natural_order_fast_paths_agree_with_natural_cmp() {
