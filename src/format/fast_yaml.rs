@@ -64,8 +64,9 @@ impl<'a> Items<'a> {
             }
         }
         let start = self.pos + d;
-        if !bytes[self.pos..start].iter().all(|&b| b == b' ') || !bytes[start..].starts_with(b"- ")
-        {
+        // A line shorter than the indentation is no item either.
+        let prefix = bytes.get(self.pos..start)?;
+        if !prefix.iter().all(|&b| b == b' ') || !bytes[start..].starts_with(b"- ") {
             return None;
         }
         // The mapping's keys are at column m.
@@ -308,6 +309,10 @@ mod tests {
         assert_eq!(got.len(), 3);
         assert_eq!(Some(got), saphyr_items(BASE));
         // Indented list items, blank lines, trailing spaces.
+        // A last line shorter than the list's indentation: declined, not a panic.
+        let short = "frame: 1\njoint:\n    - type: R\n      bodies: [1, 2]\nab";
+        assert!(Items::new(short, short.find("type").unwrap_or(0)).is_some());
+        assert!(fast_items(short).is_none());
         let indented = BASE
             .replace("\n- ", "\n  - ")
             .replace("\n  bodies", "\n    bodies");
