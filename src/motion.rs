@@ -803,6 +803,10 @@ pub struct GeometryUsed {
     /// `--tolerance`); 0 when every number is exact.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub precision: Option<f64>,
+    /// File geometry: the precision of the direction numbers (axes, normals) alone, which the
+    /// lever arm multiplies ([`file_threshold`]); `--tolerance` sets both.
+    #[serde(skip)]
+    pub direction_precision: Option<f64>,
     /// File geometry: whether the configuration written satisfies every joint (only joints
     /// with `second` geometry can miss it); the first-order analyses use the first body's
     /// geometry of an open joint.
@@ -874,18 +878,23 @@ pub fn choose(
         configuration: "a random generic realization of the joint types".into(),
         note,
         precision: None,
+        direction_precision: None,
         closure: None,
     };
     let file = |note: Option<String>| -> Result<GeometryUsed, MotionError> {
         // Every joint model must build at the file's geometry.
         check_file_geometry(m)?;
-        let precision = precision.unwrap_or_else(|| written_precision(m));
+        let (precision, directions) = match precision {
+            Some(p) => (p, p),
+            None => (written_precision(m), written_direction_precision(m)),
+        };
         Ok(GeometryUsed {
             mode: "file",
             seed: None,
             configuration: "the configuration written in the file".into(),
             note,
             precision: Some(precision),
+            direction_precision: Some(directions),
             closure: Some(file_closure(m, precision)?),
         })
     };
@@ -1166,23 +1175,71 @@ pub fn has_geometry(m: &Mechanism) -> bool {
 /// to ±0.5·10^−d (CAD exports round so); a shorter one (`2.5`, `0`, `1`) is taken as exact.
 /// Numbers are judged by their shortest round-trip decimal form.
 pub fn written_precision(m: &Mechanism) -> f64 {
+    written(m, false)
+}
+
+/// [`written_precision`] of the direction numbers alone (axes, normals): a rounded direction
+/// moves a joint's constraint rows by its error times the lever arm, a rounded point only by
+/// its error, so the threshold weighs the two apart ([`file_threshold`]).
+pub fn written_direction_precision(m: &Mechanism) -> f64 {
+    written(m, true)
+}
+
+fn written(m: &Mechanism, directions_only: bool) -> f64 {
     let mut worst: f64 = 0.0;
     for j in &m.joints {
         let g = &j.geometry;
-        let vectors = [g.origin, g.origin2, g.axis, g.axis2, g.normal];
-        let second = g.second.as_ref().map(|s| s.vectors().map(|(_, v)| v));
-        let numbers = vectors
+        let points = [g.origin, g.origin2];
+        let directions = [g.axis, g.axis2, g.normal];
+        let second = g.second.as_ref().map(|s| {
+            s.vectors()
+                .into_iter()
+                .filter(|(name, _)| !directions_only || *name != "origin")
+                .map(|(_, v)| v)
+        });
+        let vectors = directions
             .iter()
-            .chain(second.iter().flatten())
+            .chain(points.iter().filter(|_| !directions_only))
+            .copied()
+            .chain(second.into_iter().flatten());
+        let numbers = vectors
             .flatten()
-            .flat_map(|v| v.iter().copied())
-            .chain(g.pitch);
+            .flat_map(|v| v.into_iter())
+            .chain(g.pitch.filter(|_| !directions_only));
         for x in numbers {
             worst = worst.max(rounding_of(x));
         }
     }
     worst
 }
+
+/// The largest coordinate of a joint origin: the lever arm of the constraint rows, whose
+/// moments are taken about the world origin.
+pub(crate) fn lever(m: &Mechanism) -> f64 {
+    m.joints
+        .iter()
+        .flat_map(|j| [j.geometry.origin, j.geometry.origin2])
+        .flatten()
+        .flat_map(|p| p.into_iter())
+        .fold(0.0f64, |a, x| a.max(x.abs()))
+}
+
+/// The absolute rank threshold the file's rounding allows: a point rounded by δ moves a
+/// joint's unit constraint rows by about δ, a direction rounded by δ_d by about δ_d·(1 + L)
+/// with lever arm L ([`lever`]); twice the sum (see [`FILE_TOL_FACTOR`]). `None` at a random
+/// realization.
+pub fn file_threshold(m: &Mechanism, used: &GeometryUsed) -> Option<f64> {
+    let delta = used.precision.filter(|&d| d > 0.0)?;
+    let directions = used.direction_precision.unwrap_or(delta);
+    Some(FILE_TOL_FACTOR * (delta + directions * lever(m)))
+}
+
+/// Factor of the precision-derived threshold: rounding a point by δ moves a joint's unit rows
+/// by about δ, rounding a direction by δ_d with lever arms up to L by about δ_d·(1 + L), and an
+/// exact zero singular value by about as much (the Bennett linkage rounded to 4 decimals:
+/// 1.3e-5 for δ = 5e-5); twice that is the threshold, and a decision within a factor 100 of it
+/// is flagged.
+pub const FILE_TOL_FACTOR: f64 = 2.0;
 
 /// The rounding uncertainty of one number as written (see [`written_precision`]).
 pub fn rounding_of(x: f64) -> f64 {

@@ -1060,26 +1060,13 @@ fn analyze_split(
     .map_err(GeometricError::Budget)
 }
 
-/// Factor of the precision-derived threshold: a number rounded to ±δ on coordinates of size up
-/// to L moves a joint's unit rows by about δ·(1 + L), and an exact zero singular value by
-/// about as much (the Bennett linkage rounded to 4 decimals: 1.3e-5 for δ = 5e-5); twice that
-/// is the threshold, and a decision within a factor 100 of it is flagged.
-pub(crate) const FILE_TOL_FACTOR: f64 = 2.0;
-
 /// Rank threshold of the analysis: relative to σ_max at random geometry; at the file's
-/// geometry also the perturbation its rounded numbers allow ([`FILE_TOL_FACTOR`]).
+/// geometry also the perturbation its rounded numbers allow ([`motion::file_threshold`]).
 fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f64) {
     let rel = 1e-9 * n.max(1) as f64;
     let mut abs = rel * smax.max(f64::MIN_POSITIVE);
-    if let Some(delta) = used.precision.filter(|&d| d > 0.0) {
-        let lever = m
-            .joints
-            .iter()
-            .flat_map(|j| [j.geometry.origin, j.geometry.origin2])
-            .flatten()
-            .flat_map(|p| p.into_iter())
-            .fold(0.0f64, |a, x| a.max(x.abs()));
-        abs = abs.max(FILE_TOL_FACTOR * delta * (1.0 + lever));
+    if let Some(t) = motion::file_threshold(m, used) {
+        abs = abs.max(t);
     }
     (abs / smax.max(f64::MIN_POSITIVE), abs)
 }
@@ -1106,6 +1093,11 @@ fn analyze_models(
     let nb = m.bodies.len();
     let frame = m.frame;
     let pairs = pairs_of(m);
+    // Far from the world origin (coordinates in millimetres, say) the dense path's twists,
+    // taken about the world origin, mix rotations with lever arms of size L and lose rank
+    // decisions (a four-bar at 1,000 mm: mobility 2 or 9); the sparse path takes each body's
+    // twists about its own point.
+    let far = used.is_file() && motion::lever(m) > sparse_float::FAR_LEVER;
     let id = |i: usize| m.body_id(i).to_string();
     let rows_total: usize = pairs.iter().map(|p| models[p.joint].rows.nrows()).sum();
     let count: i64 = (b * m.movable()) as i64
@@ -1321,7 +1313,7 @@ fn analyze_models(
             }
             continue;
         }
-        if exact.is_none() && lcols > sparse_float::sparse_from() {
+        if exact.is_none() && (far || lcols > sparse_float::sparse_from()) {
             // At the file's geometry, a large part: sparse floating-point path.
             let out = sparse_float::SparsePart {
                 m,

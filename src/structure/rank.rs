@@ -689,9 +689,9 @@ pub(crate) fn check(
     let nb = eqs.nodes;
     let (mut rows, free) = pair_rows(m, geoms, used.seed, eqs, used.is_file());
     let tol = match used.precision {
-        Some(delta) => Tol {
+        Some(_) => Tol {
             rel: 1e-9,
-            abs: crate::rigidity::geometric::FILE_TOL_FACTOR * delta * (1.0 + lever(m)),
+            abs: crate::motion::file_threshold(m, used).unwrap_or(0.0),
         },
         None => Tol {
             rel: REL_TOL,
@@ -1705,17 +1705,6 @@ fn block_rank(
             64 * (nrows + ncols) as u64 + cube(nrows.max(ncols)),
         ),
     }
-}
-
-/// The largest coordinate of a joint point: the lever arm that turns an uncertainty in an axis
-/// into one in the constraint rows.
-fn lever(m: &Mechanism) -> f64 {
-    m.joints
-        .iter()
-        .flat_map(|j| [j.geometry.origin, j.geometry.origin2])
-        .flatten()
-        .flat_map(|p| p.into_iter())
-        .fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
 /// Set aside the constraint equations that are dependent at the file's configuration, keeping

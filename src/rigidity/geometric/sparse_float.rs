@@ -44,6 +44,12 @@ use std::collections::BTreeMap;
 /// Parts with more unknowns than this are analysed by the sparse path at the file's geometry.
 pub(super) const SPARSE_COLUMNS: usize = 1200;
 
+/// File geometry with a joint origin farther than this from the world origin (in the file's
+/// length unit) takes the sparse path at any size: its body-local twists keep the rank
+/// decisions that world-origin twists lose as the lever arm grows (robots written in metres
+/// stay on the dense path; linkages written in millimetres move here).
+pub(super) const FAR_LEVER: f64 = 10.0;
+
 thread_local! {
     static SPARSE_FROM: Cell<usize> = const { Cell::new(SPARSE_COLUMNS) };
 }
