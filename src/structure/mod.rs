@@ -551,25 +551,46 @@ fn build(
     }
     let id_of = |b: usize| &id_text[id_at[b]..id_at[b + 1]];
     let id = |b: usize| id_of(b).to_string();
-    // Solve-order key of every body: frame and over-determined part are known first, groups in
-    // canonical order, the under-determined part (or unsolved bodies) last.
-    let mut key = vec![i64::MAX; nb];
+    // Integer ids that are their body's index plus one constant (every generated file) are
+    // written from the index: the group lists name bodies at random, and each read of the id
+    // table was two cache misses at 10^6 bodies.
+    let int_base = match m.bodies.first().map(|b| &b.id) {
+        Some(crate::mechanism::BodyId::Int(first)) => {
+            let follows = m.bodies.iter().enumerate().all(|(k, b)| {
+                matches!(b.id, crate::mechanism::BodyId::Int(i)
+                    if i64::try_from(k).ok().and_then(|k| k.checked_add(*first)) == Some(i))
+            });
+            follows.then_some(*first)
+        }
+        _ => None,
+    };
+    let put_id = |s: &mut String, b: usize| match int_base {
+        Some(c) => push_int(s, b as i64 + c),
+        None => s.push_str(id_of(b)),
+    };
+    // Solve-order key of every body: frame (0) and over-determined part (1) are known first,
+    // groups in canonical order (group g is g + 2), the under-determined part (or unsolved
+    // bodies) last. Four bytes a node: the group lists read it at random.
+    let mut key = vec![u32::MAX; nb];
     for (b, k) in key.iter_mut().enumerate() {
         *k = match dec.body_part[b] {
-            Part::Frame => -2,
-            Part::Over => -1,
-            _ => i64::MAX,
+            Part::Frame => 0,
+            Part::Over => 1,
+            _ => u32::MAX,
         };
     }
+    let group_key = |g: usize| u32::try_from(g + 2).unwrap_or(u32::MAX - 1);
     for (g, grp) in raw.iter().enumerate() {
         for &b in &grp.bodies {
-            key[b] = g as i64;
+            key[b] = group_key(g);
         }
     }
     if let Some(k) = key.get_mut(m.frame) {
-        *k = -2;
+        *k = 0;
     }
-    // Pairs touching each body, compressed (`touch[start[x]..start[x + 1]]`), in pair order.
+    // Pairs touching each node, compressed (`near[start[x]..start[x + 1]]`), in pair order,
+    // each with what the group lists need of it: reading the pair's fields from `eqs` and the
+    // joint's kind from the joint was five cache misses a pair at 10^6 bodies.
     let mut start = vec![0usize; nb + 1];
     for e in 0..eqs.len() {
         let [a, c] = eqs.bodies(e);
@@ -582,38 +603,57 @@ fn build(
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut touch = vec![0usize; start[nb]];
+    let blank = Near {
+        y: 0,
+        e: 0,
+        driven: 0,
+        joint: 0,
+        kind: JointType::R,
+        hub: false,
+        input_only: false,
+    };
+    let mut near = vec![blank; start[nb]];
     for e in 0..eqs.len() {
         let [a, c] = eqs.bodies(e);
-        touch[fill[a]] = e;
+        let ji = eqs.joint[e];
+        let p = Near {
+            y: c as u32,
+            e: e as u32,
+            driven: eqs.driven[e],
+            joint: ji as u32,
+            kind: m.joints[ji].kind,
+            hub: true,
+            input_only: eqs.input_only[e],
+        };
+        near[fill[a]] = p;
         fill[a] += 1;
         if c != a {
-            touch[fill[c]] = e;
+            near[fill[c]] = Near {
+                y: a as u32,
+                hub: false,
+                ..p
+            };
             fill[c] += 1;
         }
     }
     drop(fill);
-    // Joint kinds in a table of their own (read from the joints, hundreds of bytes apart, each
-    // was a cache miss at 10^6 joints).
-    let kind_of: Vec<JointType> = m.joints.iter().map(|j| j.kind).collect();
-    let code = |e: usize| kind_of[eqs.joint[e]].code();
     // Each group's pair lists, type and inputs on its own (in parallel: they read shared
     // data only); then the types are numbered in order of first appearance.
     let rendered: Vec<(String, String, String, String, u32)> = crate::par::map(raw.len(), |g| {
         let grp = &raw[g];
-        let gk = g as i64;
-        let mut from: Vec<(usize, usize, usize)> = Vec::new();
-        let mut internal: Vec<(usize, usize, usize)> = Vec::new();
-        let mut to: Vec<(usize, usize, usize)> = Vec::new();
+        let gk = group_key(g);
+        // (first body, second body, pair, its joint's kind).
+        let mut from: Vec<(u32, u32, u32, JointType)> = Vec::new();
+        let mut internal: Vec<(u32, u32, u32, JointType)> = Vec::new();
+        let mut to: Vec<(u32, u32, u32, JointType)> = Vec::new();
         let mut kinds: Vec<(JointType, usize)> = Vec::new();
         let mut inputs = 0u32;
         let mut active_joints: Vec<usize> = Vec::new();
-        let mut add_kind = |ji: usize, n: usize| {
+        let mut add_kind = |ji: usize, jt: JointType, n: usize| {
             if n == 0 {
                 return;
             }
             active_joints.push(ji);
-            let jt = kind_of[ji];
             match kinds.iter_mut().find(|(k, _)| *k == jt) {
                 Some((_, c)) => *c += n,
                 None => kinds.push((jt, n)),
@@ -626,37 +666,38 @@ fn build(
                 elements.push(x);
                 continue;
             }
-            for &e in &touch[start[x]..start[x + 1]] {
-                let [a, c] = eqs.bodies(e);
-                let y = if a == x { c } else { a };
+            let xi = x as u32;
+            for p in &near[start[x]..start[x + 1]] {
+                let y = p.y as usize;
                 if eqs.is_element(y) {
                     elements.push(y);
                     continue;
                 }
-                if eqs.input_only[e] {
+                let ky = key[y];
+                if p.input_only {
                     // A multiple joint's inputs: counted, not listed (its pairs are below).
-                    if key[y] < gk || (key[y] == gk && x == a) {
-                        inputs += eqs.driven[e];
+                    if ky < gk || (ky == gk && p.hub) {
+                        inputs += p.driven;
                     }
                     continue;
                 }
-                let active = if key[y] == gk {
+                let active = if ky == gk {
                     // Count an internal pair once, from its hub's side.
-                    if x != a {
+                    if !p.hub {
                         continue;
                     }
-                    internal.push((x.min(y), x.max(y), e));
+                    internal.push((xi.min(p.y), xi.max(p.y), p.e, p.kind));
                     true
-                } else if key[y] < gk {
-                    from.push((x, y, e));
+                } else if ky < gk {
+                    from.push((xi, p.y, p.e, p.kind));
                     true
                 } else {
-                    to.push((x, y, e));
+                    to.push((xi, p.y, p.e, p.kind));
                     false
                 };
                 if active {
-                    add_kind(eqs.joint[e], 1);
-                    inputs += eqs.driven[e];
+                    add_kind(p.joint as usize, p.kind, 1);
+                    inputs += p.driven;
                 }
             }
         }
@@ -667,15 +708,15 @@ fn build(
         elements.dedup();
         for v in elements {
             let jt = eqs.element_joint(v);
-            let mut inside: Vec<(usize, usize)> = Vec::new();
-            let mut before: Vec<(usize, usize)> = Vec::new();
-            let mut after: Vec<(usize, usize)> = Vec::new();
-            for &e in &touch[start[v]..start[v + 1]] {
-                let y = eqs.other[e];
-                match key[y].cmp(&gk) {
-                    std::cmp::Ordering::Equal => inside.push((y, e)),
-                    std::cmp::Ordering::Less => before.push((y, e)),
-                    std::cmp::Ordering::Greater => after.push((y, e)),
+            let jk = m.joints[jt].kind;
+            let mut inside: Vec<(u32, u32)> = Vec::new();
+            let mut before: Vec<(u32, u32)> = Vec::new();
+            let mut after: Vec<(u32, u32)> = Vec::new();
+            for p in &near[start[v]..start[v + 1]] {
+                match key[p.y as usize].cmp(&gk) {
+                    std::cmp::Ordering::Equal => inside.push((p.y, p.e)),
+                    std::cmp::Ordering::Less => before.push((p.y, p.e)),
+                    std::cmp::Ordering::Greater => after.push((p.y, p.e)),
                 }
             }
             if key[v] == gk {
@@ -683,40 +724,40 @@ fn build(
                     continue;
                 };
                 for &(y, e) in &inside[1..] {
-                    internal.push((hub, y, e));
+                    internal.push((hub, y, e, jk));
                 }
                 for &(y, e) in &before {
-                    from.push((hub, y, e));
+                    from.push((hub, y, e, jk));
                 }
                 for &(y, e) in &after {
-                    to.push((hub, y, e));
+                    to.push((hub, y, e, jk));
                 }
-                add_kind(jt, inside.len() - 1 + before.len());
+                add_kind(jt, jk, inside.len() - 1 + before.len());
             } else if key[v] < gk {
-                let holder = before.first().map(|&(y, _)| y).unwrap_or(m.frame);
+                let holder = before.first().map_or(m.frame as u32, |&(y, _)| y);
                 for &(x, e) in &inside {
-                    from.push((x, holder, e));
+                    from.push((x, holder, e, jk));
                 }
-                add_kind(jt, inside.len());
+                add_kind(jt, jk, inside.len());
             } else if let Some(&(holder, _)) = after.first() {
                 for &(x, e) in &inside {
-                    to.push((x, holder, e));
+                    to.push((x, holder, e, jk));
                 }
             }
         }
-        let render = |list: &mut Vec<(usize, usize, usize)>| {
+        let render = |list: &mut Vec<(u32, u32, u32, JointType)>| {
             list.sort_unstable();
             let mut s = String::with_capacity(list.len() * 8);
-            for &(i, j, e) in list.iter() {
-                // Writing into a String cannot fail.
-                s.push_str(id_of(i));
+            for &(i, j, _, k) in list.iter() {
+                put_id(&mut s, i as usize);
                 s.push('&');
-                s.push_str(id_of(j));
-                s.push_str(code(e));
+                put_id(&mut s, j as usize);
+                s.push_str(k.code());
                 s.push('.');
             }
             s
         };
+
         // Joint types in catalogue order, as the BTreeMap over `JointType` gave them.
         kinds.sort_unstable_by_key(|&(k, _)| k);
         let mut kind = String::new();
@@ -889,6 +930,21 @@ fn build(
     }
 }
 
+/// A pair seen from one of its nodes (see `build`).
+#[derive(Clone, Copy)]
+struct Near {
+    /// The other node.
+    y: u32,
+    /// The pair.
+    e: u32,
+    driven: u32,
+    joint: u32,
+    kind: JointType,
+    /// Whether this node is the pair's hub.
+    hub: bool,
+    input_only: bool,
+}
+
 /// The dimension of the span of joint motions (columns of `twists`, normalized), at a relative
 /// tolerance of 1e-6: 3 for a planar or spherical loop, 6 for a general spatial one.
 fn spatiality<'a>(twists: impl Iterator<Item = &'a nalgebra::DMatrix<f64>>) -> usize {
@@ -1044,26 +1100,29 @@ fn diagnose(
 /// lists of a 10^6-body mechanism write millions of ids).
 fn push_id(s: &mut String, id: &crate::mechanism::BodyId) {
     match id {
-        crate::mechanism::BodyId::Int(i) => {
-            let mut buf = [0u8; 20];
-            let mut k = buf.len();
-            let mut v = i.unsigned_abs();
-            loop {
-                k -= 1;
-                buf[k] = b'0' + (v % 10) as u8;
-                v /= 10;
-                if v == 0 {
-                    break;
-                }
-            }
-            if *i < 0 {
-                s.push('-');
-            }
-            // ASCII digits: always UTF-8.
-            s.push_str(std::str::from_utf8(&buf[k..]).unwrap_or_default());
-        }
+        crate::mechanism::BodyId::Int(i) => push_int(s, *i),
         crate::mechanism::BodyId::Name(n) => s.push_str(n),
     }
+}
+
+/// Append `i` in decimal, as `Display` writes it.
+fn push_int(s: &mut String, i: i64) {
+    let mut buf = [0u8; 20];
+    let mut k = buf.len();
+    let mut v = i.unsigned_abs();
+    loop {
+        k -= 1;
+        buf[k] = b'0' + (v % 10) as u8;
+        v /= 10;
+        if v == 0 {
+            break;
+        }
+    }
+    if i < 0 {
+        s.push('-');
+    }
+    // ASCII digits: always UTF-8.
+    s.push_str(std::str::from_utf8(&buf[k..]).unwrap_or_default());
 }
 
 /// Upper-case Roman numeral (1 → `I`); plain digits beyond 3999.
