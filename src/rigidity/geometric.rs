@@ -1097,7 +1097,10 @@ fn analyze_models(
     // taken about the world origin, mix rotations with lever arms of size L and lose rank
     // decisions (a four-bar at 1,000 mm: mobility 2 or 9); the sparse path takes each body's
     // twists about its own point.
-    let far = used.is_file() && motion::lever(m) > sparse_float::FAR_LEVER;
+    // (`with_sparse_from(usize::MAX, ..)` keeps the dense path for tests comparing the two.)
+    let far = used.is_file()
+        && motion::lever(m) > sparse_float::FAR_LEVER
+        && sparse_float::sparse_from() < usize::MAX;
     let id = |i: usize| m.body_id(i).to_string();
     let rows_total: usize = pairs.iter().map(|p| models[p.joint].rows.nrows()).sum();
     let count: i64 = (b * m.movable()) as i64
