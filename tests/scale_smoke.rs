@@ -105,22 +105,6 @@ fn every_command_on_a_hundred_thousand_bodies() {
     let mut failures = Vec::new();
     for file in &files {
         for args in COMMANDS {
-            // Known issue (docs/reliability.md): the exact geometric analysis of the random
-            // file's one large block: the Jacobian's factorization is now fill-free (block
-            // triangular order) and the factorizations charge the budgets, but the
-            // self-stress support (the transpose's factorization) still fills in and does not
-            // reach the default budgets within the time cap (97 s CPU, 1.77 GB). Left out,
-            // said here.
-            if file.ends_with("random-spatial-1e5.toml")
-                && (args.contains(&"geometric") || args.ends_with(&["rigid"]))
-            {
-                eprintln!(
-                    "skipped (known issue): {} on {}",
-                    args.join(" "),
-                    file.display()
-                );
-                continue;
-            }
             let mut full: Vec<String> = args.iter().map(|s| s.to_string()).collect();
             full.insert(1, file.to_str().expect("UTF-8").to_string());
             let (code, secs, tail) = capped(&full);
