@@ -593,6 +593,9 @@ struct ExactPart<'a> {
     b: usize,
 }
 
+/// What [`ExactPart::run`] finds: the rank, the local union-find, the self-stress support.
+type ExactOutcome = (usize, Vec<usize>, Option<Vec<bool>>);
+
 impl ExactPart<'_> {
     /// The rank, the part's local union-find (a parent per body of `part.bodies`, each
     /// pointing to its cluster's smallest member) and, when its rows are dependent, the flags
@@ -604,7 +607,7 @@ impl ExactPart<'_> {
         budget: &Budget,
         meter: &mut Meter,
         locked: &mut BTreeMap<usize, usize>,
-    ) -> Result<(usize, Vec<usize>, Option<Vec<bool>>), BudgetExceeded> {
+    ) -> Result<ExactOutcome, BudgetExceeded> {
         let (part, pairs, b) = (self.part, self.pairs, self.b);
         let fixed = |x: usize| x == self.frame || x == part.root;
         let mut local: BTreeMap<usize, usize> = BTreeMap::new();
