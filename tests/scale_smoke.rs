@@ -105,14 +105,13 @@ fn every_command_on_a_hundred_thousand_bodies() {
     let mut failures = Vec::new();
     for file in &files {
         for args in COMMANDS {
-            // Known issue (docs/reliability.md): the exact geometric analysis of the random
-            // file's one large block: the Jacobian's factorization is now fill-free (block
-            // triangular order) and the factorizations charge the budgets, but the
-            // self-stress support (the transpose's factorization) still fills in and does not
-            // reach the default budgets within the time cap (97 s CPU, 1.77 GB). Left out,
-            // said here.
+            // Known issue (docs/reliability.md): `dot --view rigid` on the random file runs
+            // far longer than `rigid --method geometric` on it (the 10^4 file: over 5 min CPU
+            // against 0.7 s; 10^5: 3.5 GB), not yet understood; `rigid --method geometric`
+            // runs here (9 s CPU, 0.9 GB at 10^5). Left out, said here.
             if file.ends_with("random-spatial-1e5.toml")
-                && (args.contains(&"geometric") || args.ends_with(&["rigid"]))
+                && args.contains(&"rigid")
+                && args[0] == "dot"
             {
                 eprintln!(
                     "skipped (known issue): {} on {}",

@@ -264,33 +264,83 @@ pub fn pairs_matrix(
 
 /// The exact factorization behind [`pairs_rank`] (`None` when the pairs give no row), within
 /// `limits`: its rank, and random vectors of its null space (the motions, B columns per group
-/// in group order) through [`Factor::random_null_vectors`].
+/// in group order) through [`Factor::random_null_vectors`]. With `track`, it also keeps what
+/// [`pairs_stress_support_from`] needs (the self-stresses from the same factorization).
 pub fn pairs_factor(
     b: usize,
     ngroups: usize,
     rows: &[DMatrix<Fp>],
     pairs: impl Iterator<Item = (usize, usize, usize)>,
     group: impl Fn(usize) -> Option<usize>,
+    track: bool,
     limits: &mut Limits<'_>,
 ) -> Result<Option<Factor>, BudgetExceeded> {
     let a = pairs_matrix(b, ngroups, rows, pairs, group);
     if a.nrows() == 0 {
         return Ok(None);
     }
-    Factor::new_within(&a, limits).map(Some)
+    if track {
+        Factor::new_tracked_within(&a, limits).map(Some)
+    } else {
+        Factor::new_within(&a, limits).map(Some)
+    }
 }
 
-/// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, as
-/// in [`pairs_factor`]: a flag per pair, set when a random self-stress is nonzero on one of
-/// its rows (every self-stress has its support within these pairs; a random one reaches all
-/// of them except with probability at most (rows)/p). By the factorization of the
-/// transpose (the pairs' rows as unknowns, grouped by pair; one equation per body column),
-/// within `limits`.
+/// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, from
+/// their tracked factorization `f` ([`pairs_factor`] with `track`; `None` for no rows): a
+/// flag per pair, set when a random self-stress is nonzero on one of its rows (every
+/// self-stress has its support within these pairs; a random one reaches all of them except
+/// with probability at most (rows)/p). A pair that gives the matrix no row (its bodies both
+/// held fixed, or one body twice) constrains nothing that moves: each of its rows is a
+/// self-stress of its own. Cost: one pass over the factorization's trace
+/// ([`Factor::random_left_null_vector`]), charged to `meter`; the transpose is never factored.
 ///
-/// The transpose is over-determined (a body's B equations against the fewer rows of its
-/// pairs), so its block triangular order is one tier and the greedy order decides; ordering
-/// its pairs by the Jacobian's own tiers was tried and filled in far more (10^4 random
-/// spatial bodies: minutes instead of seconds).
+/// `None` when `f` was not tracked.
+#[allow(clippy::too_many_arguments)]
+pub fn pairs_stress_support_from(
+    f: Option<&Factor>,
+    rows: &[DMatrix<Fp>],
+    pairs: &[(usize, usize, usize)],
+    group: impl Fn(usize) -> Option<usize>,
+    seed: u64,
+    meter: &mut crate::budget::Meter,
+) -> Result<Option<Vec<bool>>, BudgetExceeded> {
+    let mut rng = crate::rng::SplitMix64::new(seed);
+    let y = match f {
+        Some(f) => {
+            meter.charge(f.trace_len() as u64)?;
+            match f.random_left_null_vector(&mut rng) {
+                Some(y) => y,
+                None => return Ok(None),
+            }
+        }
+        None => Vec::new(),
+    };
+    // The rows of each pair in the matrix, in the order `pairs_matrix` pushes them.
+    let mut at = 0usize;
+    let out = pairs
+        .iter()
+        .map(|&(joint, hub, other)| {
+            let n = rows[joint].nrows();
+            if hub == other || (group(hub).is_none() && group(other).is_none()) {
+                return n > 0;
+            }
+            let s = y
+                .get(at..at + n)
+                .is_some_and(|s| s.iter().any(|v| !v.is_zero()));
+            at += n;
+            s
+        })
+        .collect();
+    Ok(Some(out))
+}
+
+/// The same flags as [`pairs_stress_support_from`] by the factorization of the transpose
+/// (the pairs' rows as unknowns, grouped by pair; one equation per body column), within
+/// `limits`: the reference the tests compare with. Not used by the analysis: the transpose
+/// is over-determined (a body's B equations against the fewer rows of its pairs), so its
+/// block triangular order is one tier and the greedy order fills in (10^5 random spatial
+/// bodies: minutes, several GB).
 pub fn pairs_stress_support(
     b: usize,
     rows: &[DMatrix<Fp>],
@@ -374,6 +424,72 @@ mod tests {
                 assert_eq!(r.nrows(), b - kind.grade() as usize, "{kind:?} {space:?}");
             }
         }
+    }
+
+    /// The self-stress support from the tracked Jacobian factorization equals the one from
+    /// the transpose's factorization, on random mechanisms (spatial and planar) with a
+    /// fixed body besides the frame (as a part's root is).
+    #[test]
+    fn stress_support_from_the_factorization_matches_the_transpose() {
+        let budget = crate::budget::Budget::UNLIMITED;
+        let what = || "test".to_string();
+        let mut nonempty = 0;
+        for (n, planar, seed) in [
+            (60, false, 1),
+            (120, false, 2),
+            (150, true, 3),
+            (300, false, 4),
+        ] {
+            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            let b = m.b() as usize;
+            let rows: Vec<DMatrix<Fp>> = (0..m.joints.len())
+                .map(|ji| joint_rows(&m, ji, 9, m.joints[ji].driven))
+                .collect();
+            let mut pairs = Vec::new();
+            for (ji, j) in m.joints.iter().enumerate() {
+                if let Some((&hub, others)) = j.bodies.split_first() {
+                    pairs.extend(others.iter().map(|&o| (ji, hub, o)));
+                }
+            }
+            // Body 1 held fixed too (besides the frame).
+            let fixed = (m.frame + 1) % m.bodies.len();
+            let mut local = vec![None; m.bodies.len()];
+            let mut ng = 0;
+            for (x, l) in local.iter_mut().enumerate() {
+                if x != m.frame && x != fixed {
+                    *l = Some(ng);
+                    ng += 1;
+                }
+            }
+            let group = |x: usize| local[x];
+            let mut meter = budget.meter("test");
+            let mut limits = Limits {
+                budget: &budget,
+                meter: &mut meter,
+                what: &what,
+            };
+            let reference =
+                pairs_stress_support(b, &rows, &pairs, group, ng, 5, &mut limits).expect("fits");
+            let f = pairs_factor(
+                b,
+                ng,
+                &rows,
+                pairs.iter().copied(),
+                group,
+                true,
+                &mut limits,
+            )
+            .expect("fits");
+            let got = pairs_stress_support_from(f.as_ref(), &rows, &pairs, group, 6, &mut meter)
+                .expect("fits")
+                .expect("tracked");
+            assert_eq!(got, reference, "{n} {planar} {seed}");
+            nonempty += got.iter().filter(|&&s| s).count();
+        }
+        assert!(
+            nonempty > 0,
+            "no self-stress at all: the test shows nothing"
+        );
     }
 
     #[test]

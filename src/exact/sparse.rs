@@ -203,6 +203,8 @@ struct Blk {
     groups: Vec<usize>,
     nrows: usize,
     data: Vec<Fp>,
+    /// The working id of its first row (its rows are `id..id + nrows`; see [`Trace`]).
+    id: u32,
 }
 
 /// Bytes of one field element (and of one index) in the memory estimates.
@@ -256,7 +258,102 @@ pub struct Factor {
     records: Vec<Record>,
     rank: usize,
     stats: FactorStats,
+    /// How the dependent rows combine the input rows ([`Factor::new_tracked_within`]).
+    trace: Option<Trace>,
 }
+
+/// The row operations of a tracked factorization, for the left null space.
+///
+/// Every row the elimination handles has a working id: the input rows first (`orig` gives
+/// each one's row in the matrix), then each row a front leaves over, in order. A front turns
+/// its rows (its members' rows) by an invertible map into its pivot rows (kept in the
+/// factor), the rows it leaves over (new working rows, on later fronts) and the rows that
+/// became zero (dependent). For each row left over or dependent the trace keeps its
+/// combination of the front's rows: its own row plus multiples of the rows chosen as pivots
+/// (at most the group's size), composed with the compression of the rows left over. The
+/// dependent rows, expanded back through the fronts to the input rows, are a basis of the
+/// left null space; [`Factor::random_left_null_vector`] expands a random combination of
+/// them in one backward pass.
+#[derive(Clone, Debug, Default)]
+struct Trace {
+    /// The matrix row of each input working id.
+    orig: Vec<u32>,
+    /// Rows of the matrix without entries (each a left null vector of its own).
+    empty: Vec<u32>,
+    /// Working ids in all.
+    nids: u32,
+    /// Per output row: its working id ([`DEPENDENT`] for a zero row) and the end of its
+    /// terms in `terms` (they start where the previous output's end).
+    outputs: Vec<(u32, u32)>,
+    /// `(working id of a front row, coefficient)`.
+    terms: Vec<(u32, Fp)>,
+}
+
+impl Trace {
+    /// Bytes it holds.
+    fn bytes(&self) -> u64 {
+        ((self.orig.len() + self.empty.len() + 2 * self.outputs.len() + 3 * self.terms.len())
+            as u64)
+            .saturating_mul(4)
+    }
+}
+
+/// The combination of a front's input rows that one output row is, being accumulated.
+struct Combo<'a> {
+    /// The working ids of the front's input rows.
+    in_ids: &'a [u32],
+    /// `(input position, coefficient)`, positions distinct.
+    terms: Vec<(u32, Fp)>,
+}
+
+impl<'a> Combo<'a> {
+    fn new(in_ids: &'a [u32]) -> Combo<'a> {
+        Combo {
+            in_ids,
+            terms: Vec::new(),
+        }
+    }
+
+    fn add(&mut self, at: u32, c: Fp) {
+        match self.terms.iter_mut().find(|e| e.0 == at) {
+            Some(e) => e.1 += c,
+            None => self.terms.push((at, c)),
+        }
+    }
+
+    /// Add `c` times front row `ri` (its own input row, if not chosen, and its multiples
+    /// of the chosen rows).
+    fn add_row(&mut self, ri: usize, c: Fp, own: &[u32], tr: &[Fp], sg: usize, chosen: &[u32]) {
+        if own[ri] != CHOSEN {
+            self.add(own[ri], c);
+        }
+        for (k, &at) in chosen.iter().enumerate() {
+            let v = tr[ri * sg + k];
+            if !v.is_zero() {
+                self.add(at, c * v);
+            }
+        }
+    }
+
+    /// Record it as the combination of output row `id` ([`DEPENDENT`] for a zero row).
+    fn emit(mut self, t: &mut Trace, id: u32) {
+        self.terms.sort_unstable_by_key(|e| e.0);
+        t.outputs.push((id, t.terms.len() as u32));
+        let in_ids = self.in_ids;
+        t.terms.extend(
+            self.terms
+                .into_iter()
+                .filter(|e| !e.1.is_zero())
+                .map(|(at, c)| (in_ids[at as usize], c)),
+        );
+    }
+}
+
+/// The id of an output row that became zero (a dependent row).
+const DEPENDENT: u32 = u32::MAX;
+
+/// A front row taken as a pivot (it has no own term any more).
+const CHOSEN: u32 = u32::MAX;
 
 impl Factor {
     /// Factor a sparse matrix, eliminating by its column groups. Rows touching the same
@@ -290,15 +387,45 @@ impl Factor {
         })
     }
 
+    /// [`Factor::new_within`], keeping the row operations that express each dependent row
+    /// as a combination of the input rows ([`Trace`]), for
+    /// [`Factor::random_left_null_vector`]: the left null space from this factorization,
+    /// without factoring the transpose. The extra work is small: a front's rows carry their
+    /// combination of its pivot rows (at most the group's size of coefficients each).
+    pub fn new_tracked_within(
+        a: &SparseMatrix,
+        limits: &mut Limits<'_>,
+    ) -> Result<Factor, BudgetExceeded> {
+        Factor::build_tracked(a, None, true, &mut |work, bytes| limits.charge(work, bytes))
+    }
+
     fn build<E>(
         a: &SparseMatrix,
         tiers: Option<&[u32]>,
         charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
     ) -> Result<Factor, E> {
-        let blocks = blocks_of(a);
+        Factor::build_tracked(a, tiers, false, charge)
+    }
+
+    fn build_tracked<E>(
+        a: &SparseMatrix,
+        tiers: Option<&[u32]>,
+        track: bool,
+        charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
+    ) -> Result<Factor, E> {
+        let (blocks, orig) = blocks_of(a);
         let input: usize = a.rows.iter().map(|r| r.len()).sum();
         charge((input + a.ncols + a.rows.len()) as u64, 0)?;
-        Factor::run(a.groups(), blocks, input, tiers, charge)
+        let trace = track.then(|| Trace {
+            nids: orig.len() as u32,
+            empty: (0..a.rows.len() as u32)
+                .filter(|&i| a.rows[i as usize].is_empty())
+                .collect(),
+            orig,
+            outputs: Vec::new(),
+            terms: Vec::new(),
+        });
+        Factor::run(a.groups(), blocks, input, tiers, trace, charge)
     }
 
     /// Factor a matrix given as dense blocks over column groups of the given sizes (the
@@ -317,6 +444,7 @@ impl Factor {
         charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
     ) -> Result<Factor, E> {
         let mut input = 0;
+        let mut next_id = 0u32;
         let blks = blocks
             .into_iter()
             .filter(|b| !b.groups.is_empty() && b.mat.nrows() > 0)
@@ -345,14 +473,17 @@ impl Factor {
                         sorted.extend_from_slice(&data[s0..s0 + sizes[b.groups[k]]]);
                     }
                 }
+                let id = next_id;
+                next_id += m as u32;
                 Blk {
                     groups: order.iter().map(|&k| b.groups[k]).collect(),
                     nrows: m,
                     data: sorted,
+                    id,
                 }
             })
             .collect();
-        Factor::run(sizes.to_vec(), blks, input, None, charge)
+        Factor::run(sizes.to_vec(), blks, input, None, None, charge)
     }
 
     /// The elimination. `charge(work, bytes)` is called with the work of each step and the
@@ -362,6 +493,7 @@ impl Factor {
         blocks: Vec<Blk>,
         input_entries: usize,
         given_tiers: Option<&[u32]>,
+        mut trace: Option<Trace>,
         charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
     ) -> Result<Factor, E> {
         let n = sizes.len();
@@ -455,9 +587,25 @@ impl Factor {
                 pool.bytes
                     .saturating_add(member_bytes)
                     .saturating_add(record_bytes)
+                    .saturating_add(trace.as_ref().map_or(0, Trace::bytes))
                     .saturating_add(front_len.saturating_mul(FP_BYTES)),
             )?;
             let mut front = vec![Fp::ZERO; nrows * width];
+            // Tracking: each front row's input position (`own`, until it is chosen as a
+            // pivot) and its coefficients on the rows chosen so far (`tr`, `sg` per row).
+            let tracking = trace.is_some();
+            let mut in_ids: Vec<u32> = Vec::new();
+            let mut own: Vec<u32> = Vec::new();
+            let mut tr: Vec<Fp> = Vec::new();
+            let mut chosen: Vec<u32> = Vec::new();
+            if tracking {
+                charge((nrows as u64).saturating_mul((sg * (sg + 2)) as u64), 0)?;
+                for b in &members {
+                    in_ids.extend(b.id..b.id + b.nrows as u32);
+                }
+                own.extend(0..nrows as u32);
+                tr = vec![Fp::ZERO; nrows * sg];
+            }
             let mut r0 = 0;
             for b in &members {
                 let bw = b.width();
@@ -488,6 +636,14 @@ impl Factor {
                 front[r * width..(p + 1) * width].rotate_right(width);
                 let inv = front[r * width + c].inv();
                 scale(&mut front[r * width + c..(r + 1) * width], inv);
+                if tracking {
+                    tr[r * sg..(p + 1) * sg].rotate_right(sg);
+                    own[r..=p].rotate_right(1);
+                    tr[r * sg + chosen.len()] = Fp::ONE;
+                    chosen.push(own[r]);
+                    own[r] = CHOSEN;
+                    scale(&mut tr[r * sg..(r + 1) * sg], inv);
+                }
                 for i in 0..nrows {
                     if i == r {
                         continue;
@@ -496,6 +652,11 @@ impl Factor {
                     if !f.is_zero() {
                         let (dst, src) = two_rows(&mut front, width, i, r);
                         axpy_sub(&mut dst[c..], f, &src[c..]);
+                        // Rows above are pivot rows: their combinations are not needed.
+                        if tracking && i > r {
+                            let (dst, src) = two_rows(&mut tr, sg, i, r);
+                            axpy_sub(dst, f, src);
+                        }
                     }
                 }
                 pivots.push(c);
@@ -535,6 +696,13 @@ impl Factor {
                     let n_in = j - i;
                     if bw == 0 {
                         stats.dependent_rows += n_in;
+                        if let Some(t) = trace.as_mut() {
+                            for &ri in &order[i..j] {
+                                let mut combo = Combo::new(&in_ids);
+                                combo.add_row(ri, Fp::ONE, &own, &tr, sg, &chosen);
+                                combo.emit(t, DEPENDENT);
+                            }
+                        }
                         i = j;
                         continue;
                     }
@@ -547,17 +715,59 @@ impl Factor {
                     }
                     let kept = if n_in > bw {
                         charge(
-                            (n_in as u64)
-                                .saturating_mul(bw as u64)
-                                .saturating_mul(bw as u64),
+                            (n_in as u64).saturating_mul(bw as u64).saturating_mul(
+                                bw as u64 + if tracking { sg as u64 + 2 } else { 0 },
+                            ),
                             0,
                         )?;
-                        echelon(&mut data, bw)
+                        if let Some(t) = trace.as_mut() {
+                            // The compression tracked as the front: each output row is a
+                            // combination of the group's rows, each of those one of the
+                            // front's rows.
+                            let mut own2: Vec<u32> = (0..n_in as u32).collect();
+                            let mut tr2 = vec![Fp::ZERO; n_in * bw];
+                            let mut chosen2 = Vec::new();
+                            let kept =
+                                echelon_tracked(&mut data, bw, &mut own2, &mut tr2, &mut chosen2);
+                            for o in 0..n_in {
+                                let mut combo = Combo::new(&in_ids);
+                                if own2[o] != CHOSEN {
+                                    let ri = order[i + own2[o] as usize];
+                                    combo.add_row(ri, Fp::ONE, &own, &tr, sg, &chosen);
+                                }
+                                for (k, &l) in chosen2.iter().enumerate() {
+                                    let c = tr2[o * bw + k];
+                                    if !c.is_zero() {
+                                        let ri = order[i + l as usize];
+                                        combo.add_row(ri, c, &own, &tr, sg, &chosen);
+                                    }
+                                }
+                                let id = if o < kept {
+                                    t.nids + o as u32
+                                } else {
+                                    DEPENDENT
+                                };
+                                combo.emit(t, id);
+                            }
+                            t.nids += kept as u32;
+                            kept
+                        } else {
+                            echelon(&mut data, bw)
+                        }
                     } else {
+                        if let Some(t) = trace.as_mut() {
+                            for (o, &ri) in order[i..j].iter().enumerate() {
+                                let mut combo = Combo::new(&in_ids);
+                                combo.add_row(ri, Fp::ONE, &own, &tr, sg, &chosen);
+                                combo.emit(t, t.nids + o as u32);
+                            }
+                            t.nids += n_in as u32;
+                        }
                         n_in
                     };
                     stats.dependent_rows += n_in - kept;
                     data.truncate(kept * bw);
+                    let id = trace.as_ref().map_or(0, |t| t.nids - kept as u32);
                     if kept > 0 {
                         if groups.len() <= WIDE_BLOCK {
                             for &h in &groups {
@@ -568,6 +778,7 @@ impl Factor {
                             groups,
                             nrows: kept,
                             data,
+                            id,
                         });
                     }
                     i = j;
@@ -621,7 +832,58 @@ impl Factor {
             records,
             rank,
             stats,
+            trace,
         })
+    }
+
+    /// Entries of the trace of a tracked factorization (0 if not tracked): the cost of
+    /// [`Factor::random_left_null_vector`].
+    pub fn trace_len(&self) -> usize {
+        self.trace.as_ref().map_or(0, |t| {
+            t.terms.len() + t.outputs.len() + t.orig.len() + t.empty.len()
+        })
+    }
+
+    /// Whether the factorization kept its row operations ([`Factor::new_tracked_within`]).
+    pub fn is_tracked(&self) -> bool {
+        self.trace.is_some()
+    }
+
+    /// A random vector of the left null space {y : yᵀ A = 0} of the factored matrix, dense
+    /// over its rows, or `None` when the factorization was not tracked
+    /// ([`Factor::new_tracked_within`]). Each dependent row (and each row without entries)
+    /// gets a random coefficient and the combination is expanded back through the fronts,
+    /// last first: one pass over the trace. Its support is the union of the supports of all
+    /// left null vectors (the rows in some self-stress) except with probability at most
+    /// (rows)/p.
+    pub fn random_left_null_vector(&self, rng: &mut SplitMix64) -> Option<Vec<Fp>> {
+        let t = self.trace.as_ref()?;
+        let mut w = vec![Fp::ZERO; t.nids as usize];
+        let mut end = t.terms.len();
+        for &(id, start) in t.outputs.iter().rev() {
+            let (start, stop) = (start as usize, end);
+            end = start;
+            let v = if id == DEPENDENT {
+                Fp::random(rng)
+            } else {
+                w[id as usize]
+            };
+            if v.is_zero() {
+                continue;
+            }
+            for &(k, c) in &t.terms[start..stop] {
+                w[k as usize] += v * c;
+            }
+        }
+        let nrows = t.orig.len() + t.empty.len();
+        let mut y = vec![Fp::ZERO; nrows];
+        for (k, &r) in t.orig.iter().enumerate() {
+            y[r as usize] = w[k];
+        }
+        for &r in &t.empty {
+            y[r as usize] = Fp::random(rng);
+        }
+        Some(y)
     }
 
     /// The rank.
@@ -818,7 +1080,10 @@ impl Factor {
 
 /// The rows of `a` as working blocks: rows touching the same set of groups merged, in the
 /// order of their sorted group sets (deterministic).
-fn blocks_of(a: &SparseMatrix) -> Vec<Blk> {
+/// The rows of `a` merged into blocks (rows on the same set of groups), with the matrix row
+/// of each row of the blocks in order (the blocks' rows are the working ids `0..`, see
+/// [`Trace`]). Rows without entries are left out.
+fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
     let sizes = a.groups();
     let mut offsets = Vec::with_capacity(sizes.len());
     let mut group_of = Vec::with_capacity(a.ncols);
@@ -841,6 +1106,7 @@ fn blocks_of(a: &SparseMatrix) -> Vec<Blk> {
         .collect();
     keyed.sort();
     let mut blocks = Vec::new();
+    let mut orig = Vec::with_capacity(keyed.len());
     let mut i = 0;
     let mut local = vec![0usize; sizes.len()];
     while i < keyed.len() {
@@ -865,16 +1131,18 @@ fn blocks_of(a: &SparseMatrix) -> Vec<Blk> {
             groups,
             nrows: j - i,
             data,
+            id: orig.len() as u32,
         });
+        orig.extend(keyed[i..j].iter().map(|&(_, ri)| ri as u32));
         i = j;
     }
-    blocks
+    (blocks, orig)
 }
 
 /// The elimination tier of each column group of `a` that [`Factor::new`] uses (lower
 /// first): its block triangular order (module docs).
 pub fn elimination_tiers(a: &SparseMatrix) -> Vec<u32> {
-    let blocks = blocks_of(a);
+    let (blocks, _) = blocks_of(a);
     tiers(&a.groups(), &blocks).0
 }
 
@@ -1235,6 +1503,48 @@ fn echelon(m: &mut [Fp], w: usize) -> usize {
     r
 }
 
+/// [`echelon`] keeping each row's combination of the input rows: `own[i]` its own input row
+/// (until chosen as a pivot, then [`CHOSEN`]), `tr` (`w` per row) its coefficients on the
+/// rows chosen so far, listed in `chosen` (input rows).
+fn echelon_tracked(
+    m: &mut [Fp],
+    w: usize,
+    own: &mut [u32],
+    tr: &mut [Fp],
+    chosen: &mut Vec<u32>,
+) -> usize {
+    let nr = m.len() / w;
+    let mut r = 0;
+    for c in 0..w {
+        if r == nr {
+            break;
+        }
+        let Some(p) = (r..nr).find(|&i| !m[i * w + c].is_zero()) else {
+            continue;
+        };
+        swap_rows(m, w, r, p);
+        swap_rows(tr, w, r, p);
+        own.swap(r, p);
+        tr[r * w + chosen.len()] = Fp::ONE;
+        chosen.push(own[r]);
+        own[r] = CHOSEN;
+        let inv = m[r * w + c].inv();
+        scale(&mut m[r * w + c..(r + 1) * w], inv);
+        scale(&mut tr[r * w..(r + 1) * w], inv);
+        for i in r + 1..nr {
+            let f = m[i * w + c];
+            if !f.is_zero() {
+                let (dst, src) = two_rows(m, w, i, r);
+                axpy_sub(&mut dst[c..], f, &src[c..]);
+                let (dst, src) = two_rows(tr, w, i, r);
+                axpy_sub(dst, f, src);
+            }
+        }
+        r += 1;
+    }
+    r
+}
+
 /// A row that the earlier rows make redundant, with the rows taking part in its dependency.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct DependentRow {
@@ -1551,6 +1861,21 @@ mod tests {
     use super::super::dense;
     use super::*;
 
+    fn tracked(a: &SparseMatrix) -> Factor {
+        let budget = Budget::UNLIMITED;
+        let mut meter = budget.meter("test");
+        let what = || "test".to_string();
+        Factor::new_tracked_within(
+            a,
+            &mut Limits {
+                budget: &budget,
+                meter: &mut meter,
+                what: &what,
+            },
+        )
+        .expect("unlimited")
+    }
+
     fn check(a: &SparseMatrix) {
         let d = a.to_dense();
         let f = Factor::new(a);
@@ -1584,6 +1909,25 @@ mod tests {
         for y in &ln {
             assert!(a.left_mul_sparse(y).iter().all(|v| v.is_zero()));
         }
+        // The tracked factorization: same rank, and a random left null vector whose
+        // support is that of the whole left null space.
+        let t = tracked(a);
+        assert_eq!(t.rank(), r);
+        assert!(!f.is_tracked() && t.is_tracked());
+        let y = t
+            .random_left_null_vector(&mut SplitMix64::new(3))
+            .expect("tracked");
+        assert_eq!(y.len(), a.nrows());
+        let ys: Vec<(u32, Fp)> = (0..y.len() as u32).map(|i| (i, y[i as usize])).collect();
+        assert!(a.left_mul_sparse(&ys).iter().all(|v| v.is_zero()));
+        let mut support = vec![false; a.nrows()];
+        for v in &ln {
+            for &(i, _) in v {
+                support[i as usize] = true;
+            }
+        }
+        let got: Vec<bool> = y.iter().map(|v| !v.is_zero()).collect();
+        assert_eq!(got, support);
         let deps = dependent_rows(a);
         assert_eq!(deps.len(), a.nrows() - r);
         let greedy = dense::independent_rows(&d);
@@ -1635,6 +1979,32 @@ mod tests {
         let f = Factor::new(&a);
         assert_eq!(f.rank(), 6);
         assert_eq!(f.stats().dependent_rows, 2);
+    }
+
+    /// Random mechanism-like patterns (trees with extra pairs, repeated pairs, pairs to the
+    /// frame): fronts with rows left over, compressions with dependent rows, rows on no
+    /// group; the tracked factorization's left null vector against the basis.
+    #[test]
+    fn tracked_left_null_space_on_random_patterns() {
+        for seed in 0..40u64 {
+            let mut rng = SplitMix64::new(seed);
+            let nb = 2 + rng.below(30) as usize;
+            let b = 1 + rng.below(6) as usize;
+            let mut pairs = Vec::new();
+            for x in 1..nb {
+                pairs.push((
+                    rng.below(x as u64) as usize,
+                    x,
+                    1 + rng.below(b as u64) as usize,
+                ));
+            }
+            for _ in 0..rng.below(2 * nb as u64) {
+                let (i, j) = (rng.below(nb as u64) as usize, rng.below(nb as u64) as usize);
+                pairs.push((i, j, 1 + rng.below(b as u64 + 2) as usize));
+            }
+            let a = random_pair_matrix(nb, b, &pairs, seed);
+            check(&a);
+        }
     }
 
     #[test]

@@ -597,59 +597,21 @@ struct ExactPart<'a> {
     b: usize,
 }
 
-impl ExactPart<'_> {
-    /// The part's pairs carrying its self-stresses
-    /// ([`crate::exact::models::pairs_stress_support`]).
-    fn stress_support(
-        &self,
-        budget: &Budget,
-        meter: &mut Meter,
-    ) -> Result<Vec<bool>, BudgetExceeded> {
-        let (part, pairs, b) = (self.part, self.pairs, self.b);
-        let mut local: BTreeMap<usize, usize> = BTreeMap::new();
-        for &x in &part.bodies {
-            if x != self.frame && x != part.root {
-                let g = local.len();
-                local.insert(x, g);
-            }
-        }
-        meter.charge((part.pairs.len() * b * b * 8) as u64)?;
-        let list: Vec<(usize, usize, usize)> = part
-            .pairs
-            .iter()
-            .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
-            .collect();
-        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
-        let (nl, np) = (part.bodies.len(), list.len());
-        let what = move || {
-            format!(
-                "the geometric rigidity analysis (exact self-stresses of one rigid block of \
-                 {nl} bodies and {np} joint pairs)"
-            )
-        };
-        crate::exact::models::pairs_stress_support(
-            b,
-            self.rows,
-            &list,
-            |x| local.get(&x).copied(),
-            local.len(),
-            0x7374_7265_7373 ^ seed,
-            &mut Limits {
-                budget,
-                meter,
-                what: &what,
-            },
-        )
-    }
+/// What [`ExactPart::run`] finds: the rank, the local union-find, the self-stress support.
+type ExactOutcome = (usize, Vec<usize>, Option<Vec<bool>>);
 
-    /// The rank and the part's local union-find (a parent per body of `part.bodies`, each
-    /// pointing to its cluster's smallest member); locked DOF are added to `locked`.
+impl ExactPart<'_> {
+    /// The rank, the part's local union-find (a parent per body of `part.bodies`, each
+    /// pointing to its cluster's smallest member) and, when its rows are dependent, the flags
+    /// of its pairs carrying its self-stresses (from the same factorization,
+    /// [`crate::exact::models::pairs_stress_support_from`]); locked DOF are added to
+    /// `locked`.
     fn run(
         &self,
         budget: &Budget,
         meter: &mut Meter,
         locked: &mut BTreeMap<usize, usize>,
-    ) -> Result<(usize, Vec<usize>), BudgetExceeded> {
+    ) -> Result<ExactOutcome, BudgetExceeded> {
         let (part, pairs, b) = (self.part, self.pairs, self.b);
         let fixed = |x: usize| x == self.frame || x == part.root;
         let mut local: BTreeMap<usize, usize> = BTreeMap::new();
@@ -672,14 +634,18 @@ impl ExactPart<'_> {
         // The sampled motions and each body's twists over them (k · B field elements each).
         budget.check_memory(((ng * b * k + nl * b * k) as u64).saturating_mul(8), what)?;
         meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+        let list: Vec<(usize, usize, usize)> = part
+            .pairs
+            .iter()
+            .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
+            .collect();
         let factor = crate::exact::models::pairs_factor(
             b,
             ng,
             self.rows,
-            part.pairs
-                .iter()
-                .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other)),
+            list.iter().copied(),
             |x| local.get(&x).copied(),
+            true,
             &mut Limits {
                 budget,
                 meter,
@@ -688,6 +654,23 @@ impl ExactPart<'_> {
         )?;
         let rank = factor.as_ref().map_or(0, |f| f.rank());
         let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        // The self-stresses live on the pairs a random exact self-stress reaches.
+        let prow: usize = list
+            .iter()
+            .map(|&(j, _, _)| self.models[j].rows.nrows())
+            .sum();
+        let support = if prow > rank {
+            crate::exact::models::pairs_stress_support_from(
+                factor.as_ref(),
+                self.rows,
+                &list,
+                |x| local.get(&x).copied(),
+                0x7374_7265_7373 ^ seed,
+                meter,
+            )?
+        } else {
+            None
+        };
         let mut rng = crate::rng::SplitMix64::new(0x6765_6f72_6967_6964 ^ seed);
         let samples: Vec<Vec<Fp>> = match &factor {
             Some(f) => {
@@ -852,7 +835,7 @@ impl ExactPart<'_> {
             let r = find(&mut luf, x);
             luf[x] = r;
         }
-        Ok((rank, luf))
+        Ok((rank, luf, support))
     }
 }
 
@@ -1246,17 +1229,16 @@ fn analyze_models(
                 frame,
                 b,
             };
-            let (r, luf) = ctx.run(budget, meter, &mut locked_by_joint)?;
+            let (r, luf, support) = ctx.run(budget, meter, &mut locked_by_joint)?;
             let prow: usize = part
                 .pairs
                 .iter()
                 .map(|&pi| models[pairs[pi].joint].rows.nrows())
                 .sum();
-            if prow > r {
+            if let Some(support) = support.filter(|_| prow > r) {
                 // The self-stresses live on the pairs a random exact self-stress reaches:
                 // the floating-point ones (for the joints' weights) come from those rows
                 // alone, whose left null space is the whole one's.
-                let support = ctx.stress_support(budget, meter)?;
                 let sub = Part {
                     root: part.root,
                     pairs: part
