@@ -209,3 +209,45 @@ fn rejected_placements_of_a_random_mechanism_keep_their_verdict() {
     assert_eq!(t.summary.count_valid, 30);
     assert_eq!(t.summary.excluded_by_rank, 30);
 }
+
+/// A placement the exact rank certifies is analysed from the search's own flow (its strongly
+/// connected components, levels and types), not by a full analysis: the same placements,
+/// groups, types, scores, ranks and families as the full analyses give.
+fn lean_equals_full(m: &Mechanism, limit: Option<usize>) {
+    let lib = Library::builtin();
+    let o = TransformOptions {
+        limit,
+        ..TransformOptions::default()
+    };
+    let lean = transform(m, &o, &lib, None).unwrap();
+    let full = transform(
+        m,
+        &TransformOptions {
+            full_analyses: true,
+            ..o
+        },
+        &lib,
+        None,
+    )
+    .unwrap();
+    assert!(!full.placements.is_empty());
+    assert_eq!(lean, full);
+}
+
+#[test]
+fn lean_analyses_equal_full_ones_on_assur_linkages() {
+    lean_equals_full(&generate::assur(2, 60, 7, Variant::A).unwrap(), None);
+    lean_equals_full(
+        &generate::assur(2, 300, 364, Variant::A).unwrap(),
+        Some(100),
+    );
+    lean_equals_full(&generate::assur(3, 20, 5, Variant::B).unwrap(), Some(200));
+    lean_equals_full(
+        &generate::assur_spatial(2, 30, 7, Variant::A).unwrap(),
+        None,
+    );
+    lean_equals_full(
+        &generate::assur_spatial(2, 200, 364, Variant::B).unwrap(),
+        Some(100),
+    );
+}
