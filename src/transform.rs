@@ -606,27 +606,40 @@ fn place(
             batch.clear();
             return Ok(());
         }
-        meter.charge(per_eval.saturating_mul(batch.len() as u64))?;
+        // One unit a placement first; what each then spends (the exact decision of its
+        // inputs, a lean analysis, a full one and the rank decisions inside it) after the
+        // batch.
+        meter.charge(batch.len() as u64)?;
         let results: Vec<(Option<Placement>, u64)> = batch
             .par_iter()
             .map_init(
-                || e.mech.clone(),
+                // A copy of the expansion only for the placements analysed in full.
+                || None::<Mechanism>,
                 |mech, (x, w, flow)| {
-                    let certified = match oracle.decide(mech, w) {
-                        Some(false) => return (None, 0),
+                    let decided = oracle.work(w);
+                    let certified = match oracle.decide(&e.mech, w) {
+                        Some(false) => return (None, decided),
                         Some(true) => true,
                         None => false,
                     };
                     if certified && let Some(l) = lean {
-                        let g = l.groups(mech, flow, lib);
-                        return (Some(placement_of(mech, e, *x, w, g)), 0);
+                        let g = l.groups(&e.mech, flow, lib);
+                        return (
+                            Some(placement_of(&e.mech, e, *x, w, g)),
+                            decided.saturating_add(l.work),
+                        );
                     }
+                    let mech = mech.get_or_insert_with(|| e.mech.clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
-                    (a.map(|a| placement(mech, e, *x, &a, w)), work)
+                    (
+                        a.map(|a| placement(mech, e, *x, &a, w)),
+                        work.saturating_add(per_eval).saturating_add(decided),
+                    )
                 },
             )
             .collect();
-        // The rank decisions' own work (dense factorizations of growing groups above all).
+        // The analyses' work: a full analysis its estimate and its rank decisions (dense
+        // factorizations of growing groups above all), a lean one its pass over the arrays.
         meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
         let results = results.into_iter().map(|r| r.0);
         let done = r.count_valid;
@@ -2342,6 +2355,12 @@ struct Lean {
     touch: Vec<u32>,
     /// Body ids as the analysis writes them.
     ids: Vec<String>,
+    /// Each pair's two bodies and joint type (read from the joints, hundreds of bytes apart,
+    /// each was a cache miss).
+    ends: Vec<[u32; 2]>,
+    kind: Vec<JointType>,
+    /// Work units of one lean analysis: a few passes over the bodies and pairs.
+    work: u64,
 }
 
 impl Lean {
@@ -2371,10 +2390,21 @@ impl Lean {
                 }
             }
         }
+        let ends = m
+            .joints
+            .iter()
+            .map(|j| match j.bodies[..] {
+                [a, c] => [a as u32, c as u32],
+                _ => [m.frame as u32; 2],
+            })
+            .collect();
         Lean {
             start,
             touch,
             ids: m.bodies.iter().map(|b| b.id.to_string()).collect(),
+            ends,
+            kind: m.joints.iter().map(|j| j.kind).collect(),
+            work: 8 * (m.bodies.len() + m.joints.len()) as u64 + 100,
         }
     }
 
@@ -2382,9 +2412,9 @@ impl Lean {
     fn groups(&self, m: &Mechanism, flow: &[[u8; 2]], lib: &Library) -> Groups {
         let nb = m.bodies.len();
         let frame = m.frame;
-        let ends = |q: usize| match m.joints[q].bodies[..] {
-            [a, c] => (a, c),
-            _ => (frame, frame),
+        let ends = |q: usize| {
+            let [a, c] = self.ends[q];
+            (a as usize, c as usize)
         };
         // x -> y: an equation flowing into x touches y (bodies other than the frame).
         let mut deg = vec![0usize; nb + 1];
@@ -2478,7 +2508,7 @@ impl Lean {
                     if (key[y] == gk && x != a) || key[y] > gk {
                         continue;
                     }
-                    let jt = m.joints[q].kind;
+                    let jt = self.kind[q];
                     match kinds.iter_mut().find(|(k, _)| *k == jt) {
                         Some((_, c)) => *c += 1,
                         None => kinds.push((jt, 1)),
@@ -2860,6 +2890,18 @@ impl Oracle {
         let mut rng = crate::rng::SplitMix64::new(seed ^ 0x7A4E_5F0B_0C1E_0000);
         let v = f.random_null_vectors(n, &mut rng);
         Ok(Oracle::Motions { seed, col, v })
+    }
+
+    /// Work units of [`Oracle::decide`] on placement `w`: its inputs' rows on the null
+    /// vectors (`f × N` numbers and their rank).
+    fn work(&self, w: &[(usize, u32)]) -> u64 {
+        match self {
+            Oracle::Motions { v, .. } => {
+                let f: u64 = w.iter().map(|&(_, n)| u64::from(n)).sum();
+                f.saturating_mul(v.len() as u64).saturating_mul(8) + 1
+            }
+            _ => 1,
+        }
     }
 
     /// `Some(false)`: placement `w` (units per pair of `m`) is not determined; `Some(true)`:
