@@ -116,8 +116,10 @@ pub struct TransformOptions {
     /// Place the independent parts one by one (default). `false` places the whole mechanism
     /// as one: the same placements, counts and scores, at the cost of the product (tests).
     pub split: bool,
-    /// Analyse every placement in full (tests). By default a placement the exact rank
-    /// certifies is analysed from the search's own flow: the same groups, types and scores.
+    /// Analyse every placement in full (tests: the former path). By default a placement the
+    /// exact rank certifies is analysed from the search's own flow (the same groups, types
+    /// and scores), and every placement of a mechanism whose constraint equations are
+    /// dependent is rejected by one exact rank (the same verdicts).
     pub full_analyses: bool,
     /// Structural analysis options (`--count-only`, `--seed`, method).
     pub analysis: structure::Options,
@@ -1661,7 +1663,7 @@ impl Problem {
                 for (q, &n) in a.set_aside.iter().enumerate() {
                     set_aside[q] = n;
                 }
-                oracle = Oracle::of(m, a, &opts.budget, meter)?;
+                oracle = Oracle::of(m, a, &opts.budget, opts.full_analyses, meter)?;
                 if matches!(oracle, Oracle::Motions { .. })
                     && !opts.full_analyses
                     && opts.analysis.method == structure::Method::Flow
@@ -2761,6 +2763,7 @@ impl Oracle {
         m: &Mechanism,
         a: &Analysis,
         budget: &Budget,
+        full_analyses: bool,
         meter: &mut Meter,
     ) -> Result<Oracle, BudgetExceeded> {
         use crate::exact::{Factor, Fp, SparseMatrix, models};
@@ -2828,6 +2831,9 @@ impl Oracle {
         // see). Decided by the exact rank of `J` within a work and memory cap of its own;
         // past it the analyses decide, as before.
         let small = ncols - cons <= ORACLE_NULLITY;
+        if !small && full_analyses {
+            return Ok(Oracle::Undecided);
+        }
         let mut col = vec![usize::MAX; m.bodies.len()];
         let mut c = 0;
         for (x, slot) in col.iter_mut().enumerate() {

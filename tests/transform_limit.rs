@@ -251,3 +251,39 @@ fn lean_analyses_equal_full_ones_on_assur_linkages() {
         Some(100),
     );
 }
+
+/// `--limit 100` in work units (deterministic), on two families where each placement used to
+/// cost a full analysis of the mechanism (50 units a body or joint, 5·10^5 here, so 100
+/// placements at least 5·10^7): a planar Assur II linkage of 4,002 bodies, each placement
+/// certified by the exact rank and now analysed from the search's flow (8 units a body or
+/// joint), and a random planar mechanism of 3,000 bodies whose constraint equations are
+/// dependent, each placement now rejected by one exact rank of the constraints before the
+/// search. Both fit 2·10^7 units; the former path (`full_analyses`) overruns it.
+#[test]
+fn limit_100_fits_a_budget_the_full_analyses_overrun() {
+    let assur = generate::assur(2, 1_000, 364, Variant::A).unwrap();
+    let (random, _) = generate::random(3_000, true, 1).unwrap();
+    let lib = Library::builtin();
+    for (m, determined) in [(&assur, 100), (&random, 0)] {
+        let o = TransformOptions {
+            limit: Some(100),
+            budget: Budget {
+                max_work: 20_000_000,
+                ..Budget::DEFAULT
+            },
+            ..TransformOptions::default()
+        };
+        let t = transform(m, &o, &lib, None).unwrap();
+        assert_eq!(t.summary.count_valid, 100, "{}", m.name);
+        assert_eq!(t.summary.determined, determined, "{}", m.name);
+        assert!(t.summary.truncated);
+        let full = TransformOptions {
+            full_analyses: true,
+            ..o
+        };
+        match transform(m, &full, &lib, None) {
+            Err(TransformError::Budget(e)) => assert!(e.help().contains("--max-work"), "{e}"),
+            other => panic!("{}: {:?}", m.name, other.map(|t| t.summary)),
+        }
+    }
+}
