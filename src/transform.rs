@@ -691,6 +691,9 @@ fn place(
             }
         }
         let mut err: Option<BudgetExceeded> = None;
+        // `Oracle::Later`: decided once a placement of this expansion is rejected.
+        let mut late: Option<Oracle> = None;
+        let excluded_before = r.excluded;
         p.search(meter, &mut |w, flow| {
             if found >= limit {
                 r.cut = true;
@@ -713,7 +716,7 @@ fn place(
                 if let Err(b) = flush(
                     e,
                     &cache,
-                    &p.oracle,
+                    late.as_ref().unwrap_or(&p.oracle),
                     p.lean.as_ref(),
                     &mut batch,
                     &mut r,
@@ -722,6 +725,12 @@ fn place(
                 ) {
                     err = Some(b);
                     return false;
+                }
+                if late.is_none()
+                    && r.excluded > excluded_before
+                    && matches!(p.oracle, Oracle::Later { .. })
+                {
+                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
                 }
                 if stopped {
                     return false;
@@ -736,7 +745,7 @@ fn place(
         flush(
             e,
             &cache,
-            &p.oracle,
+            late.as_ref().unwrap_or(&p.oracle),
             p.lean.as_ref(),
             &mut batch,
             &mut r,
@@ -1663,7 +1672,7 @@ impl Problem {
                 for (q, &n) in a.set_aside.iter().enumerate() {
                     set_aside[q] = n;
                 }
-                oracle = Oracle::of(m, a, &opts.budget, opts.full_analyses, meter)?;
+                oracle = Oracle::of(m, a, opts.full_analyses, meter)?;
                 if matches!(oracle, Oracle::Motions { .. })
                     && !opts.full_analyses
                     && opts.analysis.method == structure::Method::Flow
@@ -2747,6 +2756,11 @@ const ORACLE_NULLITY: usize = 64;
 enum Oracle {
     Undecided,
     Reject,
+    /// A large null space: undecided, until a placement is rejected; then the exact rank of
+    /// `J` ([`Oracle::dependent`]) may reject every other one at once.
+    Later {
+        seed: u64,
+    },
     Motions {
         seed: u64,
         /// Column of each body's first unknown (`usize::MAX`: the frame).
@@ -2762,11 +2776,10 @@ impl Oracle {
     fn of(
         m: &Mechanism,
         a: &Analysis,
-        budget: &Budget,
         full_analyses: bool,
         meter: &mut Meter,
     ) -> Result<Oracle, BudgetExceeded> {
-        use crate::exact::{Factor, Fp, SparseMatrix, models};
+        use crate::exact::{Factor, models};
         let Some(seed) = a.geometry.as_ref().and_then(|g| g.seed) else {
             return Ok(Oracle::Undecided);
         };
@@ -2826,65 +2839,19 @@ impl Oracle {
             return Ok(Oracle::Undecided);
         }
         // A large null space: no per-placement test, but dependent rows of `J` still reject
-        // every placement (the random families: a redundancy among the constraints that the
-        // input-free analysis, whose under-determined block is too large to check, cannot
-        // see). Decided by the exact rank of `J` within a work and memory cap of its own;
-        // past it the analyses decide, as before.
-        let small = ncols - cons <= ORACLE_NULLITY;
-        if !small && full_analyses {
-            return Ok(Oracle::Undecided);
-        }
-        let mut col = vec![usize::MAX; m.bodies.len()];
-        let mut c = 0;
-        for (x, slot) in col.iter_mut().enumerate() {
-            if x != m.frame {
-                *slot = c;
-                c += b;
-            }
-        }
-        meter.charge(50 * (m.bodies.len() + m.joints.len()) as u64)?;
-        let mut j = SparseMatrix::with_groups(vec![b; movable]);
-        for q in 0..m.joints.len() {
-            let Some((x, y)) = pair(q) else { continue };
-            let rows = models::joint_rows(m, q, seed, 0);
-            for r in 0..rows.nrows() {
-                let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
-                for (z, negate) in [(x, true), (y, false)] {
-                    if x == y || col[z] == usize::MAX {
-                        continue;
-                    }
-                    for k in 0..b {
-                        let v = rows[(r, k)];
-                        entries.push(((col[z] + k) as u32, if negate { -v } else { v }));
-                    }
-                }
-                j.push_row(entries);
-            }
-        }
-        let nrows = j.nrows();
-        if !small {
-            let entries = (nrows * 2 * b + ncols) as u64;
-            let cap = Budget {
-                max_work: budget.max_work.min(400 * entries + 1_000_000),
-                max_memory_bytes: budget.max_memory_bytes.min(1 << 30),
-                ..*budget
-            };
-            let mut own = cap.meter("the exact rank of the constraints");
-            let what = || "the exact rank of the constraints".to_string();
-            let r = Factor::new_within(
-                &j,
-                &mut crate::exact::sparse::Limits {
-                    budget: &cap,
-                    meter: &mut own,
-                    what: &what,
-                },
-            );
-            meter.charge(own.used())?;
-            return Ok(match r {
-                Ok(f) if f.rank() < nrows => Oracle::Reject,
-                _ => Oracle::Undecided,
+        // every placement; that is decided once a placement is rejected ([`Oracle::Later`],
+        // [`Oracle::dependent`]), so a mechanism with one placement (a serial chain, each
+        // expansion of a shared joint) never pays for it.
+        if ncols - cons > ORACLE_NULLITY {
+            return Ok(if full_analyses {
+                Oracle::Undecided
+            } else {
+                Oracle::Later { seed }
             });
         }
+        meter.charge(50 * (m.bodies.len() + m.joints.len()) as u64)?;
+        let (j, col) = jacobian(m, seed);
+        let nrows = j.nrows();
         let f = Factor::new(&j);
         if f.rank() < nrows {
             return Ok(Oracle::Reject);
@@ -2896,6 +2863,48 @@ impl Oracle {
         let mut rng = crate::rng::SplitMix64::new(seed ^ 0x7A4E_5F0B_0C1E_0000);
         let v = f.random_null_vectors(n, &mut rng);
         Ok(Oracle::Motions { seed, col, v })
+    }
+
+    /// For [`Oracle::Later`], once a placement was rejected: [`Oracle::Reject`] when the
+    /// constraint rows `J` of `m` are dependent (then no placement is determined: the
+    /// random families, whose redundancy among the constraints the input-free analysis
+    /// cannot see, its under-determined block being too large to check), else
+    /// [`Oracle::Undecided`]. The exact rank runs within a work and memory cap of its own;
+    /// past it the analyses decide, as before. Its work is charged to `meter`.
+    fn dependent(&self, m: &Mechanism, budget: &Budget, meter: &mut Meter) -> Oracle {
+        let Oracle::Later { seed } = self else {
+            return Oracle::Undecided;
+        };
+        let b = m.b() as usize;
+        let units = 50 * (m.bodies.len() + m.joints.len()) as u64;
+        if meter.charge(units).is_err() {
+            return Oracle::Undecided;
+        }
+        let (j, col) = jacobian(m, *seed);
+        let nrows = j.nrows();
+        let entries = (nrows * 2 * b + col.len() * b) as u64;
+        let cap = Budget {
+            max_work: budget.max_work.min(400 * entries + 1_000_000),
+            max_memory_bytes: budget.max_memory_bytes.min(1 << 30),
+            ..*budget
+        };
+        let mut own = cap.meter("the exact rank of the constraints");
+        let what = || "the exact rank of the constraints".to_string();
+        let r = crate::exact::Factor::new_within(
+            &j,
+            &mut crate::exact::sparse::Limits {
+                budget: &cap,
+                meter: &mut own,
+                what: &what,
+            },
+        );
+        if meter.charge(own.used()).is_err() {
+            return Oracle::Undecided;
+        }
+        match r {
+            Ok(f) if f.rank() < nrows => Oracle::Reject,
+            _ => Oracle::Undecided,
+        }
     }
 
     /// Work units of [`Oracle::decide`] on placement `w`: its inputs' rows on the null
@@ -2915,7 +2924,7 @@ impl Oracle {
     fn decide(&self, m: &Mechanism, w: &[(usize, u32)]) -> Option<bool> {
         use crate::exact::{Fp, dense, models};
         match self {
-            Oracle::Undecided => None,
+            Oracle::Undecided | Oracle::Later { .. } => None,
             Oracle::Reject => Some(false),
             Oracle::Motions { seed, col, v } => {
                 let b = m.b() as usize;
@@ -2961,6 +2970,43 @@ impl Oracle {
             }
         }
     }
+}
+
+/// The constraint rows `J` of `m` (binary joints, no inputs) over GF(p) at the random
+/// realization `seed`, one column group per movable body, and each body's first column
+/// (`usize::MAX`: the frame).
+fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>) {
+    use crate::exact::{Fp, SparseMatrix, models};
+    let b = m.b() as usize;
+    let mut col = vec![usize::MAX; m.bodies.len()];
+    let mut c = 0;
+    for (x, slot) in col.iter_mut().enumerate() {
+        if x != m.frame {
+            *slot = c;
+            c += b;
+        }
+    }
+    let mut j = SparseMatrix::with_groups(vec![b; m.bodies.len().saturating_sub(1)]);
+    for q in 0..m.joints.len() {
+        let [x, y] = m.joints[q].bodies[..] else {
+            continue;
+        };
+        let rows = models::joint_rows(m, q, seed, 0);
+        for r in 0..rows.nrows() {
+            let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+            for (z, negate) in [(x, true), (y, false)] {
+                if x == y || col[z] == usize::MAX {
+                    continue;
+                }
+                for k in 0..b {
+                    let v = rows[(r, k)];
+                    entries.push(((col[z] + k) as u32, if negate { -v } else { v }));
+                }
+            }
+            j.push_row(entries);
+        }
+    }
+    (j, col)
 }
 
 #[cfg(test)]
