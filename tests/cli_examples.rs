@@ -200,3 +200,27 @@ fn a_hundred_groups_render_without_graphviz_warnings() {
     }
     let _ = std::fs::remove_file(path);
 }
+
+/// `mobility` is the count; on a file with geometry it must not let the count's verdict stand
+/// for the mechanism: the planar four-bar written in 3D has count -2 with one input, yet moves
+/// with 1 DOF at its geometry (as `rigid` says), so the verdict is "by the count" and a note
+/// points to the commands that decide at the file's configuration.
+#[test]
+fn mobility_on_a_file_with_geometry_points_to_the_true_mobility() {
+    let (code, out, err) = mbsa(&["mobility", "@four-bar-3d-driven"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("by the count the inputs over-determine the mechanism"),
+        "{out}"
+    );
+    assert!(
+        out.contains("note: the count ignores the joint geometry"),
+        "{out}"
+    );
+    let (_, rigid, _) = mbsa(&["rigid", "@four-bar-3d-driven"]);
+    assert!(rigid.contains("true mobility 1"), "{rigid}");
+    // Without geometry the count is all there is: no note.
+    let (code, out, err) = mbsa(&["mobility", "@four-bar"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("note:"), "{out}");
+}

@@ -371,7 +371,9 @@ fn run(cli: Cli) -> Result<(), Failure> {
             let m = load_with_inputs(&file, inputs.as_deref())?;
             let r = mbsa::mobility::mobility(&m);
             let out = emit(&match format {
-                OutputFormat::Table => mbsa::report::mobility::table(&r),
+                OutputFormat::Table => {
+                    mbsa::report::mobility::table(&r, mbsa::motion::has_geometry(&m))
+                }
                 OutputFormat::Json => mbsa::report::json(&r),
             });
             keep_until_exit((m, r));

@@ -3,8 +3,10 @@
 use crate::mobility::{MobilityReport, Verdict};
 use std::fmt::Write;
 
-/// Render the mobility report.
-pub fn table(r: &MobilityReport) -> String {
+/// Render the mobility report. `file_geometry` says the file gives every joint its geometry:
+/// the count then may not be the mechanism's mobility, and the verdict points to the commands
+/// that decide it at the file's configuration.
+pub fn table(r: &MobilityReport, file_geometry: bool) -> String {
     let mut t = super::new_table();
     t.set_header(vec!["quantity", "value", "meaning"]);
     let rows: Vec<[String; 3]> = vec![
@@ -65,11 +67,22 @@ pub fn table(r: &MobilityReport) -> String {
             r.mobility.count - r.mobility.inputs as i64
         ),
         Verdict::More => format!(
-            "more inputs ({}) than the count ({}): the inputs over-determine the mechanism",
+            "more inputs ({}) than the count ({}): by the count the inputs over-determine the mechanism",
             r.mobility.inputs, r.mobility.count
         ),
     };
     let _ = writeln!(out, "verdict: {verdict}");
+    // The count ignores geometry; with the file's geometry at hand, say where the true
+    // mobility comes from rather than let the count's verdict stand for the mechanism.
+    if file_geometry {
+        let _ = writeln!(
+            out,
+            "note: the count ignores the joint geometry written in the file; special geometry \
+             (parallel or concurrent axes, a planar or spherical loop written in space) can make \
+             the true mobility larger: `mbsa rigid` gives it at the file's configuration and \
+             `mbsa analyze` checks the inputs there"
+        );
+    }
     if !r.disconnected.is_empty() {
         let _ = writeln!(
             out,
