@@ -713,6 +713,14 @@ fn place(
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
                 batch_size = (batch_size * 2).min(max_batch);
+                // Only with more placements to analyse: a rejected single one (each
+                // expansion of a shared joint) pays nothing.
+                if late.is_none()
+                    && r.excluded > excluded_before
+                    && matches!(p.oracle, Oracle::Later { .. })
+                {
+                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+                }
                 if let Err(b) = flush(
                     e,
                     &cache,
@@ -726,12 +734,7 @@ fn place(
                     err = Some(b);
                     return false;
                 }
-                if late.is_none()
-                    && r.excluded > excluded_before
-                    && matches!(p.oracle, Oracle::Later { .. })
-                {
-                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
-                }
+
                 if stopped {
                     return false;
                 }
@@ -742,6 +745,13 @@ fn place(
             return Err(b.into());
         }
         // The rest of the batch belongs to this expansion: analysed before the next is built.
+        if late.is_none()
+            && !batch.is_empty()
+            && r.excluded > excluded_before
+            && matches!(p.oracle, Oracle::Later { .. })
+        {
+            late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+        }
         flush(
             e,
             &cache,
