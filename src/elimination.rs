@@ -233,6 +233,65 @@ impl Elimination {
             .sum()
     }
 
+    /// The largest front's number of columns (its group's and its neighbours').
+    pub(crate) fn max_front(&self) -> usize {
+        self.records.iter().map(|r| r.r.ncols()).max().unwrap_or(0)
+    }
+
+    /// Entries of the fronts' triangular factors (the cost of one back substitution).
+    pub(crate) fn factor_entries(&self) -> u64 {
+        self.records.iter().map(|r| r.r.len() as u64).sum()
+    }
+
+    /// `k` random vectors of the null space (columns of a `total × k` matrix), in one back
+    /// substitution: every free column gets a random value in [−1, 1] (seeded), the pivots
+    /// follow. Each is a random combination of the [`Elimination::null_space`] basis, so `k`
+    /// of them span the image of any linear map of rank ≤ `k` on the null space (almost
+    /// surely). Cost: `k` times the factor's entries.
+    pub(crate) fn random_null_vectors(&self, k: usize, seed: u64) -> DMatrix<f64> {
+        let total: usize = self.sizes.iter().sum();
+        let mut x = DMatrix::zeros(total, k);
+        let mut rng = SplitMix64::new(seed);
+        for rec in &self.records {
+            let o = self.offsets[rec.group];
+            for &c in &rec.perm[rec.rank..] {
+                for j in 0..k {
+                    x[(o + c, j)] = rng.next_signed();
+                }
+            }
+        }
+        for h in self.records.iter().rev() {
+            if h.rank == 0 {
+                continue;
+            }
+            let sg = self.sizes[h.group];
+            let o = self.offsets[h.group];
+            // rhs = −R_free · x_free − R_others · x_others
+            let mut rhs = DMatrix::zeros(h.rank, k);
+            for q in h.rank..sg {
+                let row = x.row(o + h.perm[q]).into_owned();
+                rhs.ger(-1.0, &h.r.column(q), &row.transpose(), 1.0);
+            }
+            let mut c = sg;
+            for &g in &h.others {
+                let s = self.sizes[g];
+                let xo = x.rows(self.offsets[g], s);
+                rhs.gemm(-1.0, &h.r.view((0, c), (h.rank, s)), &xo, 1.0);
+                c += s;
+            }
+            for i in (0..h.rank).rev() {
+                for j in 0..k {
+                    let mut s = rhs[(i, j)];
+                    for l in i + 1..h.rank {
+                        s -= h.r[(i, l)] * x[(o + h.perm[l], j)];
+                    }
+                    x[(o + h.perm[i], j)] = s / h.r[(i, i)];
+                }
+            }
+        }
+        x
+    }
+
     /// A basis of the null space (dense vectors over all unknowns), one per free column.
     pub(crate) fn null_space(&self) -> Vec<DVector<f64>> {
         let total: usize = self.sizes.iter().sum();

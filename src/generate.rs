@@ -601,7 +601,7 @@ pub fn to_toml(m: &Mechanism) -> String {
             normal,
             pitch,
             second,
-        } = &j.geometry;
+        } = &*j.geometry;
         for (key, v) in [("origin", origin), ("origin2", origin2)] {
             if let Some(v) = v {
                 let _ = writeln!(out, "{key} = {}", toml_vec(v, planar));

@@ -1038,7 +1038,7 @@ pub(crate) fn file_geometries(m: &Mechanism) -> Vec<Geometry> {
             if !modelled(j.kind, m.space) && j.geometry.is_empty() {
                 random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
             } else {
-                j.geometry.clone()
+                j.geometry.to_geometry()
             }
         })
         .collect()
@@ -1073,7 +1073,7 @@ pub fn configure(m: &Mechanism) -> Result<Vec<JointModel>, MotionError> {
             let g = if !modelled(j.kind, m.space) && j.geometry.is_empty() {
                 random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
             } else {
-                j.geometry.clone()
+                j.geometry.to_geometry()
             };
             joint_model(j.kind, &g, m.space, j.driven).map_err(|e| MotionError::InJoint {
                 joint: j.id.clone(),

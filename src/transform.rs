@@ -1523,7 +1523,7 @@ impl<'a> Expansions<'a> {
                 let pj = Joint {
                     id: format!("{}[{label}]", joint.id),
                     kind: joint.kind,
-                    bodies: vec![ba, bb],
+                    bodies: [ba, bb].into(),
                     driven: 0,
                     geometry: joint.geometry.clone(),
                 };

@@ -492,7 +492,8 @@ fn a_point_gap_is_the_distance_of_the_points() {
     far.geometry = Geometry {
         origin: Some([1.0, 2.0, 13.0]),
         ..Geometry::default()
-    };
+    }
+    .into();
     m.joints.push(far);
     let c = file_closure(&m, None).unwrap();
     assert_eq!(c.status, ClosureStatus::Open);

@@ -12,6 +12,10 @@
 //! with `--max-work` on the release CLI: the new game fits 4·10^7 units, the session-5 game
 //! needs more than 1.6·10^8 (each bar fetched its B + 1 pebbles from wherever the few free ones
 //! had wandered).
+//!
+//! Session 7: a searched bar gathers B + 2 pebbles once (independent, and not tight after it)
+//! instead of B + 1 before the bar and B + 1 again after it. The same planar Assur linkage:
+//! 2.01·10^7 units (session 6's game: 3.12·10^7), so a budget of 2.5·10^7 fails the old game.
 
 use mbsa::budget::Budget;
 use mbsa::generate::{self, Variant};
@@ -60,6 +64,16 @@ fn planar_assur_of_100000_bodies_fits_sixty_million_units() {
         .expect("the near-linear game fits the budget");
     assert_eq!((r.dof, r.redundant), (1, 0), "one crank, no redundancy");
     assert_eq!(r.rigid, [["1"]], "no rigid component but the frame");
+    assert!(!r.degenerate);
+}
+
+#[test]
+fn planar_assur_of_100000_bodies_fits_twenty_five_million_units() {
+    let m = generate::assur(2, 24_999, 364, Variant::A).expect("valid");
+    let r = analyze_within(&m, &PebbleOptions::default(), &budget(25_000_000))
+        .expect("one gather per searched bar fits the budget");
+    assert_eq!((r.dof, r.redundant), (1, 0));
+    assert_eq!(r.rigid, [["1"]]);
     assert!(!r.degenerate);
 }
 

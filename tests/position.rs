@@ -1402,3 +1402,112 @@ fn n_four_bar_40_seed_survey() {
         }
     }
 }
+
+/// An open planar chain of `n` R joints with its last joint written twice (two coincident
+/// pins between the same bodies: 2 dependent rows, so no full row rank): the curve test runs
+/// one slicing level per freedom.
+fn doubled_chain(n: i64) -> Mechanism {
+    let mut joints: Vec<JointSpec> = (1..=n)
+        .map(|k| {
+            j(
+                &format!("R{k}"),
+                JointType::R,
+                k,
+                k + 1,
+                [k as f64 - 1.0, 0.1 * (k % 7) as f64, 0.0],
+                None,
+            )
+        })
+        .collect();
+    let mut twin = joints[n as usize - 1].clone();
+    twin.id = Some("R-twin".into());
+    joints.push(twin);
+    Mechanism::from_parts(
+        "doubled chain",
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        joints,
+    )
+}
+
+/// Issue 16 item 1: the finite-mobility test charges its solves to the work budget
+/// (deterministic units): a row-deficient chain with many freedoms stops with the budget
+/// error under a small cap, and the same chain gives the same answer unbudgeted.
+#[test]
+fn finite_mobility_charges_its_work_to_the_budget() {
+    let m = doubled_chain(12);
+    let config = Configuration::reference(m.bodies.len());
+    let f = finite_mobility(
+        &m,
+        &config,
+        &FiniteOptions {
+            budget: mbsa::budget::Budget::UNLIMITED,
+            ..FiniteOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!((f.first_order, f.finite), (12, 12), "{f:?}");
+    let small = FiniteOptions {
+        budget: mbsa::budget::Budget {
+            max_work: 1_000_000,
+            ..mbsa::budget::Budget::DEFAULT
+        },
+        ..FiniteOptions::default()
+    };
+    let e = finite_mobility(&m, &config, &small).unwrap_err();
+    assert!(matches!(e, SolveError::Budget(_)), "{e}");
+    assert!(
+        e.to_string().contains("finite-mobility test") && e.to_string().contains("work limit"),
+        "{e}"
+    );
+}
+
+#[test]
+fn cli_rigid_finite_over_budget_exits_2_naming_the_limit() {
+    let dir = std::env::temp_dir().join(format!("mbsa-finite-budget-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("doubled-chain.toml");
+    let m = doubled_chain(12);
+    let mut text = String::from("name = \"doubled chain\"\nspace = \"planar\"\nframe = 1\n");
+    for jt in &m.joints {
+        let o = jt.geometry.origin.unwrap();
+        text += &format!(
+            "\n[[joint]]\nid = \"{}\"\ntype = \"R\"\nbodies = [{}, {}]\norigin = [{}, {}]\n",
+            jt.id,
+            m.body_id(jt.bodies[0]),
+            m.body_id(jt.bodies[1]),
+            o[0],
+            o[1]
+        );
+    }
+    std::fs::write(&path, text).unwrap();
+    let run = |work: &str| {
+        assert_cmd::Command::cargo_bin("mbsa")
+            .unwrap()
+            .args([
+                "rigid",
+                path.to_str().unwrap(),
+                "--finite",
+                "--max-work",
+                work,
+            ])
+            .output()
+            .unwrap()
+    };
+    let out = run("1000000");
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("finite-mobility test") && err.contains("--max-work"),
+        "{err}"
+    );
+    let out = run("100000000000");
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

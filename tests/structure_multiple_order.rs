@@ -193,7 +193,7 @@ fn joints_of(m: &Mechanism) -> Vec<JointSpec> {
             kind: j.kind,
             bodies: j.bodies.iter().map(|&b| m.bodies[b].id.clone()).collect(),
             driven: j.driven,
-            geometry: j.geometry.clone(),
+            geometry: j.geometry.to_geometry(),
         })
         .collect()
 }

@@ -317,8 +317,18 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
             .precision()?
             .map(|p| mbsa::position::tolerance_for(scale, p));
         Some(
-            mbsa::position::finite_mobility_of_file(&m, tolerance, &Default::default())
-                .map_err(|e| Failure::Input(format!("error: {}: {e}", file.file)))?,
+            mbsa::position::finite_mobility_of_file(
+                &m,
+                tolerance,
+                &mbsa::position::FiniteOptions {
+                    budget: super::budget(),
+                    ..Default::default()
+                },
+            )
+            .map_err(|e| match e {
+                mbsa::position::SolveError::Budget(b) => super::budget_failure(&b),
+                e => Failure::Input(format!("error: {}: {e}", file.file)),
+            })?,
         )
     } else {
         None

@@ -262,9 +262,15 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
                 mbsa::position::finite_mobility(
                     &m,
                     &sol.config,
-                    &mbsa::position::FiniteOptions::default(),
+                    &mbsa::position::FiniteOptions {
+                        budget: super::budget(),
+                        ..Default::default()
+                    },
                 )
-                .map_err(|e| input_err(name, &e))?,
+                .map_err(|e| match e {
+                    SolveError::Budget(b) => super::budget_failure(&b),
+                    e => input_err(name, &e),
+                })?,
             );
         }
         return emit(&match args.format {

@@ -6,6 +6,7 @@
 
 mod error;
 mod fast_toml;
+mod fast_yaml;
 mod model;
 mod schema;
 mod tree;
@@ -198,6 +199,13 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             model::build(tree::parse_toml(text)?, &name, tree::Lazy::None)
         }
         Format::Yaml => {
+            // The joint list last, its items in the common shapes (`fast_yaml`): the head read
+            // by saphyr, the items by hand. Anything else, and any error, read again below.
+            if let Some((root, lazy)) = tree::parse_yaml_fast(text)
+                && let Ok(m) = model::build(root, &name, lazy)
+            {
+                return Ok(m);
+            }
             // The joint list last (the common case): one read, the joints one at a time.
             if let Some((root, lazy)) = tree::parse_yaml_resume(text)
                 && let Ok(m) = model::build(root, &name, lazy)
@@ -220,6 +228,13 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             }
         }
         Format::Json => {
+            // The joint list last (the common case): one pass, the joints one at a time.
+            // Anything else, and any error, read again below (errors found and located there).
+            if let Some((root, lazy)) = tree::parse_json_resume(text)
+                && let Ok(m) = model::build(root, &name, lazy)
+            {
+                return Ok(m);
+            }
             // One pass: the tree parser refuses whatever serde_json refuses; after an error,
             // serde_json's check reports its own first (as when it ran before the tree).
             tree::parse_json_tree(text)

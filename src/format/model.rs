@@ -5,7 +5,7 @@ use super::error::{ErrorKind, Label, LoadError};
 use super::tree::{Entry, Lazy, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
 use crate::mechanism::{
-    Body, BodyId, Expect, Geometry, Joint, JointSpec, Mechanism, Second, Space,
+    Body, BodyId, Expect, Geometry, Joint, JointBodies, JointSpec, Mechanism, Second, Space,
 };
 use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::fmt::Write as _;
@@ -688,6 +688,7 @@ fn build_joints<'a>(
     let mut seen: Vec<(u32, u32)> = Vec::new();
     // Per joint: whether its id is the default `a-b` (suffixed below).
     let mut defaulted: Vec<bool> = Vec::with_capacity(read.capacity());
+    let mut ids_buf: Vec<usize> = Vec::new();
     lazy.for_each(list, &mut |j: Node<'a>| {
         let es = as_map(&j, "a joint")?;
         // One pass over the keys: the entries looked up below, and whether any is unknown
@@ -763,7 +764,9 @@ fn build_joints<'a>(
                 Some("write both bodies, e.g. bodies = [1, 2]".into()),
             ));
         }
-        let mut ids: Vec<usize> = Vec::with_capacity(items.len());
+        // One buffer for every joint: a binary joint keeps its two bodies inline.
+        let ids = &mut ids_buf;
+        ids.clear();
         // A body named twice in one joint: a scan for short lists, else a mark per body (the
         // joint's number and the item's position), so that one joint of n bodies is linear.
         let stamp = read.len() as u32;
@@ -910,9 +913,9 @@ fn build_joints<'a>(
         read.push(Joint {
             id,
             kind,
-            bodies: ids,
+            bodies: JointBodies::from(&ids[..]),
             driven,
-            geometry,
+            geometry: geometry.into(),
         });
         Ok(())
     })?;

@@ -102,6 +102,14 @@ pub(crate) enum Lazy<'a> {
         /// The objects directly in the list, counted while it was skipped.
         items: usize,
     },
+    /// JSON whose joint list is the last top-level key ([`parse_json_resume`]): the items
+    /// read from `pos` (just past the list's `[`), then the end of the text checked.
+    JsonResume {
+        text: &'a str,
+        pos: usize,
+        /// At least the objects in the list (every `{` from it on).
+        items: usize,
+    },
     /// TOML: the joints of the first piece, then later pieces of the text (each starts with a
     /// `[[joint]]` header and holds only joints), parsed in parallel a few at a time. A piece
     /// that holds anything else, or fails to parse, sets `fallback`: the caller then reads the
@@ -119,6 +127,13 @@ pub(crate) enum Lazy<'a> {
     /// reads on, item by item ([`parse_yaml_resume`]); anything after the list is an error
     /// (the caller then reads the text again).
     YamlResume(Box<YamlReader<'a>>),
+    /// YAML whose joint list is the last top-level key, its items read by
+    /// [`super::fast_yaml`] (a shape it does not read is an error: the caller then reads the
+    /// text with saphyr).
+    YamlLines {
+        text: &'a str,
+        items: super::fast_yaml::Items<'a>,
+    },
     /// TOML read by [`super::fast_toml`]: the byte range of each `[[joint]]` table, read one
     /// at a time. A table it does not read is an error (the caller then reads the text with
     /// the toml crate).
@@ -136,10 +151,11 @@ impl<'a> Lazy<'a> {
     pub(crate) fn len_hint(&self, list: &Value<'a>) -> usize {
         match (list, self) {
             (Value::Seq(items), _) => items.len(),
-            (Value::Deferred, Lazy::Json { items, .. }) => *items,
+            (Value::Deferred, Lazy::Json { items, .. } | Lazy::JsonResume { items, .. }) => *items,
             (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
             (Value::Deferred, Lazy::Yaml { text }) => text.matches("bodies").count(),
             (Value::Deferred, Lazy::YamlResume(r)) => r.index.text.matches("bodies").count(),
+            (Value::Deferred, Lazy::YamlLines { text, .. }) => text.matches("bodies").count(),
             // Every header but one at the very start follows a line break.
             (Value::Deferred, Lazy::Toml { text, .. }) => text.matches(JOINT_HEADER).count() + 1,
             _ => 0,
@@ -161,6 +177,8 @@ impl<'a> Lazy<'a> {
                     bytes: text.as_bytes(),
                     pos: span.start + 1,
                     deferred: None,
+                    resume: false,
+                    stopped: false,
                 };
                 let mut failed = None;
                 loop {
@@ -178,6 +196,31 @@ impl<'a> Lazy<'a> {
                         return failed.map_or(Ok(()), Err);
                     }
                 }
+            }
+            (Value::Deferred, Lazy::JsonResume { text, pos, .. }) => {
+                let mut p = JsonParser {
+                    text,
+                    bytes: text.as_bytes(),
+                    pos,
+                    deferred: None,
+                    resume: false,
+                    stopped: false,
+                };
+                loop {
+                    p.ws();
+                    f(p.value(3)?)?;
+                    if p.list_end(b']')? {
+                        break;
+                    }
+                }
+                // The list was the last key: the object and the text end here.
+                p.ws();
+                p.eat(b'}')?;
+                p.ws();
+                if p.pos != p.bytes.len() {
+                    return Err(p.error("read again"));
+                }
+                Ok(())
             }
             (
                 Value::Deferred,
@@ -223,6 +266,13 @@ impl<'a> Lazy<'a> {
                 Ok(())
             }
             (Value::Deferred, Lazy::Yaml { text }) => yaml_joint_items(text, f),
+            (Value::Deferred, Lazy::YamlLines { mut items, .. }) => loop {
+                match items.next_item() {
+                    Some(Some(item)) => f(item)?,
+                    Some(None) => return Ok(()),
+                    None => return Err(syntax("YAML", "read again", 0..0, "here")),
+                }
+            },
             (Value::Deferred, Lazy::YamlResume(mut r)) => {
                 use saphyr_parser::Event;
                 loop {
@@ -847,7 +897,7 @@ fn resolve_plain(text: Cow<'_, str>) -> Value<'_> {
 }
 
 /// [`resolve_plain`] for the non-string values (`None`: a string).
-fn resolve_plain_str(s: &str) -> Option<Value<'static>> {
+pub(crate) fn resolve_plain_str(s: &str) -> Option<Value<'static>> {
     match s {
         "" | "~" | "null" | "Null" | "NULL" => return Some(Value::Null),
         "true" | "True" | "TRUE" => return Some(Value::Bool(true)),
@@ -983,6 +1033,21 @@ pub(crate) fn parse_yaml_resume(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
     }
 }
 
+/// [`parse_yaml_resume`] with the joint list's items read by [`super::fast_yaml`]
+/// ([`Lazy::YamlLines`]); `None` where that one gives `None` or the list is not a block
+/// sequence starting on a line of its own.
+pub(crate) fn parse_yaml_fast(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
+    let (root, _) = parse_yaml_resume(text)?;
+    let Value::Map(es) = &root.value else {
+        return None;
+    };
+    let list = es
+        .iter()
+        .find(|e| matches!(e.value.value, Value::Deferred))?;
+    let items = super::fast_yaml::Items::new(text, list.value.span.start)?;
+    Some((root, Lazy::YamlLines { text, items }))
+}
+
 /// The second read of [`Lazy::Yaml`]: `f` on each item of the top-level joint list.
 fn yaml_joint_items<'a>(
     text: &'a str,
@@ -1090,6 +1155,8 @@ pub(crate) fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadEr
         bytes: text.as_bytes(),
         pos: 0,
         deferred: None,
+        resume: false,
+        stopped: false,
     };
     p.ws();
     let node = p.value(1)?;
@@ -1104,12 +1171,48 @@ pub(crate) fn parse_json_tree(text: &str) -> Result<(Node<'_>, Lazy<'_>), LoadEr
     Ok((node, lazy))
 }
 
+/// JSON whose joint list is the last top-level key (the common case): the text before the
+/// list as a tree, and the list's items read one at a time after it ([`Lazy::JsonResume`]), in
+/// one pass (no skip over the list first). `None` when there is no non-empty joint list at
+/// the top level; anything after the list, or any error, is an error of the items' read (the
+/// caller then reads the text again with [`parse_json_tree`], which finds and locates it).
+pub(crate) fn parse_json_resume(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
+    let mut p = JsonParser {
+        text,
+        bytes: text.as_bytes(),
+        pos: 0,
+        deferred: None,
+        resume: true,
+        stopped: false,
+    };
+    p.ws();
+    let node = p.value(1).ok()?;
+    if !p.stopped {
+        return None;
+    }
+    // Objects from the list on: the joint vector's size (nested objects only add to it).
+    let rest = &p.bytes[p.pos..];
+    let items = rest.iter().filter(|&&b| b == b'{').count();
+    Some((
+        node,
+        Lazy::JsonResume {
+            text,
+            pos: p.pos,
+            items,
+        },
+    ))
+}
+
 struct JsonParser<'a> {
     text: &'a str,
     bytes: &'a [u8],
     pos: usize,
     /// The top-level joint list, skipped (see [`Lazy::Json`]), and its objects.
     deferred: Option<(Range<usize>, usize)>,
+    /// Stop at the top-level joint list instead of skipping it ([`parse_json_resume`]);
+    /// `stopped` once it did.
+    resume: bool,
+    stopped: bool,
 }
 
 impl<'a> JsonParser<'a> {
@@ -1139,14 +1242,41 @@ impl<'a> JsonParser<'a> {
         syntax("JSON", msg, at..at, "here")
     }
 
+    /// Whitespace; runs of spaces (indentation) eight bytes at a time.
     fn ws(&mut self) {
+        loop {
+            match self.bytes.get(self.pos) {
+                Some(b' ') => match word(self.bytes, self.pos) {
+                    Some(w) => {
+                        let other = nonzero_bytes(w ^ splat(b' '));
+                        if other == 0 {
+                            self.pos += 8;
+                        } else {
+                            self.pos += (other.trailing_zeros() / 8) as usize;
+                        }
+                    }
+                    None => self.pos += 1,
+                },
+                Some(b'\t' | b'\n' | b'\r') => self.pos += 1,
+                _ => return,
+            }
+        }
+    }
+
+    /// At a non-empty array (`[` and, past whitespace, anything but `]`)?
+    fn list_ahead(&self) -> bool {
+        if self.bytes.get(self.pos) != Some(&b'[') {
+            return false;
+        }
+        let mut i = self.pos + 1;
         while self
             .bytes
-            .get(self.pos)
+            .get(i)
             .is_some_and(|b| matches!(b, b' ' | b'\t' | b'\n' | b'\r'))
         {
-            self.pos += 1;
+            i += 1;
         }
+        !matches!(self.bytes.get(i), None | Some(b']'))
     }
 
     fn eat(&mut self, b: u8) -> Result<(), LoadError> {
@@ -1180,6 +1310,28 @@ impl<'a> JsonParser<'a> {
                         self.ws();
                         self.eat(b':')?;
                         self.ws();
+                        if self.resume && depth == 1 && is_joint_list(&key) && self.list_ahead() {
+                            // The items are read by `Lazy::JsonResume`, from after the `[`.
+                            let at = self.pos;
+                            self.pos += 1;
+                            self.stopped = true;
+                            push_entry(
+                                &mut entries,
+                                &mut index,
+                                Entry {
+                                    key,
+                                    key_span,
+                                    value: Node {
+                                        span: at..self.bytes.len(),
+                                        value: Value::Deferred,
+                                    },
+                                },
+                            )?;
+                            return Ok(Node {
+                                span: start..self.bytes.len(),
+                                value: Value::Map(entries),
+                            });
+                        }
                         let value = if depth == 1
                             && self.deferred.is_none()
                             && is_joint_list(&key)
@@ -1277,6 +1429,16 @@ impl<'a> JsonParser<'a> {
                         Ok(f) => Value::Float(f),
                         Err(_) => return Err(self.error("invalid number")),
                     }
+                } else if s.len() <= 18 {
+                    // At most 18 characters (sign and digits, checked above): fits in an i64.
+                    let (neg, digits) = match s.strip_prefix('-') {
+                        Some(d) => (true, d),
+                        None => (false, s),
+                    };
+                    let n = digits
+                        .bytes()
+                        .fold(0i64, |n, d| n * 10 + i64::from(d - b'0'));
+                    Value::Int(if neg { -n } else { n })
                 } else {
                     int_or_big(s.parse::<i64>().ok(), s)
                 }
@@ -1449,6 +1611,12 @@ fn word(bytes: &[u8], i: usize) -> Option<u64> {
 /// the callers use).
 fn zero_bytes(x: u64) -> u64 {
     x.wrapping_sub(0x0101_0101_0101_0101) & !x & 0x8080_8080_8080_8080
+}
+
+/// The high bit of each byte of `x` that is not zero (exact in every byte).
+fn nonzero_bytes(x: u64) -> u64 {
+    const LOW7: u64 = 0x7F7F_7F7F_7F7F_7F7F;
+    (((x & LOW7).wrapping_add(LOW7)) | x) & !LOW7
 }
 
 /// Each byte of a word equal to `b`.
@@ -1644,6 +1812,51 @@ mod tests {
             assert!(ours.is_err(), "accepted what serde_json refuses: {text:?}");
         }
         assert!(refused > 1000, "{refused}");
+    }
+
+    /// The tree with its deferred joint list read in (as `strip` shows it), by `parse`.
+    fn with_items<'a>(parsed: Option<(Node<'a>, Lazy<'a>)>) -> Option<String> {
+        let (root, lazy) = parsed?;
+        let Value::Map(mut es) = root.value else {
+            return Some(strip(&root));
+        };
+        let mut items = Vec::new();
+        if let Some(e) = es
+            .iter_mut()
+            .find(|e| matches!(e.value.value, Value::Deferred))
+        {
+            let list = std::mem::replace(&mut e.value.value, Value::Null);
+            lazy.for_each(list, &mut |n| {
+                items.push(n);
+                Ok(())
+            })
+            .ok()?;
+            e.value.value = Value::Seq(items);
+        }
+        Some(strip(&Node {
+            span: root.span,
+            value: Value::Map(es),
+        }))
+    }
+
+    #[test]
+    fn json_resumed_read_equals_the_whole_read() {
+        let base = r#"{"name": "a\u00e9", "frame": 1, "expect": {"mobility": 0, "x": null}, "joints": [{"type": "R", "bodies": [1, 2], "axis": [0.5, -1e3, 2E+2]}, {"type": "P", "bodies": [2, 3], "driven": -12345678901234567}, {"id": 123456789012345678901, "bodies": [-0, 7]}]}"#;
+        let alphabet = b" \t\n{}[]:,.\"\\-+0123456789eEtrufalsn\x01";
+        let mut resumed = 0;
+        let texts = crate::format::mutated_texts(base, alphabet, 0x9E37_79B9_7F4A_7C15, 6000, 2);
+        for text in std::iter::once(base.to_string()).chain(texts) {
+            let Some(r) = with_items(parse_json_resume(&text)) else {
+                continue;
+            };
+            resumed += 1;
+            assert!(
+                json_check(&text).is_ok(),
+                "accepted what serde_json refuses: {text:?}"
+            );
+            assert_eq!(Some(r), with_items(parse_json_tree(&text).ok()), "{text:?}");
+        }
+        assert!(resumed > 1000, "{resumed}");
     }
 
     #[test]

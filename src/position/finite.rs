@@ -17,6 +17,7 @@ use super::newton::{NewtonOptions, System, Targets};
 use super::pose::Configuration;
 use super::residual::{ModelError, PositionModel};
 use super::solve::SolveError;
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use crate::rng::SplitMix64;
 use nalgebra::{DMatrix, DVector};
@@ -33,6 +34,9 @@ pub struct FiniteOptions {
     pub seed: u64,
     /// Relative singular-value threshold of the rank decisions.
     pub rank_tolerance: f64,
+    /// Work cap: every Gauss–Newton step, evaluation and SVD is charged to a meter of
+    /// [`Budget::max_work`] (deterministic units, about the dense flops).
+    pub budget: Budget,
 }
 
 impl Default for FiniteOptions {
@@ -42,6 +46,7 @@ impl Default for FiniteOptions {
             step: 1e-3,
             seed: 0,
             rank_tolerance: 1e-8,
+            budget: Budget::DEFAULT,
         }
     }
 }
@@ -106,7 +111,7 @@ pub fn finite_mobility_of_file(
     let reference = Configuration::reference(m.bodies.len());
     let closure = check_closure(m, &reference, tolerance)?;
     if closure.status == ClosureStatus::Closed {
-        return Ok(finite_mobility(m, &reference, opts)?);
+        return finite_mobility(m, &reference, opts);
     }
     let (config, _) = assemble(m, &reference, &NewtonOptions::default())?;
     let scale = super::residual::model_size(m);
@@ -139,6 +144,22 @@ pub fn finite_mobility_of_file(
 
 /// Largest mechanism (bodies) the dense test handles.
 pub const MAX_BODIES: usize = 400;
+
+/// [`null_basis`] charged to `meter` (an SVD: about `max(rows, n) · n²` units).
+fn null_basis_within(
+    j: &DMatrix<f64>,
+    rel: f64,
+    meter: &mut Meter,
+) -> Result<DMatrix<f64>, BudgetExceeded> {
+    let n = j.ncols() as u64;
+    meter.charge(
+        (j.nrows() as u64)
+            .max(n)
+            .saturating_mul(n)
+            .saturating_mul(n),
+    )?;
+    Ok(null_basis(j, rel))
+}
 
 /// Null-space basis (columns) of `j` and its rank threshold decisions.
 fn null_basis(j: &DMatrix<f64>, rel: f64) -> DMatrix<f64> {
@@ -316,7 +337,9 @@ const POLISH_STEPS: usize = 4;
 /// translation change from `config` (planar: its `B` embedded components). Dense Gauss–Newton
 /// from `from`: damped normal-equation steps while the residual is above [`POLISH`], then
 /// regularized QR steps ([`regularized_step`]); the solution, or `None` when the residual
-/// stays above `tol`.
+/// stays above `tol`. Every evaluation (`rows · n` units) and step (`rows · n² + n³`) is
+/// charged to `meter`.
+#[allow(clippy::too_many_arguments)]
 fn solve_sliced(
     sys: &System,
     model: &PositionModel,
@@ -325,7 +348,8 @@ fn solve_sliced(
     from: &Configuration,
     slices: &[(DVector<f64>, f64)],
     tol: f64,
-) -> Option<Configuration> {
+    meter: &mut Meter,
+) -> Result<Option<Configuration>, BudgetExceeded> {
     let b = model.b();
     let n = sys.bodies.len() * b;
     let mut x = from.clone();
@@ -347,12 +371,20 @@ fn solve_sliced(
     };
     let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let (mut r, mut j) = eval(&x);
+    let (rows, cols) = (j.nrows() as u64, n as u64);
+    let eval_units = rows.saturating_mul(cols).max(1);
+    let step_units = rows
+        .saturating_mul(cols)
+        .saturating_mul(cols)
+        .saturating_add(cols.saturating_mul(cols).saturating_mul(cols));
+    meter.charge(eval_units)?;
     let mut slow = 0;
     let mut polish_steps = 0;
     for _ in 0..40 {
         if !r.iter().chain(j.iter()).all(|v| v.is_finite()) {
-            return None;
+            return Ok(None);
         }
+        meter.charge(step_units)?;
         if inf(&r) <= tol {
             break;
         }
@@ -368,7 +400,10 @@ fn solve_sliced(
                     break;
                 }
                 polish_steps += 1;
-                regularized_step(&j, &r)?
+                match regularized_step(&j, &r) {
+                    Some(s) => s,
+                    None => return Ok(None),
+                }
             }
         };
         let norm0 = r.norm();
@@ -380,6 +415,7 @@ fn solve_sliced(
                 let tw: Vec<f64> = (0..b).map(|k| t * step[i * b + k]).collect();
                 y.poses[body] = x.poses[body].moved_by(model.space, &tw);
             }
+            meter.charge(eval_units)?;
             let (r2, j2) = eval(&y);
             if r2.norm() < norm0 {
                 // A set of lower dimension than the slices' count: Newton creeps.
@@ -394,7 +430,7 @@ fn solve_sliced(
             break;
         }
     }
-    (inf(&r) <= tol).then_some(x)
+    Ok((inf(&r) <= tol).then_some(x))
 }
 
 /// Residual a landed point is projected to (model units).
@@ -440,7 +476,12 @@ impl Curves<'_> {
     /// nearly tangent to a branch (at angle θ) keeps near-solutions along it to a distance of
     /// about `sqrt(1e-14)/θ`; there the residual grows as the square of the distance, so the
     /// outward points (to 2·step) miss [`TRACK`] while a real curve is solved to rounding.
-    fn certified(&self, slices: &[(DVector<f64>, f64)], d: &DVector<f64>) -> bool {
+    fn certified(
+        &self,
+        slices: &[(DVector<f64>, f64)],
+        d: &DVector<f64>,
+        meter: &mut Meter,
+    ) -> Result<bool, BudgetExceeded> {
         let rho = d.norm();
         let u = d / rho;
         let mut plan = Vec::new();
@@ -469,19 +510,21 @@ impl Curves<'_> {
                 &from,
                 &with,
                 TRACK,
-            ) else {
-                return false;
+                meter,
+            )?
+            else {
+                return Ok(false);
             };
             let (dz, _) = slice_coords(self.sys, self.model, self.config, &z);
             let cos = dz.dot(&prev) / (dz.norm() * prev.norm()).max(1e-300);
             let in_cone = dz.norm() <= 1.2 * s && cos >= 0.95; // false for NaN too
             if !in_cone {
-                return false;
+                return Ok(false);
             }
             prev = dz;
             prev_s = s;
         }
-        true
+        Ok(true)
     }
 }
 
@@ -495,17 +538,24 @@ impl Curves<'_> {
 /// certified from a landed point (a random first-order motion of length `step` in the
 /// slices, projected back by Gauss–Newton) by [`Curves::certified`]; `k` runs up from 0
 /// and stops at the first level where no start is certified.
+///
+/// The work (every solve, evaluation and SVD) is charged to a meter of `opts.budget`: past
+/// it, [`SolveError::Budget`] (a mechanism with many freedoms and no full row rank runs one
+/// slicing level per freedom).
 pub fn finite_mobility(
     m: &Mechanism,
     config: &Configuration,
     opts: &FiniteOptions,
-) -> Result<FiniteMobility, ModelError> {
+) -> Result<FiniteMobility, SolveError> {
     if m.bodies.len() > MAX_BODIES {
         return Err(ModelError::TooLarge {
             bodies: m.bodies.len(),
             limit: MAX_BODIES,
-        });
+        }
+        .into());
     }
+    let mut meter = opts.budget.meter("the finite-mobility test");
+    let meter = &mut meter;
     let free = undriven(m);
     let model = PositionModel::new(&free)?;
     let b = model.b();
@@ -521,7 +571,7 @@ pub fn finite_mobility(
             .map(|p| (b - m.joints[p.joint].grade().min(b as u32) as usize) as i64)
             .sum::<i64>();
     let (_, j0, _) = sys.evaluate(&model, &targets, config);
-    let n0 = null_basis(&j0, opts.rank_tolerance);
+    let n0 = null_basis_within(&j0, opts.rank_tolerance, meter)?;
     let first_order = n0.ncols();
     let (_, jd0) = slice_coords(&sys, &model, config, config);
     let mut rng = SplitMix64::new(opts.seed ^ 0xF1_u64);
@@ -550,7 +600,7 @@ pub fn finite_mobility(
         let within = if slices.is_empty() {
             DMatrix::identity(first_order, first_order)
         } else {
-            null_basis(&rows, 1e-8)
+            null_basis_within(&rows, 1e-8, meter)?
         };
         let kernel = &n0 * within;
         if kernel.ncols() == 0 {
@@ -566,7 +616,8 @@ pub fn finite_mobility(
             let v = &kernel * DVector::from_fn(kernel.ncols(), |_, _| rng.next_signed());
             let v = &v / v.norm().max(1e-300);
             let start = curves.start(&v);
-            let Some(y) = solve_sliced(&sys, &model, &targets, config, &start, &slices, LAND)
+            let Some(y) =
+                solve_sliced(&sys, &model, &targets, config, &start, &slices, LAND, meter)?
             else {
                 continue;
             };
@@ -574,7 +625,7 @@ pub fn finite_mobility(
                 // A nearby sample: its nullity (at a generic point of a reduced component,
                 // the component's dimension).
                 let (_, j1, _) = sys.evaluate(&model, &targets, &y);
-                let n1 = null_basis(&j1, opts.rank_tolerance);
+                let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
                 samples.push(n1.ncols());
                 if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
                     best = Some((n1.ncols(), n1));
@@ -590,11 +641,11 @@ pub fn finite_mobility(
             if !away {
                 continue;
             }
-            if curves.certified(&slices, &d) {
+            if curves.certified(&slices, &d, meter)? {
                 found = true;
                 if !slices.is_empty() {
                     let (_, j1, _) = sys.evaluate(&model, &targets, &y);
-                    let n1 = null_basis(&j1, opts.rank_tolerance);
+                    let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
                     if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
                         best = Some((n1.ncols(), n1));
                     }

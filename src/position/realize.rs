@@ -11,7 +11,7 @@ pub fn with_random_geometry(m: &Mechanism, seed: u64) -> Mechanism {
     let mut out = m.clone();
     for (i, j) in out.joints.iter_mut().enumerate() {
         let mut rng = SplitMix64::new(joint_seed(seed, i));
-        j.geometry = random_geometry(j.kind, m.space, &mut rng);
+        j.geometry = random_geometry(j.kind, m.space, &mut rng).into();
     }
     out
 }
@@ -110,7 +110,8 @@ pub fn with_random_geometry_away_from_folds(
             let again = seed ^ (attempt as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
             for &ji in &mine {
                 let mut rng = SplitMix64::new(joint_seed(again, ji));
-                out.joints[ji].geometry = random_geometry(out.joints[ji].kind, m.space, &mut rng);
+                out.joints[ji].geometry =
+                    random_geometry(out.joints[ji].kind, m.space, &mut rng).into();
             }
             c = conditioning(&out)?;
             if c > best.0 {

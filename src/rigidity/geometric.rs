@@ -39,6 +39,10 @@ use std::collections::{BTreeMap, BTreeSet};
 
 pub use crate::motion::GeometrySource;
 
+mod sparse_float;
+#[doc(hidden)]
+pub use sparse_float::with_sparse_from;
+
 /// Options of [`analyze`].
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
 pub struct GeometricOptions {
@@ -1156,7 +1160,12 @@ fn analyze_models(
         iso[body] = if rows == 0 {
             DMatrix::identity(b, b)
         } else {
-            small_null(&a, local_rel)
+            sparse_float::isolated(
+                m,
+                &a,
+                local_rel,
+                incident[body].iter().map(|&pi| pairs[pi].joint),
+            )
         };
         comp[body] = complement(&iso[body], b);
     }
@@ -1310,6 +1319,29 @@ fn analyze_models(
                     union_min(&mut uf, part.bodies[l], part.bodies[x]);
                 }
             }
+            continue;
+        }
+        if exact.is_none() && lcols > sparse_float::sparse_from() {
+            // At the file's geometry, a large part: sparse floating-point path.
+            let out = sparse_float::SparsePart {
+                m,
+                part,
+                pairs: &pairs,
+                models,
+                comp: &comp,
+                iso: &iso,
+                b,
+                used: &used,
+                ntol: rows_total.max(b * m.movable()),
+                smax,
+                groups: &lbody,
+                sizes: &lsizes,
+            }
+            .run(budget, meter, &mut w, &mut locked_by_joint, &mut uf)?;
+            rank += out.rank;
+            float_rank += out.rank;
+            kept_min = kept_min.min(out.kept_min);
+            dropped_max = dropped_max.max(out.dropped_max);
             continue;
         }
         budget.check_memory(

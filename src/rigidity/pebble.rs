@@ -878,11 +878,31 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
             // independent (and then the pair not tight), go back where they came from. The
             // kept one is the own pebble of an end, or else the one from the latest vertex in
             // the insertion order (the local slack, not the pebbles of the old, settled part).
+            // One gather answers both questions: B + 2 pebbles on the pair before the bar are
+            // B + 1 after it (every set holding both ends gains exactly this bar), so the bar
+            // is independent and leaves the pair in no tight set; exactly B + 1 means
+            // independent and tight, and the failed search for the last one visited the
+            // minimal tight set, as a failed gather after the insertion would.
             let (ox, oy) = (game.peb[x as usize], game.peb[y as usize]);
+            let wide = game.weight[x as usize] + game.weight[y as usize] > l + 1;
             game.recording = true;
             let ok = game.gather(x, y, l + 1);
+            let loose = ok && wide && game.gather(x, y, l + 2);
             game.recording = false;
-            if ok {
+            if ok && wide && !loose {
+                // Tight once the bar is in: keep the moves (the contraction reads the state),
+                // pay with a pebble of the pair and contract the set the search found.
+                game.keep_moves(0);
+                let (t, h) = if game.peb[x as usize] > 0 {
+                    (x, y)
+                } else {
+                    (y, x)
+                };
+                game.peb[t as usize] -= 1;
+                game.link(t, h);
+                game.contract(x, y);
+                accepted[i] = true;
+            } else if ok {
                 let (t, h) = if ox > 0 {
                     (x, y)
                 } else if oy > 0 {
@@ -919,7 +939,13 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
                     }
                 };
                 game.undo_to(0);
-                game.insert_bar(t, h, x, y);
+                if loose {
+                    // Not tight after the bar (B + 2 pebbles were there): no check.
+                    game.peb[t as usize] -= 1;
+                    game.link(t, h);
+                } else {
+                    game.insert_bar(t, h, x, y);
+                }
                 accepted[i] = true;
             } else {
                 game.undo_to(0);

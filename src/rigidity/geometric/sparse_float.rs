@@ -1,0 +1,595 @@
+//! The sparse floating-point path for large parts at the file's geometry (issue 16, item 4).
+//!
+//! The dense path keeps every motion of a part as a dense orthonormal vector: `d` motions over
+//! `n` unknowns cost `d² · n` to orthonormalize and `d · n` memory, then every two clusters are
+//! compared over all motions. On a part with more than [`SPARSE_COLUMNS`] unknowns this path
+//! instead:
+//! 1. writes each body's twist about its own reference point (the mean of its joints' origins)
+//!    instead of the world origin: `t_O = M(c) · t_c`, an invertible change of coordinates per
+//!    body, so ranks, null spaces and self-stresses are the same, but the Jacobian's
+//!    conditioning no longer grows with the square of the mechanism's size in bar lengths (a
+//!    rotation about a pin 10^3 lengths from the origin is a velocity of 10^3 at the origin);
+//! 2. factors the part's rows by the same block-sparse rank-revealing QR
+//!    ([`Elimination`], greedy minimum-front order, column pivoting within each body) with
+//!    the same threshold rule ([`threshold`]) applied to the re-expressed rows, except that
+//!    the relative threshold's size factor is that of the largest front (at least
+//!    [`SPARSE_COLUMNS`]), not the block's size: the rounding of a front's QR grows with the
+//!    front, and a row of windows has singular values down to about `1/N` (a difference
+//!    operator along the row), which `1e-9 · 6N` would cut at `N ≈ 10^4`;
+//! 3. takes `B + 2` random motions (one back substitution each: every free column random)
+//!    instead of the whole null space, and decides locked DOF and rigid clusters from them:
+//!    each decision is about a linear map from the motions to one body's or one pair's twist,
+//!    of rank at most `B`, which keeps its rank on `B` random vectors of its domain (almost
+//!    surely); equal twists are found by sorting the bodies on a random projection of their
+//!    sampled twists (no comparison of every two clusters);
+//! 4. takes up to 8 random self-stresses (the same elimination on the transpose) for the
+//!    joints' weights: the joints taking part are the same, the weights are estimates.
+//!
+//! Cost: the factorization (linear in the part for chains of windows, bounded by the fill of
+//! the minimum-front order in general) plus `B + 2` back substitutions, then linear in the
+//! part's pairs and bodies (sorting aside).
+
+use super::{
+    Pair, Part, eliminate, find, orthonormalize, pair_block, small_null, small_rank, threshold,
+    union_min,
+};
+use crate::budget::{Budget, BudgetExceeded, Meter};
+use crate::elimination::{Block, sigma_max};
+use crate::mechanism::{Mechanism, Space};
+use crate::motion::{GeometryUsed, JointModel};
+use nalgebra::{DMatrix, DVector};
+use std::cell::Cell;
+use std::collections::BTreeMap;
+
+/// Parts with more unknowns than this are analysed by the sparse path at the file's geometry.
+pub(super) const SPARSE_COLUMNS: usize = 1200;
+
+thread_local! {
+    static SPARSE_FROM: Cell<usize> = const { Cell::new(SPARSE_COLUMNS) };
+}
+
+/// The part size (unknowns) above which the sparse path runs, on this thread.
+pub(super) fn sparse_from() -> usize {
+    SPARSE_FROM.with(|c| c.get())
+}
+
+/// Run `f` with the sparse path taken for parts of more than `columns` unknowns (0: every
+/// part), on this thread; for tests comparing it with the dense path.
+#[doc(hidden)]
+pub fn with_sparse_from<R>(columns: usize, f: impl FnOnce() -> R) -> R {
+    let old = SPARSE_FROM.with(|c| c.replace(columns));
+    let out = f();
+    SPARSE_FROM.with(|c| c.set(old));
+    out
+}
+
+/// How many random motions beyond `B`.
+const EXTRA_SAMPLES: usize = 2;
+/// How many random self-stresses at most.
+const STRESS_SAMPLES: usize = 8;
+
+/// `M(c)`: a twist about point `c` to the same twist about the world origin.
+fn shift(space: Space, c: [f64; 3]) -> Option<DMatrix<f64>> {
+    match space {
+        Space::Spherical => None,
+        Space::Planar => {
+            // v_O = v_c − ω ẑ × c = (v_cx + ω c_y, v_cy − ω c_x).
+            let mut m = DMatrix::identity(3, 3);
+            m[(1, 0)] = c[1];
+            m[(2, 0)] = -c[0];
+            Some(m)
+        }
+        Space::Spatial => {
+            // v_O = v_c + c × ω.
+            let mut m = DMatrix::identity(6, 6);
+            let [x, y, z] = c;
+            m[(3, 1)] = -z;
+            m[(3, 2)] = y;
+            m[(4, 0)] = z;
+            m[(4, 2)] = -x;
+            m[(5, 0)] = -y;
+            m[(5, 1)] = x;
+            Some(m)
+        }
+    }
+}
+
+/// The reference point of a body: the mean of the origins of `joints` (none without one).
+fn reference(m: &Mechanism, joints: impl Iterator<Item = usize>) -> Option<[f64; 3]> {
+    let mut c = [0.0; 3];
+    let mut n = 0.0;
+    for j in joints {
+        if let Some(o) = m.joints[j].geometry.origin {
+            for i in 0..3 {
+                c[i] += o[i];
+            }
+            n += 1.0;
+        }
+    }
+    (n > 0.0).then(|| c.map(|x| x / n))
+}
+
+/// A body's fully isolated motions (orthonormal, world twists) from the stacked rows `a` of
+/// its pairs ([`small_null`] at `rel`), checked about the body's own reference point: far
+/// from the world origin, the rows of two pins of one bar differ by about 1/distance² and
+/// [`small_null`] takes the bar's rotation about both pins for an isolated motion (the
+/// N-four-bar from about 4,000 windows). When the count about the reference point (each
+/// row scaled to unit norm) differs, that one is used, mapped back to world twists; else the
+/// world one (unchanged reports).
+pub(super) fn isolated(
+    m: &Mechanism,
+    a: &DMatrix<f64>,
+    rel: f64,
+    joints: impl Iterator<Item = usize>,
+) -> DMatrix<f64> {
+    let world = small_null(a, rel);
+    let Some(s) = reference(m, joints).and_then(|c| shift(m.space, c)) else {
+        return world;
+    };
+    let mut local = a * &s;
+    for mut row in local.row_iter_mut() {
+        let n = row.norm();
+        if n > 0.0 {
+            row.unscale_mut(n);
+        }
+    }
+    let near = small_null(&local, rel);
+    if near.ncols() == world.ncols() {
+        return world;
+    }
+    let cols = orthonormalize((&s * &near).column_iter().map(|c| c.into_owned()).collect());
+    if cols.is_empty() {
+        DMatrix::zeros(a.ncols(), 0)
+    } else {
+        DMatrix::from_columns(&cols)
+    }
+}
+
+/// One part for the sparse path (the fields mirror the dense path's locals).
+pub(super) struct SparsePart<'a> {
+    pub m: &'a Mechanism,
+    pub part: &'a Part,
+    pub pairs: &'a [Pair],
+    pub models: &'a [JointModel],
+    pub comp: &'a [DMatrix<f64>],
+    pub iso: &'a [DMatrix<f64>],
+    pub b: usize,
+    pub used: &'a GeometryUsed,
+    /// The size entering the relative tolerance (max(rows, unknowns) of the mechanism).
+    pub ntol: usize,
+    /// σ_max of the mechanism in world coordinates (the report's scale).
+    pub smax: f64,
+    /// The part's groups (bodies with unknowns), their sizes and offsets.
+    pub groups: &'a [usize],
+    pub sizes: &'a [usize],
+}
+
+/// What the part adds to the report.
+pub(super) struct SparseOut {
+    pub rank: usize,
+    /// Smallest pivot kept and largest dropped, on the report's scale (× σ_max / σ_max,local).
+    pub kept_min: f64,
+    pub dropped_max: f64,
+}
+
+impl SparsePart<'_> {
+    /// The shift of `body`'s twist when it has every DOF as unknowns (no isolated motion).
+    fn body_shift(&self, body: usize, incident: &[usize]) -> Option<DMatrix<f64>> {
+        if self.iso[body].ncols() > 0 || self.comp[body].ncols() != self.b {
+            return None;
+        }
+        let c = reference(self.m, incident.iter().map(|&pi| self.pairs[pi].joint))?;
+        shift(self.m.space, c)
+    }
+
+    /// The analysis of the part: its rank; locked DOF added to `locked`, self-stress weights
+    /// to `w`, rigid clusters merged into `uf`.
+    pub(super) fn run(
+        &self,
+        budget: &Budget,
+        meter: &mut Meter,
+        w: &mut BTreeMap<usize, f64>,
+        locked: &mut BTreeMap<usize, usize>,
+        uf: &mut [usize],
+    ) -> Result<SparseOut, BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let nl = part.bodies.len();
+        let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
+        let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
+        for (g, &x) in self.groups.iter().enumerate() {
+            lgroup.insert(x, g);
+        }
+        // Pairs of each of the part's bodies, then each group's shift.
+        let mut inc: Vec<Vec<usize>> = vec![Vec::new(); nl];
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            inc[lidx(p.hub)].push(pi);
+            if p.other != p.hub {
+                inc[lidx(p.other)].push(pi);
+            }
+        }
+        let shifts: Vec<Option<DMatrix<f64>>> = self
+            .groups
+            .iter()
+            .map(|&x| self.body_shift(x, &inc[lidx(x)]))
+            .collect();
+        // The block of pair `pi` on `body`, in the body's local coordinates.
+        let local_block = |pi: usize, body: usize| {
+            let blk = pair_block(pairs, self.models, self.comp, pi, body);
+            match lgroup.get(&body).and_then(|&g| shifts[g].as_ref()) {
+                Some(s) => blk * s,
+                None => blk,
+            }
+        };
+        meter.charge((part.pairs.len() * b * b * 8) as u64)?;
+        // Each row scaled to unit norm over the pair's columns (a rotation's rows about a far
+        // pin shrink to about 1/distance once written about a near point): same rank and
+        // null space; a self-stress y of the scaled rows is D·y' of the original ones.
+        let mut rownorm: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+        let mut blocks = Vec::new();
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let mut bodies: Vec<usize> = [p.hub, p.other]
+                .into_iter()
+                .filter(|x| lgroup.contains_key(x))
+                .collect();
+            bodies.sort_by_key(|x| lgroup.get(x).copied());
+            bodies.dedup();
+            let r = self.models[p.joint].rows.nrows();
+            if bodies.is_empty() || r == 0 {
+                continue;
+            }
+            let width: usize = bodies.iter().map(|&x| self.comp[x].ncols()).sum();
+            let mut mat = DMatrix::zeros(r, width);
+            let mut c = 0;
+            for &x in &bodies {
+                let blk = local_block(pi, x);
+                mat.view_mut((0, c), (r, blk.ncols())).copy_from(&blk);
+                c += blk.ncols();
+            }
+            let norms: Vec<f64> = (0..r)
+                .map(|i| {
+                    let n = mat.row(i).norm();
+                    if n > 0.0 { n } else { 1.0 }
+                })
+                .collect();
+            for (i, &n) in norms.iter().enumerate() {
+                mat.row_mut(i).unscale_mut(n);
+            }
+            rownorm.insert(pi, norms);
+            blocks.push(Block {
+                groups: bodies
+                    .iter()
+                    .filter_map(|x| lgroup.get(x).copied())
+                    .collect(),
+                mat,
+            });
+        }
+        let mut offsets = Vec::with_capacity(self.sizes.len());
+        let mut acc = 0;
+        for &s in self.sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        let lcols = acc;
+        let smax_l = sigma_max(self.sizes, &offsets, &blocks);
+        // The relative threshold's size factor: that of the largest dense factorization done
+        // (a front), at least the dense path's largest whole Jacobian (SPARSE_COLUMNS), not
+        // the block's whole size (module docs).
+        let mut ntol = self.ntol.min(SPARSE_COLUMNS);
+        let (_, mut abs_tol) = threshold(self.m, self.used, smax_l, ntol);
+        let nv = nl as u64;
+        let mut elim = eliminate(self.sizes, blocks.clone(), abs_tol, budget, nv)?;
+        meter.charge(elim.work())?;
+        let front = elim.max_front();
+        if front > ntol && ntol < self.ntol {
+            ntol = front.min(self.ntol);
+            abs_tol = threshold(self.m, self.used, smax_l, ntol).1;
+            elim = eliminate(self.sizes, blocks, abs_tol, budget, nv)?;
+            meter.charge(elim.work())?;
+        }
+        let rank = elim.rank;
+        let (kept, dropped) = (elim.kept_min, elim.dropped_max);
+        let scale = if smax_l > 0.0 {
+            self.smax / smax_l
+        } else {
+            1.0
+        };
+
+        // Random motions and each body's twist (world coordinates) over them, each motion
+        // scaled to unit norm over the part's unknowns.
+        let d = lcols.saturating_sub(rank);
+        let k = d.min(b + EXTRA_SAMPLES);
+        budget.check_memory(
+            ((lcols + nl * b) as u64)
+                .saturating_mul(k as u64)
+                .saturating_mul(8),
+            || {
+                format!(
+                    "the geometric rigidity analysis ({k} sampled motions over {lcols} unknowns \
+                     in one rigid block of {nv} bodies)"
+                )
+            },
+        )?;
+        meter.charge(elim.factor_entries().saturating_mul(k as u64 + 1))?;
+        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        let x = elim.random_null_vectors(k, 0x7370_6172_7365 ^ seed);
+        drop(elim);
+        let mut tw: Vec<DMatrix<f64>> = vec![DMatrix::zeros(b, k); nl];
+        for (li, &body) in part.bodies.iter().enumerate() {
+            if let Some(&g) = lgroup.get(&body) {
+                let xg = x.rows(offsets[g], self.sizes[g]);
+                tw[li] = match &shifts[g] {
+                    Some(s) => s * xg,
+                    None => &self.comp[body] * xg,
+                };
+            }
+        }
+        drop(x);
+        for j in 0..k {
+            let n2: f64 = tw.iter().map(|t| t.column(j).norm_squared()).sum();
+            if n2 > 0.0 {
+                let n = n2.sqrt();
+                for t in &mut tw {
+                    t.column_mut(j).unscale_mut(n);
+                }
+            }
+        }
+
+        let scaled_block = |pi: usize, body: usize| {
+            let mut blk = local_block(pi, body);
+            if let Some(norms) = rownorm.get(&pi) {
+                for (i, &n) in norms.iter().enumerate() {
+                    blk.row_mut(i).unscale_mut(n);
+                }
+            }
+            blk
+        };
+        let unscale = |pi: usize, i: usize| rownorm.get(&pi).map_or(1.0, |v| v[i]);
+        self.stresses(
+            &lgroup,
+            &scaled_block,
+            &unscale,
+            abs_tol,
+            rank,
+            budget,
+            meter,
+            w,
+        )?;
+
+        // Locked DOF per joint: allowed dimension minus the rank of the relative twist over
+        // the sampled motions, with both bodies' own isolated motions.
+        let zero_tol = 1e-7;
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * (k + 2 * b)) as u64))?;
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (th, to) = (&tw[lidx(p.hub)], &tw[lidx(p.other)]);
+            let mut cols: Vec<DVector<f64>> = (0..k).map(|j| to.column(j) - th.column(j)).collect();
+            for body in [p.hub, p.other] {
+                for c in self.iso[body].column_iter() {
+                    cols.push(c.into_owned());
+                }
+            }
+            let used = if cols.is_empty() {
+                0
+            } else {
+                small_rank(&DMatrix::from_columns(&cols), zero_tol)
+            };
+            let allowed = self.models[p.joint].twists.ncols();
+            *locked.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
+        }
+
+        // Rigid clusters: bodies whose twists agree (modulo their own isolated motions) on
+        // every sampled motion: within zero_tol · sqrt(k) over the k unit samples (a difference
+        // within zero_tol over an orthonormal basis of the motions, the dense rule, is within
+        // that on any k unit motions).
+        let same_tol = zero_tol * (k.max(1) as f64).sqrt();
+        let iso_of = |li: usize| &self.iso[part.bodies[li]];
+        let same = |x: usize, y: usize| {
+            let diff = &tw[x] - &tw[y];
+            let cols: Vec<DVector<f64>> = iso_of(x)
+                .column_iter()
+                .chain(iso_of(y).column_iter())
+                .map(|c| c.into_owned())
+                .collect();
+            let mut res = diff;
+            for qv in &orthonormalize(cols) {
+                let proj = qv * (qv.transpose() * &res);
+                res -= proj;
+            }
+            res.norm() <= same_tol
+        };
+        let mut luf: Vec<usize> = (0..nl).collect();
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k + 64) as u64))?;
+        for &pi in &part.pairs {
+            let p = pairs[pi];
+            let (x, y) = (lidx(p.hub), lidx(p.other));
+            if same(x, y) {
+                union_min(&mut luf, x, y);
+            }
+        }
+        // Representatives without isolated motions of their own: sorted on a random
+        // projection of their sampled twists; equal twists project within same_tol.
+        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
+        let mut rng = crate::rng::SplitMix64::new(0x0063_6c75_7374_6572 ^ seed);
+        let mut dir: Vec<f64> = (0..b * k).map(|_| rng.next_signed()).collect();
+        let dn = dir
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
+        for v in &mut dir {
+            *v /= dn;
+        }
+        let proj = |li: usize| -> f64 { tw[li].iter().zip(&dir).map(|(a, c)| a * c).sum() };
+        let mut plain: Vec<(f64, usize)> = reps
+            .iter()
+            .filter(|&&x| iso_of(x).ncols() == 0)
+            .map(|&x| (proj(x), x))
+            .collect();
+        plain.sort_by(|a, c| a.0.total_cmp(&c.0).then(a.1.cmp(&c.1)));
+        let mut compared: u64 = 0;
+        for i in 0..plain.len() {
+            for j in i + 1..plain.len() {
+                if plain[j].0 - plain[i].0 > same_tol {
+                    break;
+                }
+                compared += 1;
+                if compared.is_multiple_of(4096) {
+                    meter.charge(4096 * (b * k * 4) as u64)?;
+                }
+                let (a, c) = (plain[i].1, plain[j].1);
+                if find(&mut luf, a) != find(&mut luf, c) && same(a, c) {
+                    union_min(&mut luf, a, c);
+                }
+            }
+        }
+        // Representatives with isolated motions: compared with the clusters sharing a joint
+        // with them (as the exact path does), until nothing changes.
+        if reps.iter().any(|&x| iso_of(x).ncols() > 0) {
+            let mut of_joint: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+            for &pi in &part.pairs {
+                let p = pairs[pi];
+                let v = of_joint.entry(p.joint).or_default();
+                v.push(lidx(p.hub));
+                v.push(lidx(p.other));
+            }
+            for _ in 0..4 {
+                let mut changed = false;
+                for members in of_joint.values() {
+                    let mut roots: Vec<usize> =
+                        members.iter().map(|&x| find(&mut luf, x)).collect();
+                    roots.sort_unstable();
+                    roots.dedup();
+                    if !roots.iter().any(|&r| iso_of(r).ncols() > 0) {
+                        continue;
+                    }
+                    meter.charge((roots.len() as u64).saturating_mul(roots.len() as u64 * 64))?;
+                    for i in 0..roots.len() {
+                        for j in 0..i {
+                            let (a, c) = (roots[j], roots[i]);
+                            if find(&mut luf, a) == a
+                                && find(&mut luf, c) == c
+                                && (iso_of(a).ncols() > 0 || iso_of(c).ncols() > 0)
+                                && same(a, c)
+                            {
+                                luf[c] = a;
+                                changed = true;
+                            }
+                        }
+                    }
+                }
+                if !changed {
+                    break;
+                }
+            }
+        }
+        for x in 0..nl {
+            let r = find(&mut luf, x);
+            if r != x {
+                union_min(uf, part.bodies[r], part.bodies[x]);
+            }
+        }
+        Ok(SparseOut {
+            rank,
+            kept_min: kept * scale,
+            dropped_max: dropped * scale,
+        })
+    }
+
+    /// Random self-stresses of the part (the elimination on the transpose, with the pairs as
+    /// unknowns), each joint's share added to `w`: the sum over `s` unit random stresses,
+    /// times `e / s` (`e` stresses in all) so that it estimates the dense path's share over an
+    /// orthonormal basis (exact when `s = e` and the stresses are orthogonal).
+    #[allow(clippy::too_many_arguments)]
+    fn stresses(
+        &self,
+        lgroup: &BTreeMap<usize, usize>,
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+        row_norm: &dyn Fn(usize, usize) -> f64,
+        abs_tol: f64,
+        rank: usize,
+        budget: &Budget,
+        meter: &mut Meter,
+        w: &mut BTreeMap<usize, f64>,
+    ) -> Result<(), BudgetExceeded> {
+        let (part, pairs) = (self.part, self.pairs);
+        let psizes: Vec<usize> = part
+            .pairs
+            .iter()
+            .map(|&pi| self.models[pairs[pi].joint].rows.nrows())
+            .collect();
+        let prow: usize = psizes.iter().sum();
+        if prow <= rank {
+            return Ok(());
+        }
+        let mut poff = Vec::with_capacity(psizes.len());
+        let mut acc = 0;
+        for &s in &psizes {
+            poff.push(acc);
+            acc += s;
+        }
+        let ngroups = self.groups.len();
+        let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            for x in [pairs[pi].hub, pairs[pi].other] {
+                if let Some(&g) = lgroup.get(&x)
+                    && linc[g].last() != Some(&lp)
+                {
+                    linc[g].push(lp);
+                }
+            }
+        }
+        let mut tblocks = Vec::with_capacity(ngroups);
+        for (g, &body) in self.groups.iter().enumerate() {
+            let s = self.sizes[g];
+            let ps = std::mem::take(&mut linc[g]);
+            let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+            let mut mat = DMatrix::zeros(s, width);
+            let mut c = 0;
+            for &lp in &ps {
+                let blk = local_block(part.pairs[lp], body).transpose();
+                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+                c += blk.ncols();
+            }
+            tblocks.push(Block { groups: ps, mat });
+        }
+        let nv = part.bodies.len() as u64;
+        let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv)?;
+        meter.charge(telim.work())?;
+        let e = prow.saturating_sub(telim.rank);
+        let s = e.min(STRESS_SAMPLES);
+        if s == 0 {
+            return Ok(());
+        }
+        budget.check_memory((prow as u64).saturating_mul(s as u64 * 8), || {
+            format!(
+                "the geometric rigidity analysis ({s} sampled self-stresses over {prow} \
+                 constraint rows in one rigid block)"
+            )
+        })?;
+        meter.charge(telim.factor_entries().saturating_mul(s as u64 + 1))?;
+        let seed = part.pairs.first().copied().unwrap_or(0) as u64;
+        let mut y = telim.random_null_vectors(s, 0x7374_7265_7373 ^ seed);
+        // Back to the original rows' stresses: y = D·y', D = 1 / row norms.
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            for i in 0..psizes[lp] {
+                let n = row_norm(pi, i);
+                y.row_mut(poff[lp] + i).unscale_mut(n);
+            }
+        }
+        let factor = e as f64 / s as f64;
+        for j in 0..s {
+            let n2 = y.column(j).norm_squared();
+            if n2 == 0.0 {
+                continue;
+            }
+            for (lp, &pi) in part.pairs.iter().enumerate() {
+                let v = y.view((poff[lp], j), (psizes[lp], 1)).norm_squared() / n2;
+                *w.entry(pairs[pi].joint).or_insert(0.0) += v * factor;
+            }
+        }
+        Ok(())
+    }
+}
