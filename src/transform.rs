@@ -116,6 +116,11 @@ pub struct TransformOptions {
     /// Place the independent parts one by one (default). `false` places the whole mechanism
     /// as one: the same placements, counts and scores, at the cost of the product (tests).
     pub split: bool,
+    /// Analyse every placement in full (tests: the former path). By default a placement the
+    /// exact rank certifies is analysed from the search's own flow (the same groups, types
+    /// and scores), and every placement of a mechanism whose constraint equations are
+    /// dependent is rejected by one exact rank (the same verdicts).
+    pub full_analyses: bool,
     /// Structural analysis options (`--count-only`, `--seed`, method).
     pub analysis: structure::Options,
 }
@@ -134,6 +139,7 @@ impl Default for TransformOptions {
             limit: None,
             budget: Budget::DEFAULT,
             split: true,
+            full_analyses: false,
             analysis: structure::Options::default(),
         }
     }
@@ -592,6 +598,7 @@ fn place(
     let mut flush = |e: &Expansion,
                      cache: &structure::AnalysisCache,
                      oracle: &Oracle,
+                     lean: Option<&Lean>,
                      batch: &mut Vec<Leaf>,
                      r: &mut Placed,
                      meter: &mut Meter,
@@ -601,23 +608,40 @@ fn place(
             batch.clear();
             return Ok(());
         }
-        meter.charge(per_eval.saturating_mul(batch.len() as u64))?;
+        // One unit a placement first; what each then spends (the exact decision of its
+        // inputs, a lean analysis, a full one and the rank decisions inside it) after the
+        // batch.
+        meter.charge(batch.len() as u64)?;
         let results: Vec<(Option<Placement>, u64)> = batch
             .par_iter()
             .map_init(
-                || e.mech.clone(),
+                // A copy of the expansion only for the placements analysed in full.
+                || None::<Mechanism>,
                 |mech, (x, w, flow)| {
-                    let certified = match oracle.decide(mech, w) {
-                        Some(false) => return (None, 0),
+                    let decided = oracle.work(w);
+                    let certified = match oracle.decide(&e.mech, w) {
+                        Some(false) => return (None, decided),
                         Some(true) => true,
                         None => false,
                     };
+                    if certified && let Some(l) = lean {
+                        let g = l.groups(&e.mech, flow, lib);
+                        return (
+                            Some(placement_of(&e.mech, e, *x, w, g)),
+                            decided.saturating_add(l.work),
+                        );
+                    }
+                    let mech = mech.get_or_insert_with(|| e.mech.clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
-                    (a.map(|a| placement(mech, e, *x, &a, w)), work)
+                    (
+                        a.map(|a| placement(mech, e, *x, &a, w)),
+                        work.saturating_add(per_eval).saturating_add(decided),
+                    )
                 },
             )
             .collect();
-        // The rank decisions' own work (dense factorizations of growing groups above all).
+        // The analyses' work: a full analysis its estimate and its rank decisions (dense
+        // factorizations of growing groups above all), a lean one its pass over the arrays.
         meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
         let results = results.into_iter().map(|r| r.0);
         let done = r.count_valid;
@@ -667,6 +691,9 @@ fn place(
             }
         }
         let mut err: Option<BudgetExceeded> = None;
+        // `Oracle::Later`: decided once a placement of this expansion is rejected.
+        let mut late: Option<Oracle> = None;
+        let excluded_before = r.excluded;
         p.search(meter, &mut |w, flow| {
             if found >= limit {
                 r.cut = true;
@@ -686,10 +713,19 @@ fn place(
             if batch.len() >= batch_size {
                 // Batches grow from one placement: the first ones stream at once.
                 batch_size = (batch_size * 2).min(max_batch);
+                // Only with more placements to analyse: a rejected single one (each
+                // expansion of a shared joint) pays nothing.
+                if late.is_none()
+                    && r.excluded > excluded_before
+                    && matches!(p.oracle, Oracle::Later { .. })
+                {
+                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+                }
                 if let Err(b) = flush(
                     e,
                     &cache,
-                    &p.oracle,
+                    late.as_ref().unwrap_or(&p.oracle),
+                    p.lean.as_ref(),
                     &mut batch,
                     &mut r,
                     &mut eval_meter,
@@ -698,6 +734,7 @@ fn place(
                     err = Some(b);
                     return false;
                 }
+
                 if stopped {
                     return false;
                 }
@@ -708,10 +745,18 @@ fn place(
             return Err(b.into());
         }
         // The rest of the batch belongs to this expansion: analysed before the next is built.
+        if late.is_none()
+            && !batch.is_empty()
+            && r.excluded > excluded_before
+            && matches!(p.oracle, Oracle::Later { .. })
+        {
+            late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+        }
         flush(
             e,
             &cache,
-            &p.oracle,
+            late.as_ref().unwrap_or(&p.oracle),
+            p.lean.as_ref(),
             &mut batch,
             &mut r,
             &mut eval_meter,
@@ -1589,6 +1634,10 @@ struct Problem {
     note: Option<String>,
     /// The exact decision of each placement, where one is made before its analysis.
     oracle: Oracle,
+    /// A placement the oracle certifies is analysed from the search's own flow
+    /// ([`Lean`]): random geometry, binary joints, the flow method, and an input-free
+    /// analysis with no isolated freedom, no redundancy and nothing set aside.
+    lean: Option<Lean>,
 }
 
 impl Problem {
@@ -1607,6 +1656,7 @@ impl Problem {
         u[m.frame] = 0;
         let mut isolated = 0u32;
         let mut oracle = Oracle::Undecided;
+        let mut lean = None;
         // Constraint equations dependent at the file's configuration fix nothing: inputs take
         // their place (a planar four-bar written in space takes one input, not none).
         let mut set_aside = vec![0u32; m.joints.len()];
@@ -1632,7 +1682,16 @@ impl Problem {
                 for (q, &n) in a.set_aside.iter().enumerate() {
                     set_aside[q] = n;
                 }
-                oracle = Oracle::of(m, a, meter)?;
+                oracle = Oracle::of(m, a, opts.full_analyses, meter)?;
+                if matches!(oracle, Oracle::Motions { .. })
+                    && !opts.full_analyses
+                    && opts.analysis.method == structure::Method::Flow
+                    && a.isolated.is_empty()
+                    && a.redundant.is_empty()
+                    && a.set_aside.iter().all(|&n| n == 0)
+                {
+                    lean = Some(Lean::of(m));
+                }
             }
             for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
                 let id = crate::mechanism::BodyId::from_text(&iso.body);
@@ -1662,6 +1721,7 @@ impl Problem {
             root: None,
             note: None,
             oracle,
+            lean,
         };
         let mut cons = vec![0u32; nq];
         let mut group_pairs: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
@@ -2236,8 +2296,6 @@ fn placement(
     a: &Analysis,
     w: &[(usize, u32)],
 ) -> Placement {
-    let mut sorted: Vec<(usize, u32)> = w.iter().copied().filter(|&(_, n)| n > 0).collect();
-    sorted.sort_by_key(|&(q, _)| (e.origin[q], q));
     let smallest = |g: &structure::Group| {
         g.bodies
             .iter()
@@ -2245,20 +2303,273 @@ fn placement(
             .min()
             .unwrap_or(usize::MAX)
     };
+    placement_of(
+        mech,
+        e,
+        x,
+        w,
+        Groups {
+            scores: scores(a),
+            types: a.types.clone(),
+            partition: a.groups.iter().map(|g| g.bodies.clone()).collect(),
+            groups_at: a.groups.iter().map(|g| (g.level, smallest(g))).collect(),
+            kinds: a.groups.iter().map(|g| g.kind.clone()).collect(),
+            in_lib: a.groups.iter().map(|g| g.in_library).collect(),
+        },
+    )
+}
+
+/// The groups of a determined placement, as a [`Placement`] keeps them.
+struct Groups {
+    scores: Scores,
+    types: Vec<TypeCount>,
+    partition: Vec<Vec<String>>,
+    groups_at: Vec<(usize, usize)>,
+    kinds: Vec<String>,
+    in_lib: Vec<bool>,
+}
+
+fn placement_of(
+    mech: &Mechanism,
+    e: &Expansion,
+    x: usize,
+    w: &[(usize, u32)],
+    g: Groups,
+) -> Placement {
+    let mut sorted: Vec<(usize, u32)> = w.iter().copied().filter(|&(_, n)| n > 0).collect();
+    sorted.sort_by_key(|&(q, _)| (e.origin[q], q));
     Placement {
         rank: None,
         family: None,
         inputs: inputs_of(mech, e, w),
         expansion: e.label.clone(),
-        scores: scores(a),
-        types: a.types.clone(),
-        partition: a.groups.iter().map(|g| g.bodies.clone()).collect(),
+        scores: g.scores,
+        types: g.types,
+        partition: g.partition,
         seq: 0,
         exp: x,
         inputs_at: sorted.iter().map(|&(q, _)| e.origin[q]).collect(),
-        groups_at: a.groups.iter().map(|g| (g.level, smallest(g))).collect(),
-        kinds: a.groups.iter().map(|g| g.kind.clone()).collect(),
-        in_lib: a.groups.iter().map(|g| g.in_library).collect(),
+        groups_at: g.groups_at,
+        kinds: g.kinds,
+        in_lib: g.in_lib,
+    }
+}
+
+/// The analysis of a placement the exact rank certifies, from the search's own flow (one pass
+/// over arrays, no rank check, no maximum flow, no rendering of the pair lists), with what it
+/// reuses across the placements of one expansion: each body's pairs and id.
+///
+/// Why it is the analysis's answer: the oracle proved the placement's whole system of full
+/// row rank, so the certified rank check factorizes nothing and returns the count
+/// decomposition (`structure::analyze_placement`); with no isolated freedom in the input-free
+/// analysis there is none with inputs either (more rows, smaller null spaces), so every body
+/// keeps all its unknowns and every pair its `B − k` equations plus its inputs. The search's
+/// flow routes all of them (the placement is determined by count), and the groups of a
+/// determined count are the strongly connected components of "an equation flowing into `x`
+/// touches `y`" under any perfect flow (the Dulmage–Mendelsohn fine decomposition does not
+/// depend on the flow): the same components, levels, canonical order and types.
+/// `TransformOptions::full_analyses` runs the full analysis instead; a test compares both.
+struct Lean {
+    /// Pairs touching each body (`touch[start[x]..start[x + 1]]`), a pair of a body with
+    /// itself once, in pair order (as `structure::build` lists them).
+    start: Vec<usize>,
+    touch: Vec<u32>,
+    /// Body ids as the analysis writes them.
+    ids: Vec<String>,
+    /// Each pair's two bodies and joint type (read from the joints, hundreds of bytes apart,
+    /// each was a cache miss).
+    ends: Vec<[u32; 2]>,
+    kind: Vec<JointType>,
+    /// Work units of one lean analysis: a few passes over the bodies and pairs.
+    work: u64,
+}
+
+impl Lean {
+    fn of(m: &Mechanism) -> Lean {
+        let nb = m.bodies.len();
+        let mut start = vec![0usize; nb + 1];
+        for j in &m.joints {
+            if let [a, c] = j.bodies[..] {
+                start[a + 1] += 1;
+                if c != a {
+                    start[c + 1] += 1;
+                }
+            }
+        }
+        for i in 0..nb {
+            start[i + 1] += start[i];
+        }
+        let mut fill = start.clone();
+        let mut touch = vec![0u32; start[nb]];
+        for (q, j) in m.joints.iter().enumerate() {
+            if let [a, c] = j.bodies[..] {
+                touch[fill[a]] = q as u32;
+                fill[a] += 1;
+                if c != a {
+                    touch[fill[c]] = q as u32;
+                    fill[c] += 1;
+                }
+            }
+        }
+        let ends = m
+            .joints
+            .iter()
+            .map(|j| match j.bodies[..] {
+                [a, c] => [a as u32, c as u32],
+                _ => [m.frame as u32; 2],
+            })
+            .collect();
+        Lean {
+            start,
+            touch,
+            ids: m.bodies.iter().map(|b| b.id.to_string()).collect(),
+            ends,
+            kind: m.joints.iter().map(|j| j.kind).collect(),
+            work: 8 * (m.bodies.len() + m.joints.len()) as u64 + 100,
+        }
+    }
+
+    /// The groups of placement `w` (pairs of `m`, all binary) whose search flow is `flow`.
+    fn groups(&self, m: &Mechanism, flow: &[[u8; 2]], lib: &Library) -> Groups {
+        let nb = m.bodies.len();
+        let frame = m.frame;
+        let ends = |q: usize| {
+            let [a, c] = self.ends[q];
+            (a as usize, c as usize)
+        };
+        // x -> y: an equation flowing into x touches y (bodies other than the frame).
+        let mut deg = vec![0usize; nb + 1];
+        let edge = |q: usize, i: usize| -> Option<(usize, usize)> {
+            let (a, c) = ends(q);
+            let (x, y) = if i == 0 { (a, c) } else { (c, a) };
+            (flow.get(q).is_some_and(|f| f[i] > 0) && x != frame && y != frame && x != y)
+                .then_some((x, y))
+        };
+        for q in 0..m.joints.len() {
+            for i in 0..2 {
+                if let Some((x, _)) = edge(q, i) {
+                    deg[x + 1] += 1;
+                }
+            }
+        }
+        for i in 0..nb {
+            deg[i + 1] += deg[i];
+        }
+        let mut fill = deg.clone();
+        let mut adj = vec![0u32; deg[nb]];
+        for q in 0..m.joints.len() {
+            for i in 0..2 {
+                if let Some((x, y)) = edge(q, i) {
+                    adj[fill[x]] = y as u32;
+                    fill[x] += 1;
+                }
+            }
+        }
+        drop(fill);
+        let active: Vec<bool> = (0..nb)
+            .map(|x| x != frame && self.start[x + 1] > self.start[x])
+            .collect();
+        let sccs = structure::tarjan(&deg, &adj, &active);
+        // Dependencies first: levels in emission order.
+        let mut comp = vec![usize::MAX; nb];
+        for (c, s) in sccs.iter().enumerate() {
+            for &x in s {
+                comp[x] = c;
+            }
+        }
+        let mut level = vec![1usize; sccs.len()];
+        for (c, s) in sccs.iter().enumerate() {
+            let mut lv = 0;
+            for &x in s {
+                for &y in &adj[deg[x]..deg[x + 1]] {
+                    let d = comp[y as usize];
+                    if d != c {
+                        lv = lv.max(level[d]);
+                    }
+                }
+            }
+            level[c] = 1 + lv;
+        }
+        let n = sccs.len();
+        let raw = structure::canonical(sccs, level, vec![Vec::new(); n]);
+        // Solve-order key: the frame (and bodies no joint names) first, then the groups.
+        let mut key = vec![-2i64; nb];
+        for (g, grp) in raw.iter().enumerate() {
+            for &x in &grp.bodies {
+                key[x] = g as i64;
+            }
+        }
+        let mut types: Vec<TypeCount> = Vec::new();
+        let mut type_index: BTreeMap<String, usize> = BTreeMap::new();
+        let mut out = Groups {
+            scores: Scores {
+                groups: raw.len(),
+                largest: 0,
+                levels: 0,
+                covered: 0,
+                all_covered: true,
+            },
+            types: Vec::new(),
+            partition: Vec::with_capacity(raw.len()),
+            groups_at: Vec::with_capacity(raw.len()),
+            kinds: Vec::with_capacity(raw.len()),
+            in_lib: Vec::with_capacity(raw.len()),
+        };
+        let mut kinds: Vec<(JointType, usize)> = Vec::new();
+        for (g, grp) in raw.iter().enumerate() {
+            let gk = g as i64;
+            kinds.clear();
+            for &x in &grp.bodies {
+                for &q in &self.touch[self.start[x]..self.start[x + 1]] {
+                    let q = q as usize;
+                    let (a, c) = ends(q);
+                    let y = if a == x { c } else { a };
+                    // Active: internal (counted once, from its first body) or to a body
+                    // solved before.
+                    if (key[y] == gk && x != a) || key[y] > gk {
+                        continue;
+                    }
+                    let jt = self.kind[q];
+                    match kinds.iter_mut().find(|(k, _)| *k == jt) {
+                        Some((_, c)) => *c += 1,
+                        None => kinds.push((jt, 1)),
+                    }
+                }
+            }
+            kinds.sort_unstable_by_key(|&(k, _)| k);
+            let mut kind = String::new();
+            for (k, n) in &kinds {
+                let _ = std::fmt::Write::write_fmt(&mut kind, format_args!("{n}{}", k.code()));
+            }
+            kind.push_str(m.space.suffix());
+            let t = match type_index.get(&kind) {
+                Some(&t) => t,
+                None => {
+                    let t = types.len();
+                    types.push(TypeCount {
+                        kind: kind.clone(),
+                        count: 0,
+                        in_library: lib.contains(&kind),
+                    });
+                    type_index.insert(kind.clone(), t);
+                    t
+                }
+            };
+            types[t].count += 1;
+            let covered = types[t].in_library;
+            out.scores.largest = out.scores.largest.max(grp.bodies.len());
+            out.scores.levels = out.scores.levels.max(grp.level);
+            out.scores.covered += usize::from(covered);
+            out.partition
+                .push(grp.bodies.iter().map(|&x| self.ids[x].clone()).collect());
+            out.groups_at
+                .push((grp.level, grp.bodies.first().copied().unwrap_or(usize::MAX)));
+            out.kinds.push(kind);
+            out.in_lib.push(covered);
+        }
+        out.scores.all_covered = out.scores.covered == raw.len();
+        out.types = types;
+        out
     }
 }
 
@@ -2455,6 +2766,11 @@ const ORACLE_NULLITY: usize = 64;
 enum Oracle {
     Undecided,
     Reject,
+    /// A large null space: undecided, until a placement is rejected; then the exact rank of
+    /// `J` ([`Oracle::dependent`]) may reject every other one at once.
+    Later {
+        seed: u64,
+    },
     Motions {
         seed: u64,
         /// Column of each body's first unknown (`usize::MAX`: the frame).
@@ -2467,8 +2783,13 @@ enum Oracle {
 impl Oracle {
     /// The oracle of `m` (an expansion, binary joints, no inputs) given its first analysis `a`
     /// (no inputs either). `cols_minus_rows` is the count's nullity of `J`.
-    fn of(m: &Mechanism, a: &Analysis, meter: &mut Meter) -> Result<Oracle, BudgetExceeded> {
-        use crate::exact::{Factor, Fp, SparseMatrix, models};
+    fn of(
+        m: &Mechanism,
+        a: &Analysis,
+        full_analyses: bool,
+        meter: &mut Meter,
+    ) -> Result<Oracle, BudgetExceeded> {
+        use crate::exact::{Factor, models};
         let Some(seed) = a.geometry.as_ref().and_then(|g| g.seed) else {
             return Ok(Oracle::Undecided);
         };
@@ -2524,36 +2845,22 @@ impl Oracle {
             .map(|j| b.saturating_sub(j.grade() as usize))
             .sum();
         let ncols = movable * b;
-        if cons > ncols || ncols - cons > ORACLE_NULLITY {
+        if cons > ncols {
             return Ok(Oracle::Undecided);
         }
-        let mut col = vec![usize::MAX; m.bodies.len()];
-        let mut c = 0;
-        for (x, slot) in col.iter_mut().enumerate() {
-            if x != m.frame {
-                *slot = c;
-                c += b;
-            }
+        // A large null space: no per-placement test, but dependent rows of `J` still reject
+        // every placement; that is decided once a placement is rejected ([`Oracle::Later`],
+        // [`Oracle::dependent`]), so a mechanism with one placement (a serial chain, each
+        // expansion of a shared joint) never pays for it.
+        if ncols - cons > ORACLE_NULLITY {
+            return Ok(if full_analyses {
+                Oracle::Undecided
+            } else {
+                Oracle::Later { seed }
+            });
         }
         meter.charge(50 * (m.bodies.len() + m.joints.len()) as u64)?;
-        let mut j = SparseMatrix::with_groups(vec![b; movable]);
-        for q in 0..m.joints.len() {
-            let Some((x, y)) = pair(q) else { continue };
-            let rows = models::joint_rows(m, q, seed, 0);
-            for r in 0..rows.nrows() {
-                let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
-                for (z, negate) in [(x, true), (y, false)] {
-                    if x == y || col[z] == usize::MAX {
-                        continue;
-                    }
-                    for k in 0..b {
-                        let v = rows[(r, k)];
-                        entries.push(((col[z] + k) as u32, if negate { -v } else { v }));
-                    }
-                }
-                j.push_row(entries);
-            }
-        }
+        let (j, col) = jacobian(m, seed);
         let nrows = j.nrows();
         let f = Factor::new(&j);
         if f.rank() < nrows {
@@ -2568,12 +2875,66 @@ impl Oracle {
         Ok(Oracle::Motions { seed, col, v })
     }
 
+    /// For [`Oracle::Later`], once a placement was rejected: [`Oracle::Reject`] when the
+    /// constraint rows `J` of `m` are dependent (then no placement is determined: the
+    /// random families, whose redundancy among the constraints the input-free analysis
+    /// cannot see, its under-determined block being too large to check), else
+    /// [`Oracle::Undecided`]. The exact rank runs within a work and memory cap of its own;
+    /// past it the analyses decide, as before. Its work is charged to `meter`.
+    fn dependent(&self, m: &Mechanism, budget: &Budget, meter: &mut Meter) -> Oracle {
+        let Oracle::Later { seed } = self else {
+            return Oracle::Undecided;
+        };
+        let b = m.b() as usize;
+        let units = 50 * (m.bodies.len() + m.joints.len()) as u64;
+        if meter.charge(units).is_err() {
+            return Oracle::Undecided;
+        }
+        let (j, col) = jacobian(m, *seed);
+        let nrows = j.nrows();
+        let entries = (nrows * 2 * b + col.len() * b) as u64;
+        let cap = Budget {
+            max_work: budget.max_work.min(400 * entries + 1_000_000),
+            max_memory_bytes: budget.max_memory_bytes.min(1 << 30),
+            ..*budget
+        };
+        let mut own = cap.meter("the exact rank of the constraints");
+        let what = || "the exact rank of the constraints".to_string();
+        let r = crate::exact::Factor::new_within(
+            &j,
+            &mut crate::exact::sparse::Limits {
+                budget: &cap,
+                meter: &mut own,
+                what: &what,
+            },
+        );
+        if meter.charge(own.used()).is_err() {
+            return Oracle::Undecided;
+        }
+        match r {
+            Ok(f) if f.rank() < nrows => Oracle::Reject,
+            _ => Oracle::Undecided,
+        }
+    }
+
+    /// Work units of [`Oracle::decide`] on placement `w`: its inputs' rows on the null
+    /// vectors (`f × N` numbers and their rank).
+    fn work(&self, w: &[(usize, u32)]) -> u64 {
+        match self {
+            Oracle::Motions { v, .. } => {
+                let f: u64 = w.iter().map(|&(_, n)| u64::from(n)).sum();
+                f.saturating_mul(v.len() as u64).saturating_mul(8) + 1
+            }
+            _ => 1,
+        }
+    }
+
     /// `Some(false)`: placement `w` (units per pair of `m`) is not determined; `Some(true)`:
     /// its whole system has full row rank; `None`: the analysis decides.
     fn decide(&self, m: &Mechanism, w: &[(usize, u32)]) -> Option<bool> {
         use crate::exact::{Fp, dense, models};
         match self {
-            Oracle::Undecided => None,
+            Oracle::Undecided | Oracle::Later { .. } => None,
             Oracle::Reject => Some(false),
             Oracle::Motions { seed, col, v } => {
                 let b = m.b() as usize;
@@ -2619,6 +2980,43 @@ impl Oracle {
             }
         }
     }
+}
+
+/// The constraint rows `J` of `m` (binary joints, no inputs) over GF(p) at the random
+/// realization `seed`, one column group per movable body, and each body's first column
+/// (`usize::MAX`: the frame).
+fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>) {
+    use crate::exact::{Fp, SparseMatrix, models};
+    let b = m.b() as usize;
+    let mut col = vec![usize::MAX; m.bodies.len()];
+    let mut c = 0;
+    for (x, slot) in col.iter_mut().enumerate() {
+        if x != m.frame {
+            *slot = c;
+            c += b;
+        }
+    }
+    let mut j = SparseMatrix::with_groups(vec![b; m.bodies.len().saturating_sub(1)]);
+    for q in 0..m.joints.len() {
+        let [x, y] = m.joints[q].bodies[..] else {
+            continue;
+        };
+        let rows = models::joint_rows(m, q, seed, 0);
+        for r in 0..rows.nrows() {
+            let mut entries: Vec<(u32, Fp)> = Vec::with_capacity(2 * b);
+            for (z, negate) in [(x, true), (y, false)] {
+                if x == y || col[z] == usize::MAX {
+                    continue;
+                }
+                for k in 0..b {
+                    let v = rows[(r, k)];
+                    entries.push(((col[z] + k) as u32, if negate { -v } else { v }));
+                }
+            }
+            j.push_row(entries);
+        }
+    }
+    (j, col)
 }
 
 #[cfg(test)]

@@ -209,3 +209,81 @@ fn rejected_placements_of_a_random_mechanism_keep_their_verdict() {
     assert_eq!(t.summary.count_valid, 30);
     assert_eq!(t.summary.excluded_by_rank, 30);
 }
+
+/// A placement the exact rank certifies is analysed from the search's own flow (its strongly
+/// connected components, levels and types), not by a full analysis: the same placements,
+/// groups, types, scores, ranks and families as the full analyses give.
+fn lean_equals_full(m: &Mechanism, limit: Option<usize>) {
+    let lib = Library::builtin();
+    let o = TransformOptions {
+        limit,
+        ..TransformOptions::default()
+    };
+    let lean = transform(m, &o, &lib, None).unwrap();
+    let full = transform(
+        m,
+        &TransformOptions {
+            full_analyses: true,
+            ..o
+        },
+        &lib,
+        None,
+    )
+    .unwrap();
+    assert!(!full.placements.is_empty());
+    assert_eq!(lean, full);
+}
+
+#[test]
+fn lean_analyses_equal_full_ones_on_assur_linkages() {
+    lean_equals_full(&generate::assur(2, 60, 7, Variant::A).unwrap(), None);
+    lean_equals_full(
+        &generate::assur(2, 300, 364, Variant::A).unwrap(),
+        Some(100),
+    );
+    lean_equals_full(&generate::assur(3, 20, 5, Variant::B).unwrap(), Some(200));
+    lean_equals_full(
+        &generate::assur_spatial(2, 30, 7, Variant::A).unwrap(),
+        None,
+    );
+    lean_equals_full(
+        &generate::assur_spatial(2, 200, 364, Variant::B).unwrap(),
+        Some(100),
+    );
+}
+
+/// `--limit 100` in work units (deterministic), on two families where each placement used to
+/// cost a full analysis of the mechanism (50 units a body or joint, 5·10^5 here, so 100
+/// placements at least 5·10^7): a planar Assur II linkage of 4,002 bodies, each placement
+/// certified by the exact rank and now analysed from the search's flow (8 units a body or
+/// joint), and a random planar mechanism of 3,000 bodies whose constraint equations are
+/// dependent, each placement now rejected by one exact rank of the constraints before the
+/// search. Both fit 2·10^7 units; the former path (`full_analyses`) overruns it.
+#[test]
+fn limit_100_fits_a_budget_the_full_analyses_overrun() {
+    let assur = generate::assur(2, 1_000, 364, Variant::A).unwrap();
+    let (random, _) = generate::random(3_000, true, 1).unwrap();
+    let lib = Library::builtin();
+    for (m, determined) in [(&assur, 100), (&random, 0)] {
+        let o = TransformOptions {
+            limit: Some(100),
+            budget: Budget {
+                max_work: 20_000_000,
+                ..Budget::DEFAULT
+            },
+            ..TransformOptions::default()
+        };
+        let t = transform(m, &o, &lib, None).unwrap();
+        assert_eq!(t.summary.count_valid, 100, "{}", m.name);
+        assert_eq!(t.summary.determined, determined, "{}", m.name);
+        assert!(t.summary.truncated);
+        let full = TransformOptions {
+            full_analyses: true,
+            ..o
+        };
+        match transform(m, &full, &lib, None) {
+            Err(TransformError::Budget(e)) => assert!(e.help().contains("--max-work"), "{e}"),
+            other => panic!("{}: {:?}", m.name, other.map(|t| t.summary)),
+        }
+    }
+}

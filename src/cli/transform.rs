@@ -92,6 +92,7 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         limit: args.limit,
         budget: super::budget(),
         split: true,
+        full_analyses: false,
         analysis: structure.options()?,
     };
     if !structure.count_only {

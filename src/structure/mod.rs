@@ -15,6 +15,9 @@ pub(crate) mod flow;
 pub mod library;
 mod rank;
 
+/// The count decomposition's components and canonical order, for `mbsa transform`'s analysis
+/// of certified placements from its search's flow.
+pub(crate) use count::{canonical, tarjan};
 pub use library::{Library, LibraryError};
 
 use crate::joint::JointType;
