@@ -105,21 +105,6 @@ fn every_command_on_a_hundred_thousand_bodies() {
     let mut failures = Vec::new();
     for file in &files {
         for args in COMMANDS {
-            // Known issue (docs/reliability.md): `dot --view rigid` on the random file runs
-            // far longer than `rigid --method geometric` on it (the 10^4 file: over 5 min CPU
-            // against 0.7 s; 10^5: 3.5 GB), not yet understood; `rigid --method geometric`
-            // runs here (9 s CPU, 0.9 GB at 10^5). Left out, said here.
-            if file.ends_with("random-spatial-1e5.toml")
-                && args.contains(&"rigid")
-                && args[0] == "dot"
-            {
-                eprintln!(
-                    "skipped (known issue): {} on {}",
-                    args.join(" "),
-                    file.display()
-                );
-                continue;
-            }
             let mut full: Vec<String> = args.iter().map(|s| s.to_string()).collect();
             full.insert(1, file.to_str().expect("UTF-8").to_string());
             let (code, secs, tail) = capped(&full);

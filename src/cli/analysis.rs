@@ -168,11 +168,16 @@ pub enum ViewArg {
 
 /// `mbsa dot`.
 pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Failure> {
-    let m = load_with_inputs(file, args.inputs.as_deref())?;
+    let mut m = load_with_inputs(file, args.inputs.as_deref())?;
     if !args.count_only || view == ViewArg::Rigid {
         args.geometry.closure_check(&file.file, &m)?;
     }
     if view == ViewArg::Rigid {
+        // The same analysis as `mbsa rigid` (inputs not counted), so the picture's mobility
+        // and redundancies are the numbers `rigid` prints.
+        for j in &mut m.joints {
+            j.driven = 0;
+        }
         let opts = geometric::GeometricOptions {
             geometry: args.geometry.source(),
             precision: args.geometry.precision()?,
