@@ -792,44 +792,15 @@ impl ExactPart<'_> {
             }
         }
         if !eiso.is_empty() {
-            // The bodies of each joint of the part (a multiple joint's bodies are not all
-            // pairs of each other).
-            let mut of_joint: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-            for &pi in &part.pairs {
-                let p = pairs[pi];
-                let v = of_joint.entry(p.joint).or_default();
-                v.push(lidx(p.hub));
-                v.push(lidx(p.other));
-            }
-            for _ in 0..4 {
-                let mut changed = false;
-                for members in of_joint.values() {
-                    let mut roots: Vec<usize> =
-                        members.iter().map(|&x| find(&mut luf, x)).collect();
-                    roots.sort_unstable();
-                    roots.dedup();
-                    if !roots.iter().any(|r| eiso.contains_key(r)) {
-                        continue;
-                    }
-                    meter.charge((roots.len() as u64).saturating_mul(roots.len() as u64 * 64))?;
-                    for i in 0..roots.len() {
-                        for j in 0..i {
-                            let (a, c) = (roots[j], roots[i]);
-                            if find(&mut luf, a) == a
-                                && find(&mut luf, c) == c
-                                && (eiso.contains_key(&a) || eiso.contains_key(&c))
-                                && same(a, c)
-                            {
-                                luf[c] = a;
-                                changed = true;
-                            }
-                        }
-                    }
-                }
-                if !changed {
-                    break;
-                }
-            }
+            merge_across_joints(
+                part,
+                pairs,
+                &lidx,
+                &mut luf,
+                |r| eiso.contains_key(&r),
+                same,
+                meter,
+            )?;
         }
         for x in 0..nl {
             let r = find(&mut luf, x);
@@ -856,6 +827,57 @@ struct Built {
     offsets: Vec<usize>,
     blocks: Vec<Block>,
     smax: f64,
+}
+
+/// Clusters with isolated motions compared with the clusters sharing a joint with them (the
+/// bodies of each joint of the part: a multiple joint's bodies are not all pairs of each
+/// other), merged when `same` says they move alike, until nothing changes (at most 4 rounds).
+/// Shared by the exact and the sparse floating-point paths.
+fn merge_across_joints(
+    part: &Part,
+    pairs: &[Pair],
+    lidx: &impl Fn(usize) -> usize,
+    luf: &mut [usize],
+    has_iso: impl Fn(usize) -> bool,
+    same: impl Fn(usize, usize) -> bool,
+    meter: &mut Meter,
+) -> Result<(), BudgetExceeded> {
+    let mut of_joint: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for &pi in &part.pairs {
+        let p = pairs[pi];
+        let v = of_joint.entry(p.joint).or_default();
+        v.push(lidx(p.hub));
+        v.push(lidx(p.other));
+    }
+    for _ in 0..4 {
+        let mut changed = false;
+        for members in of_joint.values() {
+            let mut roots: Vec<usize> = members.iter().map(|&x| find(luf, x)).collect();
+            roots.sort_unstable();
+            roots.dedup();
+            if !roots.iter().any(|&r| has_iso(r)) {
+                continue;
+            }
+            meter.charge((roots.len() as u64).saturating_mul(roots.len() as u64 * 64))?;
+            for i in 0..roots.len() {
+                for j in 0..i {
+                    let (a, c) = (roots[j], roots[i]);
+                    if find(luf, a) == a
+                        && find(luf, c) == c
+                        && (has_iso(a) || has_iso(c))
+                        && same(a, c)
+                    {
+                        luf[c] = a;
+                        changed = true;
+                    }
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    Ok(())
 }
 
 /// The block of pair `pi` on `body` (sign: + other, − hub), in `body`'s reduced coordinates.

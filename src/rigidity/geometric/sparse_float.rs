@@ -30,8 +30,8 @@
 //! part's pairs and bodies (sorting aside).
 
 use super::{
-    Pair, Part, eliminate, find, orthonormalize, pair_block, small_null, small_rank, threshold,
-    union_min,
+    Pair, Part, eliminate, find, merge_across_joints, orthonormalize, pair_block, small_null,
+    small_rank, threshold, union_min,
 };
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::elimination::{Block, sigma_max};
@@ -454,42 +454,15 @@ impl SparsePart<'_> {
         // Representatives with isolated motions: compared with the clusters sharing a joint
         // with them (as the exact path does), until nothing changes.
         if reps.iter().any(|&x| iso_of(x).ncols() > 0) {
-            let mut of_joint: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
-            for &pi in &part.pairs {
-                let p = pairs[pi];
-                let v = of_joint.entry(p.joint).or_default();
-                v.push(lidx(p.hub));
-                v.push(lidx(p.other));
-            }
-            for _ in 0..4 {
-                let mut changed = false;
-                for members in of_joint.values() {
-                    let mut roots: Vec<usize> =
-                        members.iter().map(|&x| find(&mut luf, x)).collect();
-                    roots.sort_unstable();
-                    roots.dedup();
-                    if !roots.iter().any(|&r| iso_of(r).ncols() > 0) {
-                        continue;
-                    }
-                    meter.charge((roots.len() as u64).saturating_mul(roots.len() as u64 * 64))?;
-                    for i in 0..roots.len() {
-                        for j in 0..i {
-                            let (a, c) = (roots[j], roots[i]);
-                            if find(&mut luf, a) == a
-                                && find(&mut luf, c) == c
-                                && (iso_of(a).ncols() > 0 || iso_of(c).ncols() > 0)
-                                && same(a, c)
-                            {
-                                luf[c] = a;
-                                changed = true;
-                            }
-                        }
-                    }
-                }
-                if !changed {
-                    break;
-                }
-            }
+            merge_across_joints(
+                part,
+                self.pairs,
+                &lidx,
+                &mut luf,
+                |r| iso_of(r).ncols() > 0,
+                same,
+                meter,
+            )?;
         }
         for x in 0..nl {
             let r = find(&mut luf, x);
