@@ -442,7 +442,14 @@ pub(crate) fn sigma_max(sizes: &[usize], offsets: &[usize], blocks: &[Block]) ->
     let mut segs: Vec<(usize, usize)> =
         Vec::with_capacity(blocks.iter().map(|b| b.groups.len()).sum());
     let mut shapes: Vec<(usize, usize, usize)> = Vec::with_capacity(blocks.len());
-    for b in blocks {
+    // Packed in the order of their first column: the gathers from `x` and the sums into `y`
+    // then sweep the vectors nearly in order instead of jumping across them (at 10^6 bodies
+    // the two vectors are 24 MB each and the random order missed the cache on every block).
+    // This changes only the order of the sums into `y`, by rounding.
+    let first = |b: &Block| b.groups.iter().map(|&g| offsets[g]).min().unwrap_or(0);
+    let mut order: Vec<usize> = (0..blocks.len()).collect();
+    order.sort_by_key(|&i| first(&blocks[i]));
+    for b in order.iter().map(|&i| &blocks[i]) {
         vals.extend_from_slice(b.mat.as_slice());
         segs.extend(b.groups.iter().map(|&g| (offsets[g], sizes[g])));
         shapes.push((b.mat.nrows(), b.mat.ncols(), b.groups.len()));
