@@ -307,22 +307,20 @@ impl Game {
 struct Fast {
     l: u8,
     n_bodies: usize,
-    weight: Vec<u8>,
-    peb: Vec<u8>,
-    /// Out- and in-bars of each vertex (bar ids into `tail`/`head`).
-    out: Vec<Vec<u32>>,
-    inn: Vec<Vec<u32>>,
-    tail: Vec<u32>,
-    head: Vec<u32>,
-    pos_out: Vec<u32>,
-    pos_in: Vec<u32>,
+    /// The vertices, one cache line each: pebbles, out-bars and the search's marks.
+    v: Vec<Vtx>,
+    /// Every bar at each vertex, in and out (bar ids into `ends`). A flip leaves these lists
+    /// as they are; only inserting a bar and contracting a component change them.
+    inc: Vec<Vec<u32>>,
+    /// The two ends of each bar, in no particular order (the direction is in the out-bars).
+    ends: Vec<[u32; 2]>,
+    /// Position of each bar in the `inc` list of `ends[bar][0]` and of `ends[bar][1]`.
+    pos: Vec<[u32; 2]>,
     /// Union-find over bodies: the root is the super-body's id.
     parent: Vec<u32>,
     /// Bodies of each super-body (at its root).
     members: Vec<Vec<u32>>,
-    mark: Vec<u32>,
     epoch: u32,
-    from: Vec<u32>,
     stack: Vec<u32>,
     visited: Vec<u32>,
     /// Reverse search: in the growing tight set (`qmark == qepoch`), known to reach a free
@@ -336,9 +334,9 @@ struct Fast {
     /// bar keeps the borrowed pebble of the latest vertex.
     rank: Vec<u32>,
     /// Pebble moves kept for undoing, while `recording`: (source, target, start in `log`), and
-    /// the bars each move turned round.
+    /// the bars each move turned round, as (tail, head, bar) after the turn.
     moves: Vec<(u32, u32, u32)>,
-    log: Vec<u32>,
+    log: Vec<[u32; 3]>,
     recording: bool,
     /// Whether some contraction made a rigid set of at least two bodies but not all of them
     /// (it stays rigid as bars are added: a proper rigid sub-chain).
@@ -347,25 +345,76 @@ struct Fast {
     work: u64,
 }
 
+/// Most out-bars of a vertex: pebbles + out-bars = weight ≤ B ≤ 6 at every moment.
+const MAX_OUT: usize = 6;
+
+/// One vertex of the contracted game in one cache line: a search step reads the vertex's
+/// out-bars (heads inline) and each head's mark and pebbles, one line each; turning a path
+/// round touches the same lines. Session 7 kept these in eight arrays and two heap lists per
+/// vertex (about ten cache misses per step at 10^6 vertices).
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(64))]
+struct Vtx {
+    /// Heads and bar ids of the out-bars, `nout` of them.
+    head: [u32; MAX_OUT],
+    bar: [u32; MAX_OUT],
+    /// Search epoch that reached the vertex.
+    mark: u32,
+    /// The vertex the search came from, and the slot of its out-bar to this one.
+    from: u32,
+    peb: u8,
+    weight: u8,
+    nout: u8,
+    slot: u8,
+}
+
+impl Vtx {
+    fn push_out(&mut self, h: u32, bar: u32) {
+        let n = self.nout as usize;
+        self.head[n] = h;
+        self.bar[n] = bar;
+        self.nout += 1;
+    }
+
+    /// Remove the out-bar in `slot`; the last one takes its place (as `Vec::swap_remove`).
+    fn remove_out(&mut self, slot: usize) -> u32 {
+        let last = self.nout as usize - 1;
+        let bar = self.bar[slot];
+        self.head[slot] = self.head[last];
+        self.bar[slot] = self.bar[last];
+        self.nout -= 1;
+        bar
+    }
+
+    fn outs(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let n = self.nout as usize;
+        self.head[..n]
+            .iter()
+            .copied()
+            .zip(self.bar[..n].iter().copied())
+    }
+}
+
 impl Fast {
     fn new(weight: Vec<u8>, n_bodies: usize, l: u8, bars: usize) -> Fast {
         let n = weight.len();
         Fast {
             l,
             n_bodies,
-            peb: weight.clone(),
-            weight,
-            out: vec![Vec::new(); n],
-            inn: vec![Vec::new(); n],
-            tail: Vec::with_capacity(bars),
-            head: Vec::with_capacity(bars),
-            pos_out: Vec::with_capacity(bars),
-            pos_in: Vec::with_capacity(bars),
+            v: weight
+                .iter()
+                .map(|&w| Vtx {
+                    peb: w,
+                    weight: w,
+                    ..Vtx::default()
+                })
+                .collect(),
+            inc: vec![Vec::new(); n],
+            ends: Vec::with_capacity(bars),
+            pos: Vec::with_capacity(bars),
             parent: (0..n_bodies as u32).collect(),
             members: (0..n_bodies as u32).map(|b| vec![b]).collect(),
-            mark: vec![0; n],
             epoch: 0,
-            from: vec![0; n],
             stack: Vec::new(),
             visited: Vec::new(),
             qmark: vec![0; n],
@@ -381,13 +430,21 @@ impl Fast {
         }
     }
 
+    fn peb(&self, x: u32) -> u8 {
+        self.v[x as usize].peb
+    }
+
+    fn weight(&self, x: u32) -> u8 {
+        self.v[x as usize].weight
+    }
+
     /// Whether a tight set of two or more vertices may hold both `x` and `y`, by degrees alone.
     /// In a tight set T every vertex z has at least its weight of bars inside T (removing
     /// z leaves at most w(T − z) − B bars if T − z spans one, and if not, z carries all
     /// w(T) − B ≥ w(z) of them), and a body with fewer than B bars in T has only nodes beside
     /// it (else the same count gives B).
     fn may_be_tight(&self, x: u32, y: u32) -> bool {
-        let short = |z: u32| self.degree(z) < self.weight[z as usize] as usize;
+        let short = |z: u32| self.degree(z) < self.weight(z) as usize;
         let thin_body = |z: u32| self.is_body(z) && self.degree(z) < self.l as usize;
         let full_body = |z: u32| {
             self.is_body(z) && self.degree(z) == self.l as usize && self.beside_two_bodies(z)
@@ -409,12 +466,12 @@ impl Fast {
     /// spends its pebbles on its first neighbour and the free ones sit on both, each
     /// reachable from the other).
     fn fresh_end(&self, x: u32, y: u32) -> Option<(u32, u32)> {
-        let spare = |t: u32| (self.weight[t as usize] as usize).saturating_sub(self.degree(t));
+        let spare = |t: u32| (self.weight(t) as usize).saturating_sub(self.degree(t));
         let fits = |t: u32, h: u32| {
             spare(t) > 0
                 && (!self.is_body(t)
                     || self.is_body(h)
-                    || self.bars_between(h, t) < self.weight[h as usize] as usize)
+                    || self.bars_between(h, t) < self.weight(h) as usize)
         };
         let (a, b) = if spare(x) >= spare(y) { (x, y) } else { (y, x) };
         if fits(a, b) {
@@ -426,6 +483,12 @@ impl Fast {
         }
     }
 
+    /// The other end of `bar` at `x`.
+    fn other(&self, bar: u32, x: u32) -> u32 {
+        let [a, b] = self.ends[bar as usize];
+        if a == x { b } else { a }
+    }
+
     /// Whether body `z`, with at most B bars, has two different (super-)bodies beside it. Then
     /// no tight set holds z with another vertex: it would hold all of z's bars (a vertex
     /// carries at least its weight of bars inside a tight set), so the rest would be a
@@ -433,11 +496,8 @@ impl Fast {
     /// it forms), or a bar-free set of weight B.
     fn beside_two_bodies(&self, z: u32) -> bool {
         let mut first: Option<u32> = None;
-        let ends = self.out[z as usize]
-            .iter()
-            .map(|&b| self.head[b as usize])
-            .chain(self.inn[z as usize].iter().map(|&b| self.tail[b as usize]));
-        for y in ends {
+        for &bar in &self.inc[z as usize] {
+            let y = self.other(bar, z);
             if self.is_body(y) {
                 match first {
                     None => first = Some(y),
@@ -451,7 +511,7 @@ impl Fast {
 
     /// Bars at vertex `x` in the contracted graph.
     fn degree(&self, x: u32) -> usize {
-        self.out[x as usize].len() + self.inn[x as usize].len()
+        self.inc[x as usize].len()
     }
 
     fn is_body(&self, x: u32) -> bool {
@@ -475,7 +535,7 @@ impl Fast {
     fn next_epoch(&mut self) -> u32 {
         self.epoch = self.epoch.wrapping_add(1);
         if self.epoch == 0 {
-            self.mark.iter_mut().for_each(|m| *m = 0);
+            self.v.iter_mut().for_each(|r| r.mark = 0);
             self.epoch = 1;
         }
         self.epoch
@@ -483,97 +543,90 @@ impl Fast {
 
     /// Add a bar oriented `t` → `h` (the caller accounts for the pebble).
     fn link(&mut self, t: u32, h: u32) -> u32 {
-        let bar = self.tail.len() as u32;
-        self.tail.push(t);
-        self.head.push(h);
-        self.pos_out.push(self.out[t as usize].len() as u32);
-        self.pos_in.push(self.inn[h as usize].len() as u32);
-        self.out[t as usize].push(bar);
-        self.inn[h as usize].push(bar);
+        let bar = self.ends.len() as u32;
+        self.ends.push([t, h]);
+        self.pos.push([
+            self.inc[t as usize].len() as u32,
+            self.inc[h as usize].len() as u32,
+        ]);
+        self.inc[t as usize].push(bar);
+        self.inc[h as usize].push(bar);
+        self.v[t as usize].push_out(h, bar);
         bar
     }
 
-    fn unlink_out(&mut self, bar: u32) {
-        let t = self.tail[bar as usize] as usize;
-        let p = self.pos_out[bar as usize] as usize;
-        self.out[t].swap_remove(p);
-        if let Some(&moved) = self.out[t].get(p) {
-            self.pos_out[moved as usize] = p as u32;
+    /// Remove `bar` from the lists of both its ends (not from the out-bars).
+    fn unlink(&mut self, bar: u32) {
+        for side in 0..2 {
+            let x = self.ends[bar as usize][side];
+            let p = self.pos[bar as usize][side] as usize;
+            let list = &mut self.inc[x as usize];
+            list.swap_remove(p);
+            if let Some(&moved) = list.get(p) {
+                let s = usize::from(self.ends[moved as usize][0] != x);
+                self.pos[moved as usize][s] = p as u32;
+            }
         }
     }
 
-    fn unlink_in(&mut self, bar: u32) {
-        let h = self.head[bar as usize] as usize;
-        let p = self.pos_in[bar as usize] as usize;
-        self.inn[h].swap_remove(p);
-        if let Some(&moved) = self.inn[h].get(p) {
-            self.pos_in[moved as usize] = p as u32;
-        }
+    /// Turn round the out-bar in `slot` of `p` (to `z`): it becomes an out-bar of `z`.
+    fn flip_slot(&mut self, p: u32, slot: usize, z: u32) -> u32 {
+        let bar = self.v[p as usize].remove_out(slot);
+        self.v[z as usize].push_out(p, bar);
+        bar
     }
 
-    /// Turn `bar` round: t → h becomes h → t.
-    fn flip(&mut self, bar: u32) {
-        self.unlink_out(bar);
-        self.unlink_in(bar);
-        let (t, h) = (self.tail[bar as usize], self.head[bar as usize]);
-        self.tail[bar as usize] = h;
-        self.head[bar as usize] = t;
-        self.pos_out[bar as usize] = self.out[h as usize].len() as u32;
-        self.out[h as usize].push(bar);
-        self.pos_in[bar as usize] = self.inn[t as usize].len() as u32;
-        self.inn[t as usize].push(bar);
+    /// Position of `bar` among the out-bars of `t`.
+    fn slot_of(&self, t: u32, bar: u32) -> usize {
+        let r = &self.v[t as usize];
+        r.bar[..r.nout as usize]
+            .iter()
+            .position(|&b| b == bar)
+            .unwrap_or(0)
     }
 
     /// Bars between node `n` and vertex `s`, in either direction (both out-lists are short).
     fn bars_between(&self, n: u32, s: u32) -> usize {
-        let a = self.out[n as usize]
-            .iter()
-            .filter(|&&b| self.head[b as usize] == s)
-            .count();
-        let b = self.out[s as usize]
-            .iter()
-            .filter(|&&b| self.head[b as usize] == n)
-            .count();
+        let a = self.v[n as usize].outs().filter(|&(h, _)| h == s).count();
+        let b = self.v[s as usize].outs().filter(|&(h, _)| h == n).count();
         a + b
     }
 
     /// Move one free pebble reachable from `s` onto `s`, never taking one from `a` or `b`.
     fn find_pebble(&mut self, s: u32, a: u32, b: u32) -> bool {
         let e = self.next_epoch();
-        self.mark[s as usize] = e;
+        self.v[s as usize].mark = e;
         self.stack.clear();
         self.stack.push(s);
         while let Some(x) = self.stack.pop() {
-            for i in 0..self.out[x as usize].len() {
-                let bar = self.out[x as usize][i];
-                let y = self.head[bar as usize];
+            let rx = self.v[x as usize];
+            for i in 0..rx.nout as usize {
+                let y = rx.head[i];
                 self.work += 1;
-                if self.mark[y as usize] == e {
+                let ry = &mut self.v[y as usize];
+                if ry.mark == e {
                     continue;
                 }
-                self.mark[y as usize] = e;
-                self.from[y as usize] = bar;
+                ry.mark = e;
+                ry.from = x;
+                ry.slot = i as u8;
                 self.visited.push(y);
-                if y != a
-                    && y != b
-                    && self.peb[y as usize] > 0
-                    && (self.only == u32::MAX || self.only == y)
-                {
-                    self.peb[y as usize] -= 1;
+                if y != a && y != b && ry.peb > 0 && (self.only == u32::MAX || self.only == y) {
+                    ry.peb -= 1;
                     if self.recording {
                         self.moves.push((y, s, self.log.len() as u32));
                     }
                     let mut z = y;
                     while z != s {
-                        let bar = self.from[z as usize];
-                        z = self.tail[bar as usize];
-                        self.flip(bar);
+                        let (p, slot) = (self.v[z as usize].from, self.v[z as usize].slot);
+                        let bar = self.flip_slot(p, slot as usize, z);
                         if self.recording {
-                            self.log.push(bar);
+                            self.log.push([z, p, bar]);
                         }
+                        z = p;
                         self.work += 1;
                     }
-                    self.peb[s as usize] += 1;
+                    self.v[s as usize].peb += 1;
                     return true;
                 }
                 self.stack.push(y);
@@ -586,7 +639,7 @@ impl Fast {
     /// of `t` and directed from `t` to `h`; then, when the pair may be tight (no `l + 1`
     /// pebbles can be gathered on it), contract the new rigid component.
     fn insert_bar(&mut self, t: u32, h: u32, x: u32, y: u32) {
-        self.peb[t as usize] -= 1;
+        self.v[t as usize].peb -= 1;
         self.link(t, h);
         if self.may_be_tight(x, y) {
             self.recording = true;
@@ -606,14 +659,14 @@ impl Fast {
     fn gather(&mut self, u: u32, v: u32, target: u8) -> bool {
         // Fill first the end that holds more pebbles (fewer bars on a tie): usually the newer
         // body, whose missing pebbles are near.
-        let key = |x: u32| (self.peb[x as usize], usize::MAX - self.degree(x));
+        let key = |x: u32| (self.peb(x), usize::MAX - self.degree(x));
         let (u, v) = if key(v) > key(u) { (v, u) } else { (u, v) };
-        while self.peb[u as usize] + self.peb[v as usize] < target {
+        while self.peb(u) + self.peb(v) < target {
             self.visited.clear();
-            if self.peb[u as usize] < self.weight[u as usize] && self.find_pebble(u, u, v) {
+            if self.peb(u) < self.weight(u) && self.find_pebble(u, u, v) {
                 continue;
             }
-            if self.peb[v as usize] < self.weight[v as usize] && self.find_pebble(v, u, v) {
+            if self.peb(v) < self.weight(v) && self.find_pebble(v, u, v) {
                 continue;
             }
             return false;
@@ -628,14 +681,36 @@ impl Fast {
             let Some((z, s, start)) = self.moves.pop() else {
                 break;
             };
+            // The bars turn back in the order they turned, each pushed onto its old tail, from
+            // which the next is removed: the push and the removal are one replacement in
+            // place (push, then `swap_remove` moves the pushed bar into the freed slot), so a
+            // vertex never holds more than its weight of out-bars.
+            let mut pending: Option<(u32, u32, u32)> = None;
             for k in start as usize..self.log.len() {
-                let bar = self.log[k];
-                self.flip(bar);
+                let [t, h, bar] = self.log[k];
+                let j = self.slot_of(t, bar);
+                match pending {
+                    Some((x, head, b)) if x == t => {
+                        let r = &mut self.v[t as usize];
+                        r.head[j] = head;
+                        r.bar[j] = b;
+                    }
+                    other => {
+                        if let Some((x, head, b)) = other {
+                            self.v[x as usize].push_out(head, b);
+                        }
+                        self.v[t as usize].remove_out(j);
+                    }
+                }
+                pending = Some((h, t, bar));
                 self.work += 1;
             }
+            if let Some((x, head, b)) = pending {
+                self.v[x as usize].push_out(head, b);
+            }
             self.log.truncate(start as usize);
-            self.peb[s as usize] -= 1;
-            self.peb[z as usize] += 1;
+            self.v[s as usize].peb -= 1;
+            self.v[z as usize].peb += 1;
         }
     }
 
@@ -649,15 +724,16 @@ impl Fast {
 
     /// Whether node `n` is pinned to super-body `k` (B − k bars between them).
     fn pinned_to(&self, n: u32, k: u32) -> bool {
-        !self.is_body(n) && self.bars_between(n, k) >= self.weight[n as usize] as usize
+        !self.is_body(n) && self.bars_between(n, k) >= self.weight(n) as usize
     }
 
     /// Whether node `n` has all its pebbles on bars to one super-body of the set.
     fn pinned_in_set(&self, n: u32, q_e: u32) -> bool {
-        if self.is_body(n) || self.out[n as usize].len() < self.weight[n as usize] as usize {
+        let r = &self.v[n as usize];
+        if self.is_body(n) || r.nout < r.weight {
             return false;
         }
-        let mut heads = self.out[n as usize].iter().map(|&b| self.head[b as usize]);
+        let mut heads = r.outs().map(|(h, _)| h);
         let first = heads.next();
         first.is_some_and(|h| self.qmark[h as usize] == q_e && heads.all(|y| y == h))
     }
@@ -665,34 +741,41 @@ impl Fast {
     /// Reverse-search step: every vertex with a bar into `x` that reaches no free pebble
     /// outside the set joins it, with every vertex its search visited.
     fn scan_in(&mut self, x: u32, q_e: u32, q: &mut Vec<u32>, seen: &mut Vec<u32>) {
+        let own = self.v[x as usize];
+        let own = &own.bar[..own.nout as usize];
         let mut k = 0;
-        while k < self.inn[x as usize].len() {
-            let p = self.tail[self.inn[x as usize][k] as usize];
+        while k < self.inc[x as usize].len() {
+            let bar = self.inc[x as usize][k];
             k += 1;
+            if own.contains(&bar) {
+                continue; // An out-bar of x.
+            }
+            let p = self.other(bar, x);
             self.work += 1;
             if self.qmark[p as usize] == q_e || self.fmark[p as usize] == q_e {
                 continue;
             }
             let e = self.next_epoch();
-            self.mark[p as usize] = e;
-            let mut found = self.peb[p as usize] > 0;
+            self.v[p as usize].mark = e;
+            let mut found = self.peb(p) > 0;
             seen.clear();
             seen.push(p);
             let mut si = 0;
             while si < seen.len() && !found {
                 let y = seen[si];
                 si += 1;
-                for &bar in &self.out[y as usize] {
-                    let z = self.head[bar as usize] as usize;
+                let ry = self.v[y as usize];
+                for (z, _) in ry.outs() {
+                    let z = z as usize;
                     self.work += 1;
-                    if self.qmark[z] == q_e || self.mark[z] == e {
+                    if self.qmark[z] == q_e || self.v[z].mark == e {
                         continue;
                     }
-                    if self.fmark[z] == q_e || self.peb[z] > 0 {
+                    if self.fmark[z] == q_e || self.v[z].peb > 0 {
                         found = true;
                         break;
                     }
-                    self.mark[z] = e;
+                    self.v[z].mark = e;
                     seen.push(z as u32);
                 }
             }
@@ -705,6 +788,11 @@ impl Fast {
                 }
             }
         }
+    }
+
+    /// In-bars of `x` (bars at it that are not its out-bars).
+    fn in_degree(&self, x: u32) -> usize {
+        self.degree(x) - self.v[x as usize].nout as usize
     }
 
     /// After a failed gather on {u, v}: grow the minimal tight set to the maximal one and
@@ -754,10 +842,7 @@ impl Fast {
                     if self.is_body(x) {
                         match big {
                             None => big = Some(x),
-                            Some(b)
-                                if !fixed
-                                    && self.inn[x as usize].len() > self.inn[b as usize].len() =>
-                            {
+                            Some(b) if !fixed && self.in_degree(x) > self.in_degree(b) => {
                                 big = Some(x);
                                 self.scan_in(b, q_e, &mut q, &mut seen);
                             }
@@ -792,11 +877,12 @@ impl Fast {
         let keep = lone.or(big).unwrap_or(u);
         // The set is closed: every out-bar of a member is inside it. Drop them all.
         for &x in &q {
-            let outs = std::mem::take(&mut self.out[x as usize]);
-            for bar in outs {
-                self.unlink_in(bar);
+            let r = self.v[x as usize];
+            for (_, bar) in r.outs() {
+                self.unlink(bar);
                 self.work += 1;
             }
+            self.v[x as usize].nout = 0;
         }
         for &x in &q {
             if x == keep {
@@ -804,11 +890,19 @@ impl Fast {
             }
             if self.is_body(x) {
                 // Relabel the in-bars (all from outside now) to the kept super-body.
-                let inn = std::mem::take(&mut self.inn[x as usize]);
+                let inn = std::mem::take(&mut self.inc[x as usize]);
                 for bar in inn {
-                    self.head[bar as usize] = keep;
-                    self.pos_in[bar as usize] = self.inn[keep as usize].len() as u32;
-                    self.inn[keep as usize].push(bar);
+                    let side = usize::from(self.ends[bar as usize][0] != x);
+                    let t = self.ends[bar as usize][1 - side];
+                    self.ends[bar as usize][side] = keep;
+                    self.pos[bar as usize][side] = self.inc[keep as usize].len() as u32;
+                    self.inc[keep as usize].push(bar);
+                    let rt = &mut self.v[t as usize];
+                    for i in 0..rt.nout as usize {
+                        if rt.bar[i] == bar {
+                            rt.head[i] = keep;
+                        }
+                    }
                     self.work += 1;
                 }
                 self.parent[x as usize] = keep;
@@ -818,16 +912,16 @@ impl Fast {
                 }
                 self.work += mine.len() as u64;
                 self.members[keep as usize].extend(mine);
-                self.peb[x as usize] = 0;
+                self.v[x as usize].peb = 0;
             } else {
                 // A node of the component: pinned to the super-body by its B − k bars.
-                for _ in 0..self.weight[x as usize] {
+                for _ in 0..self.weight(x) {
                     self.link(x, keep);
                 }
-                self.peb[x as usize] = 0;
+                self.v[x as usize].peb = 0;
             }
         }
-        self.peb[keep as usize] = self.l;
+        self.v[keep as usize].peb = self.l;
         let size = self.members[keep as usize].len();
         if size >= 2 && size < self.n_bodies {
             self.proper = true;
@@ -867,7 +961,7 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
         game.work += 1;
         if x == y {
             // A bar from a body to itself, or inside one rigid component: redundant.
-        } else if !game.is_body(y) && game.bars_between(y, x) >= game.weight[y as usize] as usize {
+        } else if !game.is_body(y) && game.bars_between(y, x) >= game.weight(y) as usize {
             // The node is pinned to the component: redundant.
         } else if let Some((t, h)) = game.fresh_end(x, y) {
             // Independent without a search: the pebble comes from the end with room.
@@ -883,8 +977,8 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
             // is independent and leaves the pair in no tight set; exactly B + 1 means
             // independent and tight, and the failed search for the last one visited the
             // minimal tight set, as a failed gather after the insertion would.
-            let (ox, oy) = (game.peb[x as usize], game.peb[y as usize]);
-            let wide = game.weight[x as usize] + game.weight[y as usize] > l + 1;
+            let (ox, oy) = (game.peb(x), game.peb(y));
+            let wide = game.weight(x) + game.weight(y) > l + 1;
             game.recording = true;
             let ok = game.gather(x, y, l + 1);
             let loose = ok && wide && game.gather(x, y, l + 2);
@@ -893,12 +987,8 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
                 // Tight once the bar is in: keep the moves (the contraction reads the state),
                 // pay with a pebble of the pair and contract the set the search found.
                 game.keep_moves(0);
-                let (t, h) = if game.peb[x as usize] > 0 {
-                    (x, y)
-                } else {
-                    (y, x)
-                };
-                game.peb[t as usize] -= 1;
+                let (t, h) = if game.peb(x) > 0 { (x, y) } else { (y, x) };
+                game.v[t as usize].peb -= 1;
                 game.link(t, h);
                 game.contract(x, y);
                 accepted[i] = true;
@@ -930,18 +1020,14 @@ fn solve_fast(g: &Graph, l: u8, meter: &mut Meter) -> Result<FastSolution, Budge
                         Some(p) => p,
                         None => {
                             let _ = game.find_pebble(x, x, y) || game.find_pebble(y, x, y);
-                            if game.peb[x as usize] > 0 {
-                                (x, y)
-                            } else {
-                                (y, x)
-                            }
+                            if game.peb(x) > 0 { (x, y) } else { (y, x) }
                         }
                     }
                 };
                 game.undo_to(0);
                 if loose {
                     // Not tight after the bar (B + 2 pebbles were there): no check.
-                    game.peb[t as usize] -= 1;
+                    game.v[t as usize].peb -= 1;
                     game.link(t, h);
                 } else {
                     game.insert_bar(t, h, x, y);
