@@ -4,7 +4,10 @@
 //! geometric analysis said mobility 9 and 63 (the rounding threshold multiplied every written
 //! number by the largest coordinate), then 2 and 11 with the point/direction split alone
 //! (twists about the world origin lose the decision); with the body-local twists of the
-//! sparse path it says 1, as the same files written near the origin do.
+//! sparse path it says 1, as the same files written near the origin do. Since the geometry is
+//! made dimensionless before every rank decision (points about their centre, lengths in link
+//! lengths), a spatial and a planar four-bar get the same numbers from `rigid`, `analyze` and
+//! `check` in m, mm and µm, near the origin or 10^4 units from it.
 
 use assert_cmd::Command;
 use std::fmt::Write;
@@ -67,4 +70,222 @@ fn a_planar_four_bar_in_millimetres_far_from_the_origin_moves_with_one_dof() {
             "{n} windows"
         );
     }
+}
+
+/// The four pins of a four-bar in millimetres (links of 100.3 mm, a parallelogram leaning by
+/// (0.6, 0.8)), far from the origin; z = 250.5 is known to ±0.05 mm only.
+const PINS_MM: [[f64; 3]; 4] = [
+    [1000.17, 500.23, 250.5],
+    [1060.35, 580.47, 250.5],
+    [1160.65, 580.47, 250.5],
+    [1100.47, 500.23, 250.5],
+];
+
+/// The same four-bar written in another unit and place: a point `p` (mm) is written
+/// `(p + shift) · factor`, rounded to `decimals`.
+#[derive(Clone, Copy, Debug)]
+struct Units {
+    label: &'static str,
+    shift: [f64; 3],
+    factor: f64,
+    decimals: i32,
+}
+
+const VARIANTS: [Units; 5] = [
+    // Metres near the origin: the reference (twists about the origin are well conditioned).
+    Units {
+        label: "m near the origin",
+        shift: [-1080.0, -540.0, -250.0],
+        factor: 1e-3,
+        decimals: 5,
+    },
+    Units {
+        label: "m",
+        shift: [0.0; 3],
+        factor: 1e-3,
+        decimals: 5,
+    },
+    Units {
+        label: "mm",
+        shift: [0.0; 3],
+        factor: 1.0,
+        decimals: 2,
+    },
+    Units {
+        label: "µm",
+        shift: [0.0; 3],
+        factor: 1e3,
+        decimals: 0,
+    },
+    Units {
+        label: "mm translated by 1e4",
+        shift: [1e4; 3],
+        factor: 1.0,
+        decimals: 2,
+    },
+];
+
+/// A four-bar (bodies 1-4, frame 1, R joints A-D) at [`PINS_MM`] written in `u`: spatial
+/// (axes z) or planar.
+fn four_bar(u: Units, spatial: bool) -> String {
+    let space = if spatial { "spatial" } else { "planar" };
+    let mut out = format!("name = \"four-bar\"\nspace = \"{space}\"\nframe = 1\n");
+    let scale = 10f64.powi(u.decimals);
+    for (k, (p, (a, b))) in PINS_MM
+        .iter()
+        .zip([(1, 2), (2, 3), (3, 4), (4, 1)])
+        .enumerate()
+    {
+        let q: Vec<String> = (0..if spatial { 3 } else { 2 })
+            .map(|i| {
+                format!(
+                    "{}",
+                    ((p[i] + u.shift[i]) * u.factor * scale).round() / scale
+                )
+            })
+            .collect();
+        let _ = write!(
+            out,
+            "\n[[joint]]\nid = \"{}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{}]\n{}",
+            ["A", "B", "C", "D"][k],
+            q.join(", "),
+            if spatial { "axis = [0, 0, 1]\n" } else { "" }
+        );
+    }
+    out
+}
+
+fn run(args: &[&str], text: &str) -> (Option<i32>, String) {
+    let out = Command::cargo_bin("mbsa")
+        .expect("the mbsa binary is built")
+        .args(args)
+        .write_stdin(text)
+        .output()
+        .expect("mbsa runs");
+    (
+        out.status.code(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+    )
+}
+
+/// The numbers of `rigid --method geometric`: count, true mobility, redundant constraints,
+/// rows, rank, unknowns, isolated DOF (from the JSON report).
+fn rigid_numbers(text: &str) -> Vec<i64> {
+    let (code, out) = run(
+        &["rigid", "--method", "geometric", "--format", "json", "-"],
+        text,
+    );
+    assert_eq!(code, Some(0), "{out}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("a JSON report");
+    let r = v.get("geometric").unwrap_or(&v);
+    [
+        "count",
+        "mobility",
+        "redundant",
+        "rows",
+        "rank",
+        "columns",
+        "isolated",
+    ]
+    .iter()
+    .map(|k| r[*k].as_i64().unwrap_or_else(|| panic!("`{k}` in {out}")))
+    .collect()
+}
+
+/// `analyze`'s verdict: every line but the geometry's (its precision is in the unit written)
+/// and the closure's.
+fn analyze_verdict(text: &str) -> String {
+    let (code, out) = run(&["analyze", "-"], text);
+    assert_eq!(code, Some(0), "{out}");
+    out.lines()
+        .filter(|l| !l.starts_with("geometry:") && !l.starts_with("closure:"))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `check` with the expectations of the four-bar as analysed in metres near the origin.
+fn check_passes(text: &str, expect: &str) -> (Option<i32>, String) {
+    run(&["check", "-"], &format!("{text}\n[expect]\n{expect}"))
+}
+
+#[test]
+fn four_bars_in_any_unit_and_place_get_the_same_verdicts() {
+    // (spatial, rigid numbers, analyze's summary, expectations for `check`), the numbers
+    // being those of the metres file near the origin: a spatial four-bar counts -2 (6·3 −
+    // 4·5) but moves with 1 DOF, its 3 redundant constraints set aside at the file's
+    // configuration; a planar one counts and moves 1.
+    let cases = [
+        (
+            true,
+            [-2, 1, 3, 20, 17, 18, 0],
+            "mobility -2, inputs 0; not determined (over- and under-determined parts)",
+            "mobility = -2\ntrue_mobility = 1\nredundant = 3\nisolated = 0\ngroups = 0\n\
+             determined = false\nuncontrolled = 1\n",
+        ),
+        (
+            false,
+            [1, 1, 0, 8, 8, 9, 0],
+            "mobility 1, inputs 0; under-determined",
+            "mobility = 1\ntrue_mobility = 1\nredundant = 0\nisolated = 0\ngroups = 0\n\
+             determined = false\nuncontrolled = 1\n",
+        ),
+    ];
+    for (spatial, numbers, summary, expect) in cases {
+        let reference = four_bar(VARIANTS[0], spatial);
+        let verdict = analyze_verdict(&reference);
+        assert!(verdict.contains(summary), "{verdict}");
+        for u in VARIANTS {
+            let text = four_bar(u, spatial);
+            let what = format!(
+                "{} ({})",
+                u.label,
+                if spatial { "spatial" } else { "planar" }
+            );
+            assert_eq!(rigid_numbers(&text), numbers, "{what}:\n{text}");
+            assert_eq!(analyze_verdict(&text), verdict, "{what}:\n{text}");
+            let (code, out) = check_passes(&text, expect);
+            assert_eq!(code, Some(0), "{what}: {out}");
+        }
+    }
+}
+
+/// A bar between two balls spins about the line of their centres: its axis is reported in
+/// the file's units and place, though the rank decisions ran on the dimensionless geometry.
+#[test]
+fn an_isolated_spin_in_millimetres_is_reported_in_millimetres() {
+    let text = "name = \"SS bar\"\nspace = \"spatial\"\nframe = 1\n\
+        \n[[joint]]\nid = \"A\"\ntype = \"S\"\nbodies = [1, 2]\norigin = [1000.17, 500.23, 250.5]\n\
+        \n[[joint]]\nid = \"B\"\ntype = \"S\"\nbodies = [2, 1]\norigin = [1100.47, 580.47, 250.5]\n";
+    let (code, out) = run(
+        &["rigid", "--method", "geometric", "--format", "json", "-"],
+        text,
+    );
+    assert_eq!(code, Some(0), "{out}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("a JSON report");
+    let r = v.get("geometric").unwrap_or(&v);
+    assert_eq!(r["mobility"], 1, "{out}");
+    let axis = &r["isolated_motions"][0]["axis"];
+    assert_eq!(axis["kind"], "rotation", "{out}");
+    let get = |k: &str| -> [f64; 3] {
+        let a = axis[k].as_array().unwrap_or_else(|| panic!("{k} in {out}"));
+        [0, 1, 2].map(|i| a[i].as_f64().unwrap_or(f64::NAN))
+    };
+    let (p, d) = (get("point"), get("direction"));
+    // The point lies on the line through both centres, the direction along it.
+    let (a, b) = (PINS_MM[0], [1100.47, 580.47, 250.5]);
+    let ab: Vec<f64> = (0..3).map(|i| b[i] - a[i]).collect();
+    let len = ab.iter().map(|x| x * x).sum::<f64>().sqrt();
+    let ap: Vec<f64> = (0..3).map(|i| p[i] - a[i]).collect();
+    let cross = [
+        ap[1] * ab[2] - ap[2] * ab[1],
+        ap[2] * ab[0] - ap[0] * ab[2],
+        ap[0] * ab[1] - ap[1] * ab[0],
+    ];
+    let off = cross.iter().map(|x| x * x).sum::<f64>().sqrt() / len;
+    assert!(
+        off < 1e-6,
+        "the axis point {p:?} is {off} mm off the line: {out}"
+    );
+    let along = (0..3).map(|i| d[i] * ab[i] / len).sum::<f64>().abs();
+    assert!((along - 1.0).abs() < 1e-9, "direction {d:?}: {out}");
 }

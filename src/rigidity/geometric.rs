@@ -308,7 +308,9 @@ fn orthonormalize(vs: Vec<DVector<f64>>) -> Vec<DVector<f64>> {
 
 // ---------------------------------------------------------------------------------------------
 
-fn axis_of(space: Space, t: &[f64]) -> Option<Axis> {
+/// The axis of the motion `t` of the dimensionless geometry `scale` gives, in file units.
+fn axis_of(space: Space, scale: &motion::Scale, t: &[f64]) -> Option<Axis> {
+    let t = &scale.world_twist(space, t)[..];
     let round = |x: f64| {
         if x.abs() < 1e-12 {
             0.0
@@ -1098,13 +1100,15 @@ fn analyze_models(
     let nb = m.bodies.len();
     let frame = m.frame;
     let pairs = pairs_of(m);
-    // Far from the world origin (coordinates in millimetres, say) the dense path's twists,
-    // taken about the world origin, mix rotations with lever arms of size L and lose rank
-    // decisions (a four-bar at 1,000 mm: mobility 2 or 9); the sparse path takes each body's
-    // twists about its own point.
+    // The models are at the dimensionless geometry (`motion::scale_of`: about the centre, in
+    // link lengths), so the length unit and the place do not matter. Joints many link lengths
+    // from the centre (a long row of windows) still give the dense path's centre-based twists
+    // lever arms of size L, which lose rank decisions as L grows; the sparse path takes each
+    // body's twists about its own point.
     // (`with_sparse_from(usize::MAX, ..)` keeps the dense path for tests comparing the two.)
+    let scale = used.scale.unwrap_or(motion::Scale::IDENTITY);
     let far = used.is_file()
-        && motion::lever(m) > sparse_float::FAR_LEVER
+        && motion::lever(m, &scale) > sparse_float::FAR_LEVER
         && sparse_float::sparse_from() < usize::MAX;
     let id = |i: usize| m.body_id(i).to_string();
     let rows_total: usize = pairs.iter().map(|p| models[p.joint].rows.nrows()).sum();
@@ -1162,6 +1166,7 @@ fn analyze_models(
         } else {
             sparse_float::isolated(
                 m,
+                &scale,
                 &a,
                 local_rel,
                 incident[body].iter().map(|&pi| pairs[pi].joint),
@@ -1581,17 +1586,20 @@ fn analyze_models(
     let mut redundant_joints = Vec::new();
     let wmax = w.values().cloned().fold(0.0, f64::max);
     if wmax > 0.0 {
+        // Ordered by the weight as reported (rounded to 1e-6), then in joint order: equal
+        // weights (the four joints of a Bennett linkage) are not ordered by rounding noise.
         let mut list: Vec<(usize, f64)> = w
             .into_iter()
             .map(|(j, v)| (j, (v / wmax).sqrt()))
             .filter(|(_, v)| *v > 1e-6)
+            .map(|(j, v)| (j, (v * 1e6).round() / 1e6))
             .collect();
         list.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
         redundant_joints = list
             .into_iter()
             .map(|(j, v)| JointWeight {
                 joint: m.joints[j].id.clone(),
-                weight: (v * 1e6).round() / 1e6,
+                weight: v,
             })
             .collect();
     }
@@ -1636,7 +1644,7 @@ fn analyze_models(
             joints: joint_ids(&mut incident[body].iter().copied()),
             dof: k,
             axis: if k == 1 {
-                axis_of(m.space, iso[body].column(0).as_slice())
+                axis_of(m.space, &scale, iso[body].column(0).as_slice())
             } else {
                 None
             },
@@ -1656,7 +1664,7 @@ fn analyze_models(
             joints: joint_ids(&mut incident[frame].iter().copied()),
             dof: frame_spin,
             axis: if frame_spin == 1 {
-                axis_of(m.space, frame_iso.column(0).as_slice())
+                axis_of(m.space, &scale, frame_iso.column(0).as_slice())
             } else {
                 None
             },
@@ -1729,7 +1737,7 @@ fn analyze_models(
             joints: joint_ids(&mut boundary.iter().copied()),
             dof: k,
             axis: if k == 1 && t.ncols() == 1 {
-                axis_of(m.space, t.column(0).as_slice())
+                axis_of(m.space, &scale, t.column(0).as_slice())
             } else {
                 None
             },

@@ -36,7 +36,7 @@ use super::{
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::elimination::{Block, sigma_max};
 use crate::mechanism::{Mechanism, Space};
-use crate::motion::{GeometryUsed, JointModel};
+use crate::motion::{GeometryUsed, JointModel, Scale};
 use nalgebra::{DMatrix, DVector};
 use std::cell::Cell;
 use std::collections::BTreeMap;
@@ -44,10 +44,12 @@ use std::collections::BTreeMap;
 /// Parts with more unknowns than this are analysed by the sparse path at the file's geometry.
 pub(super) const SPARSE_COLUMNS: usize = 1200;
 
-/// File geometry with a joint origin farther than this from the world origin (in the file's
-/// length unit) takes the sparse path at any size: its body-local twists keep the rank
-/// decisions that world-origin twists lose as the lever arm grows (robots written in metres
-/// stay on the dense path; linkages written in millimetres move here).
+/// File geometry with a joint origin farther than this from the centre, in characteristic
+/// lengths ([`crate::motion::lever`] at the dimensionless geometry), takes the sparse path at
+/// any size: its body-local twists keep the rank decisions that centre-based twists lose as
+/// the lever arm grows (a long row of windows, in any unit). A compact linkage (a four-bar in
+/// millimetres far from the world origin: lever 0.8) stays on the dense path, which the
+/// dimensionless geometry keeps well conditioned.
 pub(super) const FAR_LEVER: f64 = 10.0;
 
 thread_local! {
@@ -100,12 +102,17 @@ fn shift(space: Space, c: [f64; 3]) -> Option<DMatrix<f64>> {
     }
 }
 
-/// The reference point of a body: the mean of the origins of `joints` (none without one).
-fn reference(m: &Mechanism, joints: impl Iterator<Item = usize>) -> Option<[f64; 3]> {
+/// The reference point of a body: the mean of the origins of `joints` (none without one), at
+/// the dimensionless geometry `scale` gives (the joint models' coordinates).
+fn reference(
+    m: &Mechanism,
+    scale: &Scale,
+    joints: impl Iterator<Item = usize>,
+) -> Option<[f64; 3]> {
     let mut c = [0.0; 3];
     let mut n = 0.0;
     for j in joints {
-        if let Some(o) = m.joints[j].geometry.origin {
+        if let Some(o) = m.joints[j].geometry.origin.map(|p| scale.point(p)) {
             for i in 0..3 {
                 c[i] += o[i];
             }
@@ -124,12 +131,13 @@ fn reference(m: &Mechanism, joints: impl Iterator<Item = usize>) -> Option<[f64;
 /// world one (unchanged reports).
 pub(super) fn isolated(
     m: &Mechanism,
+    scale: &Scale,
     a: &DMatrix<f64>,
     rel: f64,
     joints: impl Iterator<Item = usize>,
 ) -> DMatrix<f64> {
     let world = small_null(a, rel);
-    let Some(s) = reference(m, joints).and_then(|c| shift(m.space, c)) else {
+    let Some(s) = reference(m, scale, joints).and_then(|c| shift(m.space, c)) else {
         return world;
     };
     let mut local = a * &s;
@@ -184,7 +192,12 @@ impl SparsePart<'_> {
         if self.iso[body].ncols() > 0 || self.comp[body].ncols() != self.b {
             return None;
         }
-        let c = reference(self.m, incident.iter().map(|&pi| self.pairs[pi].joint))?;
+        let scale = self.used.scale.unwrap_or(Scale::IDENTITY);
+        let c = reference(
+            self.m,
+            &scale,
+            incident.iter().map(|&pi| self.pairs[pi].joint),
+        )?;
         shift(self.m.space, c)
     }
 
