@@ -145,12 +145,29 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
         args.geometry.closure_check(&file.file, &m)?;
     }
     let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
-    let out = emit(&match format {
-        OutputFormat::Table => mbsa::report::structure::table(&a),
-        OutputFormat::Json => mbsa::report::json(&a),
-    });
+    let out = match format {
+        OutputFormat::Table => emit(&mbsa::report::structure::table(&a)),
+        OutputFormat::Json => emit_json(&a),
+    };
     keep_until_exit((m, a));
     out
+}
+
+/// [`emit`] of [`mbsa::report::json`], the same bytes, written as they are serialized: the
+/// text of a 10^6-body analysis is over 100 MB, and held whole it was the largest allocation
+/// after the analysis (with the copies of its growth).
+fn emit_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
+    use std::io::Write;
+    let mut out = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
+    let written = serde_json::to_writer_pretty(&mut out, value)
+        .map_err(std::io::Error::from)
+        .and_then(|()| out.write_all(b"\n"))
+        .and_then(|()| out.flush());
+    match written {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
+        Err(e) => Err(Failure::Input(format!("error: cannot write output: {e}"))),
+    }
 }
 
 /// `--view` values.

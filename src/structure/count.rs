@@ -194,23 +194,24 @@ pub(crate) fn decompose(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Decomposit
     let (src, sink) = (0usize, 1usize);
     let eq_node = |e: usize| 2 + e;
     let body_node = |b: usize| 2 + ne + b;
-    let mut edges: Vec<(u32, u32, u32)> = Vec::with_capacity(3 * ne + nb);
-    for e in 0..ne {
-        edges.push((src as u32, eq_node(e) as u32, eqs.cap[e]));
-        let [h, o] = eqs.bodies(e);
-        if h != m.frame {
-            edges.push((eq_node(e) as u32, body_node(h) as u32, INF));
+    // The edges are listed twice (counted, then placed) rather than held in a list.
+    let mut net = Network::from_edges(2 + ne + nb, |put| {
+        for e in 0..ne {
+            put(src as u32, eq_node(e) as u32, eqs.cap[e]);
+            let [h, o] = eqs.bodies(e);
+            if h != m.frame {
+                put(eq_node(e) as u32, body_node(h) as u32, INF);
+            }
+            if o != m.frame && o != h {
+                put(eq_node(e) as u32, body_node(o) as u32, INF);
+            }
         }
-        if o != m.frame && o != h {
-            edges.push((eq_node(e) as u32, body_node(o) as u32, INF));
+        for (b, &ub) in u.iter().enumerate().take(nb) {
+            if b != m.frame {
+                put(body_node(b) as u32, sink as u32, ub);
+            }
         }
-    }
-    for (b, &ub) in u.iter().enumerate().take(nb) {
-        if b != m.frame {
-            edges.push((body_node(b) as u32, sink as u32, ub));
-        }
-    }
-    let mut net = Network::new(2 + ne + nb, &edges);
+    });
     if eqs.hint.len() == ne {
         let mut start = Vec::new();
         for (e, h) in eqs.hint.iter().enumerate() {
