@@ -24,7 +24,8 @@ use crate::structure::{self, Analysis, Library, Status, TypeCount};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::cmp::Ordering;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, HashMap};
+use std::sync::{Arc, OnceLock};
 
 /// A ranking criterion (`--rank`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
@@ -242,7 +243,7 @@ pub struct Placement {
     /// Group types with counts and coverage, in order of first appearance.
     pub types: Vec<TypeCount>,
     /// The groups' bodies in canonical order (level, size, smallest body).
-    pub partition: Vec<Vec<String>>,
+    pub partition: Partition,
     /// Enumeration order (deterministic), the final tie-break.
     #[serde(skip)]
     seq: usize,
@@ -255,9 +256,9 @@ pub struct Placement {
     /// Level and smallest body (index) of each group of `partition`.
     #[serde(skip)]
     groups_at: Vec<(usize, usize)>,
-    /// SG type of each group of `partition`.
+    /// SG type of each group of `partition` (its index in `types`).
     #[serde(skip)]
-    kinds: Vec<String>,
+    kinds: Vec<u32>,
     /// Whether the library covers each group of `partition`.
     #[serde(skip)]
     in_lib: Vec<bool>,
@@ -278,12 +279,189 @@ impl Placement {
             .collect::<Vec<_>>()
             .join(",")
     }
+}
 
-    /// The partition as an order-independent key.
-    fn partition_key(&self) -> Vec<Vec<String>> {
-        let mut k = self.partition.clone();
-        k.sort();
-        k
+/// The groups' bodies of a placement, in canonical order, kept as body indices into the
+/// mechanism's body ids (shared by every placement): four bytes a body instead of a string
+/// each. A listed placement of a 10^5-body linkage held 10^5 strings (about 6 MB; 100 of them
+/// and their families' copies were 2.3 GB of `transform --limit 100`). It serializes as the
+/// list of lists of body ids it stands for.
+#[derive(Clone, Debug)]
+pub struct Partition(Repr);
+
+#[derive(Clone, Debug)]
+enum Repr {
+    /// Group `g` is `bodies[ends[g - 1]..ends[g]]`, each an index into `ids`.
+    Indexed {
+        ids: Arc<Vec<String>>,
+        bodies: Vec<u32>,
+        ends: Vec<u32>,
+    },
+    /// The ids themselves: an analysis named a body the id table lacks (never expected).
+    Text(Vec<Vec<String>>),
+}
+
+/// A partition as an order-independent key: equal keys are equal partitions (the same sets of
+/// groups with the same bodies in the same order), as the sorted lists of ids were.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum PartitionKey {
+    Indexed(Vec<Vec<u32>>),
+    Text(Vec<Vec<String>>),
+}
+
+impl Partition {
+    /// Groups of bodies given as indices into `ids`.
+    fn indexed(ids: &Arc<Vec<String>>, groups: impl Iterator<Item = Vec<u32>>) -> Partition {
+        let mut bodies = Vec::new();
+        let mut ends = Vec::new();
+        for g in groups {
+            bodies.extend_from_slice(&g);
+            ends.push(bodies.len() as u32);
+        }
+        bodies.shrink_to_fit();
+        ends.shrink_to_fit();
+        Partition(Repr::Indexed {
+            ids: Arc::clone(ids),
+            bodies,
+            ends,
+        })
+    }
+
+    /// Number of groups.
+    pub fn len(&self) -> usize {
+        match &self.0 {
+            Repr::Indexed { ends, .. } => ends.len(),
+            Repr::Text(v) => v.len(),
+        }
+    }
+
+    /// Whether there are no groups.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    fn range(ends: &[u32], g: usize) -> std::ops::Range<usize> {
+        let start = if g == 0 { 0 } else { ends[g - 1] as usize };
+        start..ends[g] as usize
+    }
+
+    /// Body ids of group `g` (empty past the last group).
+    pub fn group(&self, g: usize) -> Vec<&str> {
+        match &self.0 {
+            Repr::Indexed { ids, bodies, ends } if g < ends.len() => bodies[Self::range(ends, g)]
+                .iter()
+                .map(|&x| ids.get(x as usize).map_or("", String::as_str))
+                .collect(),
+            Repr::Text(v) => v
+                .get(g)
+                .map(|grp| grp.iter().map(String::as_str).collect())
+                .unwrap_or_default(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// Number of bodies of group `g`.
+    fn group_len(&self, g: usize) -> usize {
+        match &self.0 {
+            Repr::Indexed { ends, .. } if g < ends.len() => Self::range(ends, g).len(),
+            Repr::Text(v) => v.get(g).map_or(0, Vec::len),
+            _ => 0,
+        }
+    }
+
+    /// Every group's body ids.
+    pub fn to_vec(&self) -> Vec<Vec<String>> {
+        (0..self.len())
+            .map(|g| self.group(g).into_iter().map(str::to_string).collect())
+            .collect()
+    }
+
+    fn key(&self) -> PartitionKey {
+        match &self.0 {
+            Repr::Indexed { bodies, ends, .. } => {
+                let mut k: Vec<Vec<u32>> = (0..ends.len())
+                    .map(|g| bodies[Self::range(ends, g)].to_vec())
+                    .collect();
+                k.sort();
+                PartitionKey::Indexed(k)
+            }
+            Repr::Text(v) => {
+                let mut k = v.clone();
+                k.sort();
+                PartitionKey::Text(k)
+            }
+        }
+    }
+
+    /// A part's partition in the whole mechanism's terms: body `x` of the part is `map[x]`,
+    /// with the whole's ids.
+    fn remap(&mut self, map: &[usize], whole: &Arc<Vec<String>>) {
+        if let Repr::Indexed { ids, bodies, .. } = &mut self.0 {
+            for x in bodies.iter_mut() {
+                *x = map.get(*x as usize).map_or(u32::MAX, |&y| y as u32);
+            }
+            *ids = Arc::clone(whole);
+        }
+    }
+}
+
+impl PartialEq for Partition {
+    fn eq(&self, other: &Partition) -> bool {
+        self.len() == other.len() && (0..self.len()).all(|g| self.group(g) == other.group(g))
+    }
+}
+
+impl Eq for Partition {}
+
+impl Serialize for Partition {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeSeq;
+        let mut seq = s.serialize_seq(Some(self.len()))?;
+        for g in 0..self.len() {
+            seq.serialize_element(&self.group(g))?;
+        }
+        seq.end()
+    }
+}
+
+/// The body ids of a mechanism as the analysis writes them, shared by its placements'
+/// partitions, and (made on first use, by the full analyses only) the index of each.
+struct BodyNames {
+    ids: Arc<Vec<String>>,
+    index: OnceLock<HashMap<String, u32>>,
+}
+
+impl BodyNames {
+    fn of(m: &Mechanism) -> BodyNames {
+        BodyNames {
+            ids: Arc::new(m.bodies.iter().map(|b| b.id.to_string()).collect()),
+            index: OnceLock::new(),
+        }
+    }
+
+    /// The partition of groups given by their body ids.
+    fn partition(&self, groups: &[&[String]]) -> Partition {
+        let index = self.index.get_or_init(|| {
+            let mut h = HashMap::with_capacity(self.ids.len());
+            for (i, id) in self.ids.iter().enumerate() {
+                h.entry(id.clone()).or_insert(i as u32);
+            }
+            h
+        });
+        let mut out: Vec<Vec<u32>> = Vec::with_capacity(groups.len());
+        for g in groups {
+            let mut v = Vec::with_capacity(g.len());
+            for id in g.iter() {
+                match index.get(id) {
+                    Some(&x) => v.push(x),
+                    None => {
+                        return Partition(Repr::Text(groups.iter().map(|g| g.to_vec()).collect()));
+                    }
+                }
+            }
+            out.push(v);
+        }
+        Partition::indexed(&self.ids, out.into_iter())
     }
 }
 
@@ -293,7 +471,7 @@ pub struct Family {
     /// 1-based, in order of the best member's rank.
     pub id: usize,
     /// The groups' bodies (as in the best member).
-    pub partition: Vec<Vec<String>>,
+    pub partition: Partition,
     /// Ranks of the members, best first.
     pub placements: Vec<usize>,
 }
@@ -591,6 +769,8 @@ fn place(
     };
     let limit = opts.limit.unwrap_or(usize::MAX);
     let per_eval = analysis_work(m);
+    // The body ids every placement's partition indexes (an expansion keeps the bodies).
+    let names = BodyNames::of(m);
     // (expansion, placement, the search's flow for a warm start of the analysis)
     let mut batch: Vec<Leaf> = Vec::new();
     let mut stopped = false;
@@ -634,7 +814,7 @@ fn place(
                     let mech = mech.get_or_insert_with(|| e.mech.clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
                     (
-                        a.map(|a| placement(mech, e, *x, &a, w)),
+                        a.map(|a| placement(mech, e, *x, &a, w, &names)),
                         work.saturating_add(per_eval).saturating_add(decided),
                     )
                 },
@@ -680,7 +860,7 @@ fn place(
         // The rank check's factorizations, shared by every analysis of this expansion: a
         // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
         let cache = structure::AnalysisCache::default();
-        let p = Problem::of(e, m, rules, opts, &cache, meter)?;
+        let p = Problem::of(e, m, rules, opts, &cache, &names.ids, meter)?;
         if x == 0 {
             r.isolated = p.isolated;
             r.set_aside = p.set_aside;
@@ -804,11 +984,11 @@ pub fn transform(
         summary.listed = placements.len();
         finish_listing_note(&mut summary);
     }
-    let mut index: BTreeMap<Vec<Vec<String>>, usize> = BTreeMap::new();
+    let mut index: BTreeMap<PartitionKey, usize> = BTreeMap::new();
     let mut families: Vec<Family> = Vec::new();
     for (i, p) in placements.iter_mut().enumerate() {
         p.rank = Some(i + 1);
-        let key = p.partition_key();
+        let key = p.partition.key();
         let f = *index.entry(key).or_insert_with(|| {
             families.push(Family {
                 id: families.len() + 1,
@@ -935,13 +1115,15 @@ fn split(m: &Mechanism) -> Vec<Part> {
     if joints_of.len() <= 1 {
         return Vec::new();
     }
+    // One table of local indices for every part, set and cleared per part (a table per part
+    // was quadratic: 10^5 parts of a 10^5-body star cleared 80 GB).
+    let mut local = vec![usize::MAX; nb];
     joints_of
         .into_iter()
         .zip(bodies_of)
         .map(|(joints, mut bodies)| {
             bodies.push(m.frame);
             bodies.sort_unstable();
-            let mut local = vec![usize::MAX; nb];
             for (i, &b) in bodies.iter().enumerate() {
                 local[b] = i;
             }
@@ -961,6 +1143,9 @@ fn split(m: &Mechanism) -> Vec<Part> {
                     .collect(),
                 expect: Default::default(),
             };
+            for &b in &bodies {
+                local[b] = usize::MAX;
+            }
             Part {
                 mech,
                 joints,
@@ -1038,6 +1223,7 @@ fn combine_parts(
     summary.expansions = 1;
     summary.expansions_total = 1;
     let mut examined = 0usize;
+    let whole_ids: Arc<Vec<String>> = Arc::new(m.bodies.iter().map(|b| b.id.to_string()).collect());
     for (pi, part) in parts.iter().enumerate() {
         let prules = rules.restrict(&part.joints);
         let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
@@ -1048,6 +1234,7 @@ fn combine_parts(
             for g in &mut p.groups_at {
                 g.1 = part.bodies[g.1];
             }
+            p.partition.remap(&part.bodies, &whole_ids);
             let e = by.entry(Key::of(&p.scores)).or_default();
             e.0 += 1;
             if e.1.len() < cap {
@@ -1225,27 +1412,66 @@ fn join_placements(members: &[&Placement], key: Key) -> Placement {
     let mut groups: Vec<(usize, usize, usize, usize, usize)> = Vec::new();
     for (pi, p) in members.iter().enumerate() {
         for (gi, g) in p.groups_at.iter().enumerate() {
-            groups.push((g.0, p.partition[gi].len(), g.1, pi, gi));
+            groups.push((g.0, p.partition.group_len(gi), g.1, pi, gi));
         }
     }
     groups.sort_unstable();
     let mut types: Vec<TypeCount> = Vec::new();
-    let mut partition = Vec::with_capacity(groups.len());
     let mut groups_at = Vec::with_capacity(groups.len());
     for &(level, _, first, pi, gi) in &groups {
         let p = members[pi];
-        partition.push(p.partition[gi].clone());
-        groups_at.push((level, first, p.kinds[gi].clone(), p.in_lib[gi]));
-        let kind = &p.kinds[gi];
-        match types.iter_mut().find(|t| &t.kind == kind) {
-            Some(t) => t.count += 1,
-            None => types.push(TypeCount {
-                kind: kind.clone(),
-                count: 1,
-                in_library: p.in_lib[gi],
-            }),
-        }
+        let kind = p
+            .kinds
+            .get(gi)
+            .and_then(|&t| p.types.get(t as usize))
+            .map_or("", |t| t.kind.as_str());
+        let t = match types.iter_mut().position(|t| t.kind == kind) {
+            Some(t) => {
+                types[t].count += 1;
+                t
+            }
+            None => {
+                types.push(TypeCount {
+                    kind: kind.to_string(),
+                    count: 1,
+                    in_library: p.in_lib[gi],
+                });
+                types.len() - 1
+            }
+        };
+        groups_at.push((level, first, t as u32, p.in_lib[gi]));
     }
+    // The parts' partitions are in the whole's terms (`Partition::remap`): one table of ids.
+    let indexed = members.iter().all(|p| {
+        matches!((&p.partition.0, &members[0].partition.0),
+            (Repr::Indexed { ids: a, .. }, Repr::Indexed { ids: b, .. }) if Arc::ptr_eq(a, b))
+    });
+    let partition = match (&members.first().map(|p| &p.partition.0), indexed) {
+        (Some(Repr::Indexed { ids, .. }), true) => Partition::indexed(
+            ids,
+            groups
+                .iter()
+                .map(|&(_, _, _, pi, gi)| match &members[pi].partition.0 {
+                    Repr::Indexed { bodies, ends, .. } => {
+                        bodies[Partition::range(ends, gi)].to_vec()
+                    }
+                    Repr::Text(_) => Vec::new(),
+                }),
+        ),
+        _ => Partition(Repr::Text(
+            groups
+                .iter()
+                .map(|&(_, _, _, pi, gi)| {
+                    members[pi]
+                        .partition
+                        .group(gi)
+                        .into_iter()
+                        .map(str::to_string)
+                        .collect()
+                })
+                .collect(),
+        )),
+    };
     let labels: Vec<String> = members.iter().filter_map(|p| p.expansion.clone()).collect();
     Placement {
         rank: None,
@@ -1259,7 +1485,7 @@ fn join_placements(members: &[&Placement], key: Key) -> Placement {
         exp: members.iter().map(|p| p.exp).max().unwrap_or(0),
         inputs_at: inputs.iter().map(|(j, _)| *j).collect(),
         groups_at: groups_at.iter().map(|g| (g.0, g.1)).collect(),
-        kinds: groups_at.iter().map(|g| g.2.clone()).collect(),
+        kinds: groups_at.iter().map(|g| g.2).collect(),
         in_lib: groups_at.iter().map(|g| g.3).collect(),
     }
 }
@@ -1436,13 +1662,24 @@ fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
         degree[s] += 1;
     }
     let mut edges = Vec::with_capacity(n - 1);
+    // The smallest leaf at each step, in linear time: `ptr` only moves up; a vertex below it
+    // that becomes a leaf is taken at once (it is then the smallest). Was a scan from 0 at
+    // each step, quadratic: 40 % of `transform` on a 10^4-body shared joint.
+    let mut ptr = (0..n).find(|&v| degree[v] == 1).unwrap_or(0);
+    let mut leaf = ptr;
     for &s in &seq {
-        let leaf = (0..n)
-            .find(|&v| degree[v] == 1)
-            .expect("a tree with at least two vertices left has a leaf");
         edges.push((leaf.min(s), leaf.max(s)));
         degree[leaf] = 0;
         degree[s] -= 1;
+        if degree[s] == 1 && s < ptr {
+            leaf = s;
+        } else {
+            ptr += 1;
+            while ptr < n && degree[ptr] != 1 {
+                ptr += 1;
+            }
+            leaf = ptr.min(n - 1);
+        }
     }
     let last: Vec<usize> = (0..n).filter(|&v| degree[v] == 1).collect();
     if let [a, b] = last[..] {
@@ -1647,6 +1884,7 @@ impl Problem {
         rules: &Rules,
         opts: &TransformOptions,
         cache: &structure::AnalysisCache,
+        ids: &Arc<Vec<String>>,
         meter: &mut Meter,
     ) -> Result<Problem, BudgetExceeded> {
         let m = &e.mech;
@@ -1690,7 +1928,7 @@ impl Problem {
                     && a.redundant.is_empty()
                     && a.set_aside.iter().all(|&n| n == 0)
                 {
-                    lean = Some(Lean::of(m));
+                    lean = Some(Lean::of(m, ids));
                 }
             }
             for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
@@ -2295,6 +2533,7 @@ fn placement(
     x: usize,
     a: &Analysis,
     w: &[(usize, u32)],
+    names: &BodyNames,
 ) -> Placement {
     let smallest = |g: &structure::Group| {
         g.bodies
@@ -2311,9 +2550,23 @@ fn placement(
         Groups {
             scores: scores(a),
             types: a.types.clone(),
-            partition: a.groups.iter().map(|g| g.bodies.clone()).collect(),
+            partition: names.partition(
+                &a.groups
+                    .iter()
+                    .map(|g| g.bodies.as_slice())
+                    .collect::<Vec<_>>(),
+            ),
             groups_at: a.groups.iter().map(|g| (g.level, smallest(g))).collect(),
-            kinds: a.groups.iter().map(|g| g.kind.clone()).collect(),
+            kinds: a
+                .groups
+                .iter()
+                .map(|g| {
+                    a.types
+                        .iter()
+                        .position(|t| t.kind == g.kind)
+                        .unwrap_or(usize::MAX) as u32
+                })
+                .collect(),
             in_lib: a.groups.iter().map(|g| g.in_library).collect(),
         },
     )
@@ -2323,9 +2576,9 @@ fn placement(
 struct Groups {
     scores: Scores,
     types: Vec<TypeCount>,
-    partition: Vec<Vec<String>>,
+    partition: Partition,
     groups_at: Vec<(usize, usize)>,
-    kinds: Vec<String>,
+    kinds: Vec<u32>,
     in_lib: Vec<bool>,
 }
 
@@ -2374,8 +2627,8 @@ struct Lean {
     /// itself once, in pair order (as `structure::build` lists them).
     start: Vec<usize>,
     touch: Vec<u32>,
-    /// Body ids as the analysis writes them.
-    ids: Vec<String>,
+    /// Body ids as the analysis writes them (shared with the placements' partitions).
+    ids: Arc<Vec<String>>,
     /// Each pair's two bodies and joint type (read from the joints, hundreds of bytes apart,
     /// each was a cache miss).
     ends: Vec<[u32; 2]>,
@@ -2385,7 +2638,7 @@ struct Lean {
 }
 
 impl Lean {
-    fn of(m: &Mechanism) -> Lean {
+    fn of(m: &Mechanism, ids: &Arc<Vec<String>>) -> Lean {
         let nb = m.bodies.len();
         let mut start = vec![0usize; nb + 1];
         for j in &m.joints {
@@ -2422,7 +2675,7 @@ impl Lean {
         Lean {
             start,
             touch,
-            ids: m.bodies.iter().map(|b| b.id.to_string()).collect(),
+            ids: Arc::clone(ids),
             ends,
             kind: m.joints.iter().map(|j| j.kind).collect(),
             work: 8 * (m.bodies.len() + m.joints.len()) as u64 + 100,
@@ -2510,7 +2763,7 @@ impl Lean {
                 all_covered: true,
             },
             types: Vec::new(),
-            partition: Vec::with_capacity(raw.len()),
+            partition: Partition(Repr::Text(Vec::new())),
             groups_at: Vec::with_capacity(raw.len()),
             kinds: Vec::with_capacity(raw.len()),
             in_lib: Vec::with_capacity(raw.len()),
@@ -2560,15 +2813,18 @@ impl Lean {
             out.scores.largest = out.scores.largest.max(grp.bodies.len());
             out.scores.levels = out.scores.levels.max(grp.level);
             out.scores.covered += usize::from(covered);
-            out.partition
-                .push(grp.bodies.iter().map(|&x| self.ids[x].clone()).collect());
             out.groups_at
                 .push((grp.level, grp.bodies.first().copied().unwrap_or(usize::MAX)));
-            out.kinds.push(kind);
+            out.kinds.push(t as u32);
             out.in_lib.push(covered);
         }
         out.scores.all_covered = out.scores.covered == raw.len();
         out.types = types;
+        out.partition = Partition::indexed(
+            &self.ids,
+            raw.iter()
+                .map(|grp| grp.bodies.iter().map(|&x| x as u32).collect()),
+        );
         out
     }
 }
@@ -3049,6 +3305,45 @@ mod tests {
         }
         // Index 0 is the star on the hub.
         assert_eq!(prufer_tree(4, 0), vec![(0, 1), (0, 2), (0, 3)]);
+    }
+
+    /// The linear decoding takes the smallest leaf at each step, as the scan from 0 did.
+    #[test]
+    fn prufer_decoding_takes_the_smallest_leaf() {
+        fn reference(n: usize, mut index: u64) -> Vec<(usize, usize)> {
+            let mut seq = vec![0usize; n - 2];
+            for s in seq.iter_mut().rev() {
+                *s = (index % n as u64) as usize;
+                index /= n as u64;
+            }
+            let mut degree = vec![1usize; n];
+            for &s in &seq {
+                degree[s] += 1;
+            }
+            let mut edges = Vec::new();
+            for &s in &seq {
+                let leaf = (0..n).find(|&v| degree[v] == 1).unwrap();
+                edges.push((leaf.min(s), leaf.max(s)));
+                degree[leaf] = 0;
+                degree[s] -= 1;
+            }
+            let last: Vec<usize> = (0..n).filter(|&v| degree[v] == 1).collect();
+            edges.push((last[0], last[1]));
+            edges.sort_unstable();
+            edges
+        }
+        let mut rng = crate::rng::SplitMix64::new(3);
+        for n in 3..=9 {
+            for i in 0..trees(n).min(2000) {
+                assert_eq!(prufer_tree(n, i), reference(n, i), "tree {i} of K{n}");
+            }
+        }
+        for n in [10, 17, 40, 200] {
+            for _ in 0..300 {
+                let i = rng.next_u64() % trees(n);
+                assert_eq!(prufer_tree(n, i), reference(n, i), "tree {i} of K{n}");
+            }
+        }
     }
 
     #[test]

@@ -67,7 +67,7 @@ fn count_only() -> TransformOptions {
 
 /// What a placement is, independent of its rank among equals.
 fn essence(p: &Placement) -> (String, Vec<usize>, Vec<Vec<String>>, Vec<String>) {
-    let mut part = p.partition.clone();
+    let mut part = p.partition.to_vec();
     part.sort();
     let mut types: Vec<String> = p
         .types
