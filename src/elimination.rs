@@ -410,7 +410,7 @@ fn block_normal_product(
         let gj = g[j];
         let col = &av[j * r..j * r + r];
         for i in 0..r {
-            jb[i] = col[i] * gj + jb[i];
+            jb[i] += col[i] * gj;
         }
     }
     for j in 0..w {
