@@ -38,7 +38,7 @@ fuzz_target!(|data: &[u8]| {
         Ok(m) => {
             let r = mbsa::mobility::mobility(&m);
             let _ = mbsa::report::json(&r);
-            let _ = mbsa::report::mobility::table(&r);
+            let _ = mbsa::report::mobility::table(&r, mbsa::motion::has_geometry(&m));
             let _ = mbsa::report::json(&m);
         }
         Err(e) => {
