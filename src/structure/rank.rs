@@ -2748,7 +2748,7 @@ mod tests {
             assert_eq!(rows.len(), eqs.len());
             assert_eq!(free.len(), 0);
             // The file's geometry (here the same values, given), with the rows without input.
-            let (file_rows, free) = pair_rows(m, &geoms, None, &eqs, true);
+            let (file_rows, free) = pair_rows(m, &geoms, None, &HashMap::new(), &eqs, true);
             assert_eq!(free.len(), eqs.len());
             for e in 0..eqs.len() {
                 let ji = eqs.joint[e];
