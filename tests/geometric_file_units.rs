@@ -289,3 +289,51 @@ fn an_isolated_spin_in_millimetres_is_reported_in_millimetres() {
     let along = (0..3).map(|i| d[i] * ab[i] / len).sum::<f64>().abs();
     assert!((along - 1.0).abs() < 1e-9, "direction {d:?}: {out}");
 }
+
+/// The N-four-bar of [`n_four_bar_mm`] written in metres (5 decimals: the same ±0.005 mm).
+fn n_four_bar_m(n: usize) -> String {
+    let mm = n_four_bar_mm(n);
+    mm.lines()
+        .map(|l| match l.strip_prefix("origin = [") {
+            Some(rest) => {
+                let nums: Vec<String> = rest
+                    .trim_end_matches(']')
+                    .split(", ")
+                    .map(|x| {
+                        let v: f64 = x.parse().expect("a number");
+                        format!("{}", (v * 1e-3 * 1e5).round() / 1e5)
+                    })
+                    .collect();
+                format!("origin = [{}]", nums.join(", "))
+            }
+            None => l.to_string(),
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// `analyze` on a long row of windows agrees with `rigid`: mobility 1, under-determined, no
+/// isolated freedom and no equation too many, in metres and in millimetres, from 10 to 1,000
+/// windows. Before session 9 the 1,000-window files got about 1,000 isolated freedoms and
+/// "over-determined" (twists about the centre, 500 link lengths away).
+#[test]
+fn analyze_agrees_with_rigid_on_long_rows_of_windows() {
+    for n in [10, 100, 1000] {
+        for (unit, text) in [("mm", n_four_bar_mm(n)), ("m", n_four_bar_m(n))] {
+            let what = format!("{n} windows in {unit}");
+            assert_eq!(true_mobility(&text), "count 1; true mobility 1", "{what}");
+            let verdict = analyze_verdict(&text);
+            assert!(
+                verdict.contains("mobility 1, inputs 0; under-determined"),
+                "{what}: {verdict}"
+            );
+            assert!(!verdict.contains("isolated"), "{what}: {verdict}");
+            assert!(!verdict.contains("too many"), "{what}: {verdict}");
+            // `dot` draws the same verdict: no body in the over-determined colour.
+            let (code, out) = run(&["dot", "--view", "structure", "-"], &text);
+            assert_eq!(code, Some(0), "{what}: {out}");
+            assert!(out.contains("#f9d68a"), "{what}: under-determined bodies");
+            assert!(!out.contains("#f4a6a6"), "{what}: over-determined bodies");
+        }
+    }
+}

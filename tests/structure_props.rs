@@ -184,7 +184,13 @@ proptest! {
         };
         let opts = Options { geometry: mbsa::motion::GeometrySource::Random { seed: seed ^ 0x5eed }, ..Options::default() };
         let a = analyze(&m, &opts, &Library::empty()).unwrap();
-        let (rank, nrows, nunk) = global_rank(&m, seed ^ 0x5eed);
+        // The generic rank: the largest over realizations (one draw of the count-only kinds'
+        // synthetic models can be degenerate; the rank check confirms its deficits at another
+        // draw, so the reference is the best of several).
+        let (rank, nrows, nunk) = (0..8u64)
+            .map(|k| global_rank(&m, seed ^ 0x5eed ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)))
+            .max_by_key(|r| r.0)
+            .expect("eight draws");
         let iso: usize = a.isolated.iter().map(|i| i.dimension as usize).sum();
         let red: usize = a.redundant.iter().map(|r| r.count as usize).sum();
         let determined = rank == nrows && rank + iso == nunk && iso == 0;

@@ -22,7 +22,7 @@ use super::count::{Decomposition, Equations, Part, decompose};
 use super::{Isolated, Redundancy, Unchecked};
 use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
-use crate::mechanism::{Geometry, Mechanism};
+use crate::mechanism::{Geometry, Mechanism, Space};
 use crate::motion::{self, GeometryUsed};
 use nalgebra::{DMatrix, DMatrixViewMut, Dyn, MatrixView, RawStorage};
 
@@ -66,6 +66,12 @@ pub(crate) struct RankResult {
     /// work measure.
     #[cfg_attr(not(test), allow(dead_code))]
     pub rounds: usize,
+    /// Joints of a deficit that a second realization did not confirm (the draw was
+    /// degenerate there), with the seed of a draw without the deficit: [`check`] draws them
+    /// at it and starts over. Empty in a final result.
+    suspects: Vec<(usize, u64)>,
+    /// With suspects: the rows and each pair's first row count, for the next attempt.
+    kept_rows: Option<(PairRows, Vec<usize>)>,
 }
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -220,6 +226,166 @@ fn reduced_basis<'a>(
         }
     }
     Some(qb)
+}
+
+/// Body-local twists at the file's geometry. Each body's unknowns are written about its own
+/// reference point (the mean of the origins of its pairs' joints, at the dimensionless
+/// geometry), `t_centre = S_x · t_local`: an invertible change of columns per body, so ranks
+/// and left null spaces (the redundancies and their weights) are unchanged, but the rows a body
+/// sees carry lever arms of its own size instead of its distance from the centre. A bar of a
+/// row of 1,000 windows sits 500 link lengths from the centre: its rotation about its two pins
+/// then changes its rows by about 1/500 of their size, which the precision-derived threshold
+/// (lever 500) took for an isolated freedom. The same change of coordinates as the sparse path
+/// of the geometric analysis (`rigidity::geometric::sparse_float`).
+pub(crate) struct LocalFrames {
+    /// `S_x` per node (`None`: the frame, element nodes, bodies without a joint point).
+    frame: Vec<Option<DMatrix<f64>>>,
+    /// The largest lever arm of a joint point about its body's reference point (in
+    /// characteristic lengths).
+    lever: f64,
+}
+
+impl LocalFrames {
+    /// The frames of `m`'s bodies at the (dimensionless) file geometry `geoms`; `None` for a
+    /// spherical mechanism (no translations to move).
+    fn new(m: &Mechanism, geoms: &[Geometry], eqs: &Equations) -> Option<LocalFrames> {
+        if m.space == Space::Spherical || geoms.len() != m.joints.len() {
+            return None;
+        }
+        let nb = eqs.nodes;
+        let mut sum = vec![[0.0f64; 3]; nb];
+        let mut count = vec![0usize; nb];
+        let body = |x: usize| x != m.frame && !eqs.is_element(x);
+        for e in 0..eqs.len() {
+            let [h, o] = eqs.bodies(e);
+            let Some(p) = geoms[eqs.joint[e]].origin else {
+                continue;
+            };
+            if h == o || !p.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            for x in [h, o] {
+                if body(x) {
+                    (0..3).for_each(|i| sum[x][i] += p[i]);
+                    count[x] += 1;
+                }
+            }
+        }
+        let centre: Vec<Option<[f64; 3]>> = (0..nb)
+            .map(|x| (count[x] > 0).then(|| sum[x].map(|v| v / count[x] as f64)))
+            .collect();
+        let mut lever = 0.0f64;
+        for e in 0..eqs.len() {
+            let [h, o] = eqs.bodies(e);
+            let g = &geoms[eqs.joint[e]];
+            for x in [h, o] {
+                let Some(c) = centre[x] else {
+                    continue;
+                };
+                for p in [g.origin, g.origin2].into_iter().flatten() {
+                    for i in 0..3 {
+                        let d = (p[i] - c[i]).abs();
+                        if d.is_finite() {
+                            lever = lever.max(d);
+                        }
+                    }
+                }
+            }
+        }
+        let frame = centre
+            .into_iter()
+            .map(|c| c.map(|c| shift(m.space, c)))
+            .collect();
+        Some(LocalFrames { frame, lever })
+    }
+
+    /// [`crate::motion::file_threshold`] with the body-local lever arm: a direction rounded by
+    /// `δ_d` moves a row written about its body's reference point by `δ_d` times its distance
+    /// from that point.
+    fn threshold(&self, used: &GeometryUsed) -> f64 {
+        let Some(delta) = used.precision.filter(|&d| d > 0.0) else {
+            return 0.0;
+        };
+        let directions = used.direction_precision.unwrap_or(delta);
+        let length = used.scale.map_or(1.0, |s| s.length);
+        crate::motion::FILE_TOL_FACTOR * (delta / length + directions * self.lever)
+    }
+}
+
+/// `S(c)`: a twist about point `c` to the same twist about the centre (planar `(ω, v_x, v_y)`,
+/// spatial `(ω, v)`), as `sparse_float::shift`.
+fn shift(space: Space, c: [f64; 3]) -> DMatrix<f64> {
+    match space {
+        Space::Planar => {
+            // v_O = v_c − ω ẑ × c = (v_cx + ω c_y, v_cy − ω c_x).
+            let mut s = DMatrix::identity(3, 3);
+            s[(1, 0)] = c[1];
+            s[(2, 0)] = -c[0];
+            s
+        }
+        _ => {
+            // v_O = v_c + c × ω.
+            let mut s = DMatrix::identity(6, 6);
+            let [x, y, z] = c;
+            s[(3, 1)] = -z;
+            s[(3, 2)] = y;
+            s[(4, 0)] = z;
+            s[(4, 2)] = -x;
+            s[(5, 0)] = -y;
+            s[(5, 1)] = x;
+            s
+        }
+    }
+}
+
+/// [`reduced_basis`] about the body's reference point: the stacked rows times `s` (its
+/// [`LocalFrames`] change of coordinates), each scaled to unit norm, their null space by the
+/// SVD at `t`; the unknowns kept are `s` times the complement (all of `s` when nothing is
+/// isolated), so the blocks see the body's local twists.
+fn local_basis<'a>(
+    b: usize,
+    rows: impl Iterator<Item = RowsView<'a>> + Clone,
+    s: &DMatrix<f64>,
+    t: &Tol,
+) -> DMatrix<f64> {
+    let total: usize = rows.clone().map(|r| r.nrows()).sum();
+    if total == 0 {
+        return DMatrix::zeros(b, 0);
+    }
+    let mut a = DMatrix::<f64>::zeros(total, b);
+    let mut r0 = 0;
+    for r in rows {
+        a.view_mut((r0, 0), (r.nrows(), b))
+            .copy_from(&(r.into_owned() * s));
+        r0 += r.nrows();
+    }
+    for mut row in a.row_iter_mut() {
+        let n = row.norm();
+        if n > 0.0 {
+            row.unscale_mut(n);
+        }
+    }
+    let (sv, tol, v_t) = if total > TALL_STACK_ROWS {
+        let r = a.qr().r();
+        let (sv, _, _, v_t) = svd_parts(&r, false, true, t);
+        let max = sv.iter().copied().fold(0.0, f64::max);
+        (sv, t.cut(max, total), v_t)
+    } else {
+        let (sv, tol, _, v_t) = svd_parts(&a, false, true, t);
+        (sv, tol, v_t)
+    };
+    let v_t = v_t.expect("requested V^T");
+    let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
+    if keep.len() >= b {
+        return s.clone();
+    }
+    let mut ql = DMatrix::<f64>::zeros(b, keep.len());
+    for (c, &i) in keep.iter().enumerate() {
+        for k in 0..b {
+            ql[(k, c)] = v_t[(i, k)];
+        }
+    }
+    s * ql
 }
 
 /// A block to check: its pairs, its bodies (ascending), its part, its signature and its
@@ -745,10 +911,39 @@ fn matrix_digest<S: RawStorage<f64, Dyn, Dyn>>(a: &nalgebra::Matrix<f64, Dyn, Dy
     d.finish()
 }
 
+/// Realizations a deficit may be drawn at before it is reported without confirmation.
+const MAX_DRAWS: u64 = 8;
+
+/// The seed of the `attempt`-th independent redraw of a random realization `seed`.
+fn fresh_seed(seed: u64, attempt: u64) -> u64 {
+    seed ^ attempt.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
+
+/// Which joints a random realization draws at another seed than the analysis's, and the
+/// attempt whose draws confirm a deficit ([`confirm_seeds`]; `None`: deficits are reported as
+/// found).
+#[derive(Default)]
+struct Redraw {
+    joints: HashMap<usize, u64>,
+    confirm: Option<u64>,
+    /// The joints drawn again since the last attempt, and that attempt's rows with each pair's
+    /// first row count: only their pairs and the pairs it lowered are built again.
+    fresh: HashSet<usize>,
+    rows: Option<(PairRows, Vec<usize>)>,
+}
+
 /// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced
 /// unknowns and sound blocks seen in an earlier analysis (same rows, same tolerance) are
 /// taken from it instead of being factorized again. `geoms` is the joints' geometry when the
 /// file's is used; a random realization (`used.seed`) is drawn joint by joint instead.
+///
+/// At a random realization a deficit (an isolated freedom, a deficient block) is reported only
+/// when a second, independent realization of the joints involved has it too: a generic rank is
+/// the largest over realizations, and one draw can be degenerate (the synthetic contact lines
+/// of the count-only kinds). Only the deficits are drawn again (a body's own rows, a block's
+/// exact rank over GF(2^61 − 1) at another seed), so a check without deficits costs nothing
+/// more. When the second draw has the larger rank, the joints involved are drawn at it and the
+/// check starts over (at most [`MAX_DRAWS`] draws); everything stays a function of `--seed`.
 pub(crate) fn check(
     m: &Mechanism,
     geoms: &[Geometry],
@@ -758,14 +953,88 @@ pub(crate) fn check(
     cache: Option<&Cache>,
     shortcut: Shortcut,
 ) -> RankResult {
+    if used.seed.is_none() {
+        return check_at(
+            m,
+            geoms,
+            used,
+            eqs,
+            u,
+            cache,
+            shortcut,
+            &mut Redraw::default(),
+        );
+    }
+    let (cap0, u0) = (eqs.cap.clone(), u.to_vec());
+    let mut redraw = Redraw::default();
+    let mut work = 0u64;
+    let mut attempt = 1;
+    loop {
+        redraw.confirm = (attempt < MAX_DRAWS).then_some(attempt);
+        let mut r = check_at(m, geoms, used, eqs, u, cache, shortcut, &mut redraw);
+        work = work.saturating_add(r.work);
+        if redraw.confirm.is_none() || r.suspects.is_empty() {
+            r.work = work;
+            return r;
+        }
+        redraw.fresh.clear();
+        for &(j, s) in &r.suspects {
+            redraw.joints.insert(j, s);
+            redraw.fresh.insert(j);
+        }
+        redraw.rows = r.kept_rows.take();
+        eqs.cap.copy_from_slice(&cap0);
+        u.copy_from_slice(&u0);
+        attempt += 1;
+    }
+}
+
+/// [`check`] at one realization: the joints in `redraw.joints` at their own seeds.
+#[allow(clippy::too_many_arguments)]
+fn check_at(
+    m: &Mechanism,
+    geoms: &[Geometry],
+    used: &GeometryUsed,
+    eqs: &mut Equations,
+    u: &mut [u32],
+    cache: Option<&Cache>,
+    shortcut: Shortcut,
+    redraw: &mut Redraw,
+) -> RankResult {
     let certified = shortcut == Shortcut::Certified;
     let b = m.b() as usize;
     let nb = eqs.nodes;
-    let (mut rows, free) = pair_rows(m, geoms, used.seed, eqs, used.is_file());
+    let (mut rows, free) = match (redraw.rows.take(), used.seed) {
+        (Some((mut rows, first)), Some(seed)) => {
+            // The last attempt's rows (random realizations only): the pairs of the joints
+            // drawn again and the pairs it lowered are built again, the rest is as drawn.
+            for (e, &n) in first.iter().enumerate() {
+                let ji = eqs.joint[e];
+                if rows.nrows(e) != n || redraw.fresh.contains(&ji) {
+                    let s = redraw.joints.get(&ji).copied().unwrap_or(seed);
+                    rows.set(e, &pair_rows_at(m, eqs, e, s));
+                }
+            }
+            (rows, PairRows::from_chunks(b, Vec::new()))
+        }
+        _ => pair_rows(m, geoms, used.seed, &redraw.joints, eqs, used.is_file()),
+    };
+    // Deficits are confirmed at the draws of this attempt (random geometry only).
+    let confirm = redraw.confirm.filter(|_| used.seed.is_some());
+    // At the file's geometry every body's unknowns are its twist about its own reference
+    // point (see [`LocalFrames`]): the rank decisions no longer depend on how far the body
+    // sits from the centre.
+    let local = used
+        .is_file()
+        .then(|| LocalFrames::new(m, geoms, eqs))
+        .flatten();
     let tol = match used.precision {
         Some(_) => Tol {
             rel: 1e-9,
-            abs: crate::motion::file_threshold(m, used).unwrap_or(0.0),
+            abs: match &local {
+                Some(lf) => lf.threshold(used),
+                None => crate::motion::file_threshold(m, used).unwrap_or(0.0),
+            },
         },
         None => Tol {
             rel: REL_TOL,
@@ -777,7 +1046,15 @@ pub(crate) fn check(
     // them, so they fix nothing, and the decomposition runs on what remains.
     let mut set_aside = vec![0u32; m.joints.len()];
     let configuration = if used.is_file() {
-        redundant_at_configuration(m, eqs, &mut rows, &free, &tol, &mut set_aside)
+        redundant_at_configuration(
+            m,
+            eqs,
+            &mut rows,
+            &free,
+            &tol,
+            local.as_ref(),
+            &mut set_aside,
+        )
     } else {
         Vec::new()
     };
@@ -843,6 +1120,7 @@ pub(crate) fn check(
             );
         }
         let mine = &touch[start[body]..start[body + 1]];
+        let frame = local.as_ref().and_then(|lf| lf.frame[body].as_ref());
         // Isolated means undrivable: a motion across a cut of two or more constraining joints.
         // A body on one joint moves by that joint's own DOF, which an input drives.
         let mut joints = mine
@@ -851,19 +1129,26 @@ pub(crate) fn check(
             .map(|&e| eqs.joint[e]);
         let first = joints.next();
         if !joints.any(|j| Some(j) != first) {
-            return None;
+            return frame.cloned();
         }
+        let basis = |rows: &PairRows| match frame {
+            Some(s) => Some(local_basis(b, mine.iter().map(|&e| rows.get(e)), s, &tol)),
+            None => reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol),
+        };
         let Some(c) = cache else {
-            return reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol);
+            return basis(&rows);
         };
         let mut d = Digest::new(2);
         tol_words.iter().for_each(|&w| d.word(w));
         mine.iter().for_each(|&e| d.wide(rd[e]));
+        if let Some(s) = frame {
+            d.matrix(s);
+        }
         let k = d.finish();
         if let Some(hit) = c.get_basis(k) {
             return hit;
         }
-        let v = reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol);
+        let v = basis(&rows);
         c.put_basis(k, &v);
         v
     });
@@ -880,6 +1165,59 @@ pub(crate) fn check(
         }
         u[body] = kept as u32;
         q.push(basis);
+    }
+    // An isolated freedom at a random realization is confirmed at a second one: the body's
+    // pairs drawn again (a generic nullity is the smallest over realizations).
+    if let (Some(attempt), Some(seed)) = (confirm, used.seed) {
+        let iso_bodies: Vec<usize> = (0..nb)
+            .filter(|&x| x != m.frame && !eqs.is_element(x) && width(b, &q, x) < b)
+            .collect();
+        let spurious = crate::par::map(iso_bodies.len(), |i| {
+            let x = iso_bodies[i];
+            let mine = &touch[start[x]..start[x + 1]];
+            confirm_seeds(seed, attempt).find(|&second| {
+                let fresh = PairRows::from_chunks(
+                    b,
+                    mine.chunks(PAIRS_PER_CHUNK)
+                        .map(|c| {
+                            let mut chunk = Chunk::default();
+                            c.iter()
+                                .for_each(|&e| chunk.push_matrix(&pair_rows_at(m, eqs, e, second)));
+                            chunk
+                        })
+                        .collect(),
+                );
+                let again = reduced_basis(b, (0..mine.len()).map(|i| fresh.get(i)), &tol);
+                again.as_ref().map_or(b, |a| a.ncols()) > width(b, &q, x)
+            })
+        });
+        let joint = &eqs.joint;
+        let mut suspects: Vec<(usize, u64)> = iso_bodies
+            .iter()
+            .zip(spurious)
+            .filter_map(|(&x, s)| s.map(|s| (x, s)))
+            .flat_map(|(x, s)| {
+                touch[start[x]..start[x + 1]]
+                    .iter()
+                    .map(move |&e| (joint[e], s))
+            })
+            .collect();
+        if !suspects.is_empty() {
+            suspects.sort_unstable();
+            suspects.dedup();
+            return RankResult {
+                deficient: false,
+                work: 0,
+                decomposition: decompose(m, eqs, u),
+                set_aside,
+                isolated,
+                redundant: configuration,
+                unchecked: Vec::new(),
+                rounds: 0,
+                kept_rows: Some((rows, orig_rows)),
+                suspects,
+            };
+        }
     }
     drop(touch);
     drop(start);
@@ -901,6 +1239,8 @@ pub(crate) fn check(
     let mut verified: HashSet<Vec<usize>> = HashSet::new();
     let mut rounds = 0;
     let mut work = 0u64;
+    // Joints of deficits a second realization did not confirm (see [`check`]).
+    let mut suspects: Vec<(usize, u64)> = Vec::new();
     loop {
         rounds += 1;
         let dec = decompose(m, eqs, u);
@@ -921,6 +1261,8 @@ pub(crate) fn check(
                 redundant,
                 unchecked,
                 rounds,
+                suspects: Vec::new(),
+                kept_rows: None,
             };
         }
         if shortcut == Shortcut::Determined
@@ -939,6 +1281,8 @@ pub(crate) fn check(
                 redundant,
                 unchecked,
                 rounds,
+                suspects: Vec::new(),
+                kept_rows: None,
             };
         }
         if shortcut == Shortcut::Determined && rounds == 1 {
@@ -1022,6 +1366,45 @@ pub(crate) fn check(
             });
             work = work.saturating_add(sound.iter().map(|s| s.1).sum());
             if sound.iter().any(|&(s, _)| !s) {
+                // Each deficient group confirmed at a second realization first.
+                let mut suspects = Vec::new();
+                if let (Some(attempt), Some(seed)) = (confirm, used.seed) {
+                    for (&(g, _), _) in small.iter().zip(&sound).filter(|(_, s)| !s.0) {
+                        let block_eqs = &geqs[gstart[g]..gstart[g + 1]];
+                        let bodies = &dec.groups[g].bodies;
+                        let shape = block_shape(b, block_eqs, bodies, &rows, &q);
+                        if let Some(s) = unconfirmed(
+                            m,
+                            eqs,
+                            block_eqs,
+                            bodies,
+                            &rows,
+                            &orig_rows,
+                            shape,
+                            shape.0,
+                            confirm_seeds(seed, attempt),
+                            &mut work,
+                        ) {
+                            suspects.extend(block_eqs.iter().map(|&e| (eqs.joint[e], s)));
+                        }
+                    }
+                }
+                if !suspects.is_empty() {
+                    suspects.sort_unstable();
+                    suspects.dedup();
+                    return RankResult {
+                        deficient: false,
+                        work,
+                        decomposition: dec,
+                        set_aside,
+                        isolated,
+                        redundant,
+                        unchecked,
+                        rounds,
+                        kept_rows: Some((rows, orig_rows)),
+                        suspects,
+                    };
+                }
                 return RankResult {
                     deficient: true,
                     work,
@@ -1031,6 +1414,8 @@ pub(crate) fn check(
                     redundant,
                     unchecked,
                     rounds,
+                    suspects: Vec::new(),
+                    kept_rows: None,
                 };
             }
             if let Some(c) = cache {
@@ -1205,6 +1590,25 @@ pub(crate) fn check(
                 sound(&mut verified, signature);
                 continue;
             }
+            if let (Some(attempt), Some(seed)) = (confirm, used.seed) {
+                let needed = if part == Part::Over { ncols } else { nrows };
+                if let Some(s) = unconfirmed(
+                    m,
+                    eqs,
+                    block_eqs,
+                    bodies,
+                    &rows,
+                    &orig_rows,
+                    (nrows, ncols),
+                    needed,
+                    confirm_seeds(seed, attempt),
+                    &mut work,
+                ) {
+                    // Drawn again with the other unconfirmed deficits of this pass.
+                    suspects.extend(block_eqs.iter().map(|&e| (eqs.joint[e], s)));
+                    continue;
+                }
+            }
             let a = block_matrix(b, block_eqs, bodies, eqs, &rows, &q);
             let svd = Svd::of(&a, &tol);
             work = work.saturating_add(cube(a.nrows().max(a.ncols())));
@@ -1304,7 +1708,9 @@ pub(crate) fn check(
                 });
             }
         }
-        if !changed {
+        if !changed || !suspects.is_empty() {
+            suspects.sort_unstable();
+            suspects.dedup();
             // Only the blocks of the final decomposition matter.
             unchecked.sort_by_key(|x| (std::cmp::Reverse(x.unknowns), x.bodies, x.equations));
             unchecked.dedup();
@@ -1317,6 +1723,8 @@ pub(crate) fn check(
                 redundant,
                 unchecked,
                 rounds,
+                kept_rows: (!suspects.is_empty()).then_some((rows, orig_rows)),
+                suspects,
             };
         }
     }
@@ -1493,6 +1901,7 @@ fn pair_rows(
     m: &Mechanism,
     geoms: &[Geometry],
     seed: Option<u64>,
+    redrawn: &HashMap<usize, u64>,
     eqs: &Equations,
     with_free: bool,
 ) -> (PairRows, PairRows) {
@@ -1512,6 +1921,7 @@ fn pair_rows(
                 _ => {
                     let v = match seed {
                         Some(seed) => {
+                            let seed = redrawn.get(&ji).copied().unwrap_or(seed);
                             let g = motion::random_joint_geometry(m, seed, ji);
                             motion::pair_stack_model(m, ji, &g, driven).rows
                         }
@@ -1689,6 +2099,108 @@ impl PairRows {
     }
 }
 
+/// Draws a deficit is confirmed at (each independent of the analysis's and of the others).
+const CONFIRM_DRAWS: u64 = 4;
+
+/// The seeds of the draws that confirm a deficit in attempt `attempt` of [`check`].
+fn confirm_seeds(seed: u64, attempt: u64) -> impl Iterator<Item = u64> {
+    (0..CONFIRM_DRAWS).map(move |i| fresh_seed(seed, attempt * CONFIRM_DRAWS + i))
+}
+
+/// A draw at which a block found deficient has full rank (`needed`: its rows, or its columns
+/// for the over-determined block), among [`CONFIRM_DRAWS`] independent ones: then the first
+/// draw was degenerate there. Each draw builds the block's pairs with their joints drawn at
+/// its seed, on every body's `B` columns (an isolated freedom is a null direction of every
+/// pair touching the body, so the rank is the one on the reduced unknowns), rank by the dense
+/// SVD, or exactly ([`exact_rank`]) beyond [`MAX_DENSE_UNKNOWNS`]. A block with a lowered pair
+/// keeps its deficit (the rows kept are a choice).
+#[allow(clippy::too_many_arguments)]
+fn unconfirmed(
+    m: &Mechanism,
+    eqs: &Equations,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    rows: &PairRows,
+    orig_rows: &[usize],
+    (nrows, ncols): (usize, usize),
+    needed: usize,
+    seeds: impl Iterator<Item = u64>,
+    work: &mut u64,
+) -> Option<u64> {
+    let untouched = block_eqs.iter().all(|&e| rows.nrows(e) == orig_rows[e]);
+    if !untouched || needed > nrows.min(ncols) {
+        return None;
+    }
+    let b = m.b() as usize;
+    let full = b * bodies.len();
+    let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
+    for second in seeds {
+        let rank = if full.max(nrows) <= MAX_DENSE_UNKNOWNS {
+            let drawn: Vec<DMatrix<f64>> = block_eqs
+                .iter()
+                .map(|&e| pair_rows_at(m, eqs, e, second))
+                .collect();
+            let n: usize = drawn.iter().map(|r| r.nrows()).sum();
+            let mut a = DMatrix::<f64>::zeros(n, full);
+            let mut r0 = 0;
+            for (&e, r) in block_eqs.iter().zip(&drawn) {
+                let [h, o] = eqs.bodies(e);
+                if h != o {
+                    for (x, sign) in [(h, -1.0), (o, 1.0)] {
+                        if let Some(c) = col(x) {
+                            let mut v = a.view_mut((r0, c), (r.nrows(), b));
+                            v += r * sign;
+                        }
+                    }
+                }
+                r0 += r.nrows();
+            }
+            *work = work.saturating_add(cube(n.max(full)));
+            rank_of(
+                &a,
+                &Tol {
+                    rel: REL_TOL,
+                    abs: 0.0,
+                },
+            )
+        } else if ncols <= MAX_EXACT_UNKNOWNS {
+            exact_rank(m, eqs, block_eqs, bodies, second, work)
+        } else {
+            return None;
+        };
+        if rank >= needed {
+            return Some(second);
+        }
+    }
+    None
+}
+
+/// Pair `e`'s rows as [`pair_rows`] builds them at a random realization, its joint drawn at
+/// `seed`.
+fn pair_rows_at(m: &Mechanism, eqs: &Equations, e: usize, seed: u64) -> DMatrix<f64> {
+    let b = m.b() as usize;
+    let ji = eqs.joint[e];
+    let g = motion::random_joint_geometry(m, seed, ji);
+    let flat = |driven: u32| -> (Vec<f64>, usize) {
+        let v = motion::pair_stack_model(m, ji, &g, driven).rows;
+        let n = v.len();
+        let values = v
+            .as_slice()
+            .iter()
+            .flat_map(|r| r[..b].iter().copied())
+            .collect();
+        (values, n)
+    };
+    let (own, n) = flat(eqs.driven[e]);
+    let own = RowsView::from_slice_with_strides(&own, n, b, b, 1);
+    if eqs.input_only[e] {
+        let (free, k) = flat(0);
+        input_rows(own, RowsView::from_slice_with_strides(&free, k, b, b, 1))
+    } else {
+        own.into_owned()
+    }
+}
+
 /// The exact rank, over GF(2^61 − 1) at the random realization `seed`, of a block's rows
 /// (its pairs acting on the full B columns of its bodies; bodies outside the block known).
 /// An isolated freedom of a body is a null direction of every pair touching it, so the rank is
@@ -1793,6 +2305,7 @@ fn redundant_at_configuration(
     rows: &mut PairRows,
     free: &PairRows,
     tol: &Tol,
+    local: Option<&LocalFrames>,
     set_aside: &mut [u32],
 ) -> Vec<Redundancy> {
     let b = m.b() as usize;
@@ -1852,9 +2365,21 @@ fn redundant_at_configuration(
             for i in 0..r.nrows() {
                 let mut v = vec![0.0; ncols];
                 for (x, sign) in [(h, -1.0), (o, 1.0)] {
-                    if let Some(c) = col(x) {
-                        for k in 0..b {
-                            v[c + k] += sign * r[(i, k)];
+                    let Some(c) = col(x) else {
+                        continue;
+                    };
+                    // The row on the body's own twist about its reference point.
+                    match local.and_then(|lf| lf.frame[x].as_ref()) {
+                        Some(s) => {
+                            for k in 0..b {
+                                let rs: f64 = (0..b).map(|l| r[(i, l)] * s[(l, k)]).sum();
+                                v[c + k] += sign * rs;
+                            }
+                        }
+                        None => {
+                            for k in 0..b {
+                                v[c + k] += sign * r[(i, k)];
+                            }
                         }
                     }
                 }
@@ -2219,11 +2744,11 @@ mod tests {
             let (geoms, used) =
                 motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
             assert!(eqs.len() > 2 * PAIRS_PER_CHUNK, "several chunks");
-            let (rows, free) = pair_rows(m, &[], used.seed, &eqs, false);
+            let (rows, free) = pair_rows(m, &[], used.seed, &HashMap::new(), &eqs, false);
             assert_eq!(rows.len(), eqs.len());
             assert_eq!(free.len(), 0);
             // The file's geometry (here the same values, given), with the rows without input.
-            let (file_rows, free) = pair_rows(m, &geoms, None, &eqs, true);
+            let (file_rows, free) = pair_rows(m, &geoms, None, &HashMap::new(), &eqs, true);
             assert_eq!(free.len(), eqs.len());
             for e in 0..eqs.len() {
                 let ji = eqs.joint[e];
