@@ -312,36 +312,44 @@ fn normalized(v: &Vb, n: usize) -> Vb {
 /// `b`-dimensional motion space, independent): greedy Gram-Schmidt on the unit vectors,
 /// always taking the one with the largest residual, so no threshold is involved.
 fn complement(cols: &[Vb], b: usize) -> Vecs {
-    let mut basis = orthonormal(cols, b);
+    complement_of(orthonormal(cols, b), b)
+}
+
+/// [`complement`] of the span of `basis`, the output of [`orthonormal`] (a caller that has
+/// it already need not compute it again).
+fn complement_of(mut basis: Vecs, b: usize) -> Vecs {
     let first_new = basis.len();
     while basis.len() < b {
-        // Every unit vector projected out of the basis as [`project_out`] does, the same
-        // operations in the same order for each, interleaved across the vectors (each dot
-        // product is a chain of dependent additions: one vector at a time waited on them).
-        let mut v = [[0.0; MAX_B]; MAX_B];
-        for (i, vi) in v.iter_mut().enumerate().take(b) {
-            vi[i] = 1.0;
-        }
-        for _ in 0..2 {
-            for q in basis.as_slice() {
-                let mut d = [0.0; MAX_B];
-                for k in 0..b {
-                    for i in 0..b {
-                        d[i] += q[k] * v[i][k];
-                    }
-                }
-                for i in 0..b {
-                    for k in 0..b {
-                        v[i][k] -= q[k] * d[i];
-                    }
-                }
+        // The residual of unit vector `e_i` has squared norm `1 − Σ_q q_i²` (the basis is
+        // orthonormal to rounding, far below `CANDIDATE_GAP`): only the unit vectors within
+        // the gap of the largest can have the largest computed residual, so only they are
+        // projected, each exactly as [`project_out`] does. The vector taken is the one the
+        // projection of every unit vector takes, bit for bit (the first largest).
+        let mut sq = [0.0; MAX_B];
+        for q in basis.as_slice() {
+            for i in 0..b {
+                sq[i] += q[i] * q[i];
             }
         }
+        let mut top = f64::NEG_INFINITY;
+        let mut finite = true;
+        for s in sq.iter().take(b) {
+            finite &= s.is_finite();
+            top = top.max(1.0 - s);
+        }
         let mut best: Option<(Vb, f64)> = None;
-        for vi in v.iter().take(b) {
-            let n = norm(vi, b);
+        for (i, s) in sq.iter().enumerate().take(b) {
+            if finite && 1.0 - s < top - CANDIDATE_GAP {
+                continue;
+            }
+            #[cfg(test)]
+            PROJECTED.with(|c| c.set(c.get() + 1));
+            let mut v = [0.0; MAX_B];
+            v[i] = 1.0;
+            project_out(&mut v, basis.as_slice(), b);
+            let n = norm(&v, b);
             if best.is_none_or(|(_, w)| n > w) {
-                best = Some((*vi, n));
+                best = Some((v, n));
             }
         }
         let Some((v, _)) = best else {
@@ -351,6 +359,18 @@ fn complement(cols: &[Vb], b: usize) -> Vecs {
     }
     Vecs::of(&basis.as_slice()[first_new..])
 }
+
+#[cfg(test)]
+thread_local! {
+    /// Unit vectors [`complement`] projected on this thread (its work measure in tests).
+    static PROJECTED: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// How far below the largest estimated squared residual a unit vector in [`complement`] is
+/// still projected. The estimate and the projection differ by rounding (about `1e-15`, and
+/// at most the basis' loss of orthogonality); the largest squared residual is at least
+/// `1 / B`, so a unit vector this far below cannot have the largest.
+const CANDIDATE_GAP: f64 = 1e-4;
 
 /// Orthonormalize `cols` (modified Gram-Schmidt, twice); vectors that vanish are dropped.
 fn orthonormal(cols: &[Vb], b: usize) -> Vecs {
@@ -672,14 +692,20 @@ pub(crate) fn stack_model(
         return Ok(StackModel { b, rows, twists });
     }
     let full = full_twists(kind, g, space)?;
-    if orthonormal(full.as_slice(), b).len() != full.len() {
+    let basis = orthonormal(full.as_slice(), b);
+    if basis.len() != full.len() {
         return Err(MotionError::Degenerate {
             kind: kind.code(),
             reason: "its motion directions are dependent (parallel axes?)",
         });
     }
     let twists = Vecs::of(full.as_slice().get(driven as usize..).unwrap_or(&[]));
-    let rows = complement(twists.as_slice(), b);
+    // Nothing driven: the twists are `full`, whose orthonormal basis is at hand.
+    let rows = if driven == 0 {
+        complement_of(basis, b)
+    } else {
+        complement(twists.as_slice(), b)
+    };
     Ok(StackModel { b, rows, twists })
 }
 
@@ -1433,30 +1459,14 @@ mod tests {
         assert_eq!(stacked.rank(1e-9), b);
     }
 
-    /// [`complement`] projects every unit vector at once; bit for bit the same as one vector
-    /// at a time through [`project_out`] (the code it replaced), so rank decisions and every
-    /// output are unchanged.
+    /// [`complement`] projects only the unit vectors that can have the largest residual; bit
+    /// for bit the same as projecting every one through [`project_out`] (the code it
+    /// replaced), so rank decisions and every output are unchanged. Random columns, columns
+    /// with exact zeros and coordinate directions (ties between unit vectors), nearly
+    /// dependent columns, and the twists of every joint kind at random and axis-aligned
+    /// geometry.
     #[test]
     fn complement_equals_one_vector_at_a_time() {
-        fn reference(cols: &[Vb], b: usize) -> Vec<Vb> {
-            let mut basis: Vec<Vb> = orthonormal(cols, b).as_slice().to_vec();
-            let first_new = basis.len();
-            while basis.len() < b {
-                let mut best: Option<(Vb, f64)> = None;
-                for i in 0..b {
-                    let mut v = [0.0; MAX_B];
-                    v[i] = 1.0;
-                    project_out(&mut v, &basis, b);
-                    let n = norm(&v, b);
-                    if best.is_none_or(|(_, w)| n > w) {
-                        best = Some((v, n));
-                    }
-                }
-                let (v, _) = best.expect("b > 0");
-                basis.push(normalized(&v, b));
-            }
-            basis[first_new..].to_vec()
-        }
         let mut rng = SplitMix64::new(7);
         for trial in 0..3000 {
             let b = [3, 6][trial % 2];
@@ -1472,13 +1482,102 @@ mod tests {
                     v
                 })
                 .collect();
-            let got = complement(&cols, b);
-            let want = reference(&cols, b);
-            assert_eq!(got.len(), want.len());
-            for (g, w) in got.as_slice().iter().zip(&want) {
-                let bits = |v: &Vb| v.map(f64::to_bits);
-                assert_eq!(bits(g), bits(w), "trial {trial}");
+            check_complement(&cols, b, trial);
+        }
+        // Structured columns: small integers (many exact ties), nearly dependent pairs.
+        for trial in 0..3000 {
+            let b = [3, 6][trial % 2];
+            let d = trial % b;
+            let mut cols: Vec<Vb> = (0..d)
+                .map(|_| {
+                    let mut v = [0.0; MAX_B];
+                    for x in v.iter_mut().take(b) {
+                        *x = (rng.below(5) as f64 - 2.0) * [1.0, 0.5][rng.below(2) as usize];
+                    }
+                    v
+                })
+                .collect();
+            if d >= 2 && trial % 3 == 0 {
+                let k = rng.below(b as u64) as usize;
+                cols[1] = cols[0];
+                cols[1][k] += [1e-9, 1e-7, 1e-12][trial / 3 % 3];
             }
+            check_complement(&cols, b, trial);
+        }
+        // The twists of every joint kind, random and axis-aligned geometry.
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                for trial in 0..40 {
+                    let mut g = random_geometry(kind, space, &mut rng);
+                    if trial % 2 == 0 {
+                        let axis = |r: u64| {
+                            let mut a = [0.0; 3];
+                            a[r as usize % 3] = 1.0;
+                            a
+                        };
+                        g.axis = g.axis.map(|_| axis(rng.below(3)));
+                        g.axis2 = g.axis2.map(|_| axis(rng.below(3)));
+                        g.normal = g.normal.map(|_| axis(rng.below(3)));
+                        g.origin = g.origin.map(|o| o.map(|x| (x * 2.0).round()));
+                    }
+                    if kind.grade() as usize <= b {
+                        check_complement(contact_rows(kind, &g, space).as_slice(), b, trial);
+                    }
+                    if let Ok(full) = full_twists(kind, &g, space) {
+                        for driven in 0..=full.len() {
+                            check_complement(&full.as_slice()[driven..], b, trial);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    /// Work regression: [`complement`] projected every unit vector for every new vector
+    /// (`B` per row of the model, 30 for a spatial revolute joint); at random geometry only
+    /// the one with the largest residual is projected.
+    #[test]
+    fn complement_projects_one_unit_vector_per_new_vector() {
+        let mut rng = SplitMix64::new(3);
+        for kind in [JointType::R, JointType::U, JointType::H] {
+            let g = random_geometry(kind, Space::Spatial, &mut rng);
+            let twists = full_twists(kind, &g, Space::Spatial).expect("modelled");
+            PROJECTED.with(|c| c.set(0));
+            let rows = complement(twists.as_slice(), 6);
+            assert_eq!(rows.len(), 6 - twists.len());
+            assert_eq!(PROJECTED.with(|c| c.get()), rows.len(), "{kind:?}");
+        }
+    }
+
+    /// [`complement`] as it was: every unit vector projected for every new vector.
+    fn reference(cols: &[Vb], b: usize) -> Vec<Vb> {
+        let mut basis: Vec<Vb> = orthonormal(cols, b).as_slice().to_vec();
+        let first_new = basis.len();
+        while basis.len() < b {
+            let mut best: Option<(Vb, f64)> = None;
+            for i in 0..b {
+                let mut v = [0.0; MAX_B];
+                v[i] = 1.0;
+                project_out(&mut v, &basis, b);
+                let n = norm(&v, b);
+                if best.is_none_or(|(_, w)| n > w) {
+                    best = Some((v, n));
+                }
+            }
+            let (v, _) = best.expect("b > 0");
+            basis.push(normalized(&v, b));
+        }
+        basis[first_new..].to_vec()
+    }
+
+    fn check_complement(cols: &[Vb], b: usize, trial: usize) {
+        let got = complement(cols, b);
+        let want = reference(cols, b);
+        assert_eq!(got.len(), want.len(), "trial {trial}: {cols:?}");
+        for (g, w) in got.as_slice().iter().zip(&want) {
+            let bits = |v: &Vb| v.map(f64::to_bits);
+            assert_eq!(bits(g), bits(w), "trial {trial}: {cols:?}");
         }
     }
 
