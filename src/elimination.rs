@@ -6,7 +6,7 @@
 use crate::motion::SplitMix64;
 use nalgebra::{DMatrix, DVector};
 use std::cmp::Reverse;
-use std::collections::{BTreeMap, BTreeSet, BinaryHeap};
+use std::collections::BinaryHeap;
 
 /// A row block over some groups of unknowns: `mat` has the groups' columns side by side, in
 /// the order of `groups`.
@@ -64,69 +64,106 @@ impl Elimination {
             acc += s;
         }
         let mut store: Vec<Option<Block>> = Vec::new();
-        let mut of_group: Vec<BTreeSet<usize>> = vec![BTreeSet::new(); n];
-        let add =
-            |b: Block, store: &mut Vec<Option<Block>>, of_group: &mut Vec<BTreeSet<usize>>| {
-                let id = store.len();
-                for &g in &b.groups {
-                    of_group[g].insert(id);
-                }
-                store.push(Some(b));
-            };
+        // Block ids per group, ascending (ids only grow); ids of blocks taken since are
+        // skipped and pruned lazily. Same order as a set of live ids, without its cost.
+        let mut of_group: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let add = |b: Block, store: &mut Vec<Option<Block>>, of_group: &mut Vec<Vec<usize>>| {
+            let id = store.len();
+            for &g in &b.groups {
+                of_group[g].push(id);
+            }
+            store.push(Some(b));
+        };
         for b in blocks {
             if !b.groups.is_empty() && b.mat.nrows() > 0 {
                 add(b, &mut store, &mut of_group);
             }
         }
-        let score = |g: usize, store: &Vec<Option<Block>>, of_group: &Vec<BTreeSet<usize>>| {
-            let mut u = BTreeSet::new();
+        // Tests keep the former bookkeeping (a set of live block ids per group, unions as
+        // sets) beside it and check that every score and every front's members agree.
+        #[cfg(test)]
+        let mut shadow = shadow::Shadow::new(n, &store);
+        // Scratch for unions of groups: a stamp per group (the union's members carry the
+        // current clock).
+        let mut stamp = vec![0usize; n];
+        let mut clock = 0usize;
+        // The front width of `g` now: the sizes of the union of the groups of its live blocks.
+        let score = |g: usize,
+                     store: &Vec<Option<Block>>,
+                     of_group: &mut Vec<Vec<usize>>,
+                     stamp: &mut Vec<usize>,
+                     clock: &mut usize| {
+            of_group[g].retain(|&bi| store[bi].is_some());
+            *clock += 1;
+            let mut width = 0;
             for &bi in &of_group[g] {
                 if let Some(b) = &store[bi] {
-                    u.extend(b.groups.iter().copied());
+                    for &h in &b.groups {
+                        if stamp[h] != *clock {
+                            stamp[h] = *clock;
+                            width += sizes[h];
+                        }
+                    }
                 }
             }
-            u.iter().map(|&h| sizes[h]).sum::<usize>()
+            width
         };
         let mut heap = BinaryHeap::new();
         let mut version = vec![0usize; n];
         for g in 0..n {
-            heap.push(Reverse((score(g, &store, &of_group), g, 0usize)));
+            let s = score(g, &store, &mut of_group, &mut stamp, &mut clock);
+            #[cfg(test)]
+            assert_eq!(s, shadow.score(g, &store, sizes), "score of group {g}");
+            heap.push(Reverse((s, g, 0usize)));
         }
         let mut done = vec![false; n];
         let mut records = Vec::new();
         let mut rank = 0;
         let mut kept_min = f64::INFINITY;
         let mut dropped_max: f64 = 0.0;
+        // Column offset of each group in the current front.
+        let mut col_of = vec![0usize; n];
         while let Some(Reverse((_, g, ver))) = heap.pop() {
             if done[g] || ver != version[g] {
                 continue;
             }
             done[g] = true;
-            let ids: Vec<usize> = of_group[g].iter().copied().collect();
+            let ids = std::mem::take(&mut of_group[g]);
+            #[cfg(test)]
+            let live = shadow.take(g, &store);
             let mut members: Vec<Block> = Vec::new();
+            #[cfg(test)]
+            let mut taken = Vec::new();
             for id in ids {
+                #[cfg(test)]
+                if store[id].is_some() {
+                    taken.push(id);
+                }
                 if let Some(b) = store[id].take() {
                     held = held.saturating_sub(bytes(&b.mat));
-                    for &h in &b.groups {
-                        of_group[h].remove(&id);
-                    }
                     members.push(b);
                 }
             }
-            let others: Vec<usize> = members
-                .iter()
-                .flat_map(|b| b.groups.iter().copied())
-                .filter(|&h| h != g)
-                .collect::<BTreeSet<_>>()
-                .into_iter()
-                .collect();
+            #[cfg(test)]
+            assert_eq!(taken, live, "members of the front of group {g}");
+            clock += 1;
+            stamp[g] = clock;
+            let mut others: Vec<usize> = Vec::new();
+            for b in &members {
+                for &h in &b.groups {
+                    if stamp[h] != clock {
+                        stamp[h] = clock;
+                        others.push(h);
+                    }
+                }
+            }
+            others.sort_unstable();
             let sg = sizes[g];
             // Column offsets in the front: g first, then the others.
-            let mut col_of = BTreeMap::new();
-            col_of.insert(g, 0usize);
+            col_of[g] = 0;
             let mut width = sg;
             for &h in &others {
-                col_of.insert(h, width);
+                col_of[h] = width;
                 width += sizes[h];
             }
             let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
@@ -146,7 +183,7 @@ impl Elimination {
                 let mut c0 = 0;
                 for &h in &b.groups {
                     let s = sizes[h];
-                    let dst = col_of[&h];
+                    let dst = col_of[h];
                     front
                         .view_mut((r0, dst), (b.mat.nrows(), s))
                         .copy_from(&b.mat.view((0, c0), (b.mat.nrows(), s)));
@@ -186,6 +223,8 @@ impl Elimination {
                     rest = rest.rows(0, k).into_owned();
                 }
                 held = held.saturating_add(bytes(&rest));
+                #[cfg(test)]
+                shadow.add(store.len(), &others);
                 add(
                     Block {
                         groups: others.clone(),
@@ -202,7 +241,10 @@ impl Elimination {
             for &h in &others {
                 if !done[h] {
                     version[h] += 1;
-                    heap.push(Reverse((score(h, &store, &of_group), h, version[h])));
+                    let s = score(h, &store, &mut of_group, &mut stamp, &mut clock);
+                    #[cfg(test)]
+                    assert_eq!(s, shadow.score(h, &store, sizes), "score of group {h}");
+                    heap.push(Reverse((s, h, version[h])));
                 }
             }
             held = held.saturating_add(bytes(&rmat));
@@ -568,4 +610,110 @@ pub(crate) fn biconnected_blocks(
         }
     }
     blocks
+}
+
+/// The elimination's former bookkeeping, kept for tests: a set of live block ids per group
+/// and the front widths as set unions ([`Elimination::run_within`] must agree with it).
+#[cfg(test)]
+mod shadow {
+    use super::Block;
+    use std::collections::BTreeSet;
+
+    pub(super) struct Shadow {
+        of_group: Vec<BTreeSet<usize>>,
+    }
+
+    impl Shadow {
+        pub(super) fn new(n: usize, store: &[Option<Block>]) -> Shadow {
+            let mut of_group = vec![BTreeSet::new(); n];
+            for (id, b) in store.iter().enumerate() {
+                for &g in &b.as_ref().expect("all live at the start").groups {
+                    of_group[g].insert(id);
+                }
+            }
+            Shadow { of_group }
+        }
+
+        pub(super) fn add(&mut self, id: usize, groups: &[usize]) {
+            for &g in groups {
+                self.of_group[g].insert(id);
+            }
+        }
+
+        /// The live blocks on `g`, removed from every group (ascending ids).
+        pub(super) fn take(&mut self, g: usize, store: &[Option<Block>]) -> Vec<usize> {
+            let ids: Vec<usize> = self.of_group[g].iter().copied().collect();
+            for &id in &ids {
+                if let Some(b) = &store[id] {
+                    for &h in &b.groups {
+                        self.of_group[h].remove(&id);
+                    }
+                }
+            }
+            ids
+        }
+
+        pub(super) fn score(&self, g: usize, store: &[Option<Block>], sizes: &[usize]) -> usize {
+            let mut u = BTreeSet::new();
+            for &bi in &self.of_group[g] {
+                if let Some(b) = &store[bi] {
+                    u.extend(b.groups.iter().copied());
+                }
+            }
+            u.iter().map(|&h| sizes[h]).sum::<usize>()
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Random block systems, over- and under-determined, with blocks on up to five groups
+    /// (rows left over fill in, blocks are taken and rescored many times): the vector
+    /// bookkeeping of [`Elimination::run_within`] gives the set-based one's scores and fronts
+    /// (asserted inside, [`shadow`]), and the rank is the dense SVD's (generic entries).
+    #[test]
+    fn pivot_order_bookkeeping_matches_the_set_based_one() {
+        let mut rng = SplitMix64::new(0x0fa5_7e11);
+        for case in 0..40 {
+            let n = 5 + rng.below(40) as usize;
+            let sizes: Vec<usize> = (0..n).map(|_| 1 + rng.below(6) as usize).collect();
+            let mut offsets = Vec::new();
+            let mut total = 0;
+            for &s in &sizes {
+                offsets.push(total);
+                total += s;
+            }
+            let nblocks = n / 2 + rng.below(3 * n as u64) as usize;
+            let mut blocks = Vec::new();
+            let mut dense_rows: Vec<Vec<f64>> = Vec::new();
+            for _ in 0..nblocks {
+                let k = 1 + rng.below(5) as usize;
+                let mut groups: Vec<usize> = (0..k).map(|_| rng.below(n as u64) as usize).collect();
+                groups.sort_unstable();
+                groups.dedup();
+                let width: usize = groups.iter().map(|&g| sizes[g]).sum();
+                let rows = 1 + rng.below(6) as usize;
+                let mat = DMatrix::from_fn(rows, width, |_, _| rng.next_signed());
+                for i in 0..rows {
+                    let mut row = vec![0.0; total];
+                    let mut c = 0;
+                    for &g in &groups {
+                        for j in 0..sizes[g] {
+                            row[offsets[g] + j] = mat[(i, c + j)];
+                        }
+                        c += sizes[g];
+                    }
+                    dense_rows.push(row);
+                }
+                blocks.push(Block { groups, mat });
+            }
+            let e = Elimination::run(&sizes, blocks, 1e-9);
+            let dense = DMatrix::from_fn(dense_rows.len(), total, |i, j| dense_rows[i][j]);
+            let sv = dense.singular_values();
+            let expected = sv.iter().filter(|&&s| s > 1e-9 * sv.max().max(1.0)).count();
+            assert_eq!(e.rank, expected, "case {case}");
+        }
+    }
 }
