@@ -70,8 +70,16 @@ pub(crate) struct RankResult {
     /// degenerate there), with the seed of a draw without the deficit: [`check`] draws them
     /// at it and starts over. Empty in a final result.
     suspects: Vec<(usize, u64)>,
-    /// With suspects: the rows and each pair's first row count, for the next attempt.
-    kept_rows: Option<(PairRows, Vec<usize>)>,
+    /// With suspects: what the next attempt can take over.
+    kept_rows: Option<Kept>,
+}
+
+/// What an attempt of [`check`] leaves to the next one: the rows, each pair's first row
+/// count, and the bodies' reduced unknowns (recomputed only where a pair changed).
+struct Kept {
+    rows: PairRows,
+    first: Vec<usize>,
+    bases: Vec<Option<DMatrix<f64>>>,
 }
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -929,7 +937,7 @@ struct Redraw {
     /// The joints drawn again since the last attempt, and that attempt's rows with each pair's
     /// first row count: only their pairs and the pairs it lowered are built again.
     fresh: HashSet<usize>,
-    rows: Option<(PairRows, Vec<usize>)>,
+    rows: Option<Kept>,
 }
 
 /// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced
@@ -1004,17 +1012,28 @@ fn check_at(
     let certified = shortcut == Shortcut::Certified;
     let b = m.b() as usize;
     let nb = eqs.nodes;
+    // The last attempt's bases, and which pairs were built again since (their bodies' bases
+    // are computed again; every other body's rows are as they were).
+    let mut prev: Option<(Vec<Option<DMatrix<f64>>>, Vec<bool>)> = None;
     let (mut rows, free) = match (redraw.rows.take(), used.seed) {
-        (Some((mut rows, first)), Some(seed)) => {
+        (Some(kept), Some(seed)) => {
             // The last attempt's rows (random realizations only): the pairs of the joints
             // drawn again and the pairs it lowered are built again, the rest is as drawn.
+            let Kept {
+                mut rows,
+                first,
+                bases,
+            } = kept;
+            let mut changed = vec![false; first.len()];
             for (e, &n) in first.iter().enumerate() {
                 let ji = eqs.joint[e];
                 if rows.nrows(e) != n || redraw.fresh.contains(&ji) {
                     let s = redraw.joints.get(&ji).copied().unwrap_or(seed);
                     rows.set(e, &pair_rows_at(m, eqs, e, s));
+                    changed[e] = true;
                 }
             }
+            prev = Some((bases, changed));
             (rows, PairRows::from_chunks(b, Vec::new()))
         }
         _ => pair_rows(m, geoms, used.seed, &redraw.joints, eqs, used.is_file()),
@@ -1120,6 +1139,12 @@ fn check_at(
             );
         }
         let mine = &touch[start[body]..start[body + 1]];
+        if let Some((bases, changed)) = &prev
+            && !mine.iter().any(|&e| changed[e])
+        {
+            // Same rows, same tolerance: the last attempt's basis.
+            return bases[body].clone();
+        }
         let frame = local.as_ref().and_then(|lf| lf.frame[body].as_ref());
         // Isolated means undrivable: a motion across a cut of two or more constraining joints.
         // A body on one joint moves by that joint's own DOF, which an input drives.
@@ -1205,16 +1230,27 @@ fn check_at(
         if !suspects.is_empty() {
             suspects.sort_unstable();
             suspects.dedup();
+            // [`check`] starts over: the decomposition is never read.
             return RankResult {
                 deficient: false,
                 work: 0,
-                decomposition: decompose(m, eqs, u),
+                decomposition: Decomposition {
+                    body_part: Vec::new(),
+                    eq_part: Vec::new(),
+                    groups: Vec::new(),
+                    eq_excess: Vec::new(),
+                    body_missing: Vec::new(),
+                },
                 set_aside,
                 isolated,
                 redundant: configuration,
                 unchecked: Vec::new(),
                 rounds: 0,
-                kept_rows: Some((rows, orig_rows)),
+                kept_rows: Some(Kept {
+                    rows,
+                    first: orig_rows,
+                    bases: q,
+                }),
                 suspects,
             };
         }
@@ -1401,7 +1437,11 @@ fn check_at(
                         redundant,
                         unchecked,
                         rounds,
-                        kept_rows: Some((rows, orig_rows)),
+                        kept_rows: Some(Kept {
+                            rows,
+                            first: orig_rows,
+                            bases: q,
+                        }),
                         suspects,
                     };
                 }
@@ -1723,7 +1763,11 @@ fn check_at(
                 redundant,
                 unchecked,
                 rounds,
-                kept_rows: (!suspects.is_empty()).then_some((rows, orig_rows)),
+                kept_rows: (!suspects.is_empty()).then_some(Kept {
+                    rows,
+                    first: orig_rows,
+                    bases: q,
+                }),
                 suspects,
             };
         }
