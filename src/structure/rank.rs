@@ -74,12 +74,15 @@ pub(crate) struct RankResult {
     kept_rows: Option<Kept>,
 }
 
+/// Each body's reduced unknowns (`None`: all `B`).
+type Bases = Vec<Option<DMatrix<f64>>>;
+
 /// What an attempt of [`check`] leaves to the next one: the rows, each pair's first row
 /// count, and the bodies' reduced unknowns (recomputed only where a pair changed).
 struct Kept {
     rows: PairRows,
     first: Vec<usize>,
-    bases: Vec<Option<DMatrix<f64>>>,
+    bases: Bases,
 }
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -1014,7 +1017,7 @@ fn check_at(
     let nb = eqs.nodes;
     // The last attempt's bases, and which pairs were built again since (their bodies' bases
     // are computed again; every other body's rows are as they were).
-    let mut prev: Option<(Vec<Option<DMatrix<f64>>>, Vec<bool>)> = None;
+    let mut prev: Option<(Bases, Vec<bool>)> = None;
     let (mut rows, free) = match (redraw.rows.take(), used.seed) {
         (Some(kept), Some(seed)) => {
             // The last attempt's rows (random realizations only): the pairs of the joints
@@ -2156,8 +2159,9 @@ fn confirm_seeds(seed: u64, attempt: u64) -> impl Iterator<Item = u64> {
 /// draw was degenerate there. Each draw builds the block's pairs with their joints drawn at
 /// its seed, on every body's `B` columns (an isolated freedom is a null direction of every
 /// pair touching the body, so the rank is the one on the reduced unknowns), rank by the dense
-/// SVD, or exactly ([`exact_rank`]) beyond [`MAX_DENSE_UNKNOWNS`]. A block with a lowered pair
-/// keeps its deficit (the rows kept are a choice).
+/// SVD, or exactly ([`exact_rank`]) beyond [`MAX_DENSE_UNKNOWNS`]. A lowered pair keeps its
+/// first rows at the other draw; beyond [`MAX_DENSE_UNKNOWNS`] a block with a lowered pair
+/// keeps its deficit (the exact path builds whole pairs).
 #[allow(clippy::too_many_arguments)]
 fn unconfirmed(
     m: &Mechanism,
@@ -2172,7 +2176,7 @@ fn unconfirmed(
     work: &mut u64,
 ) -> Option<u64> {
     let untouched = block_eqs.iter().all(|&e| rows.nrows(e) == orig_rows[e]);
-    if !untouched || needed > nrows.min(ncols) {
+    if needed > nrows.min(ncols) {
         return None;
     }
     let b = m.b() as usize;
@@ -2180,9 +2184,20 @@ fn unconfirmed(
     let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
     for second in seeds {
         let rank = if full.max(nrows) <= MAX_DENSE_UNKNOWNS {
+            // A lowered pair keeps as many rows at the other draw as it has here: lowering
+            // drops rows from the end, so its first ones (a block can hold a pair an earlier
+            // redundancy lowered, and its deficit is then as much a draw's as any other).
             let drawn: Vec<DMatrix<f64>> = block_eqs
                 .iter()
-                .map(|&e| pair_rows_at(m, eqs, e, second))
+                .map(|&e| {
+                    let r = pair_rows_at(m, eqs, e, second);
+                    let k = rows.nrows(e).min(r.nrows());
+                    if k < r.nrows() {
+                        r.rows(0, k).into_owned()
+                    } else {
+                        r
+                    }
+                })
                 .collect();
             let n: usize = drawn.iter().map(|r| r.nrows()).sum();
             let mut a = DMatrix::<f64>::zeros(n, full);
@@ -2207,7 +2222,7 @@ fn unconfirmed(
                     abs: 0.0,
                 },
             )
-        } else if ncols <= MAX_EXACT_UNKNOWNS {
+        } else if untouched && ncols <= MAX_EXACT_UNKNOWNS {
             exact_rank(m, eqs, block_eqs, bodies, second, work)
         } else {
             return None;
