@@ -392,17 +392,6 @@ impl Partition {
             }
         }
     }
-
-    /// A part's partition in the whole mechanism's terms: body `x` of the part is `map[x]`,
-    /// with the whole's ids.
-    fn remap(&mut self, map: &[usize], whole: &Arc<Vec<String>>) {
-        if let Repr::Indexed { ids, bodies, .. } = &mut self.0 {
-            for x in bodies.iter_mut() {
-                *x = map.get(*x as usize).map_or(u32::MAX, |&y| y as u32);
-            }
-            *ids = Arc::clone(whole);
-        }
-    }
 }
 
 impl PartialEq for Partition {
@@ -595,7 +584,7 @@ pub fn enumerate(
     progress: Option<ProgressFn<'_>>,
     sink: &mut dyn FnMut(Placement),
 ) -> Result<Summary, TransformError> {
-    let rules = Rules::of(m, opts)?;
+    let mut rules = Rules::of(m, opts)?;
     // A geometry that cannot be used is the user's error, said once, before any work.
     let geometry = if opts.analysis.count_only {
         None
@@ -606,9 +595,10 @@ pub fn enumerate(
             opts.analysis.precision,
         )?)
     };
+    rules.random = geometry.as_ref().is_none_or(|g| g.seed.is_some());
     let mob = crate::mobility::mobility(m);
     let mut meter = opts.budget.meter("the transform search");
-    let parts = if opts.split { split(m) } else { Vec::new() };
+    let parts = if opts.split { part_sets(m) } else { Vec::new() };
     let mut summary = Summary {
         name: m.name.clone(),
         count: mob.mobility.count,
@@ -775,14 +765,15 @@ fn place(
     let mut batch: Vec<Leaf> = Vec::new();
     let mut stopped = false;
     // Analyse a batch in parallel and stream its determined placements in order.
-    let mut flush = |e: &Expansion,
-                     cache: &structure::AnalysisCache,
-                     oracle: &Oracle,
-                     lean: Option<&Lean>,
-                     batch: &mut Vec<Leaf>,
-                     r: &mut Placed,
-                     meter: &mut Meter,
-                     stopped: &mut bool|
+    let flush = |e: &Expansion,
+                 cache: &structure::AnalysisCache,
+                 oracle: &Oracle,
+                 lean: Option<&Lean>,
+                 batch: &mut Vec<Leaf>,
+                 r: &mut Placed,
+                 meter: &mut Meter,
+                 stopped: &mut bool,
+                 sink: &mut dyn FnMut(Placement) -> bool|
      -> Result<(), BudgetExceeded> {
         if batch.is_empty() || *stopped {
             batch.clear();
@@ -855,7 +846,50 @@ fn place(
     let mut batch_size = 1usize;
     // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
     let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
+    let mut by_parts = ExpansionParts::applies(&exps, rules, opts).then(ExpansionParts::default);
     for x in 0..exps.len {
+        if let Some(parts) = &mut by_parts
+            && let Some(got) =
+                parts.place(&exps.skeleton(x), x, rules, opts, lib, &names.ids, meter)?
+        {
+            if x == 0 {
+                r.isolated = got.isolated;
+                r.set_aside = got.set_aside;
+                r.f = got.f;
+                r.drivable = got.drivable;
+            }
+            if let Some(p) = got.placement {
+                // As the search and `flush` count a placement of the whole expansion.
+                if found >= limit {
+                    r.cut = true;
+                    break;
+                }
+                found += 1;
+                let seq = r.count_valid;
+                r.count_valid += 1;
+                match p {
+                    Some(mut p) => {
+                        p.seq = seq;
+                        r.determined += 1;
+                        if !stopped && !sink(p) {
+                            stopped = true;
+                        }
+                    }
+                    None => r.excluded += 1,
+                }
+                if let Some(cb) = progress {
+                    cb(Progress {
+                        examined: r.count_valid,
+                        total: r.count_valid,
+                        determined: r.determined,
+                    });
+                }
+            }
+            if stopped {
+                break;
+            }
+            continue;
+        }
         let e = &exps.get(x);
         // The rank check's factorizations, shared by every analysis of this expansion: a
         // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
@@ -910,6 +944,7 @@ fn place(
                     &mut r,
                     &mut eval_meter,
                     &mut stopped,
+                    &mut *sink,
                 ) {
                     err = Some(b);
                     return false;
@@ -941,12 +976,322 @@ fn place(
             &mut r,
             &mut eval_meter,
             &mut stopped,
+            &mut *sink,
         )?;
         if r.cut || stopped {
             break;
         }
     }
     Ok(r)
+}
+
+/// What one expansion placed part by part ([`ExpansionParts::place`]).
+struct ByParts {
+    isolated: u32,
+    set_aside: u32,
+    f: i64,
+    drivable: usize,
+    /// `None`: no count-valid placement; else the expansion's one count-valid placement,
+    /// with its analysis when it is determined.
+    placement: Option<Option<Placement>>,
+}
+
+/// The placements of one part of an expansion, as placed alone (in the part's own indices),
+/// kept for every part of any expansion with the same structure.
+struct PartResult {
+    placed: Placed,
+    /// The first determined placement (there is at most one when `placed.cut` is false).
+    placement: Option<Placement>,
+}
+
+/// An expansion of a multiple joint placed part by part, with each part's placements kept
+/// across expansions ("parts" as [`split`] makes them: joined only through the frame).
+///
+/// The expansions of a shared joint differ in a few pairs only (the first 64 trees of a joint
+/// of n bodies differ from the star in where one body hangs), and most of their parts are
+/// the same up to renaming (one body on one pair to the frame). The whole expansion was
+/// analysed twice per expansion (without inputs, then its placement): 128 analyses of every
+/// pair of a 10^5-body shared S joint, over 50 s. A part is now placed once per structure
+/// (its bodies in order, frame position, each joint's type, bodies and rules: the random
+/// realization is drawn by joint index, and a part's joints are numbered alike), and an
+/// expansion whose parts have one placement each is that placement, joined as
+/// [`combine_parts`] joins the placements of the file's independent parts (the same groups, levels,
+/// types and canonical order). An expansion with a part of several placements, or a note, is
+/// placed whole, as before.
+#[derive(Default)]
+struct ExpansionParts {
+    index: HashMap<Vec<u32>, usize>,
+    results: Vec<PartResult>,
+}
+
+impl ExpansionParts {
+    /// Whether the expansions of `m` may be placed part by part under `rules`: random
+    /// geometry (or none), and no kept input on a multiple joint (a minimum over all its
+    /// pairs, which span the parts).
+    fn applies(exps: &Expansions<'_>, rules: &Rules, opts: &TransformOptions) -> bool {
+        opts.split
+            && rules.random
+            && !exps.multi.is_empty()
+            && exps.multi.iter().all(|&j| rules.keep[j] == 0)
+    }
+
+    /// Place expansion `e` (number `x`) part by part; `None` when it is in one piece or a
+    /// part has several placements or a note (then the whole expansion is placed).
+    #[allow(clippy::too_many_arguments)]
+    fn place(
+        &mut self,
+        e: &Skeleton<'_>,
+        x: usize,
+        rules: &Rules,
+        opts: &TransformOptions,
+        lib: &Library,
+        ids: &Arc<Vec<String>>,
+        meter: &mut Meter,
+    ) -> Result<Option<ByParts>, TransformError> {
+        let m = e.m;
+        let sets = part_sets_of(m.bodies.len(), m.frame, e.ends.len(), |q| &e.ends[q][..]);
+        if sets.len() < 2 {
+            return Ok(None);
+        }
+        meter.charge((m.bodies.len() + e.ends.len()) as u64 / 8 + 1)?;
+        // One placement per part is enough to know whether there are several; the parts are
+        // analysed at the whole's random realization even where a part alone has the file's
+        // geometry.
+        let popts = TransformOptions {
+            limit: Some(1),
+            analysis: structure::Options {
+                geometry: random_source(opts.analysis.geometry),
+                ..opts.analysis
+            },
+            ..opts.clone()
+        };
+        let mut local = vec![usize::MAX; m.bodies.len()];
+        let mut of_part: Vec<usize> = Vec::with_capacity(sets.len());
+        let mut key: Vec<u32> = Vec::new();
+        for (joints, bodies) in &sets {
+            let joint = |q: usize| (m.joints[e.origin[q]].kind, &e.ends[q][..], e.origin[q]);
+            part_key(m, joints, bodies, joint, rules, &mut local, &mut key);
+            let at = match self.index.get(&key) {
+                Some(&at) => at,
+                None => {
+                    let mech = part_mechanism_of(m, joints, bodies, &mut local, |q| e.joint(q));
+                    let origins: Vec<usize> = joints.iter().map(|&q| e.origin[q]).collect();
+                    let prules = rules.restrict(&origins);
+                    let mut first: Option<Placement> = None;
+                    let placed = place(&mech, &prules, &popts, lib, meter, None, &mut |p| {
+                        first.get_or_insert(p);
+                        true
+                    })?;
+                    self.results.push(PartResult {
+                        placed,
+                        placement: first,
+                    });
+                    self.index.insert(key.clone(), self.results.len() - 1);
+                    self.results.len() - 1
+                }
+            };
+            of_part.push(at);
+        }
+        let results = &self.results;
+        let placed = |i: usize| &results[of_part[i]].placed;
+        if (0..sets.len()).any(|i| !placed(i).notes.is_empty()) {
+            return Ok(None);
+        }
+        let mut by = ByParts {
+            isolated: 0,
+            set_aside: 0,
+            f: 0,
+            drivable: 0,
+            placement: None,
+        };
+        for i in 0..sets.len() {
+            let r = placed(i);
+            by.isolated += r.isolated;
+            by.set_aside += r.set_aside;
+            by.f += r.f;
+            by.drivable += r.drivable;
+        }
+        // A part without placements: none for the expansion (the count is block diagonal).
+        if (0..sets.len()).any(|i| placed(i).count_valid == 0) {
+            return Ok(Some(by));
+        }
+        if (0..sets.len()).any(|i| placed(i).cut || placed(i).count_valid != 1) {
+            return Ok(None);
+        }
+        // Determined when every part is (the rank check is block diagonal too).
+        let members: Option<Vec<&Placement>> = (0..sets.len())
+            .map(|i| results[of_part[i]].placement.as_ref())
+            .collect();
+        let Some(members) = members else {
+            by.placement = Some(None);
+            return Ok(Some(by));
+        };
+        let rebuild = vec![true; members.len()];
+        let joined = join_parts(
+            &|q| Some(e.names(q)),
+            Some(&e.origin),
+            &sets,
+            &members,
+            &rebuild,
+            ids,
+            e.expansion_label(),
+            x,
+        );
+        let Some(p) = joined else {
+            return Ok(None);
+        };
+        by.placement = Some(Some(p));
+        Ok(Some(by))
+    }
+}
+
+/// The random realization a geometry source falls back to (the file's geometry is never
+/// used where this is asked: the whole is analysed at a random realization).
+fn random_source(g: crate::motion::GeometrySource) -> crate::motion::GeometrySource {
+    use crate::motion::GeometrySource;
+    match g {
+        GeometrySource::Auto { seed } => GeometrySource::Random { seed },
+        other => other,
+    }
+}
+
+/// The placement of a whole from one placement per part, each in its part's own indices
+/// (`sets[i]`: the part's joints and bodies in the whole's indices), as the analysis of the
+/// whole gives it: inputs in the order of the whole's joints (`origin`: the original joint
+/// of each joint of an expansion, then the pair), groups in canonical order (level, size,
+/// smallest body), types in order of first appearance. A member with `rebuild[i]` was placed
+/// on another part of the same structure: its inputs are named by `names` (joint `q`'s id and
+/// bodies' label; the part's joints are binary). `None` if a member names a joint or body the part lacks (never
+/// expected).
+#[allow(clippy::too_many_arguments)]
+fn join_parts(
+    names: &dyn Fn(usize) -> Option<(String, String)>,
+    origin: Option<&[usize]>,
+    sets: &[(Vec<usize>, Vec<usize>)],
+    members: &[&Placement],
+    rebuild: &[bool],
+    ids: &Arc<Vec<String>>,
+    expansion: Option<String>,
+    exp: usize,
+) -> Option<Placement> {
+    // (original joint, joint, order within the part, input)
+    let mut inputs: Vec<(usize, usize, usize, Input)> = Vec::new();
+    let mut key: Option<Key> = None;
+    // (level, size, smallest body, part, group)
+    let mut groups: Vec<(usize, usize, usize, usize, usize)> = Vec::new();
+    for (pi, (p, (joints, bodies))) in members.iter().zip(sets).enumerate() {
+        for (k, (l, i)) in p.inputs_at.iter().zip(&p.inputs).enumerate() {
+            let q = *joints.get(*l)?;
+            let o = origin.map_or(Some(q), |o| o.get(q).copied())?;
+            let input = if rebuild[pi] {
+                let (joint, pair) = names(q)?;
+                Input {
+                    joint,
+                    pair,
+                    driven: i.driven,
+                }
+            } else {
+                i.clone()
+            };
+            inputs.push((o, q, k, input));
+        }
+        let k = Key::of(&p.scores);
+        key = Some(key.map_or(k, |a| a.join(k)));
+        for (gi, g) in p.groups_at.iter().enumerate() {
+            groups.push((g.0, p.partition.group_len(gi), *bodies.get(g.1)?, pi, gi));
+        }
+    }
+    inputs.sort_unstable_by_key(|i| (i.0, i.1, i.2));
+    groups.sort_unstable();
+    let mut types: Vec<TypeCount> = Vec::new();
+    let mut kinds = Vec::with_capacity(groups.len());
+    let mut in_lib = Vec::with_capacity(groups.len());
+    for &(_, _, _, pi, gi) in &groups {
+        let p = members[pi];
+        let kind = p
+            .kinds
+            .get(gi)
+            .and_then(|&t| p.types.get(t as usize))
+            .map_or("", |t| t.kind.as_str());
+        let t = match types.iter().position(|t| t.kind == kind) {
+            Some(t) => {
+                types[t].count += 1;
+                t
+            }
+            None => {
+                types.push(TypeCount {
+                    kind: kind.to_string(),
+                    count: 1,
+                    in_library: p.in_lib[gi],
+                });
+                types.len() - 1
+            }
+        };
+        kinds.push(t as u32);
+        in_lib.push(p.in_lib[gi]);
+    }
+    // A group's bodies in the whole's indices (`None`: a part named a body its id table
+    // lacks, never expected; the partition is then kept as text).
+    let whole = |pi: usize, gi: usize| -> Option<Vec<u32>> {
+        let bodies = &sets[pi].1;
+        match &members[pi].partition.0 {
+            Repr::Indexed {
+                bodies: local,
+                ends,
+                ..
+            } => Some(
+                local[Partition::range(ends, gi)]
+                    .iter()
+                    .map(|&b| bodies.get(b as usize).map_or(u32::MAX, |&g| g as u32))
+                    .collect(),
+            ),
+            Repr::Text(_) => None,
+        }
+    };
+    let indexed = members
+        .iter()
+        .all(|p| matches!(p.partition.0, Repr::Indexed { .. }));
+    let partition = if indexed {
+        Partition::indexed(
+            ids,
+            groups
+                .iter()
+                .map(|&(_, _, _, pi, gi)| whole(pi, gi).unwrap_or_default()),
+        )
+    } else {
+        Partition(Repr::Text(
+            groups
+                .iter()
+                .map(|&(_, _, _, pi, gi)| match whole(pi, gi) {
+                    Some(v) => v
+                        .iter()
+                        .map(|&b| ids.get(b as usize).cloned().unwrap_or_default())
+                        .collect(),
+                    None => members[pi]
+                        .partition
+                        .group(gi)
+                        .into_iter()
+                        .map(str::to_string)
+                        .collect(),
+                })
+                .collect(),
+        ))
+    };
+    Some(Placement {
+        rank: None,
+        family: None,
+        scores: key?.scores(),
+        inputs_at: inputs.iter().map(|i| i.0).collect(),
+        inputs: inputs.into_iter().map(|i| i.3).collect(),
+        expansion,
+        types,
+        partition,
+        seq: 0,
+        exp,
+        groups_at: groups.iter().map(|g| (g.0, g.2)).collect(),
+        kinds,
+        in_lib,
+    })
 }
 
 /// Enumerate, rank and group the determined placements (at most [`list_cap`] listed, the best
@@ -1027,22 +1372,27 @@ fn finish_listing_note(s: &mut Summary) {
 // ---------------------------------------------------------------------------------------------
 // Independent parts
 
-/// One independent part: the frame with one connected component of the other bodies (joined
-/// by joints that do not pass through the frame) and the joints touching it.
-struct Part {
-    mech: Mechanism,
-    /// Original index of each joint of `mech`.
-    joints: Vec<usize>,
-    /// Original index of each body of `mech`.
-    bodies: Vec<usize>,
+/// The independent parts of `m`, as index sets: each part is the frame with one connected
+/// component of the other bodies (joined by joints that do not pass through the frame) and
+/// the joints touching it, in order of their first joint; a mechanism in one piece gives none.
+/// Every joint belongs to exactly one part: the frame's equations only ever fix the frame, so
+/// the constraint Jacobian (frame fixed) is block diagonal over the parts, and so are the
+/// matching, the groups and the rank check. Each part's joints (ascending) and bodies
+/// (ascending, the frame included); [`part_mechanism`] builds one part's mechanism.
+fn part_sets(m: &Mechanism) -> Vec<(Vec<usize>, Vec<usize>)> {
+    part_sets_of(m.bodies.len(), m.frame, m.joints.len(), |q| {
+        &m.joints[q].bodies[..]
+    })
 }
 
-/// The parts of `m`, in order of their first joint; a mechanism in one piece gives one part
-/// (or none without movable bodies). Every joint belongs to exactly one part: the frame's
-/// equations only ever fix the frame, so the constraint Jacobian (frame fixed) is block
-/// diagonal over the parts, and so are the matching, the groups and the rank check.
-fn split(m: &Mechanism) -> Vec<Part> {
-    let nb = m.bodies.len();
+/// [`part_sets`] of `nb` bodies, the frame `frame`, and `nj` joints whose bodies are
+/// `bodies_of(q)`.
+fn part_sets_of<'a>(
+    nb: usize,
+    frame: usize,
+    nj: usize,
+    bodies_of: impl Fn(usize) -> &'a [usize],
+) -> Vec<(Vec<usize>, Vec<usize>)> {
     let mut parent: Vec<usize> = (0..nb).collect();
     fn root(p: &mut [usize], mut x: usize) -> usize {
         while p[x] != x {
@@ -1051,10 +1401,10 @@ fn split(m: &Mechanism) -> Vec<Part> {
         }
         x
     }
-    for j in &m.joints {
+    for q in 0..nj {
         let mut first: Option<usize> = None;
-        for &b in &j.bodies {
-            if b == m.frame || b >= nb {
+        for &b in bodies_of(q) {
+            if b == frame || b >= nb {
                 continue;
             }
             match first {
@@ -1071,9 +1421,9 @@ fn split(m: &Mechanism) -> Vec<Part> {
     // Part of each root, numbered by first joint, then bodies without joints by index.
     let mut part_of: Vec<Option<usize>> = vec![None; nb];
     let mut joints_of: Vec<Vec<usize>> = Vec::new();
-    let mut joint_part: Vec<Option<usize>> = vec![None; m.joints.len()];
-    for (ji, j) in m.joints.iter().enumerate() {
-        let Some(&b) = j.bodies.iter().find(|&&b| b != m.frame && b < nb) else {
+    let mut joint_part: Vec<Option<usize>> = vec![None; nj];
+    for (ji, jp) in joint_part.iter_mut().enumerate() {
+        let Some(&b) = bodies_of(ji).iter().find(|&&b| b != frame && b < nb) else {
             continue;
         };
         let r = root(&mut parent, b);
@@ -1082,10 +1432,10 @@ fn split(m: &Mechanism) -> Vec<Part> {
             joints_of.len() - 1
         });
         joints_of[p].push(ji);
-        joint_part[ji] = Some(p);
+        *jp = Some(p);
     }
     for b in 0..nb {
-        if b != m.frame {
+        if b != frame {
             let r = root(&mut parent, b);
             if part_of[r].is_none() {
                 joints_of.push(Vec::new());
@@ -1095,7 +1445,7 @@ fn split(m: &Mechanism) -> Vec<Part> {
     }
     let mut bodies_of: Vec<Vec<usize>> = vec![Vec::new(); joints_of.len()];
     for b in 0..nb {
-        if b == m.frame {
+        if b == frame {
             continue;
         }
         let r = root(&mut parent, b);
@@ -1115,44 +1465,97 @@ fn split(m: &Mechanism) -> Vec<Part> {
     if joints_of.len() <= 1 {
         return Vec::new();
     }
-    // One table of local indices for every part, set and cleared per part (a table per part
-    // was quadratic: 10^5 parts of a 10^5-body star cleared 80 GB).
-    let mut local = vec![usize::MAX; nb];
-    joints_of
-        .into_iter()
-        .zip(bodies_of)
-        .map(|(joints, mut bodies)| {
-            bodies.push(m.frame);
-            bodies.sort_unstable();
-            for (i, &b) in bodies.iter().enumerate() {
-                local[b] = i;
-            }
-            let mech = Mechanism {
-                name: m.name.clone(),
-                description: None,
-                space: m.space,
-                frame: local[m.frame],
-                bodies: bodies.iter().map(|&b| m.bodies[b].clone()).collect(),
-                joints: joints
-                    .iter()
-                    .map(|&ji| {
-                        let mut j = m.joints[ji].clone();
-                        j.bodies = j.bodies.iter().map(|&b| local[b]).collect();
-                        j
-                    })
-                    .collect(),
-                expect: Default::default(),
-            };
-            for &b in &bodies {
-                local[b] = usize::MAX;
-            }
-            Part {
-                mech,
-                joints,
-                bodies,
-            }
-        })
-        .collect()
+    for bodies in &mut bodies_of {
+        // The frame's place among the sorted bodies: a binary search, not a sort per part.
+        let at = bodies.partition_point(|&b| b < frame);
+        bodies.insert(at, frame);
+    }
+    joints_of.into_iter().zip(bodies_of).collect()
+}
+
+/// The mechanism of one part of `m` (its `joints` and sorted `bodies`, the frame among them).
+/// `local` is a table of every body of `m`, all `usize::MAX`, used and cleared here (one
+/// table for every part: a table per part was quadratic, 10^5 parts of a 10^5-body star
+/// cleared 80 GB).
+fn part_mechanism(
+    m: &Mechanism,
+    joints: &[usize],
+    bodies: &[usize],
+    local: &mut [usize],
+) -> Mechanism {
+    part_mechanism_of(m, joints, bodies, local, |q| m.joints[q].clone())
+}
+
+/// [`part_mechanism`] with joint `q` given by `joint(q)` (the pairs of an expansion not built
+/// as a whole, [`Skeleton`]); the bodies, frame and space are `m`'s.
+fn part_mechanism_of(
+    m: &Mechanism,
+    joints: &[usize],
+    bodies: &[usize],
+    local: &mut [usize],
+    joint: impl Fn(usize) -> Joint,
+) -> Mechanism {
+    for (i, &b) in bodies.iter().enumerate() {
+        local[b] = i;
+    }
+    let mech = Mechanism {
+        name: m.name.clone(),
+        description: None,
+        space: m.space,
+        frame: local[m.frame],
+        bodies: bodies.iter().map(|&b| m.bodies[b].clone()).collect(),
+        joints: joints
+            .iter()
+            .map(|&ji| {
+                let mut j = joint(ji);
+                j.bodies = j.bodies.iter().map(|&b| local[b]).collect();
+                j
+            })
+            .collect(),
+        expect: Default::default(),
+    };
+    for &b in bodies {
+        local[b] = usize::MAX;
+    }
+    mech
+}
+
+/// The structure of one part (its `joints` and sorted `bodies` in `m`) as a key: bodies, the
+/// frame's place, and each joint's type, rules (of its original joint) and bodies in the
+/// part's own indices (`joint(q)`: type, bodies and original joint of joint `q`). Two parts with the same key are placed alike up to renaming when
+/// the realization is random (drawn by joint index) or there is none. `local` is a table of
+/// every body of `m`, all `usize::MAX`, used and cleared here.
+fn part_key<'a>(
+    m: &Mechanism,
+    joints: &[usize],
+    bodies: &[usize],
+    joint: impl Fn(usize) -> (JointType, &'a [usize], usize),
+    rules: &Rules,
+    local: &mut [usize],
+    key: &mut Vec<u32>,
+) {
+    for (i, &b) in bodies.iter().enumerate() {
+        local[b] = i;
+    }
+    key.clear();
+    key.extend([
+        bodies.len() as u32,
+        local[m.frame] as u32,
+        joints.len() as u32,
+    ]);
+    for &q in joints {
+        let (kind, ends, o) = joint(q);
+        key.extend([
+            kind as u32,
+            u32::from(rules.allowed[o]),
+            rules.keep[o],
+            ends.len() as u32,
+        ]);
+        key.extend(ends.iter().map(|&b| local[b] as u32));
+    }
+    for &b in bodies {
+        local[b] = usize::MAX;
+    }
 }
 
 /// The scores of a placement as a combinable key: groups and covered groups add up over the
@@ -1198,17 +1601,29 @@ impl Key {
     }
 }
 
-/// One part's placements by key: how many, and the first `cap` of each (enumeration order).
+/// One part's placements by key: how many, and the first `cap` of each (enumeration order,
+/// in the part's own indices), with what placing it found. Kept once for every part of the
+/// same structure ([`combine_parts`]).
 struct PartKeys {
+    placed: Placed,
     keys: Vec<(Key, u128, Vec<Placement>)>,
+    /// Placed on a part of the same structure that may be another (binary joints, random
+    /// geometry): its inputs are named from the whole's joints.
+    shared: bool,
 }
 
 /// Place every part, count the whole as the product of the parts' counts, and stream the best
 /// placements of the whole (best first, at most [`list_cap`]).
+///
+/// Parts of the same structure (bodies in order, the frame's position, each joint's type,
+/// bodies and rules) with binary joints and a random realization (drawn by joint index, and
+/// a part's joints are numbered alike) or none are placed once: a star of 10^6 bodies on the
+/// frame is one analysis of a one-body part, not 10^6 of them, and no part's mechanism is
+/// held past its placing (a `Mechanism` per part held at once was 3.3 GB at 10^6).
 #[allow(clippy::too_many_arguments)]
 fn combine_parts(
     m: &Mechanism,
-    parts: &[Part],
+    sets: &[(Vec<usize>, Vec<usize>)],
     rules: &Rules,
     opts: &TransformOptions,
     lib: &Library,
@@ -1218,37 +1633,69 @@ fn combine_parts(
     sink: &mut dyn FnMut(Placement),
 ) -> Result<(), TransformError> {
     let cap = list_cap(m, opts.limit);
-    let mut per: Vec<PartKeys> = Vec::with_capacity(parts.len());
+    let mut memo: Vec<PartKeys> = Vec::new();
+    let mut index: HashMap<Vec<u32>, usize> = HashMap::new();
+    // The entry of `memo` of each part.
+    let mut per: Vec<usize> = Vec::with_capacity(sets.len());
     let (mut count_valid, mut determined) = (1u128, 1u128);
     summary.expansions = 1;
     summary.expansions_total = 1;
     let mut examined = 0usize;
     let whole_ids: Arc<Vec<String>> = Arc::new(m.bodies.iter().map(|b| b.id.to_string()).collect());
-    for (pi, part) in parts.iter().enumerate() {
-        let prules = rules.restrict(&part.joints);
-        let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
-        let r = place(&part.mech, &prules, opts, lib, meter, None, &mut |mut p| {
-            for i in &mut p.inputs_at {
-                *i = part.joints[*i];
+    let mut local = vec![usize::MAX; m.bodies.len()];
+    let mut key: Vec<u32> = Vec::new();
+    for (pi, (joints, bodies)) in sets.iter().enumerate() {
+        // A part alone takes the file's geometry (when the whole lacks some) if all its
+        // joints have theirs: placed alone then, as before.
+        let shared = rules.random
+            && joints.iter().all(|&j| m.joints[j].bodies.len() == 2)
+            && (opts.analysis.count_only
+                || matches!(
+                    opts.analysis.geometry,
+                    crate::motion::GeometrySource::Random { .. }
+                )
+                || joints.iter().all(|&j| m.joints[j].geometry.is_empty()));
+        let seen = if shared {
+            let joint = |q: usize| (m.joints[q].kind, &m.joints[q].bodies[..], q);
+            part_key(m, joints, bodies, joint, rules, &mut local, &mut key);
+            index.get(&key).copied()
+        } else {
+            None
+        };
+        let at = match seen {
+            Some(at) => at,
+            None => {
+                let mech = part_mechanism(m, joints, bodies, &mut local);
+                let prules = rules.restrict(joints);
+                let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
+                let placed = place(&mech, &prules, opts, lib, meter, None, &mut |p| {
+                    let e = by.entry(Key::of(&p.scores)).or_default();
+                    e.0 += 1;
+                    if e.1.len() < cap {
+                        e.1.push(p);
+                    }
+                    true
+                })?;
+                memo.push(PartKeys {
+                    placed,
+                    keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
+                    shared,
+                });
+                if shared {
+                    index.insert(key.clone(), memo.len() - 1);
+                }
+                memo.len() - 1
             }
-            for g in &mut p.groups_at {
-                g.1 = part.bodies[g.1];
-            }
-            p.partition.remap(&part.bodies, &whole_ids);
-            let e = by.entry(Key::of(&p.scores)).or_default();
-            e.0 += 1;
-            if e.1.len() < cap {
-                e.1.push(p);
-            }
-            true
-        })?;
-        summary.absorb(&r);
+        };
+        per.push(at);
+        let r = &memo[at].placed;
+        summary.absorb(r);
         summary.truncated |= r.cut;
         examined += r.count_valid;
         count_valid = count_valid.saturating_mul(r.count_valid as u128);
         determined = determined.saturating_mul(r.determined as u128);
-        for n in r.notes {
-            let n = format!("part {} ({}): {n}", pi + 1, part_label(m, part));
+        for n in &r.notes {
+            let n = format!("part {} ({}): {n}", pi + 1, part_label(m, bodies));
             summary.notes.push(n);
         }
         if let Some(cb) = progress {
@@ -1258,9 +1705,6 @@ fn combine_parts(
                 determined: 0,
             });
         }
-        per.push(PartKeys {
-            keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
-        });
     }
     summary.count_valid = count_valid;
     summary.determined = determined;
@@ -1271,14 +1715,15 @@ fn combine_parts(
     summary.notes.push(format!(
         "{} independent parts (joined only through the frame), placed one by one: the counts \
          are the products of the parts' counts",
-        parts.len()
+        sets.len()
     ));
     if determined == 0 {
         return Ok(());
     }
     // The keys of the whole, part by part: layer i holds the keys of parts 0..=i combined.
     let mut layers: Vec<Vec<(Key, u128)>> = Vec::with_capacity(per.len());
-    for (i, pk) in per.iter().enumerate() {
+    for (i, &at) in per.iter().enumerate() {
+        let pk = &memo[at];
         let mut next: BTreeMap<Key, u128> = BTreeMap::new();
         if i == 0 {
             for (k, n, _) in &pk.keys {
@@ -1308,6 +1753,7 @@ fn combine_parts(
     let mut whole: Vec<Key> = last.iter().map(|(k, _)| *k).collect();
     whole.sort_by(|a, b| compare_scores(&a.scores(), &b.scores(), &criteria).then(a.cmp(b)));
     let n = per.len();
+    let rebuild: Vec<bool> = per.iter().map(|&at| memo[at].shared).collect();
     let mut listed = 0usize;
     'keys: for target in whole {
         // Every choice of one key per part that joins to `target`, the last part first.
@@ -1317,14 +1763,14 @@ fn combine_parts(
         let mut i = n - 1;
         loop {
             let np = if i == 0 { 1 } else { layers[i - 1].len() };
-            let total = per[i].keys.len() * np;
+            let total = memo[per[i]].keys.len() * np;
             let mut hit = false;
             while cursor[i] < total {
                 let c = cursor[i];
                 cursor[i] += 1;
                 meter.charge(1)?;
                 let (si, pj) = (c / np, c % np);
-                let k = per[i].keys[si].0;
+                let k = memo[per[i]].keys[si].0;
                 if i == 0 {
                     if k == tgt[0] {
                         chosen[0] = si;
@@ -1354,12 +1800,30 @@ fn combine_parts(
             }
             // A full choice: the product of the parts' listed placements, the last part
             // varying fastest.
-            let lists: Vec<&Vec<Placement>> = (0..n).map(|p| &per[p].keys[chosen[p]].2).collect();
+            let lists: Vec<&Vec<Placement>> =
+                (0..n).map(|p| &memo[per[p]].keys[chosen[p]].2).collect();
             let mut digit = vec![0usize; n];
             'prod: loop {
                 meter.charge(n as u64)?;
                 let members: Vec<&Placement> = (0..n).map(|p| &lists[p][digit[p]]).collect();
-                let mut p = join_placements(&members, target);
+                let labels: Vec<String> =
+                    members.iter().filter_map(|p| p.expansion.clone()).collect();
+                let names = |q: usize| {
+                    let j = m.joints.get(q)?;
+                    Some((j.id.clone(), m.joint_bodies_label(j)))
+                };
+                let Some(mut p) = join_parts(
+                    &names,
+                    None,
+                    sets,
+                    &members,
+                    &rebuild,
+                    &whole_ids,
+                    (!labels.is_empty()).then(|| labels.join("; ")),
+                    members.iter().map(|p| p.exp).max().unwrap_or(0),
+                ) else {
+                    break 'keys;
+                };
                 p.seq = listed;
                 sink(p);
                 listed += 1;
@@ -1385,10 +1849,10 @@ fn combine_parts(
     Ok(())
 }
 
-/// `bodies 2-5` style label of a part for notes: its movable bodies' ids, shortened.
-fn part_label(m: &Mechanism, part: &Part) -> String {
-    let ids: Vec<String> = part
-        .bodies
+/// `bodies 2-5` style label of a part (its `bodies`) for notes: its movable bodies' ids,
+/// shortened.
+fn part_label(m: &Mechanism, bodies: &[usize]) -> String {
+    let ids: Vec<String> = bodies
         .iter()
         .filter(|&&b| b != m.frame)
         .map(|&b| m.body_id(b).to_string())
@@ -1397,96 +1861,6 @@ fn part_label(m: &Mechanism, part: &Part) -> String {
         0 => "no bodies".into(),
         1..=4 => format!("bodies {}", ids.join(", ")),
         k => format!("bodies {}, {} and {} more", ids[0], ids[1], k - 2),
-    }
-}
-
-/// The placement of the whole from one placement per part: inputs in joint order, groups in
-/// canonical order (level, size, smallest body), types in order of first appearance.
-fn join_placements(members: &[&Placement], key: Key) -> Placement {
-    let mut inputs: Vec<(usize, Input)> = members
-        .iter()
-        .flat_map(|p| p.inputs_at.iter().copied().zip(p.inputs.iter().cloned()))
-        .collect();
-    inputs.sort_by_key(|(j, _)| *j);
-    // (level, size, smallest body, part, group)
-    let mut groups: Vec<(usize, usize, usize, usize, usize)> = Vec::new();
-    for (pi, p) in members.iter().enumerate() {
-        for (gi, g) in p.groups_at.iter().enumerate() {
-            groups.push((g.0, p.partition.group_len(gi), g.1, pi, gi));
-        }
-    }
-    groups.sort_unstable();
-    let mut types: Vec<TypeCount> = Vec::new();
-    let mut groups_at = Vec::with_capacity(groups.len());
-    for &(level, _, first, pi, gi) in &groups {
-        let p = members[pi];
-        let kind = p
-            .kinds
-            .get(gi)
-            .and_then(|&t| p.types.get(t as usize))
-            .map_or("", |t| t.kind.as_str());
-        let t = match types.iter_mut().position(|t| t.kind == kind) {
-            Some(t) => {
-                types[t].count += 1;
-                t
-            }
-            None => {
-                types.push(TypeCount {
-                    kind: kind.to_string(),
-                    count: 1,
-                    in_library: p.in_lib[gi],
-                });
-                types.len() - 1
-            }
-        };
-        groups_at.push((level, first, t as u32, p.in_lib[gi]));
-    }
-    // The parts' partitions are in the whole's terms (`Partition::remap`): one table of ids.
-    let indexed = members.iter().all(|p| {
-        matches!((&p.partition.0, &members[0].partition.0),
-            (Repr::Indexed { ids: a, .. }, Repr::Indexed { ids: b, .. }) if Arc::ptr_eq(a, b))
-    });
-    let partition = match (&members.first().map(|p| &p.partition.0), indexed) {
-        (Some(Repr::Indexed { ids, .. }), true) => Partition::indexed(
-            ids,
-            groups
-                .iter()
-                .map(|&(_, _, _, pi, gi)| match &members[pi].partition.0 {
-                    Repr::Indexed { bodies, ends, .. } => {
-                        bodies[Partition::range(ends, gi)].to_vec()
-                    }
-                    Repr::Text(_) => Vec::new(),
-                }),
-        ),
-        _ => Partition(Repr::Text(
-            groups
-                .iter()
-                .map(|&(_, _, _, pi, gi)| {
-                    members[pi]
-                        .partition
-                        .group(gi)
-                        .into_iter()
-                        .map(str::to_string)
-                        .collect()
-                })
-                .collect(),
-        )),
-    };
-    let labels: Vec<String> = members.iter().filter_map(|p| p.expansion.clone()).collect();
-    Placement {
-        rank: None,
-        family: None,
-        inputs: inputs.iter().map(|(_, i)| i.clone()).collect(),
-        expansion: (!labels.is_empty()).then(|| labels.join("; ")),
-        scores: key.scores(),
-        types,
-        partition,
-        seq: 0,
-        exp: members.iter().map(|p| p.exp).max().unwrap_or(0),
-        inputs_at: inputs.iter().map(|(j, _)| *j).collect(),
-        groups_at: groups_at.iter().map(|g| (g.0, g.1)).collect(),
-        kinds: groups_at.iter().map(|g| g.2).collect(),
-        in_lib: groups_at.iter().map(|g| g.3).collect(),
     }
 }
 
@@ -1532,6 +1906,11 @@ struct Rules {
     /// Driven DOF joint j must keep at least.
     keep: Vec<u32>,
     notes: Vec<String>,
+    /// Whether the analyses use no geometry or a random realization (drawn joint by joint):
+    /// then the independent parts of an expansion may be analysed apart ([`ExpansionParts`]).
+    /// The file's geometry is made dimensionless by the whole mechanism's scale, so a part
+    /// alone would not be analysed at the same configuration.
+    random: bool,
 }
 
 impl Rules {
@@ -1542,6 +1921,7 @@ impl Rules {
             grounded: self.grounded,
             keep: joints.iter().map(|&j| self.keep[j]).collect(),
             notes: Vec::new(),
+            random: self.random,
         }
     }
 
@@ -1612,6 +1992,7 @@ impl Rules {
             grounded: opts.grounded,
             keep,
             notes,
+            random: false,
         })
     }
 }
@@ -1730,6 +2111,54 @@ impl<'a> Expansions<'a> {
         }
     }
 
+    /// The pairs of expansion `k` ([`Skeleton`]): [`Expansions::get`] without the mechanism.
+    fn skeleton(&self, k: usize) -> Skeleton<'a> {
+        let m = self.m;
+        let nj = m.joints.len();
+        let mut ends: Vec<[usize; 2]> = m
+            .joints
+            .iter()
+            .map(|j| [j.bodies[0], j.bodies[j.bodies.len() - 1]])
+            .collect();
+        let mut origin: Vec<usize> = (0..nj).collect();
+        let mut multi = Vec::with_capacity(self.multi.len());
+        for (&j, &d) in self.multi.iter().zip(&self.digits(k)) {
+            let joint = &m.joints[j];
+            let edges = prufer_tree(joint.bodies.len(), d);
+            let mut pairs = Vec::with_capacity(edges.len());
+            for (i, &(a, b)) in edges.iter().enumerate() {
+                let e = [joint.bodies[a], joint.bodies[b]];
+                if i == 0 {
+                    ends[j] = e;
+                    pairs.push(j);
+                } else {
+                    pairs.push(ends.len());
+                    ends.push(e);
+                    origin.push(j);
+                }
+            }
+            multi.push((j, pairs));
+        }
+        Skeleton {
+            m,
+            ends,
+            origin,
+            multi,
+        }
+    }
+
+    /// The tree of each multiple joint in expansion `k` (mixed radix, the last varying
+    /// fastest).
+    fn digits(&self, k: usize) -> Vec<u64> {
+        let mut rest = k as u64;
+        let mut digits = vec![0u64; self.multi.len()];
+        for (d, &c) in digits.iter_mut().zip(&self.counts).rev() {
+            *d = rest % c.max(1);
+            rest /= c.max(1);
+        }
+        digits
+    }
+
     /// Expansion `k` (mixed radix over the multiple joints' trees, the last varying fastest).
     fn get(&self, k: usize) -> Expansion {
         let m = self.m;
@@ -1740,12 +2169,7 @@ impl<'a> Expansions<'a> {
                 origin: (0..m.joints.len()).collect(),
             };
         }
-        let mut rest = k as u64;
-        let mut digits = vec![0u64; self.multi.len()];
-        for (d, &c) in digits.iter_mut().zip(&self.counts).rev() {
-            *d = rest % c.max(1);
-            rest /= c.max(1);
-        }
+        let digits = self.digits(k);
         let mut mech = self.base.clone();
         let mut origin: Vec<usize> = (0..m.joints.len()).collect();
         let mut labels = Vec::new();
@@ -1780,6 +2204,74 @@ impl<'a> Expansions<'a> {
             mech,
             origin,
         }
+    }
+}
+
+/// The pairs of one expansion without its mechanism ([`Expansions::skeleton`]): each pair's
+/// two bodies and original joint, numbered as [`Expansions::get`] numbers them; ids, labels
+/// and joints are made only for what is asked (building every expansion's mechanism, two
+/// strings a pair, was 60 % of placing a 10^5-body shared joint part by part).
+struct Skeleton<'a> {
+    m: &'a Mechanism,
+    ends: Vec<[usize; 2]>,
+    origin: Vec<usize>,
+    /// Each multiple joint and its pairs in the order of its tree's edges.
+    multi: Vec<(usize, Vec<usize>)>,
+}
+
+impl Skeleton<'_> {
+    fn is_pair(&self, q: usize) -> bool {
+        self.m.joints[self.origin[q]].bodies.len() > 2
+    }
+
+    /// Pair `q`'s bodies as a label, `a-b`.
+    fn label(&self, q: usize) -> String {
+        let [a, b] = self.ends[q];
+        format!("{}-{}", self.m.body_id(a), self.m.body_id(b))
+    }
+
+    /// Joint `q` of the expansion, as [`Expansions::get`] builds it.
+    fn joint(&self, q: usize) -> Joint {
+        let o = &self.m.joints[self.origin[q]];
+        if !self.is_pair(q) {
+            let mut j = o.clone();
+            j.driven = 0;
+            return j;
+        }
+        Joint {
+            id: format!("{}[{}]", o.id, self.label(q)),
+            kind: o.kind,
+            bodies: self.ends[q].into(),
+            driven: 0,
+            geometry: o.geometry.clone(),
+        }
+    }
+
+    /// Joint `q`'s id and its bodies' label.
+    fn names(&self, q: usize) -> (String, String) {
+        let o = &self.m.joints[self.origin[q]];
+        if self.is_pair(q) {
+            let label = self.label(q);
+            (format!("{}[{label}]", o.id), label)
+        } else {
+            (o.id.clone(), self.m.joint_bodies_label(o))
+        }
+    }
+
+    /// The expansion's label, as [`Expansions::get`] writes it.
+    fn expansion_label(&self) -> Option<String> {
+        if self.multi.is_empty() {
+            return None;
+        }
+        let labels: Vec<String> = self
+            .multi
+            .iter()
+            .map(|(j, pairs)| {
+                let pairs: Vec<String> = pairs.iter().map(|&q| self.label(q)).collect();
+                format!("{}: {}", self.m.joints[*j].id, pairs.join(", "))
+            })
+            .collect();
+        Some(labels.join("; "))
     }
 }
 
