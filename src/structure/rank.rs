@@ -215,6 +215,13 @@ fn reduced_basis<'a>(
         s.view_mut((r0, 0), (r.nrows(), b)).copy_from(&r);
         r0 += r.nrows();
     }
+    Some(row_space(b, s, t))
+}
+
+/// An orthonormal basis (`b × rank`) of the row space of the stacked rows `s` (`total × b`),
+/// the right singular vectors above the threshold.
+fn row_space(b: usize, s: DMatrix<f64>, t: &Tol) -> DMatrix<f64> {
+    let total = s.nrows();
     // Only V is needed: skipping U leaves V and the singular values unchanged. A body held
     // by many pairs (the hub of a star: 10^5 pairs) first has its tall stack reduced to the
     // b × b triangle of its QR (same singular values and right singular vectors), instead of
@@ -236,7 +243,7 @@ fn reduced_basis<'a>(
             qb[(k, c)] = v_t[(i, k)];
         }
     }
-    Some(qb)
+    qb
 }
 
 /// Body-local twists at the file's geometry. Each body's unknowns are written about its own
@@ -376,25 +383,9 @@ fn local_basis<'a>(
             row.unscale_mut(n);
         }
     }
-    let (sv, tol, v_t) = if total > TALL_STACK_ROWS {
-        let r = a.qr().r();
-        let (sv, _, _, v_t) = svd_parts(&r, false, true, t);
-        let max = sv.iter().copied().fold(0.0, f64::max);
-        (sv, t.cut(max, total), v_t)
-    } else {
-        let (sv, tol, _, v_t) = svd_parts(&a, false, true, t);
-        (sv, tol, v_t)
-    };
-    let v_t = v_t.expect("requested V^T");
-    let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
-    if keep.len() >= b {
+    let ql = row_space(b, a, t);
+    if ql.ncols() >= b {
         return s.clone();
-    }
-    let mut ql = DMatrix::<f64>::zeros(b, keep.len());
-    for (c, &i) in keep.iter().enumerate() {
-        for k in 0..b {
-            ql[(k, c)] = v_t[(i, k)];
-        }
     }
     s * ql
 }
