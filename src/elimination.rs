@@ -18,10 +18,10 @@ pub(crate) struct Block {
 
 #[derive(Clone, Debug)]
 pub(crate) struct Record {
-    group: usize,
+    pub(crate) group: usize,
     /// Local column of the group for each pivot (then the free columns), in R's order.
     perm: Vec<usize>,
-    rank: usize,
+    pub(crate) rank: usize,
     others: Vec<usize>,
     r: DMatrix<f64>,
 }
@@ -53,6 +53,30 @@ impl Elimination {
         blocks: Vec<Block>,
         abs_tol: f64,
         max_bytes: u64,
+    ) -> Result<Elimination, u64> {
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, None)
+    }
+
+    /// [`Elimination::run_within`] with the groups eliminated in the given `order` (every group
+    /// once) instead of smallest front first. With groups of one unknown each this is a
+    /// Gram-Schmidt of the columns in that order: a column is a pivot exactly when its residual
+    /// against the pivots before it exceeds `abs_tol` (a greedy choice of independent columns).
+    pub(crate) fn run_in_order(
+        sizes: &[usize],
+        blocks: Vec<Block>,
+        abs_tol: f64,
+        max_bytes: u64,
+        order: &[usize],
+    ) -> Result<Elimination, u64> {
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, Some(order))
+    }
+
+    fn run_ordered(
+        sizes: &[usize],
+        blocks: Vec<Block>,
+        abs_tol: f64,
+        max_bytes: u64,
+        order: Option<&[usize]>,
     ) -> Result<Elimination, u64> {
         let bytes = |m: &DMatrix<f64>| (m.len() as u64).saturating_mul(8);
         let mut held: u64 = blocks.iter().map(|b| bytes(&b.mat)).sum();
@@ -110,7 +134,9 @@ impl Elimination {
         };
         let mut heap = BinaryHeap::new();
         let mut version = vec![0usize; n];
-        for g in 0..n {
+        // A given order: the groups in turn, no scores.
+        let mut next_in_order = order.map(|o| o.iter());
+        for g in (0..n).filter(|_| order.is_none()) {
             let s = score(g, &store, &mut of_group, &mut stamp, &mut clock);
             #[cfg(test)]
             assert_eq!(s, shadow.score(g, &store, sizes), "score of group {g}");
@@ -123,8 +149,23 @@ impl Elimination {
         let mut dropped_max: f64 = 0.0;
         // Column offset of each group in the current front.
         let mut col_of = vec![0usize; n];
-        while let Some(Reverse((_, g, ver))) = heap.pop() {
-            if done[g] || ver != version[g] {
+        loop {
+            let g = match next_in_order.as_mut() {
+                Some(it) => match it.next() {
+                    Some(&g) => g,
+                    None => break,
+                },
+                None => match heap.pop() {
+                    Some(Reverse((_, g, ver))) => {
+                        if done[g] || ver != version[g] {
+                            continue;
+                        }
+                        g
+                    }
+                    None => break,
+                },
+            };
+            if g >= n || done[g] {
                 continue;
             }
             done[g] = true;
@@ -238,7 +279,7 @@ impl Elimination {
                 let rest = front.view((r, 0), (nrows - r, width)).norm();
                 dropped_max = dropped_max.max(rest.min(abs_tol));
             }
-            for &h in &others {
+            for &h in others.iter().filter(|_| order.is_none()) {
                 if !done[h] {
                     version[h] += 1;
                     let s = score(h, &store, &mut of_group, &mut stamp, &mut clock);

@@ -421,6 +421,25 @@ fn screen(
         // A precision-derived threshold is not a multiple of σ_max: the SVD decides.
         return None;
     }
+    sparse_full_rank(b, block_eqs, bodies, eqs, rows, q, part, t, false)
+}
+
+/// [`screen`]'s elimination, for any threshold: `Some(rank)` when every needed pivot clears
+/// [`SCREEN_MARGIN`] times the SVD's threshold (bounding `σ_max` by the Frobenius norm), so
+/// that the block surely has full rank. Blocks too large for the SVD at the file's geometry
+/// (a precision-derived threshold) are decided here too; `None` leaves them unchecked.
+#[allow(clippy::too_many_arguments)]
+fn sparse_full_rank(
+    b: usize,
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &PairRows,
+    q: &[Option<DMatrix<f64>>],
+    part: Part,
+    t: &Tol,
+    file: bool,
+) -> Option<usize> {
     let sizes: Vec<usize> = bodies.iter().map(|&x| width(b, q, x)).collect();
     let ncols: usize = sizes.iter().sum();
     if ncols <= SCREEN_UNKNOWNS {
@@ -457,13 +476,65 @@ fn screen(
             );
             c0 += sizes[k];
         }
+        if file {
+            // Rows on body-local twists are far from unit norm (a row written about the
+            // centre, moved to the body): scaled rows, so that the threshold is relative to
+            // unit rows as in the set-aside.
+            for mut row in mat.row_iter_mut() {
+                let n = row.norm();
+                if n > 0.0 {
+                    row.unscale_mut(n);
+                }
+            }
+        }
         let groups = sides.iter().map(|&(_, k, _)| k).collect();
         frob2 += mat.norm_squared();
         blocks.push(Block { groups, mat });
     }
     let n = nrows.max(ncols);
-    let tol = SCREEN_MARGIN * frob2.sqrt() * n as f64 * t.rel;
-    let rank = Elimination::run(&sizes, blocks, tol).rank;
+    let tol = if file {
+        // At the file's geometry: the threshold `rigid`'s sparse path decides with (QR pivots
+        // against the SVD's threshold), `σ_max` bounded by `√(‖A‖₁ ‖A‖_∞)`, far tighter than
+        // the Frobenius norm on long chains of unit rows.
+        let mut col_sum = vec![0.0f64; ncols];
+        let offsets: Vec<usize> = sizes
+            .iter()
+            .scan(0, |acc, &s| {
+                let o = *acc;
+                *acc += s;
+                Some(o)
+            })
+            .collect();
+        let mut row_max = 0.0f64;
+        for blk in &blocks {
+            for row in blk.mat.row_iter() {
+                row_max = row_max.max(row.iter().map(|v| v.abs()).sum());
+            }
+            let mut c0 = 0;
+            for &k in &blk.groups {
+                for j in 0..sizes[k] {
+                    col_sum[offsets[k] + j] +=
+                        blk.mat.column(c0 + j).iter().map(|v| v.abs()).sum::<f64>();
+                }
+                c0 += sizes[k];
+            }
+        }
+        let col_max = col_sum.iter().copied().fold(0.0, f64::max);
+        t.cut((col_max * row_max).sqrt().min(frob2.sqrt()), n)
+    } else {
+        // At a random realization a margin above the SVD's threshold, so that the SVD would
+        // agree.
+        SCREEN_MARGIN * t.cut(frob2.sqrt(), n)
+    };
+    // Large blocks (file geometry: the screen sees dense-sized ones only) within the
+    // set-aside's memory cap; past it the block is left unchecked.
+    let rank = if file {
+        Elimination::run_within(&sizes, blocks, tol, SPARSE_ASIDE_BYTES)
+            .ok()?
+            .rank
+    } else {
+        Elimination::run(&sizes, blocks, tol).rank
+    };
     let needed = if part == Part::Over { ncols } else { nrows };
     (rank >= needed).then_some(rank)
 }
@@ -1560,6 +1631,17 @@ fn check_at(
                     verified.insert(signature);
                     continue;
                 }
+                // At the file's geometry: a sparse elimination that proves full rank.
+                if used.seed.is_none()
+                    && sparse_full_rank(b, block_eqs, bodies, eqs, &rows, &q, part, &tol, true)
+                        .is_some_and(|r| r >= needed)
+                {
+                    if let (Some(c), Some(k)) = (cache, key) {
+                        c.put_block(k, None);
+                    }
+                    verified.insert(signature);
+                    continue;
+                }
                 let u = Unchecked {
                     bodies: bodies.len(),
                     unknowns: ncols,
@@ -2392,66 +2474,34 @@ fn redundant_at_configuration(
         bodies.sort_unstable();
         bodies.dedup();
         let ncols = b * bodies.len();
-        if ncols > MAX_DENSE_UNKNOWNS {
-            continue;
-        }
-        let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
         let mut order = block.clone();
         order.sort_by_key(|&e| {
             let [h, o] = eqs.bodies(e);
             (depth[h].max(depth[o]), e)
         });
-        // Greedy independent rows: Gram-Schmidt against the kept rows, a row kept when its
-        // residual exceeds the threshold (relative to the rows' unit norm).
         let nrows: usize = block.iter().map(|&e| free.nrows(e)).sum();
         let cut = tol.cut(1.0, nrows.max(ncols));
-        let mut basis: Vec<Vec<f64>> = Vec::new();
-        let mut kept: Vec<(usize, Vec<usize>)> = Vec::new();
-        let mut dropped = 0usize;
-        for &e in &order {
-            let [h, o] = eqs.bodies(e);
+        // Pair `e`'s row `i` on the block's columns: (column of each side, the row on that
+        // body's own twist about its reference point, signed).
+        let side = |e: usize, i: usize, x: usize, sign: f64| -> Vec<f64> {
             let r = free.get(e);
-            let mut mine = Vec::new();
-            for i in 0..r.nrows() {
-                let mut v = vec![0.0; ncols];
-                for (x, sign) in [(h, -1.0), (o, 1.0)] {
-                    let Some(c) = col(x) else {
-                        continue;
-                    };
-                    // The row on the body's own twist about its reference point.
-                    match local.and_then(|lf| lf.frame[x].as_ref()) {
-                        Some(s) => {
-                            for k in 0..b {
-                                let rs: f64 = (0..b).map(|l| r[(i, l)] * s[(l, k)]).sum();
-                                v[c + k] += sign * rs;
-                            }
-                        }
-                        None => {
-                            for k in 0..b {
-                                v[c + k] += sign * r[(i, k)];
-                            }
-                        }
-                    }
-                }
-                let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-                for _ in 0..2 {
-                    for q in &basis {
-                        let d: f64 = q.iter().zip(&v).map(|(a, c)| a * c).sum();
-                        for (x, qk) in v.iter_mut().zip(q) {
-                            *x -= d * qk;
-                        }
-                    }
-                }
-                let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if n > cut * n0.max(1.0) {
-                    basis.push(v.iter().map(|x| x / n).collect());
-                    mine.push(i);
-                } else {
-                    dropped += 1;
-                }
+            match local.and_then(|lf| lf.frame[x].as_ref()) {
+                Some(s) => (0..b)
+                    .map(|k| sign * (0..b).map(|l| r[(i, l)] * s[(l, k)]).sum::<f64>())
+                    .collect(),
+                None => (0..b).map(|k| sign * r[(i, k)]).collect(),
             }
-            kept.push((e, mine));
-        }
+        };
+        let chosen = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
+            Some(independent_rows_dense(
+                eqs, free, &order, &bodies, b, cut, &side,
+            ))
+        } else {
+            independent_rows_sparse(eqs, free, &order, &bodies, b, cut, &side)
+        };
+        let Some((kept, dropped)) = chosen else {
+            continue;
+        };
         if dropped == 0 {
             continue;
         }
@@ -2498,6 +2548,154 @@ fn redundant_at_configuration(
         });
     }
     out
+}
+
+/// A pair's row on one body's columns (see [`redundant_at_configuration`]).
+type Side<'a> = dyn Fn(usize, usize, usize, f64) -> Vec<f64> + 'a;
+
+/// The rows kept per pair and the number dropped, by [`redundant_at_configuration`]'s rule.
+type Chosen = (Vec<(usize, Vec<usize>)>, usize);
+
+/// [`redundant_at_configuration`]'s greedy choice on a dense block (at most
+/// [`MAX_DENSE_UNKNOWNS`] columns): Gram-Schmidt against the kept rows, a row kept when its
+/// residual exceeds `cut` relative to its norm (at least 1).
+fn independent_rows_dense(
+    eqs: &Equations,
+    free: &PairRows,
+    order: &[usize],
+    bodies: &[usize],
+    b: usize,
+    cut: f64,
+    side: &Side<'_>,
+) -> Chosen {
+    let ncols = b * bodies.len();
+    let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
+    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut kept: Vec<(usize, Vec<usize>)> = Vec::new();
+    let mut dropped = 0usize;
+    for &e in order {
+        let [h, o] = eqs.bodies(e);
+        let mut mine = Vec::new();
+        for i in 0..free.nrows(e) {
+            let mut v = vec![0.0; ncols];
+            for (x, sign) in [(h, -1.0), (o, 1.0)] {
+                let Some(c) = col(x) else {
+                    continue;
+                };
+                for (k, t) in side(e, i, x, sign).into_iter().enumerate() {
+                    v[c + k] += t;
+                }
+            }
+            let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            for _ in 0..2 {
+                for q in &basis {
+                    let d: f64 = q.iter().zip(&v).map(|(a, c)| a * c).sum();
+                    for (x, qk) in v.iter_mut().zip(q) {
+                        *x -= d * qk;
+                    }
+                }
+            }
+            let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if n > cut * n0.max(1.0) {
+                basis.push(v.iter().map(|x| x / n).collect());
+                mine.push(i);
+            } else {
+                dropped += 1;
+            }
+        }
+        kept.push((e, mine));
+    }
+    (kept, dropped)
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: the sparse choice on every block, to compare it with the dense one.
+    static FORCE_SPARSE_ASIDE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+#[cfg(test)]
+fn force_sparse_aside() -> bool {
+    FORCE_SPARSE_ASIDE.with(|f| f.get())
+}
+
+#[cfg(not(test))]
+fn force_sparse_aside() -> bool {
+    false
+}
+
+/// Memory for [`independent_rows_sparse`]'s fronts: the choice is skipped (the block left to
+/// the count, as before) past it.
+const SPARSE_ASIDE_BYTES: u64 = 1 << 30;
+
+/// [`independent_rows_dense`]'s choice on a large block, sparse: the block's transpose (one
+/// unknown per constraint row, one equation per body coordinate) eliminated one row at a time
+/// in the same order, a Householder QR without pivoting, which is the same Gram-Schmidt (a row
+/// is kept when its residual against the rows kept before it exceeds `cut` times its norm,
+/// the rows scaled to norm at most 1). Fronts stay local when the order walks along the
+/// mechanism, as the frame-distance order does on a row of windows. `None` past
+/// [`SPARSE_ASIDE_BYTES`].
+fn independent_rows_sparse(
+    eqs: &Equations,
+    free: &PairRows,
+    order: &[usize],
+    bodies: &[usize],
+    b: usize,
+    cut: f64,
+    side: &Side<'_>,
+) -> Option<Chosen> {
+    let at = |x: usize| bodies.binary_search(&x).ok();
+    // Unknown `u` = the u-th row in the order; per body, its rows' coefficients.
+    let mut per_body: Vec<(Vec<usize>, Vec<f64>)> = vec![(Vec::new(), Vec::new()); bodies.len()];
+    let mut first = Vec::with_capacity(order.len());
+    let mut u = 0usize;
+    for &e in order {
+        let [h, o] = eqs.bodies(e);
+        first.push(u);
+        for i in 0..free.nrows(e) {
+            let sides: Vec<(usize, Vec<f64>)> = [(h, -1.0), (o, 1.0)]
+                .into_iter()
+                .filter_map(|(x, sign)| Some((at(x)?, side(e, i, x, sign))))
+                .collect();
+            let n0 = sides
+                .iter()
+                .flat_map(|(_, v)| v.iter())
+                .map(|t| t * t)
+                .sum::<f64>()
+                .sqrt();
+            let scale = 1.0 / n0.max(1.0);
+            for (k, v) in sides {
+                per_body[k].0.push(u);
+                per_body[k].1.extend(v.iter().map(|t| t * scale));
+            }
+            u += 1;
+        }
+    }
+    let blocks: Vec<Block> = per_body
+        .into_iter()
+        .filter(|(us, _)| !us.is_empty())
+        .map(|(us, vals)| Block {
+            mat: DMatrix::from_fn(b, us.len(), |r, c| vals[c * b + r]),
+            groups: us,
+        })
+        .collect();
+    let sizes = vec![1usize; u];
+    let all: Vec<usize> = (0..u).collect();
+    let el = Elimination::run_in_order(&sizes, blocks, cut, SPARSE_ASIDE_BYTES, &all).ok()?;
+    let mut kept_unknown = vec![false; u];
+    for r in &el.records {
+        kept_unknown[r.group] = r.rank == 1;
+    }
+    let mut kept = Vec::with_capacity(order.len());
+    let mut dropped = 0usize;
+    for (k, &e) in order.iter().enumerate() {
+        let mine: Vec<usize> = (0..free.nrows(e))
+            .filter(|&i| kept_unknown[first[k] + i])
+            .collect();
+        dropped += free.nrows(e) - mine.len();
+        kept.push((e, mine));
+    }
+    Some((kept, dropped))
 }
 
 /// The rows of `own` (a pair's rows with its driven DOF fixed) outside the span of `free` (its
@@ -2854,5 +3052,77 @@ mod tests {
         );
         assert_eq!(rows.nrows(1), 1);
         assert!(rows.try_get(2).is_none());
+    }
+
+    /// A row of `n` windows written in space (R joints, parallel axes), two decimals in mm.
+    fn windows_in_space(n: usize) -> String {
+        let (s, ox, oy) = (100.3, 1000.17, 500.23);
+        let mut out = String::from("space = \"spatial\"\nframe = 1\n");
+        let mut joint = |id: String, a: usize, b: usize, x: f64, y: f64| {
+            let (x, y) = (
+                ((ox + s * x) * 100.0_f64).round() / 100.0,
+                ((oy + s * y) * 100.0_f64).round() / 100.0,
+            );
+            out.push_str(&format!(
+                "\n[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}, 250.5]\naxis = [0, 0, 1]\n"
+            ));
+        };
+        joint("A0".into(), 1, 2, 0.0, 0.0);
+        for k in 1..=n {
+            let kf = k as f64;
+            joint(format!("VB{}", k - 1), 2 * k, 2 * k + 1, kf - 0.4, 0.8);
+            joint(format!("B{k}"), 2 * k + 1, 2 * k + 2, kf + 0.6, 0.8);
+            joint(format!("P{k}"), 1, 2 * k + 2, kf, 0.0);
+        }
+        out
+    }
+
+    /// The sparse choice of the constraints set aside at the file's configuration keeps the
+    /// same rows as the dense Gram-Schmidt on every block the dense one takes: the bundled
+    /// mechanisms with geometry (Bennett, Bricard, planar loops written in space, the 40-window
+    /// N-four-bar in space) and rows of windows written in space.
+    #[test]
+    fn sparse_set_aside_keeps_the_dense_rows() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("mechanisms");
+        let mut files: Vec<(String, String)> = std::fs::read_dir(&dir)
+            .expect("mechanisms/")
+            .filter_map(|e| {
+                let p = e.ok()?.path();
+                (p.extension()? == "toml").then(|| {
+                    (
+                        p.display().to_string(),
+                        std::fs::read_to_string(&p).expect("readable"),
+                    )
+                })
+            })
+            .collect();
+        files.sort();
+        for n in [1, 3, 10, 60] {
+            files.push((format!("{n} windows in space"), windows_in_space(n)));
+        }
+        let opts = super::super::Options {
+            geometry: GeometrySource::File,
+            ..Default::default()
+        };
+        let lib = super::super::library::Library::empty();
+        let mut compared = 0;
+        let mut with_aside = 0;
+        for (name, text) in &files {
+            let m = crate::format::load(name, text, crate::format::Format::Toml).expect("loads");
+            let run = |sparse: bool| {
+                FORCE_SPARSE_ASIDE.with(|f| f.set(sparse));
+                let a = super::super::analyze(&m, &opts, &lib);
+                FORCE_SPARSE_ASIDE.with(|f| f.set(false));
+                a.map(|a| format!("{a:?}"))
+            };
+            let (Ok(dense), Ok(sparse)) = (run(false), run(true)) else {
+                continue;
+            };
+            compared += 1;
+            with_aside += usize::from(dense.contains("configuration: true"));
+            assert_eq!(dense, sparse, "{name}");
+        }
+        assert!(compared >= 20, "{compared} files compared");
+        assert!(with_aside >= 5, "{with_aside} with constraints set aside");
     }
 }
