@@ -17,7 +17,12 @@
 //! The allowed twists are listed in the driven-DOF order of `format.md` (translations before
 //! rotations; C slide then turn; PL the two in-plane slides then the turn; U `axis` then
 //! `axis2`; S turns about world x, y, z through the centre; F/FP translations then
-//! rotations) and the first `driven` of them are removed: a driven DOF is fixed.
+//! rotations) and the first `driven` of them are removed: a driven DOF is fixed. Kinds whose
+//! DOF have no name (the count-only kinds below, SPSP, and the fallback model of a joint no
+//! model fits) keep a generic subspace instead: `k − driven` random combinations of their `k`
+//! allowed twists, drawn from the geometry's bits (`kept_twists`). Dropping the first twists
+//! of their basis, built by pivoting on unit vectors, kept a subspace fixed by the
+//! construction: a random realization was degenerate with a fixed probability.
 //!
 //! # Joints without a standard geometry
 //! - ER (slotted spherical) is defined here as a ball at `origin` whose rotation about `axis`
@@ -417,6 +422,66 @@ fn random_unit(rng: &mut SplitMix64) -> Vector3<f64> {
     }
 }
 
+/// Salt of the generator that mixes a joint's twists ([`kept_twists`]), so that its stream is
+/// not the one that drew the contact lines from the same seed.
+const MIX_SALT: u64 = 0x6D1C_7E0F_D81E_5A17;
+
+/// The twists a joint without named DOF keeps once `driven` of its `all` allowed twists are
+/// fixed: `all` itself when nothing is driven (bit for bit), else an orthonormal basis of
+/// `k − driven` random combinations of them (`k = all.len()`), the coefficients uniform in
+/// [−1, 1) from a generator seeded by `seed` (the geometry's bits, so the same geometry
+/// always gives the same model). This is `all` mixed by a random invertible `k × k` matrix
+/// with its first `driven` combinations dropped: a generic subspace of the allowed motions,
+/// where dropping the first vectors of `all` (a basis built by pivoting on unit vectors)
+/// left a subspace fixed by the construction, degenerate at a fixed fraction of draws.
+fn kept_twists(all: &Vecs, driven: usize, seed: u64, b: usize) -> Vecs {
+    let k = all.len();
+    if driven == 0 {
+        return *all;
+    }
+    if driven >= k {
+        return Vecs::EMPTY;
+    }
+    let mut rng = SplitMix64::new(seed ^ MIX_SALT);
+    // Random combinations are independent except on a set of measure zero; a few more draws
+    // cover a rounding accident, and the fixed convention is the last resort.
+    for _ in 0..4 {
+        let mut mixed = Vecs::EMPTY;
+        for _ in 0..k - driven {
+            let mut v = [0.0; MAX_B];
+            for t in all.as_slice() {
+                let c = rng.next_signed();
+                for (x, y) in v.iter_mut().zip(t).take(b) {
+                    *x += c * y;
+                }
+            }
+            mixed.push(v);
+        }
+        let kept = orthonormal(mixed.as_slice(), b);
+        if kept.len() == k - driven && well_conditioned(mixed.as_slice(), b) {
+            return kept;
+        }
+    }
+    Vecs::of(&all.as_slice()[driven..])
+}
+
+/// Whether the vectors are far from dependent: each keeps a residual of at least 1e-3 of its
+/// norm after projecting out the ones before it.
+fn well_conditioned(vs: &[Vb], b: usize) -> bool {
+    let mut basis = Vecs::EMPTY;
+    for v in vs {
+        let n = norm(v, b);
+        let mut r = *v;
+        project_out(&mut r, basis.as_slice(), b);
+        let rn = norm(&r, b);
+        if rn.partial_cmp(&(1e-3 * n)) != Some(std::cmp::Ordering::Greater) {
+            return false;
+        }
+        basis.push(normalized(&r, b));
+    }
+    true
+}
+
 /// The generic contact model: `B − k` lines.
 fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> Vecs {
     let b = space.b() as usize;
@@ -687,7 +752,7 @@ pub(crate) fn stack_model(
             });
         }
         let all = complement(rows.as_slice(), b);
-        let twists = Vecs::of(all.as_slice().get(driven as usize..).unwrap_or(&[]));
+        let twists = kept_twists(&all, driven as usize, mix_seed(g), b);
         let rows = complement(twists.as_slice(), b);
         return Ok(StackModel { b, rows, twists });
     }
@@ -699,7 +764,13 @@ pub(crate) fn stack_model(
             reason: "its motion directions are dependent (parallel axes?)",
         });
     }
-    let twists = Vecs::of(full.as_slice().get(driven as usize..).unwrap_or(&[]));
+    let twists = if kind == JointType::SPSP {
+        // Its twists are a basis of the annihilator of one line, ordered by pivoting: no DOF
+        // of it is named (format.md), so a driven one is a generic direction.
+        kept_twists(&full, driven as usize, mix_seed(g), b)
+    } else {
+        Vecs::of(full.as_slice().get(driven as usize..).unwrap_or(&[]))
+    };
     // Nothing driven: the twists are `full`, whose orthonormal basis is at hand.
     let rows = if driven == 0 {
         complement_of(basis, b)
@@ -768,8 +839,7 @@ fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> Stac
     }
     let rows = orthonormal(rows.as_slice(), b);
     let all = complement(rows.as_slice(), b);
-    let d = (driven as usize).min(all.len());
-    let twists = Vecs::of(&all.as_slice()[d..]);
+    let twists = kept_twists(&all, driven as usize, seed, b);
     let rows = complement(twists.as_slice(), b);
     StackModel { b, rows, twists }
 }
@@ -1605,6 +1675,61 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    /// A driven DOF of a kind without named DOF keeps a generic direction. Before session 10
+    /// a planar contact joint (one line, two allowed twists) dropped the first twist of its
+    /// pivoted basis, and whenever the pivot was the rotation the twist kept was `r × e_ω`, a
+    /// pure translation: a fixed fraction of draws gave an input that cannot turn the body.
+    /// Nothing driven gives the twists as before, and the same geometry the same model.
+    #[test]
+    fn driven_dof_without_a_name_is_generic() {
+        let mut rng = SplitMix64::new(16);
+        for (kind, space) in [
+            (JointType::EO, Space::Planar),
+            (JointType::RP, Space::Planar),
+            (JointType::L, Space::Spherical),
+            (JointType::SPSP, Space::Spatial),
+            (JointType::CTEP, Space::Spatial),
+        ] {
+            let b = space.b() as usize;
+            let k = kind.grade() as usize;
+            for _ in 0..200 {
+                let g = random_geometry(kind, space, &mut rng);
+                let all = if modelled(kind, space) {
+                    full_twists(kind, &g, space).expect("a model")
+                } else {
+                    complement(contact_rows(kind, &g, space).as_slice(), b)
+                };
+                let undriven = stack_model(kind, &g, space, 0).expect("a model");
+                assert_eq!(undriven.twists, all, "{kind:?}: nothing driven, as before");
+                for driven in 1..=k as u32 {
+                    let m = stack_model(kind, &g, space, driven).expect("a model");
+                    check(&m.matrices(), b, k - driven as usize);
+                    assert_eq!(m, stack_model(kind, &g, space, driven).expect("a model"));
+                    // Inside the allowed motions: annihilated by the undriven rows.
+                    for t in m.twists.as_slice() {
+                        for r in undriven.rows.as_slice() {
+                            assert!(dot(r, t, b).abs() < 1e-12, "{kind:?}");
+                        }
+                    }
+                }
+                if space == Space::Planar {
+                    // One twist kept: it turns the body (ω ≠ 0) and moves the origin.
+                    let t = stack_model(kind, &g, space, 1).expect("a model").twists;
+                    assert!(
+                        t.as_slice()[0][0].abs() > 1e-6,
+                        "{kind:?}: a pure translation"
+                    );
+                }
+            }
+        }
+        // The fallback model too: nothing driven as before, driven generic.
+        for seed in 0..50 {
+            let m = fallback_model(JointType::EO, Space::Planar, 1, seed);
+            check(&m.matrices(), 3, 1);
+            assert!(m.twists.as_slice()[0][0].abs() > 1e-6, "a pure translation");
         }
     }
 

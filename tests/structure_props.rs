@@ -174,50 +174,82 @@ fn global_rank(m: &Mechanism, seed: u64) -> (usize, usize, usize) {
     (rank, nrows, n)
 }
 
+/// The property below for one case: the rank check's verdict and counts against the rank of
+/// the global Jacobian (the largest over eight draws).
+fn rank_check_case(n: usize, planar: bool, seed: u64) -> Result<(), TestCaseError> {
+    let Some(m) = random_mechanism(n, planar, seed, false) else {
+        return Ok(());
+    };
+    let opts = Options {
+        geometry: mbsa::motion::GeometrySource::Random {
+            seed: seed ^ 0x5eed,
+        },
+        ..Options::default()
+    };
+    let a = analyze(&m, &opts, &Library::empty()).unwrap();
+    // The generic rank: the largest over realizations (a draw is degenerate with probability
+    // zero, but the reference takes the best of several anyway).
+    let (rank, nrows, nunk) = (0..8u64)
+        .map(|k| global_rank(&m, seed ^ 0x5eed ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)))
+        .max_by_key(|r| r.0)
+        .expect("eight draws");
+    let iso: usize = a.isolated.iter().map(|i| i.dimension as usize).sum();
+    let red: usize = a.redundant.iter().map(|r| r.count as usize).sum();
+    let determined = rank == nrows && rank + iso == nunk && iso == 0;
+    prop_assert_eq!(
+        a.status == Status::Determined && a.redundant.is_empty(),
+        determined,
+        "rank {} rows {} unknowns {} isolated {} redundant {}",
+        rank,
+        nrows,
+        nunk,
+        iso,
+        red
+    );
+    // Redundant equations: those the rank check found plus the count's surplus.
+    prop_assert_eq!(nrows - rank, red + over(&a) as usize);
+    // Uncontrolled freedoms: isolated ones plus the count's missing DOF.
+    prop_assert_eq!(nunk - rank, iso + missing(&a) as usize);
+    Ok(())
+}
+
 proptest! {
-    // A fixed stream of cases: the rank check can still keep a deficit that every confirming
-    // draw repeats (docs/reliability.md, "Verdicts at one random realization"; the case in
-    // `rank_check_keeps_a_deficit_other_draws_do_not_have`), so random streams made CI fail
-    // on whichever run met such a case. The stream below passes; change the seed to explore.
-    #![proptest_config(ProptestConfig {
-        cases: 2000,
-        rng_seed: proptest::test_runner::RngSeed::Fixed(0x5eed_0009),
-        ..ProptestConfig::default()
-    })]
+    // A random stream again since session 10 (session 9 fixed it: a driven DOF of a contact
+    // kind dropped a direction fixed by the model's construction, degenerate at a fixed
+    // fraction of draws, and the rank check could keep a deficit every confirming draw
+    // repeated). With the generic input model 220,000 cases at 110 fixed seeds passed, where
+    // the old model failed at 4 of 30 seeds. `PROPTEST_RNG_SEED` fixes a stream to explore.
+    #![proptest_config(ProptestConfig { cases: 2000, ..ProptestConfig::default() })]
 
     #[test]
     fn rank_check_matches_global_jacobian(n in 2usize..=12, planar: bool, seed: u64) {
-        let Some(m) = random_mechanism(n, planar, seed, false) else {
-            return Ok(());
-        };
-        let opts = Options { geometry: mbsa::motion::GeometrySource::Random { seed: seed ^ 0x5eed }, ..Options::default() };
-        let a = analyze(&m, &opts, &Library::empty()).unwrap();
-        // The generic rank: the largest over realizations (one draw of the count-only kinds'
-        // synthetic models can be degenerate; the rank check confirms its deficits at another
-        // draw, so the reference is the best of several).
-        let (rank, nrows, nunk) = (0..8u64)
-            .map(|k| global_rank(&m, seed ^ 0x5eed ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)))
-            .max_by_key(|r| r.0)
-            .expect("eight draws");
-        let iso: usize = a.isolated.iter().map(|i| i.dimension as usize).sum();
-        let red: usize = a.redundant.iter().map(|r| r.count as usize).sum();
-        let determined = rank == nrows && rank + iso == nunk && iso == 0;
-        prop_assert_eq!(a.status == Status::Determined && a.redundant.is_empty(), determined,
-            "rank {} rows {} unknowns {} isolated {} redundant {}", rank, nrows, nunk, iso, red);
-        // Redundant equations: those the rank check found plus the count's surplus.
-        prop_assert_eq!(nrows - rank, red + over(&a) as usize);
-        // Uncontrolled freedoms: isolated ones plus the count's missing DOF.
-        prop_assert_eq!(nunk - rank, iso + missing(&a) as usize);
+        rank_check_case(n, planar, seed)?;
     }
 }
 
-/// Known issue (session 9): a planar 9-body mechanism (P, RP and R joints, one RP joint driven)
-/// whose generic answer is one redundant equation; at the analysis seed below the rank check
-/// keeps a second one in the loop 2-3, 3-8, 8-9, 9-2 (at 2 of 12 nearby seeds). Found by
-/// `rank_check_matches_global_jacobian` with a random stream; ignored until the input model is
-/// generic (docs/reliability.md).
+/// Cases the property met with the fixed input model of session 9 (proptest seeds 2, 3, 11
+/// and 17, 2,000 cases each): planar mechanisms of P, RP and R joints with driven RP joints,
+/// where the rank check kept a deficit that the generic rank does not have.
 #[test]
-#[ignore = "known issue: a deficit the confirming draws did not clear"]
+fn rank_check_cases_the_fixed_input_model_failed() {
+    for (n, seed) in [
+        (12, 14036240559547251828u64),
+        (6, 6880465464844845752),
+        (11, 17707228102595443322),
+        (10, 1652893656849841939),
+    ] {
+        if let Err(e) = rank_check_case(n, true, seed) {
+            panic!("n = {n}, seed = {seed}: {e}");
+        }
+    }
+}
+
+/// Session 9's known issue, fixed by the generic input model (session 10): a planar 9-body
+/// mechanism (P, RP and R joints, one RP joint driven) whose generic answer is one redundant
+/// equation; at the analysis seed below the rank check kept a second one in the loop 2-3,
+/// 3-8, 8-9, 9-2 (at 2 of 12 nearby seeds), which every confirming draw repeated. Found by
+/// `rank_check_matches_global_jacobian` with a random stream.
+#[test]
 fn rank_check_keeps_a_deficit_other_draws_do_not_have() {
     let seed: u64 = 6682289030365868298;
     let m = random_mechanism(9, true, seed, false).expect("a mechanism");

@@ -6,10 +6,12 @@
 //! through `p` allows `(u; p × u)`, a slide `(0; u)`, and so on; directions need no
 //! normalization (twist spaces are spans). Its constraint rows are an exact basis of the
 //! annihilator of the twists left once its driven DOF are fixed. Count-only kinds get `B − k`
-//! random rows (generic contact lines in general position). With p = 2^61 − 1 a random
+//! random rows (generic contact lines in general position); a driven DOF of theirs, or of
+//! SPSP, keeps `k − driven` random combinations of the allowed twists (their echelon basis has
+//! no named DOF, as in [`crate::motion`]). With p = 2^61 − 1 a random
 //! realization has the generic rank except with probability below (degree)/p.
 
-use super::dense::complement_rows;
+use super::dense::{complement_rows, rank};
 use super::field::Fp;
 use super::sparse::{Factor, Limits, SparseMatrix};
 use crate::budget::BudgetExceeded;
@@ -152,21 +154,50 @@ pub fn joint_rows(m: &Mechanism, index: usize, seed: u64, driven: u32) -> DMatri
     let d = (driven as usize).min(k);
     // Its own stream, distinct from the floating-point realization's.
     let mut rng = SplitMix64::new(joint_seed(seed ^ 0xE4AC_7F1E_1D00_0000, index));
-    let all: Vec<Vec<Fp>> = match twists(j.kind, m.space, &mut rng) {
-        Some(t) if t.len() == k => t,
+    // Whether the twists have named DOF (format.md): a driven DOF of a kind without them is a
+    // generic direction.
+    let (all, named): (Vec<Vec<Fp>>, bool) = match twists(j.kind, m.space, &mut rng) {
+        Some(t) if t.len() == k => (t, j.kind != JointType::SPSP),
         _ => {
             // Generic contact lines: B − k random rows; the allowed motions are their
             // annihilator.
             let rows = DMatrix::from_fn(b - k, b, |_, _| Fp::random_nonzero(&mut rng));
             let t = complement_rows(&rows.transpose());
-            (0..t.nrows())
+            let t = (0..t.nrows())
                 .map(|i| t.row(i).iter().copied().collect())
-                .collect()
+                .collect();
+            (t, false)
         }
     };
-    let kept = &all[d.min(all.len())..];
-    let tw = DMatrix::from_fn(b, kept.len(), |r, c| kept[c][r]);
+    let tw = if named || d == 0 {
+        let kept = &all[d.min(all.len())..];
+        DMatrix::from_fn(b, kept.len(), |r, c| kept[c][r])
+    } else {
+        mixed(&all, d, b, &mut rng)
+    };
     complement_rows(&tw)
+}
+
+/// `all.len() − d` random combinations of the twists `all` (columns, B rows): `all` mixed by a
+/// random invertible matrix with its first `d` combinations dropped, a generic subspace of the
+/// allowed motions. The echelon basis [`complement_rows`] gives has zeros in the free
+/// coordinates, so dropping its first vectors kept a subspace fixed by the construction (the
+/// floating-point model had the same flaw: `motion::kept_twists`). Dependent combinations
+/// (probability about k/p) are drawn again; the fixed convention is the last resort.
+fn mixed(all: &[Vec<Fp>], d: usize, b: usize, rng: &mut SplitMix64) -> DMatrix<Fp> {
+    let k = all.len();
+    let n = k.saturating_sub(d);
+    for _ in 0..4 {
+        let c = DMatrix::from_fn(k, n, |_, _| Fp::random(rng));
+        let tw = DMatrix::from_fn(b, n, |r, col| {
+            (0..k).map(|i| all[i][r] * c[(i, col)]).sum::<Fp>()
+        });
+        if rank(&tw) == n {
+            return tw;
+        }
+    }
+    let kept = &all[d.min(k)..];
+    DMatrix::from_fn(b, kept.len(), |r, c| kept[c][r])
 }
 
 /// The exact rank of the constraint Jacobian of `m` (every binary pair hub→other of every
@@ -422,6 +453,57 @@ mod tests {
                 );
                 let r = joint_rows(&m, 0, 7, 0);
                 assert_eq!(r.nrows(), b - kind.grade() as usize, "{kind:?} {space:?}");
+            }
+        }
+    }
+
+    /// A driven DOF of a kind without named DOF keeps a generic direction: before session 10
+    /// the echelon null basis lost its first vector, so the twist kept had a zero in a free
+    /// coordinate at every draw (a planar contact joint driven once: never a turn about the
+    /// origin, or never a slide along x). Nothing driven gives the rows as before.
+    #[test]
+    fn driven_dof_without_a_name_is_generic() {
+        for (kind, space) in [
+            (JointType::EO, Space::Planar),
+            (JointType::RP, Space::Planar),
+            (JointType::SPSP, Space::Spatial),
+            (JointType::CTEP, Space::Spatial),
+        ] {
+            let b = space.b() as usize;
+            let k = kind.grade() as usize;
+            let m = Mechanism::from_parts(
+                "t",
+                space,
+                BodyId::Int(1),
+                vec![],
+                vec![JointSpec::new(kind, 1, 2, 0)],
+            );
+            for seed in 0..20 {
+                let free = joint_rows(&m, 0, seed, 0);
+                assert_eq!(free.nrows(), b - k);
+                for d in 1..=k as u32 {
+                    let rows = joint_rows(&m, 0, seed, d);
+                    assert_eq!(rows.nrows(), b - k + d as usize, "{kind:?}");
+                    assert_eq!(rows, joint_rows(&m, 0, seed, d), "deterministic");
+                    // The driven model keeps the free rows' constraints.
+                    let both = DMatrix::from_fn(rows.nrows() + free.nrows(), b, |i, c| {
+                        if i < rows.nrows() {
+                            rows[(i, c)]
+                        } else {
+                            free[(i - rows.nrows(), c)]
+                        }
+                    });
+                    assert_eq!(rank(&both), rows.nrows(), "{kind:?}");
+                }
+                // One DOF left: the twist kept (the null space of the rows) has no zero
+                // coordinate.
+                let rows = joint_rows(&m, 0, seed, k as u32 - 1);
+                let t = super::super::dense::complement_rows(&rows.transpose());
+                assert_eq!(t.nrows(), 1);
+                assert!(
+                    t.iter().all(|x| !x.is_zero()),
+                    "{kind:?} seed {seed}: {t:?}"
+                );
             }
         }
     }
