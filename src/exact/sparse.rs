@@ -568,6 +568,7 @@ impl CarriedSet<'_> {
         // The rest are zero on the group: zero everywhere means dependent.
         changed.sort_unstable();
         changed.dedup();
+        work += (res.len() * (changed.len() + 1)) as u64;
         let mut dependent = 0;
         for (c, _) in res {
             let Some(w) = self.carried[c as usize].as_mut() else {
@@ -613,7 +614,7 @@ impl CarriedSet<'_> {
             .map(Carried::entries)
             .sum();
         *self.carried_len = self.carried_len.saturating_sub(before) + after;
-        (extra, dependent, work + (before + after) as u64)
+        (extra, dependent, work + touching.len() as u64)
     }
 }
 
