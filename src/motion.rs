@@ -780,6 +780,34 @@ pub(crate) fn stack_model(
     Ok(StackModel { b, rows, twists })
 }
 
+/// `M(c)`: a twist about point `c` to the same twist about the world origin (`None` in a
+/// spherical mechanism, whose twists have no point). The body-local twists of the geometric
+/// analysis's sparse path and of the rank check at the file's geometry.
+pub(crate) fn twist_shift(space: Space, c: [f64; 3]) -> Option<DMatrix<f64>> {
+    match space {
+        Space::Spherical => None,
+        Space::Planar => {
+            // v_O = v_c − ω ẑ × c = (v_cx + ω c_y, v_cy − ω c_x).
+            let mut m = DMatrix::identity(3, 3);
+            m[(1, 0)] = c[1];
+            m[(2, 0)] = -c[0];
+            Some(m)
+        }
+        Space::Spatial => {
+            // v_O = v_c + c × ω.
+            let mut m = DMatrix::identity(6, 6);
+            let [x, y, z] = c;
+            m[(3, 1)] = -z;
+            m[(3, 2)] = y;
+            m[(4, 0)] = z;
+            m[(4, 2)] = -x;
+            m[(5, 0)] = -y;
+            m[(5, 1)] = x;
+            Some(m)
+        }
+    }
+}
+
 /// Random generic geometry for a joint of `kind`: every field set (origin, unit axis, unit
 /// axis2, unit normal, pitch), coordinates uniform in [−1, 1). Planar: z = 0 and axes in the
 /// plane (an R axis is z). Spherical: the origin is the centre (0, 0, 0).

@@ -312,7 +312,7 @@ impl LocalFrames {
         }
         let frame = centre
             .into_iter()
-            .map(|c| c.map(|c| shift(m.space, c)))
+            .map(|c| c.and_then(|c| motion::twist_shift(m.space, c)))
             .collect();
         Some(LocalFrames { frame, lever })
     }
@@ -327,32 +327,6 @@ impl LocalFrames {
         let directions = used.direction_precision.unwrap_or(delta);
         let length = used.scale.map_or(1.0, |s| s.length);
         crate::motion::FILE_TOL_FACTOR * (delta / length + directions * self.lever)
-    }
-}
-
-/// `S(c)`: a twist about point `c` to the same twist about the centre (planar `(ω, v_x, v_y)`,
-/// spatial `(ω, v)`), as `sparse_float::shift`.
-fn shift(space: Space, c: [f64; 3]) -> DMatrix<f64> {
-    match space {
-        Space::Planar => {
-            // v_O = v_c − ω ẑ × c = (v_cx + ω c_y, v_cy − ω c_x).
-            let mut s = DMatrix::identity(3, 3);
-            s[(1, 0)] = c[1];
-            s[(2, 0)] = -c[0];
-            s
-        }
-        _ => {
-            // v_O = v_c + c × ω.
-            let mut s = DMatrix::identity(6, 6);
-            let [x, y, z] = c;
-            s[(3, 1)] = -z;
-            s[(3, 2)] = y;
-            s[(4, 0)] = z;
-            s[(4, 2)] = -x;
-            s[(5, 0)] = -y;
-            s[(5, 1)] = x;
-            s
-        }
     }
 }
 

@@ -35,8 +35,8 @@ use super::{
 };
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::elimination::{Block, sigma_max};
-use crate::mechanism::{Mechanism, Space};
-use crate::motion::{GeometryUsed, JointModel, Scale};
+use crate::mechanism::Mechanism;
+use crate::motion::{self, GeometryUsed, JointModel, Scale};
 use nalgebra::{DMatrix, DVector};
 use std::cell::Cell;
 use std::collections::BTreeMap;
@@ -76,32 +76,6 @@ const EXTRA_SAMPLES: usize = 2;
 /// How many random self-stresses at most.
 const STRESS_SAMPLES: usize = 8;
 
-/// `M(c)`: a twist about point `c` to the same twist about the world origin.
-fn shift(space: Space, c: [f64; 3]) -> Option<DMatrix<f64>> {
-    match space {
-        Space::Spherical => None,
-        Space::Planar => {
-            // v_O = v_c − ω ẑ × c = (v_cx + ω c_y, v_cy − ω c_x).
-            let mut m = DMatrix::identity(3, 3);
-            m[(1, 0)] = c[1];
-            m[(2, 0)] = -c[0];
-            Some(m)
-        }
-        Space::Spatial => {
-            // v_O = v_c + c × ω.
-            let mut m = DMatrix::identity(6, 6);
-            let [x, y, z] = c;
-            m[(3, 1)] = -z;
-            m[(3, 2)] = y;
-            m[(4, 0)] = z;
-            m[(4, 2)] = -x;
-            m[(5, 0)] = -y;
-            m[(5, 1)] = x;
-            Some(m)
-        }
-    }
-}
-
 /// The reference point of a body: the mean of the origins of `joints` (none without one), at
 /// the dimensionless geometry `scale` gives (the joint models' coordinates).
 fn reference(
@@ -137,7 +111,7 @@ pub(super) fn isolated(
     joints: impl Iterator<Item = usize>,
 ) -> DMatrix<f64> {
     let world = small_null(a, rel);
-    let Some(s) = reference(m, scale, joints).and_then(|c| shift(m.space, c)) else {
+    let Some(s) = reference(m, scale, joints).and_then(|c| motion::twist_shift(m.space, c)) else {
         return world;
     };
     let mut local = a * &s;
@@ -198,7 +172,7 @@ impl SparsePart<'_> {
             &scale,
             incident.iter().map(|&pi| self.pairs[pi].joint),
         )?;
-        shift(self.m.space, c)
+        motion::twist_shift(self.m.space, c)
     }
 
     /// The analysis of the part: its rank; locked DOF added to `locked`, self-stress weights
