@@ -46,6 +46,9 @@ use nalgebra::{DMatrix, Vector3};
 
 pub use crate::rng::SplitMix64;
 
+#[cfg(test)]
+mod reference;
+
 /// The motion model of one joint (of one binary pair of it).
 #[derive(Clone, Debug, PartialEq)]
 pub struct JointModel {
@@ -280,89 +283,130 @@ impl Vecs {
     }
 }
 
-fn dot(a: &Vb, b: &Vb, n: usize) -> f64 {
+// The helpers below take the dimension as a constant `N` (3 or 6, [`Space::b`]; the entry
+// points dispatch once per joint): their loops unroll. Every sum is still taken in index
+// order from 0, so the results are bit for bit those of the loops up to a runtime dimension
+// they replaced (`reference.rs`, compared in the tests).
+
+fn dot<const N: usize>(a: &Vb, b: &Vb) -> f64 {
     let mut r = 0.0;
-    for k in 0..n {
-        r += a[k] * b[k];
+    for (x, y) in a.iter().zip(b).take(N) {
+        r += x * y;
     }
     r
 }
 
-fn norm(a: &Vb, n: usize) -> f64 {
-    dot(a, a, n).sqrt()
+fn norm<const N: usize>(a: &Vb) -> f64 {
+    dot::<N>(a, a).sqrt()
 }
 
 /// `v -= (q · v) q` twice over the basis (re-orthogonalization).
-fn project_out(v: &mut Vb, basis: &[Vb], n: usize) {
+fn project_out<const N: usize>(v: &mut Vb, basis: &[Vb]) {
     for _ in 0..2 {
         for q in basis {
-            let d = dot(q, v, n);
-            for k in 0..n {
-                v[k] -= q[k] * d;
+            let d = dot::<N>(q, v);
+            for (x, y) in v.iter_mut().zip(q).take(N) {
+                *x -= y * d;
             }
         }
     }
 }
 
-fn normalized(v: &Vb, n: usize) -> Vb {
-    let len = norm(v, n);
+/// `v / len` with `len` its norm ([`norm`], which the caller has computed already).
+fn normalized<const N: usize>(v: &Vb, len: f64) -> Vb {
     let mut out = [0.0; MAX_B];
-    for k in 0..n {
-        out[k] = v[k] / len;
+    for (o, x) in out.iter_mut().zip(v).take(N) {
+        *o = x / len;
     }
     out
 }
 
+/// Unit vector `e_i` through [`project_out`]. Its first product `q · e_i` with the first
+/// basis vector `q` is `q_i + 0.0` when `q` is finite: the sum of `q_k · 0 = ±0` for `k ≠ i`
+/// and of `q_i · 1` from `+0.0` (a sum of zeros from `+0.0` is `+0.0`, adding `±0` to a
+/// nonzero sum leaves it, and `+0.0 + q_i` is `q_i + 0.0`). The rest is [`project_out`].
+fn project_unit<const N: usize>(i: usize, basis: &[Vb]) -> Vb {
+    let mut v = [0.0; MAX_B];
+    v[i] = 1.0;
+    match basis.split_first() {
+        Some((q, rest)) if q.iter().take(N).all(|x| x.is_finite()) => {
+            let d = q[i] + 0.0;
+            for (x, y) in v.iter_mut().zip(q).take(N) {
+                *x -= y * d;
+            }
+            for q in rest {
+                let d = dot::<N>(q, &v);
+                for (x, y) in v.iter_mut().zip(q).take(N) {
+                    *x -= y * d;
+                }
+            }
+            for q in basis {
+                let d = dot::<N>(q, &v);
+                for (x, y) in v.iter_mut().zip(q).take(N) {
+                    *x -= y * d;
+                }
+            }
+        }
+        _ => project_out::<N>(&mut v, basis),
+    }
+    v
+}
+
 /// Orthonormal basis of the orthogonal complement of the span of `cols` (vectors of the
-/// `b`-dimensional motion space, independent): greedy Gram-Schmidt on the unit vectors,
+/// `N`-dimensional motion space, independent): greedy Gram-Schmidt on the unit vectors,
 /// always taking the one with the largest residual, so no threshold is involved.
-fn complement(cols: &[Vb], b: usize) -> Vecs {
-    complement_of(orthonormal(cols, b), b)
+fn complement<const N: usize>(cols: &[Vb]) -> Vecs {
+    complement_of::<N>(orthonormal::<N>(cols))
 }
 
 /// [`complement`] of the span of `basis`, the output of [`orthonormal`] (a caller that has
 /// it already need not compute it again).
-fn complement_of(mut basis: Vecs, b: usize) -> Vecs {
-    let first_new = basis.len();
-    while basis.len() < b {
-        // The residual of unit vector `e_i` has squared norm `1 − Σ_q q_i²` (the basis is
-        // orthonormal to rounding, far below `CANDIDATE_GAP`): only the unit vectors within
-        // the gap of the largest can have the largest computed residual, so only they are
-        // projected, each exactly as [`project_out`] does. The vector taken is the one the
-        // projection of every unit vector takes, bit for bit (the first largest).
-        let mut sq = [0.0; MAX_B];
-        for q in basis.as_slice() {
-            for i in 0..b {
-                sq[i] += q[i] * q[i];
-            }
+fn complement_of<const N: usize>(mut basis: Vecs) -> Vecs {
+    // The residual of unit vector `e_i` has squared norm `1 − Σ_q q_i²` (the basis is
+    // orthonormal to rounding, far below `CANDIDATE_GAP`): only the unit vectors within the
+    // gap of the largest can have the largest computed residual, so only they are projected,
+    // each exactly as [`project_out`] does. The vector taken is the one the projection of
+    // every unit vector takes, bit for bit (the first largest). The sums `Σ_q q_i²` grow by
+    // one term per vector taken, added last: the same sums, in the same order, as summing
+    // over the whole basis again.
+    let mut sq = [0.0; MAX_B];
+    for q in basis.as_slice() {
+        for (s, x) in sq.iter_mut().zip(q).take(N) {
+            *s += x * x;
         }
+    }
+    let mut out = Vecs::EMPTY;
+    while basis.len() < N {
         let mut top = f64::NEG_INFINITY;
         let mut finite = true;
-        for s in sq.iter().take(b) {
+        for s in sq.iter().take(N) {
             finite &= s.is_finite();
             top = top.max(1.0 - s);
         }
         let mut best: Option<(Vb, f64)> = None;
-        for (i, s) in sq.iter().enumerate().take(b) {
+        for (i, s) in sq.iter().enumerate().take(N) {
             if finite && 1.0 - s < top - CANDIDATE_GAP {
                 continue;
             }
             #[cfg(test)]
             PROJECTED.with(|c| c.set(c.get() + 1));
-            let mut v = [0.0; MAX_B];
-            v[i] = 1.0;
-            project_out(&mut v, basis.as_slice(), b);
-            let n = norm(&v, b);
+            let v = project_unit::<N>(i, basis.as_slice());
+            let n = norm::<N>(&v);
             if best.is_none_or(|(_, w)| n > w) {
                 best = Some((v, n));
             }
         }
-        let Some((v, _)) = best else {
+        let Some((v, n)) = best else {
             break;
         };
-        basis.push(normalized(&v, b));
+        let q = normalized::<N>(&v, n);
+        for (s, x) in sq.iter_mut().zip(&q).take(N) {
+            *s += x * x;
+        }
+        basis.push(q);
+        out.push(q);
     }
-    Vecs::of(&basis.as_slice()[first_new..])
+    out
 }
 
 #[cfg(test)]
@@ -378,19 +422,20 @@ thread_local! {
 const CANDIDATE_GAP: f64 = 1e-4;
 
 /// Orthonormalize `cols` (modified Gram-Schmidt, twice); vectors that vanish are dropped.
-fn orthonormal(cols: &[Vb], b: usize) -> Vecs {
+fn orthonormal<const N: usize>(cols: &[Vb]) -> Vecs {
     // The norm of all of them: the dot products summed in order.
     let mut sq = 0.0;
     for v in cols {
-        sq += dot(v, v, b);
+        sq += dot::<N>(v, v);
     }
     let scale = sq.sqrt().max(1e-300);
     let mut out = Vecs::EMPTY;
     for &c in cols {
         let mut v = c;
-        project_out(&mut v, out.as_slice(), b);
-        if norm(&v, b) > 1e-10 * scale {
-            out.push(normalized(&v, b));
+        project_out::<N>(&mut v, out.as_slice());
+        let n = norm::<N>(&v);
+        if n > 1e-10 * scale {
+            out.push(normalized::<N>(&v, n));
         }
     }
     out
@@ -434,7 +479,7 @@ const MIX_SALT: u64 = 0x6D1C_7E0F_D81E_5A17;
 /// with its first `driven` combinations dropped: a generic subspace of the allowed motions,
 /// where dropping the first vectors of `all` (a basis built by pivoting on unit vectors)
 /// left a subspace fixed by the construction, degenerate at a fixed fraction of draws.
-fn kept_twists(all: &Vecs, driven: usize, seed: u64, b: usize) -> Vecs {
+fn kept_twists<const N: usize>(all: &Vecs, driven: usize, seed: u64) -> Vecs {
     let k = all.len();
     if driven == 0 {
         return *all;
@@ -451,40 +496,47 @@ fn kept_twists(all: &Vecs, driven: usize, seed: u64, b: usize) -> Vecs {
             let mut v = [0.0; MAX_B];
             for t in all.as_slice() {
                 let c = rng.next_signed();
-                for (x, y) in v.iter_mut().zip(t).take(b) {
+                for (x, y) in v.iter_mut().zip(t).take(N) {
                     *x += c * y;
                 }
             }
             mixed.push(v);
         }
-        let kept = orthonormal(mixed.as_slice(), b);
-        if kept.len() == k - driven && well_conditioned(mixed.as_slice(), b) {
+        if let Some(kept) = orthonormal_if_well_conditioned::<N>(mixed.as_slice()) {
             return kept;
         }
     }
     Vecs::of(&all.as_slice()[driven..])
 }
 
-/// Whether the vectors are far from dependent: each keeps a residual of at least 1e-3 of its
-/// norm after projecting out the ones before it.
-fn well_conditioned(vs: &[Vb], b: usize) -> bool {
+/// [`orthonormal`] of `vs` when it drops none of them and they are far from dependent (each
+/// keeps a residual of at least 1e-3 of its norm after projecting out the ones before it).
+/// One Gram-Schmidt pass serves both tests: while no vector is dropped, the basis built by
+/// [`orthonormal`] and the one the residuals are measured against are the same vectors.
+fn orthonormal_if_well_conditioned<const N: usize>(vs: &[Vb]) -> Option<Vecs> {
+    let mut sq = 0.0;
+    for v in vs {
+        sq += dot::<N>(v, v);
+    }
+    let scale = sq.sqrt().max(1e-300);
     let mut basis = Vecs::EMPTY;
     for v in vs {
-        let n = norm(v, b);
+        let n = norm::<N>(v);
         let mut r = *v;
-        project_out(&mut r, basis.as_slice(), b);
-        let rn = norm(&r, b);
-        if rn.partial_cmp(&(1e-3 * n)) != Some(std::cmp::Ordering::Greater) {
-            return false;
+        project_out::<N>(&mut r, basis.as_slice());
+        let rn = norm::<N>(&r);
+        let kept = rn > 1e-10 * scale;
+        if !kept || rn.partial_cmp(&(1e-3 * n)) != Some(std::cmp::Ordering::Greater) {
+            return None;
         }
-        basis.push(normalized(&r, b));
+        basis.push(normalized::<N>(&r, rn));
     }
-    true
+    Some(basis)
 }
 
 /// The generic contact model: `B − k` lines.
-fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> Vecs {
-    let b = space.b() as usize;
+fn contact_rows<const N: usize>(kind: JointType, g: &Geometry, space: Space) -> Vecs {
+    let b = N;
     let k = (kind.grade() as usize).min(b);
     let mut rng = SplitMix64::new(mix_seed(g));
     let base = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
@@ -531,10 +583,11 @@ fn contact_rows(kind: JointType, g: &Geometry, space: Space) -> Vecs {
     }
     // Orthonormal rows spanning the same lines; random lines are independent in practice, and
     // a dependent draw only yields fewer rows (never a panic).
-    orthonormal(rows.as_slice(), b)
+    orthonormal::<N>(rows.as_slice())
 }
 
 /// All allowed twists of `kind` in driven-DOF order (before removing driven ones).
+#[inline]
 fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, MotionError> {
     use JointType::*;
     let code = kind.code();
@@ -636,7 +689,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
                 }
                 let d = d / d.norm();
                 let m = c1.cross(&d);
-                complement(&[[m.x, m.y, m.z, d.x, d.y, d.z]], 6)
+                complement::<6>(&[[m.x, m.y, m.z, d.x, d.y, d.z]])
             }
             F => {
                 let mut out = Vecs::EMPTY;
@@ -728,7 +781,20 @@ pub(crate) fn stack_model(
     space: Space,
     driven: u32,
 ) -> Result<StackModel, MotionError> {
-    let b = space.b() as usize;
+    match space {
+        Space::Spatial => stack_model_in::<6>(kind, g, space, driven),
+        Space::Planar | Space::Spherical => stack_model_in::<3>(kind, g, space, driven),
+    }
+}
+
+/// [`stack_model`] in a motion space of dimension `N` (`space.b()`).
+fn stack_model_in<const N: usize>(
+    kind: JointType,
+    g: &Geometry,
+    space: Space,
+    driven: u32,
+) -> Result<StackModel, MotionError> {
+    let b = N;
     let grade = kind.grade() as u32;
     if grade as usize > b {
         return Err(MotionError::InvalidInSpace {
@@ -744,20 +810,20 @@ pub(crate) fn stack_model(
         });
     }
     if !modelled(kind, space) {
-        let rows = contact_rows(kind, g, space);
+        let rows = contact_rows::<N>(kind, g, space);
         if rows.len() != b - grade as usize {
             return Err(MotionError::Degenerate {
                 kind: kind.code(),
                 reason: "the contact lines are dependent",
             });
         }
-        let all = complement(rows.as_slice(), b);
-        let twists = kept_twists(&all, driven as usize, mix_seed(g), b);
-        let rows = complement(twists.as_slice(), b);
+        let all = complement::<N>(rows.as_slice());
+        let twists = kept_twists::<N>(&all, driven as usize, mix_seed(g));
+        let rows = complement::<N>(twists.as_slice());
         return Ok(StackModel { b, rows, twists });
     }
     let full = full_twists(kind, g, space)?;
-    let basis = orthonormal(full.as_slice(), b);
+    let basis = orthonormal::<N>(full.as_slice());
     if basis.len() != full.len() {
         return Err(MotionError::Degenerate {
             kind: kind.code(),
@@ -767,15 +833,15 @@ pub(crate) fn stack_model(
     let twists = if kind == JointType::SPSP {
         // Its twists are a basis of the annihilator of one line, ordered by pivoting: no DOF
         // of it is named (format.md), so a driven one is a generic direction.
-        kept_twists(&full, driven as usize, mix_seed(g), b)
+        kept_twists::<N>(&full, driven as usize, mix_seed(g))
     } else {
         Vecs::of(full.as_slice().get(driven as usize..).unwrap_or(&[]))
     };
     // Nothing driven: the twists are `full`, whose orthonormal basis is at hand.
     let rows = if driven == 0 {
-        complement_of(basis, b)
+        complement_of::<N>(basis)
     } else {
-        complement(twists.as_slice(), b)
+        complement::<N>(twists.as_slice())
     };
     Ok(StackModel { b, rows, twists })
 }
@@ -812,35 +878,84 @@ pub(crate) fn twist_shift(space: Space, c: [f64; 3]) -> Option<DMatrix<f64>> {
 /// axis2, unit normal, pitch), coordinates uniform in [−1, 1). Planar: z = 0 and axes in the
 /// plane (an R axis is z). Spherical: the origin is the centre (0, 0, 0).
 pub fn random_geometry(kind: JointType, space: Space, rng: &mut SplitMix64) -> Geometry {
+    random_geometry_to(kind, space, rng, Drawn::All)
+}
+
+/// How far into [`random_geometry`]'s draws (origin, axis, axis2, normal, pitch, origin2, in
+/// this order) a kind's model reads ([`full_twists`]): the fields after it need not be drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Drawn {
+    Origin,
+    Axis,
+    Axis2,
+    Normal,
+    All,
+}
+
+/// The last field of [`random_geometry`] the model of `kind` in `space` reads. H reads the
+/// pitch; SPSP, the contact models and the fallback model hash every field ([`mix_seed`]).
+fn model_reads(kind: JointType, space: Space) -> Drawn {
+    use JointType::*;
+    match (space, kind) {
+        (Space::Spatial, S) => Drawn::Origin,
+        (Space::Spatial, R | P | C | ER | SC) => Drawn::Axis,
+        (Space::Spatial, U) => Drawn::Axis2,
+        (Space::Spatial, PL | FP | SP | PC | CR) => Drawn::Normal,
+        (Space::Planar, R | FP) | (Space::Spherical, FP) => Drawn::Origin,
+        (Space::Planar, P) | (Space::Spherical, R) => Drawn::Axis,
+        _ => Drawn::All,
+    }
+}
+
+/// [`random_geometry`] drawn up to field `last` (the later fields `None`): the same stream,
+/// so the fields drawn are bit for bit those of the whole geometry.
+fn random_geometry_to(
+    kind: JointType,
+    space: Space,
+    rng: &mut SplitMix64,
+    last: Drawn,
+) -> Geometry {
     let mut origin = [rng.next_signed(), rng.next_signed(), rng.next_signed()];
-    let mut axis: [f64; 3] = random_unit(rng).into();
-    let axis2: [f64; 3] = random_unit(rng).into();
-    let normal: [f64; 3] = random_unit(rng).into();
-    let pitch = rng.next_signed();
-    let origin2 = [rng.next_signed(), rng.next_signed(), rng.next_signed()];
+    let draw = |rng: &mut SplitMix64, field: Drawn| -> Option<[f64; 3]> {
+        (last >= field).then(|| random_unit(rng).into())
+    };
+    let mut axis = draw(rng, Drawn::Axis);
+    let axis2 = draw(rng, Drawn::Axis2);
+    let normal = draw(rng, Drawn::Normal);
+    let (pitch, origin2) = if last == Drawn::All {
+        let pitch = rng.next_signed();
+        let origin2 = [rng.next_signed(), rng.next_signed(), rng.next_signed()];
+        (Some(pitch), Some(origin2))
+    } else {
+        (None, None)
+    };
     match space {
         Space::Spatial => {}
         Space::Planar => {
             origin[2] = 0.0;
-            if kind == JointType::R {
-                axis = [0.0, 0.0, 1.0];
-            } else {
-                let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt().max(1e-12);
-                axis = [axis[0] / n, axis[1] / n, 0.0];
-                if axis == [0.0, 0.0, 0.0] {
-                    axis = [1.0, 0.0, 0.0];
+            axis = axis.map(|axis| {
+                if kind == JointType::R {
+                    [0.0, 0.0, 1.0]
+                } else {
+                    let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt().max(1e-12);
+                    let axis = [axis[0] / n, axis[1] / n, 0.0];
+                    if axis == [0.0, 0.0, 0.0] {
+                        [1.0, 0.0, 0.0]
+                    } else {
+                        axis
+                    }
                 }
-            }
+            });
         }
         Space::Spherical => origin = [0.0, 0.0, 0.0],
     }
     Geometry {
         origin: Some(origin),
-        axis: Some(axis),
-        axis2: Some(axis2),
-        origin2: Some(origin2),
-        normal: Some(normal),
-        pitch: Some(pitch),
+        axis,
+        axis2,
+        origin2,
+        normal,
+        pitch,
         second: None,
     }
 }
@@ -854,7 +969,15 @@ pub fn joint_seed(seed: u64, index: usize) -> u64 {
 /// A model that cannot fail: the generic contact model with the joint's grade (capped at B)
 /// and driven DOF (capped at the grade). Used by [`realize`] for joints no model fits.
 fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> StackModel {
-    let b = space.b() as usize;
+    match space {
+        Space::Spatial => fallback_model_in::<6>(kind, driven, seed),
+        Space::Planar | Space::Spherical => fallback_model_in::<3>(kind, driven, seed),
+    }
+}
+
+/// [`fallback_model`] in a motion space of dimension `N`.
+fn fallback_model_in<const N: usize>(kind: JointType, driven: u32, seed: u64) -> StackModel {
+    let b = N;
     let k = (kind.grade() as usize).min(b);
     let mut rng = SplitMix64::new(seed);
     let mut rows = Vecs::EMPTY;
@@ -865,10 +988,10 @@ fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> Stac
         }
         rows.push(r);
     }
-    let rows = orthonormal(rows.as_slice(), b);
-    let all = complement(rows.as_slice(), b);
-    let twists = kept_twists(&all, driven as usize, seed, b);
-    let rows = complement(twists.as_slice(), b);
+    let rows = orthonormal::<N>(rows.as_slice());
+    let all = complement::<N>(rows.as_slice());
+    let twists = kept_twists::<N>(&all, driven as usize, seed);
+    let rows = complement::<N>(twists.as_slice());
     StackModel { b, rows, twists }
 }
 
@@ -1301,6 +1424,20 @@ pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geome
     )
 }
 
+/// [`pair_stack_model`] of joint `i` at the random realization `seed`: at
+/// [`random_joint_geometry`], only the fields its model reads drawn.
+pub(crate) fn random_pair_stack_model(
+    m: &Mechanism,
+    seed: u64,
+    i: usize,
+    driven: u32,
+) -> StackModel {
+    let kind = m.joints[i].kind;
+    let mut rng = SplitMix64::new(joint_seed(seed, i));
+    let g = random_geometry_to(kind, m.space, &mut rng, model_reads(kind, m.space));
+    pair_stack_model(m, i, &g, driven)
+}
+
 /// Every joint's geometry when the file's is used ([`geometries`]), made dimensionless
 /// ([`scale_of`], the same as [`GeometryUsed::scale`]): the rank decisions made on it do not
 /// depend on the length unit or on where the model sits.
@@ -1535,9 +1672,27 @@ pub fn rounding_of(x: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use super::reference as old;
     use super::*;
     use crate::mechanism::{BodyId, JointSpec};
     use nalgebra::DVector;
+
+    /// [`complement`] in a motion space of runtime dimension `b` (3 or 6).
+    fn complement_in(cols: &[Vb], b: usize) -> Vecs {
+        match b {
+            6 => complement::<6>(cols),
+            3 => complement::<3>(cols),
+            _ => panic!("no motion space has dimension {b}"),
+        }
+    }
+
+    /// [`contact_rows`] in `space`.
+    fn contact_rows_in(kind: JointType, g: &Geometry, space: Space) -> Vecs {
+        match space {
+            Space::Spatial => contact_rows::<6>(kind, g, space),
+            _ => contact_rows::<3>(kind, g, space),
+        }
+    }
 
     fn check(m: &JointModel, b: usize, dim: usize) {
         assert_eq!(m.twists.nrows(), b);
@@ -1620,7 +1775,7 @@ mod tests {
                         g.origin = g.origin.map(|o| o.map(|x| (x * 2.0).round()));
                     }
                     if kind.grade() as usize <= b {
-                        check_complement(contact_rows(kind, &g, space).as_slice(), b, trial);
+                        check_complement(contact_rows_in(kind, &g, space).as_slice(), b, trial);
                     }
                     if let Ok(full) = full_twists(kind, &g, space) {
                         for driven in 0..=full.len() {
@@ -1630,6 +1785,141 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The models bit for bit those of the code before session 11 (`reference.rs`: runtime
+    /// dimension, squared norms summed again for every new vector): every kind in every
+    /// space, every number of driven DOF, at random geometry, at axis-aligned geometry with
+    /// small integer points (exact zeros and ties), at degenerate geometry (parallel axes,
+    /// coincident centres, zero or non-finite fields, huge and tiny coordinates: errors and
+    /// the fallback model), and the fallback model itself.
+    #[test]
+    fn models_equal_the_reference_bit_for_bit() {
+        let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
+            v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
+        };
+        let same = |a: &StackModel, b: &StackModel, what: &str| {
+            assert_eq!(a.b, b.b, "{what}");
+            assert_eq!(bits(&a.rows), bits(&b.rows), "{what}: rows");
+            assert_eq!(bits(&a.twists), bits(&b.twists), "{what}: twists");
+        };
+        let mut rng = SplitMix64::new(1611);
+        let mut compared = 0;
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            for kind in JointType::all() {
+                for trial in 0..300 {
+                    let mut g = random_geometry(kind, space, &mut rng);
+                    let axis = |r: u64| {
+                        let mut a = [0.0; 3];
+                        a[r as usize % 3] = [1.0, -1.0][r as usize / 3 % 2];
+                        a
+                    };
+                    match trial % 6 {
+                        0 | 1 => {}
+                        2 => {
+                            g.axis = Some(axis(rng.below(6)));
+                            g.axis2 = Some(axis(rng.below(6)));
+                            g.normal = Some(axis(rng.below(6)));
+                            g.origin = g.origin.map(|o| o.map(|x| (x * 2.0).round()));
+                            g.origin2 = g.origin2.map(|o| o.map(|x| (x * 2.0).round()));
+                        }
+                        3 => {
+                            // Parallel or nearly parallel directions, coincident centres.
+                            let eps = [0.0, 1e-12, 1e-9, 1e-4][rng.below(4) as usize];
+                            let a = g.axis.unwrap_or([0.0, 0.0, 1.0]);
+                            g.axis2 = Some([a[0] + eps, a[1], a[2]]);
+                            g.normal = Some([a[0], a[1] - eps, a[2]]);
+                            g.origin2 = g.origin.map(|o| [o[0] + eps, o[1], o[2]]);
+                        }
+                        4 => {
+                            // Extreme magnitudes and non-finite fields.
+                            let x = [1e200, 1e-200, f64::INFINITY, f64::NAN, 0.0, -0.0]
+                                [rng.below(6) as usize];
+                            match rng.below(5) {
+                                0 => g.origin = g.origin.map(|o| [x, o[1], o[2]]),
+                                1 => g.axis = Some([x, 0.0, 0.0]),
+                                2 => g.normal = Some([0.0, x, 0.0]),
+                                3 => g.pitch = Some(x),
+                                _ => g.origin2 = g.origin2.map(|o| [o[0], o[1], x]),
+                            }
+                        }
+                        _ => {
+                            // A field missing.
+                            match rng.below(5) {
+                                0 => g.origin = None,
+                                1 => g.axis = None,
+                                2 => g.axis2 = None,
+                                3 => g.normal = None,
+                                _ => g.origin2 = None,
+                            }
+                        }
+                    }
+                    for driven in 0..=kind.grade() as u32 + 1 {
+                        let what = format!("{kind:?} {space:?} driven {driven} trial {trial}");
+                        match (
+                            stack_model(kind, &g, space, driven),
+                            old::stack_model(kind, &g, space, driven),
+                        ) {
+                            (Ok(a), Ok(b)) => same(&a, &b, &what),
+                            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{what}"),
+                            (a, b) => panic!("{what}: {a:?} against {b:?}"),
+                        }
+                        let seed = rng.next_u64();
+                        same(
+                            &fallback_model(kind, space, driven, seed),
+                            &old::fallback_model(kind, space, driven, seed),
+                            &what,
+                        );
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        assert!(compared > 30_000, "{compared}");
+    }
+
+    /// [`random_pair_stack_model`] draws only the fields a model reads: its models are bit
+    /// for bit those at the whole [`random_geometry`] (a field the model reads but not drawn
+    /// would be an error, then the fallback model), and the fields drawn are the same.
+    #[test]
+    fn partial_random_geometry_gives_the_same_models() {
+        let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
+            v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
+        };
+        let mut partial = 0;
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            for kind in JointType::all() {
+                let reads = model_reads(kind, space);
+                partial += usize::from(reads != Drawn::All);
+                for seed in 0..200u64 {
+                    let whole = random_geometry(kind, space, &mut SplitMix64::new(seed));
+                    let g = random_geometry_to(kind, space, &mut SplitMix64::new(seed), reads);
+                    let fields = |g: &Geometry| {
+                        [g.origin, g.axis, g.axis2, g.normal, g.origin2]
+                            .map(|f| f.map(|a| a.map(f64::to_bits)))
+                    };
+                    for (a, b) in fields(&g).iter().zip(fields(&whole)) {
+                        assert!(a.is_none() || *a == b, "{kind:?} {space:?}");
+                    }
+                    assert!(g.pitch.is_none() || g.pitch == whole.pitch);
+                    for driven in 0..=kind.grade() as u32 {
+                        let what = format!("{kind:?} {space:?} driven {driven} seed {seed}");
+                        match (
+                            stack_model(kind, &g, space, driven),
+                            stack_model(kind, &whole, space, driven),
+                        ) {
+                            (Ok(a), Ok(b)) => {
+                                assert_eq!(bits(&a.rows), bits(&b.rows), "{what}");
+                                assert_eq!(bits(&a.twists), bits(&b.twists), "{what}");
+                            }
+                            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{what}"),
+                            (a, b) => panic!("{what}: {a:?} against {b:?}"),
+                        }
+                    }
+                }
+            }
+        }
+        assert!(partial >= 15, "{partial}");
     }
 
     /// Work regression: [`complement`] projected every unit vector for every new vector
@@ -1642,7 +1932,7 @@ mod tests {
             let g = random_geometry(kind, Space::Spatial, &mut rng);
             let twists = full_twists(kind, &g, Space::Spatial).expect("modelled");
             PROJECTED.with(|c| c.set(0));
-            let rows = complement(twists.as_slice(), 6);
+            let rows = complement::<6>(twists.as_slice());
             assert_eq!(rows.len(), 6 - twists.len());
             assert_eq!(PROJECTED.with(|c| c.get()), rows.len(), "{kind:?}");
         }
@@ -1650,27 +1940,27 @@ mod tests {
 
     /// [`complement`] as it was: every unit vector projected for every new vector.
     fn reference(cols: &[Vb], b: usize) -> Vec<Vb> {
-        let mut basis: Vec<Vb> = orthonormal(cols, b).as_slice().to_vec();
+        let mut basis: Vec<Vb> = old::orthonormal(cols, b).as_slice().to_vec();
         let first_new = basis.len();
         while basis.len() < b {
             let mut best: Option<(Vb, f64)> = None;
             for i in 0..b {
                 let mut v = [0.0; MAX_B];
                 v[i] = 1.0;
-                project_out(&mut v, &basis, b);
-                let n = norm(&v, b);
+                old::project_out(&mut v, &basis, b);
+                let n = old::norm(&v, b);
                 if best.is_none_or(|(_, w)| n > w) {
                     best = Some((v, n));
                 }
             }
             let (v, _) = best.expect("b > 0");
-            basis.push(normalized(&v, b));
+            basis.push(old::normalized(&v, b));
         }
         basis[first_new..].to_vec()
     }
 
     fn check_complement(cols: &[Vb], b: usize, trial: usize) {
-        let got = complement(cols, b);
+        let got = complement_in(cols, b);
         let want = reference(cols, b);
         assert_eq!(got.len(), want.len(), "trial {trial}: {cols:?}");
         for (g, w) in got.as_slice().iter().zip(&want) {
@@ -1728,7 +2018,7 @@ mod tests {
                 let all = if modelled(kind, space) {
                     full_twists(kind, &g, space).expect("a model")
                 } else {
-                    complement(contact_rows(kind, &g, space).as_slice(), b)
+                    complement_in(contact_rows_in(kind, &g, space).as_slice(), b)
                 };
                 let undriven = stack_model(kind, &g, space, 0).expect("a model");
                 assert_eq!(undriven.twists, all, "{kind:?}: nothing driven, as before");
@@ -1739,7 +2029,7 @@ mod tests {
                     // Inside the allowed motions: annihilated by the undriven rows.
                     for t in m.twists.as_slice() {
                         for r in undriven.rows.as_slice() {
-                            assert!(dot(r, t, b).abs() < 1e-12, "{kind:?}");
+                            assert!(old::dot(r, t, b).abs() < 1e-12, "{kind:?}");
                         }
                     }
                 }

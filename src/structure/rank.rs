@@ -2016,8 +2016,7 @@ fn pair_rows(
                     let v = match seed {
                         Some(seed) => {
                             let seed = redrawn.get(&ji).copied().unwrap_or(seed);
-                            let g = motion::random_joint_geometry(m, seed, ji);
-                            motion::pair_stack_model(m, ji, &g, driven).rows
+                            motion::random_pair_stack_model(m, seed, ji, driven).rows
                         }
                         None => motion::pair_stack_model(m, ji, &geoms[ji], driven).rows,
                     };
