@@ -775,7 +775,9 @@ fn inverse_proves<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &To
 /// `spans` gives each row's nonzero columns. The Gram matrix and its factor are computed with
 /// the same operations in the same order as a product over the nonzeros found value by value
 /// and a left-looking factorization (kept as the tests' reference): bit for bit the same
-/// numbers, but in loops over consecutive columns (see [`gram_matrix`], [`cholesky_runs`]).
+/// numbers, but in loops over consecutive columns (see [`gram_matrix`], [`cholesky_runs`];
+/// [`gram_blocks`] and [`cholesky_blocks`] when every body has `width` unknowns).
+#[allow(clippy::needless_range_loop)]
 fn gram_proves<const N: usize>(
     n: usize,
     a: &[[f64; N]; N],
@@ -1042,6 +1044,7 @@ fn cholesky_blocks<const N: usize, const W: usize>(
 /// The Gram proof as it was before [`gram_matrix`] and [`cholesky_runs`] (the nonzeros of
 /// each row found by value, a left-looking factorization): the tests' reference.
 #[cfg(test)]
+#[allow(clippy::needless_range_loop)]
 fn gram_proves_reference<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &Tol) -> bool {
     let tr = frob * frob;
     if !(tr > 1e-200 && tr.is_finite()) {
