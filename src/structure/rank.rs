@@ -202,7 +202,20 @@ fn reduced_basis<'a>(
     rows: impl Iterator<Item = RowsView<'a>> + Clone,
     t: &Tol,
 ) -> Option<DMatrix<f64>> {
-    let total: usize = rows.clone().map(|r| r.nrows()).sum();
+    // The pairs' rows are loaded into the cache together (see [`warm`]) as they are counted.
+    let mut touched = 0.0;
+    let total: usize = rows
+        .clone()
+        .map(|r| {
+            if r.ncols() > 0 {
+                touched += (0..r.nrows())
+                    .map(|i| r[(i, 0)] + r[(i, r.ncols() - 1)])
+                    .sum::<f64>();
+            }
+            r.nrows()
+        })
+        .sum();
+    std::hint::black_box(touched);
     if total == 0 {
         return Some(DMatrix::zeros(b, 0));
     }
@@ -559,6 +572,33 @@ fn surely_nonsingular(
     }
 }
 
+/// One row's nonzero columns in a small block ([`nonsingular_within`]): the columns of the (at
+/// most two) bodies its pair acts on, as (first column, width), ascending. Every other entry
+/// of the row is zero.
+#[derive(Clone, Copy, Default)]
+struct RowSpan {
+    k: u8,
+    c: [u8; 2],
+    w: [u8; 2],
+}
+
+/// Loads the rows of the pairs `block_eqs` into the cache together, before they are read one
+/// by one: the pairs of a block lie far apart in [`PairRows`] (and in `eqs`), so copying them
+/// pair after pair waited for memory once per pair (a third of [`nonsingular_within`]'s time
+/// and most of [`reduced_basis`]'s at 10^6 bodies). Changes no value.
+fn warm(rows: &PairRows, eqs: &Equations, block_eqs: &[usize]) {
+    let mut sum = 0.0;
+    let mut ends = 0usize;
+    for &e in block_eqs.iter().take(SMALL_BLOCK) {
+        let [h, o] = eqs.bodies(e);
+        ends ^= h ^ o;
+        // One value per cache line (8 values), and the last one.
+        let v = rows.values(e);
+        sum += v.iter().step_by(8).sum::<f64>() + v.last().copied().unwrap_or(0.0);
+    }
+    std::hint::black_box((sum, ends));
+}
+
 /// [`surely_nonsingular`] with arrays of `N × N` (`n ≤ N`), `col` the first column of each
 /// body.
 #[allow(clippy::needless_range_loop, clippy::type_complexity)]
@@ -575,7 +615,9 @@ fn nonsingular_within<const N: usize>(
         &Tol,
     ),
 ) -> bool {
+    warm(rows, eqs, block_eqs);
     let mut a = [[0.0f64; N]; N];
+    let mut spans = [RowSpan::default(); N];
     let mut r0 = 0;
     for &e in block_eqs {
         let [h, o] = eqs.bodies(e);
@@ -583,19 +625,21 @@ fn nonsingular_within<const N: usize>(
         if r0 + re.nrows() > n {
             return false;
         }
+        let mut span = RowSpan::default();
         if h != o {
             for (x, sign) in [(h, -1.0), (o, 1.0)] {
                 let Ok(k) = bodies.binary_search(&x) else {
                     continue;
                 };
                 let c0 = col[k];
-                match &q[x] {
+                let w = match &q[x] {
                     None => {
                         for i in 0..re.nrows() {
                             for j in 0..b {
                                 a[r0 + i][c0 + j] = sign * re[(i, j)];
                             }
                         }
+                        b
                     }
                     Some(qx) => {
                         for i in 0..re.nrows() {
@@ -607,10 +651,20 @@ fn nonsingular_within<const N: usize>(
                                 a[r0 + i][c0 + j] = sign * v;
                             }
                         }
+                        qx.ncols()
                     }
-                }
+                };
+                // n ≤ N ≤ 36: the columns fit a byte.
+                span.c[usize::from(span.k)] = c0 as u8;
+                span.w[usize::from(span.k)] = w as u8;
+                span.k += 1;
             }
         }
+        if span.k == 2 && span.c[1] < span.c[0] {
+            span.c.swap(0, 1);
+            span.w.swap(0, 1);
+        }
+        spans[r0..r0 + re.nrows()].fill(span);
         r0 += re.nrows();
     }
     if r0 != n {
@@ -624,7 +678,9 @@ fn nonsingular_within<const N: usize>(
     if !(frob > 0.0 && frob.is_finite()) {
         return false;
     }
-    gram_proves::<N>(n, &a, frob, t) || inverse_proves::<N>(n, &a, frob, t)
+    // Every body of the block with all `b` unknowns: the Gram proof by blocks of `b`.
+    let uniform = if n == b * bodies.len() { b } else { 0 };
+    gram_proves::<N>(n, &a, &spans, uniform, frob, t) || inverse_proves::<N>(n, &a, frob, t)
 }
 
 /// The inverse's half of [`nonsingular_within`]: `X` by Gauss-Jordan elimination and the
@@ -715,15 +771,299 @@ fn inverse_proves<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &To
 /// test accepts too (`σ_min > β` gives `0.5 / ‖X‖_F ≳ σ_min / (2√n)`, above the margin, and a
 /// residual of about `κ ε`), so the rank, the work units and the output are the same as
 /// without it; anything else goes on to the inverse.
+///
+/// `spans` gives each row's nonzero columns. The Gram matrix and its factor are computed with
+/// the same operations in the same order as a product over the nonzeros found value by value
+/// and a left-looking factorization (kept as the tests' reference): bit for bit the same
+/// numbers, but in loops over consecutive columns (see [`gram_matrix`], [`cholesky_runs`];
+/// [`gram_blocks`] and [`cholesky_blocks`] when every body has `width` unknowns).
 #[allow(clippy::needless_range_loop)]
-fn gram_proves<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &Tol) -> bool {
+fn gram_proves<const N: usize>(
+    n: usize,
+    a: &[[f64; N]; N],
+    spans: &[RowSpan; N],
+    width: usize,
+    frob: f64,
+    t: &Tol,
+) -> bool {
     let tr = frob * frob;
     if !(tr > 1e-200 && tr.is_finite()) {
         return false;
     }
     let beta = (1e-4 * frob).max(4.0 * (n as f64).sqrt() * SCREEN_MARGIN * t.cut(frob, n));
     let shift = beta * beta + 1e-12 * tr;
-    // Lower triangle of AᵀA, row by row of A over its nonzero columns.
+    let mut g = [[0.0f64; N]; N];
+    let blocks = match width {
+        6 => gram_blocks::<N, 6>(n, a, spans, &mut g),
+        3 => gram_blocks::<N, 3>(n, a, spans, &mut g),
+        _ => {
+            gram_matrix::<N>(n, a, spans, &mut g);
+            [0; N]
+        }
+    };
+    for j in 0..n {
+        g[j][j] -= shift;
+    }
+    match width {
+        6 => cholesky_blocks::<N, 6>(n, &mut g, blocks),
+        3 => cholesky_blocks::<N, 3>(n, &mut g, blocks),
+        _ => cholesky_runs::<N>(n, &mut g),
+    }
+}
+
+/// [`gram_matrix`] when every body of the block is `W` unknowns wide (body `I` the columns
+/// `W·I .. W·I + W`): the products of each row in fixed `W × W` blocks, entries above the
+/// diagonal of a diagonal block included (they are never read). Also which blocks are nonzero:
+/// bit `J` of `blocks[I]` for the block of bodies `I ≥ J`. `g` starts at zero.
+fn gram_blocks<const N: usize, const W: usize>(
+    n: usize,
+    a: &[[f64; N]; N],
+    spans: &[RowSpan; N],
+    g: &mut [[f64; N]; N],
+) -> [u64; N] {
+    let mut blocks = [0u64; N];
+    for (row, s) in a[..n].iter().zip(&spans[..n]) {
+        let k = usize::from(s.k);
+        for p in 0..k {
+            let cj = usize::from(s.c[p]);
+            for qq in 0..=p {
+                let cl = usize::from(s.c[qq]);
+                blocks[cj / W] |= 1 << (cl / W);
+                let src: &[f64; W] = row[cl..cl + W].try_into().expect("W columns");
+                for jj in 0..W {
+                    let v = row[cj + jj];
+                    let dst: &mut [f64; W] =
+                        (&mut g[cj + jj][cl..cl + W]).try_into().expect("W columns");
+                    for (x, &y) in dst.iter_mut().zip(src) {
+                        *x += v * y;
+                    }
+                }
+            }
+        }
+    }
+    blocks
+}
+
+/// The lower triangle of `AᵀA` (`n × n`), each entry `Σ_r a[r][j]·a[r][l]` summed in row order
+/// over the rows' spans. Products with an entry outside the nonzeros found by value (an exact
+/// zero inside a span) add a zero, which leaves a finite sum unchanged (no sum of finite
+/// products is ever `−0`, the sums start at `+0`): the same numbers as summing the nonzeros
+/// only. `g` starts at zero.
+fn gram_matrix<const N: usize>(
+    n: usize,
+    a: &[[f64; N]; N],
+    spans: &[RowSpan; N],
+    g: &mut [[f64; N]; N],
+) {
+    for (row, s) in a[..n].iter().zip(&spans[..n]) {
+        let k = usize::from(s.k);
+        for p in 0..k {
+            let (cj, wj) = (usize::from(s.c[p]), usize::from(s.w[p]));
+            for qq in 0..=p {
+                let (cl, wl) = (usize::from(s.c[qq]), usize::from(s.w[qq]));
+                for j in cj..cj + wj {
+                    let v = row[j];
+                    // Lower triangle: `l ≤ j` within the same span.
+                    let hi = if qq == p { j + 1 } else { cl + wl };
+                    for (x, &y) in g[j][cl..hi].iter_mut().zip(&row[cl..hi]) {
+                        *x += v * y;
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Whether the symmetric `g` (its lower triangle, `n × n`) has a Cholesky factor, every pivot
+/// positive. Right-looking: once column `k` is scaled, each later row `i` takes its update
+/// `−l_ik·l_jk` from it over consecutive entries, and only where both factors are nonzero.
+///
+/// The same numbers as the left-looking order: every entry receives its updates for
+/// `k = 0, 1, …` in order and then its division. A skipped update subtracts an exact zero (a
+/// zero times a finite number; columns with a non-finite entry are updated in full), which
+/// changes no entry: no entry is ever `−0` (the Gram sums start at `+0`, an exact cancellation
+/// rounds to `+0`, and the pivots are positive). So the pivots, and the first failing one, are
+/// bit for bit the same; a group of bodies joined in a tree factorizes without the zero blocks.
+#[allow(clippy::needless_range_loop)]
+fn cholesky_runs<const N: usize>(n: usize, g: &mut [[f64; N]; N]) -> bool {
+    let mut lk = [0.0f64; N];
+    // The nonzero runs `[start, end)` of column `k` below the diagonal.
+    let mut runs = [(0usize, 0usize); N];
+    for k in 0..n {
+        let d = g[k][k];
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        g[k][k] = d;
+        let mut finite = true;
+        for i in k + 1..n {
+            let v = g[i][k] / d;
+            g[i][k] = v;
+            lk[i] = v;
+            finite &= v.is_finite();
+        }
+        let mut nr = 0;
+        if finite {
+            let mut i = k + 1;
+            while i < n {
+                if lk[i] == 0.0 {
+                    i += 1;
+                    continue;
+                }
+                let s = i;
+                while i < n && lk[i] != 0.0 {
+                    i += 1;
+                }
+                runs[nr] = (s, i);
+                nr += 1;
+            }
+        } else if k + 1 < n {
+            runs[0] = (k + 1, n);
+            nr = 1;
+        }
+        for &(s, e) in &runs[..nr] {
+            for i in s..e {
+                let lik = lk[i];
+                let row = &mut g[i];
+                // The runs up to and including `i` (lower triangle).
+                for &(s2, e2) in &runs[..nr] {
+                    if s2 > i {
+                        break;
+                    }
+                    let hi = e2.min(i + 1);
+                    for (x, &y) in row[s2..hi].iter_mut().zip(&lk[s2..hi]) {
+                        *x -= lik * y;
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// [`cholesky_runs`] by blocks of `W × W` (every body `W` unknowns wide, `n = W · bodies`,
+/// `blocks` as [`gram_blocks`] gives them): the diagonal block of body `K` factorized, the
+/// blocks below it solved, and the later blocks updated from them, skipping the blocks that
+/// are zero (and stay zero: no fill reaches them). Every entry still receives `−l_ik·l_jk`
+/// for `k = 0, 1, …` in order and then its division, so the pivots are bit for bit those of
+/// the left-looking order (see [`cholesky_runs`] for why a skipped zero block changes
+/// nothing). A non-finite entry of the factor ends it: its square would make a later pivot
+/// `−∞` or NaN, which the left-looking order rejects too.
+#[allow(clippy::needless_range_loop)]
+fn cholesky_blocks<const N: usize, const W: usize>(
+    n: usize,
+    g: &mut [[f64; N]; N],
+    mut blocks: [u64; N],
+) -> bool {
+    let nb = n / W;
+    if nb * W != n || nb > 64 {
+        return cholesky_runs::<N>(n, g);
+    }
+    for kb in 0..nb {
+        let k0 = kb * W;
+        // The diagonal block (all updates from earlier bodies received).
+        for k in k0..k0 + W {
+            let d = g[k][k];
+            if d.is_nan() || d <= 0.0 {
+                return false;
+            }
+            let d = d.sqrt();
+            g[k][k] = d;
+            for i in k + 1..k0 + W {
+                let v = g[i][k] / d;
+                if !v.is_finite() {
+                    return false;
+                }
+                g[i][k] = v;
+            }
+            for i in k + 1..k0 + W {
+                let lik = g[i][k];
+                for j in k + 1..=i {
+                    g[i][j] -= lik * g[j][k];
+                }
+            }
+        }
+        // The blocks below it: `L_IK = G_IK · L_KK^-T`, entry by entry in column order.
+        let below_mask = (kb + 1..nb)
+            .filter(|&ib| blocks[ib] >> kb & 1 == 1)
+            .fold(0u64, |m, ib| m | 1 << ib);
+        let below = |ib: usize| below_mask >> ib & 1 == 1;
+        for ib in kb + 1..nb {
+            if !below(ib) {
+                continue;
+            }
+            for i in ib * W..ib * W + W {
+                for k in k0..k0 + W {
+                    let mut v = g[i][k];
+                    for kk in k0..k {
+                        v -= g[i][kk] * g[k][kk];
+                    }
+                    let v = v / g[k][k];
+                    if !v.is_finite() {
+                        return false;
+                    }
+                    g[i][k] = v;
+                }
+            }
+        }
+        // The later blocks: `G_IJ −= L_IK · L_JKᵀ` (for `I ≥ J`, both below `K`).
+        for jb in kb + 1..nb {
+            if !below(jb) {
+                continue;
+            }
+            let mut lt = [[0.0f64; W]; W];
+            for jj in 0..W {
+                for kk in 0..W {
+                    lt[kk][jj] = g[jb * W + jj][k0 + kk];
+                }
+            }
+            for ib in jb..nb {
+                if !below(ib) {
+                    continue;
+                }
+                blocks[ib] |= 1 << jb;
+                for i in ib * W..ib * W + W {
+                    let row = &mut g[i];
+                    for kk in 0..W {
+                        let lik = row[k0 + kk];
+                        let dst: &mut [f64; W] = (&mut row[jb * W..jb * W + W])
+                            .try_into()
+                            .expect("W columns");
+                        for (x, &y) in dst.iter_mut().zip(&lt[kk]) {
+                            *x -= lik * y;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// The Gram proof as it was before [`gram_matrix`] and [`cholesky_runs`] (the nonzeros of
+/// each row found by value, a left-looking factorization): the tests' reference.
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+fn gram_proves_reference<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &Tol) -> bool {
+    let tr = frob * frob;
+    if !(tr > 1e-200 && tr.is_finite()) {
+        return false;
+    }
+    let beta = (1e-4 * frob).max(4.0 * (n as f64).sqrt() * SCREEN_MARGIN * t.cut(frob, n));
+    let shift = beta * beta + 1e-12 * tr;
+    let mut g = gram_reference::<N>(n, a);
+    for j in 0..n {
+        g[j][j] -= shift;
+    }
+    cholesky_reference::<N>(n, &mut g)
+}
+
+/// The reference's Gram matrix: the lower triangle of `AᵀA`, row by row of `A` over the
+/// nonzero columns found by value.
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+fn gram_reference<const N: usize>(n: usize, a: &[[f64; N]; N]) -> [[f64; N]; N] {
     let mut g = [[0.0f64; N]; N];
     let mut nz = [0usize; N];
     for row in &a[..n] {
@@ -742,10 +1082,14 @@ fn gram_proves<const N: usize>(n: usize, a: &[[f64; N]; N], frob: f64, t: &Tol) 
             }
         }
     }
-    for j in 0..n {
-        g[j][j] -= shift;
-    }
-    // In place: the factor overwrites the lower triangle.
+    g
+}
+
+/// The reference's factorization: left-looking, in place (the factor overwrites the lower
+/// triangle); whether every pivot is positive.
+#[cfg(test)]
+#[allow(clippy::needless_range_loop)]
+fn cholesky_reference<const N: usize>(n: usize, g: &mut [[f64; N]; N]) -> bool {
     for j in 0..n {
         let mut d = g[j][j];
         for k in 0..j {
@@ -786,6 +1130,61 @@ fn surely_full_rank<'a>(b: usize, total: usize, rows: impl Iterator<Item = RowsV
 /// [`surely_full_rank`] with arrays of `MAX_ROWS` rows (fewer rows than that in `rows`, or
 /// the answer is `false`).
 fn full_rank_within<'a, const MAX_ROWS: usize>(
+    b: usize,
+    rows: impl Iterator<Item = RowsView<'a>>,
+) -> bool {
+    let mut a = [[0.0f64; 6]; MAX_ROWS];
+    let mut norm2 = [0.0f64; MAX_ROWS];
+    let mut n = 0;
+    if b > 6 {
+        return false;
+    }
+    for r in rows {
+        for i in 0..r.nrows() {
+            if n == MAX_ROWS {
+                return false;
+            }
+            for k in 0..b {
+                a[n][k] = r[(i, k)];
+                norm2[n] += a[n][k] * a[n][k];
+            }
+            n += 1;
+        }
+    }
+    let frob2: f64 = norm2[..n].iter().sum();
+    if n < b || frob2 == 0.0 {
+        return false;
+    }
+    let mut det = 1.0f64;
+    let mut sub2 = 0.0;
+    for c in 0..b {
+        let p = (c..n)
+            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
+            .unwrap_or(c);
+        let pivot = a[p][c];
+        if pivot == 0.0 {
+            return false;
+        }
+        a.swap(c, p);
+        norm2.swap(c, p);
+        det *= pivot.abs();
+        sub2 += norm2[c];
+        let top = a[c];
+        for row in a.iter_mut().take(n).skip(c + 1) {
+            let f = row[c] / pivot;
+            // All six columns in one fixed-width pass: the columns before `c` and from `b` on
+            // are never read again, so only the live ones matter, and they are as before.
+            for (x, &y) in row.iter_mut().zip(&top) {
+                *x -= f * y;
+            }
+        }
+    }
+    det > 1e-6 * frob2.sqrt() * sub2.sqrt().powi(b as i32 - 1)
+}
+
+/// [`full_rank_within`] as it was (the row updates over columns `c..b`): the tests' reference.
+#[cfg(test)]
+fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
     b: usize,
     rows: impl Iterator<Item = RowsView<'a>>,
 ) -> bool {
@@ -2907,7 +3306,7 @@ mod tests {
                 return (false, false);
             }
             (
-                gram_proves::<N>(n, &a, frob, t),
+                gram_proves_reference::<N>(n, &a, frob, t),
                 inverse_proves::<N>(n, &a, frob, t),
             )
         }
@@ -2943,6 +3342,229 @@ mod tests {
             accepted * 10 >= inverse_accepted * 6,
             "{accepted} of {inverse_accepted}"
         );
+    }
+
+    /// The Gram proof as [`nonsingular_within`] runs it (Gram matrix over the rows' spans, by
+    /// blocks of `b` when every body has all its unknowns, factorized by runs or by blocks
+    /// skipping zeros) computes bit for bit the Gram matrix and the factor of the reference (the
+    /// nonzeros found by value, left-looking), and so decides the same: random blocks of bodies
+    /// 3 or 6 wide or of mixed widths, joined in a chain or at random, with exact zeros inside
+    /// the spans, scaled columns, repeated rows, huge entries (non-finite factors) and both
+    /// thresholds.
+    #[test]
+    fn gram_proof_by_spans_and_blocks_is_the_reference() {
+        #[allow(clippy::needless_range_loop)]
+        fn case<const N: usize>(rng: &mut crate::rng::SplitMix64, t: &Tol, seen: &mut [usize; 4]) {
+            let uniform = [0, 3, 6][rng.below(3) as usize];
+            let mut widths = Vec::new();
+            let mut n = 0;
+            loop {
+                let w = if uniform > 0 {
+                    uniform
+                } else {
+                    1 + rng.below(6) as usize
+                };
+                if n + w > N || (n > 0 && rng.below(5) == 0) {
+                    break;
+                }
+                widths.push(w);
+                n += w;
+            }
+            let col: Vec<usize> = widths
+                .iter()
+                .scan(0, |c, &w| {
+                    *c += w;
+                    Some(*c - w)
+                })
+                .collect();
+            let nb = widths.len();
+            let chain = rng.below(2) == 0;
+            let mut a = [[0.0f64; N]; N];
+            let mut spans = [RowSpan::default(); N];
+            for r in 0..n {
+                let x = rng.below(nb as u64) as usize;
+                let y = if chain {
+                    (x + 1).min(nb - 1)
+                } else {
+                    rng.below(nb as u64) as usize
+                };
+                let mut span = RowSpan::default();
+                for body in if x == y || rng.below(3) == 0 {
+                    vec![x]
+                } else {
+                    vec![x.min(y), x.max(y)]
+                } {
+                    for v in &mut a[r][col[body]..col[body] + widths[body]] {
+                        *v = match rng.below(10) {
+                            0 => 0.0,
+                            1 => -0.0,
+                            _ => rng.next_signed(),
+                        };
+                    }
+                    span.c[usize::from(span.k)] = col[body] as u8;
+                    span.w[usize::from(span.k)] = widths[body] as u8;
+                    span.k += 1;
+                }
+                spans[r] = span;
+            }
+            match rng.below(6) {
+                0 => {
+                    let c = rng.below(n as u64) as usize;
+                    let f = 10f64.powi(-(rng.below(12) as i32));
+                    for row in a.iter_mut().take(n) {
+                        row[c] *= f;
+                    }
+                }
+                1 if n > 1 => {
+                    a[n - 1] = a[0];
+                    spans[n - 1] = spans[0];
+                }
+                2 => {
+                    let r = rng.below(n as u64) as usize;
+                    for v in &mut a[r][..n] {
+                        *v *= 1e150;
+                    }
+                }
+                _ => {}
+            }
+            let frob = a[..n]
+                .iter()
+                .map(|r| r[..n].iter().map(|v| v * v).sum::<f64>())
+                .sum::<f64>()
+                .sqrt();
+            let width = if uniform > 0 && widths.iter().all(|&w| w == uniform) {
+                uniform
+            } else {
+                0
+            };
+            // The Gram matrices, lower triangles bit for bit.
+            let reference = gram_reference::<N>(n, &a);
+            let mut by_blocks = [[0.0f64; N]; N];
+            let blocks = match width {
+                6 => gram_blocks::<N, 6>(n, &a, &spans, &mut by_blocks),
+                3 => gram_blocks::<N, 3>(n, &a, &spans, &mut by_blocks),
+                _ => {
+                    gram_matrix::<N>(n, &a, &spans, &mut by_blocks);
+                    [0; N]
+                }
+            };
+            let mut by_spans = [[0.0f64; N]; N];
+            gram_matrix::<N>(n, &a, &spans, &mut by_spans);
+            for j in 0..n {
+                for l in 0..=j {
+                    assert_eq!(reference[j][l].to_bits(), by_spans[j][l].to_bits());
+                    assert_eq!(reference[j][l].to_bits(), by_blocks[j][l].to_bits());
+                }
+            }
+            // The factors, from the shifted reference Gram matrix.
+            let shift = if frob > 0.0 && frob.is_finite() {
+                let beta =
+                    (1e-4 * frob).max(4.0 * (n as f64).sqrt() * SCREEN_MARGIN * t.cut(frob, n));
+                beta * beta + 1e-12 * frob * frob
+            } else {
+                0.0
+            };
+            let mut g = reference;
+            for j in 0..n {
+                g[j][j] -= shift;
+            }
+            let (mut r, mut runs, mut blk) = (g, g, g);
+            let ok = cholesky_reference::<N>(n, &mut r);
+            assert_eq!(ok, cholesky_runs::<N>(n, &mut runs));
+            let ok_blocks = match width {
+                6 => cholesky_blocks::<N, 6>(n, &mut blk, blocks),
+                3 => cholesky_blocks::<N, 3>(n, &mut blk, blocks),
+                _ => cholesky_runs::<N>(n, &mut blk),
+            };
+            assert_eq!(ok, ok_blocks);
+            if ok {
+                for j in 0..n {
+                    for l in 0..=j {
+                        assert_eq!(r[j][l].to_bits(), runs[j][l].to_bits(), "runs ({j}, {l})");
+                        assert_eq!(r[j][l].to_bits(), blk[j][l].to_bits(), "blocks ({j}, {l})");
+                    }
+                }
+            }
+            if frob > 0.0 {
+                assert_eq!(
+                    gram_proves_reference::<N>(n, &a, frob, t),
+                    gram_proves::<N>(n, &a, &spans, width, frob, t)
+                );
+            }
+            seen[usize::from(ok) + 2 * usize::from(width > 0)] += 1;
+        }
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut seen = [0usize; 4];
+        for t in [
+            Tol {
+                rel: REL_TOL,
+                abs: 0.0,
+            },
+            Tol {
+                rel: 1e-9,
+                abs: 0.0,
+            },
+        ] {
+            for i in 0..3000 {
+                match i % 3 {
+                    0 => case::<12>(&mut rng, &t, &mut seen),
+                    1 => case::<24>(&mut rng, &t, &mut seen),
+                    _ => case::<36>(&mut rng, &t, &mut seen),
+                }
+            }
+        }
+        // Accepted and rejected blocks, by blocks and by runs.
+        assert!(seen.iter().all(|&c| c > 100), "{seen:?}");
+    }
+
+    /// The body screen's elimination over fixed-width rows decides as the reference (updates
+    /// over the live columns only): random stacks of 3 or 6 columns and 1 to 48 rows, of full
+    /// rank, rank deficient (repeated or combined rows), scaled and near the screen's bound.
+    #[test]
+    fn body_screen_is_the_reference() {
+        fn stack<const M: usize>(rows: &DMatrix<f64>, b: usize) -> (bool, bool) {
+            let view = view(rows);
+            let new = full_rank_within::<M>(b, std::iter::once(view));
+            let old = full_rank_within_reference::<M>(b, std::iter::once(view));
+            (new, old)
+        }
+        let mut rng = crate::rng::SplitMix64::new(7);
+        let mut seen = [0usize; 2];
+        for i in 0..6000 {
+            let b = if i % 2 == 0 { 6 } else { 3 };
+            let n = 1 + rng.below(48) as usize;
+            let mut a = DMatrix::<f64>::from_fn(n, b, |_, _| rng.next_signed());
+            match rng.below(5) {
+                0 if n > 1 => {
+                    let (x, y) = (rng.below(n as u64) as usize, rng.below(n as u64) as usize);
+                    let row = a.row(x).clone_owned();
+                    a.row_mut(y).copy_from(&row);
+                }
+                1 => {
+                    // A column nearly dependent on another: near the 1e-6 bound.
+                    let (c, d) = (rng.below(b as u64) as usize, rng.below(b as u64) as usize);
+                    let f = 10f64.powi(-(rng.below(10) as i32));
+                    for r in 0..n {
+                        let v = a[(r, d)] + f * rng.next_signed();
+                        a[(r, c)] = v;
+                    }
+                }
+                2 => {
+                    let c = rng.below(b as u64) as usize;
+                    let f = 10f64.powi(-(rng.below(9) as i32));
+                    a.column_mut(c).scale_mut(f);
+                }
+                _ => {}
+            }
+            let (new, old) = match n {
+                0..=8 => stack::<8>(&a, b),
+                9..=16 => stack::<16>(&a, b),
+                _ => stack::<48>(&a, b),
+            };
+            assert_eq!(new, old, "case {i}");
+            seen[usize::from(new)] += 1;
+        }
+        assert!(seen.iter().all(|&c| c > 500), "{seen:?}");
     }
 
     /// The flat rows of every pair (built chunk by chunk, each joint's model once per chunk,
