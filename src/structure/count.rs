@@ -212,7 +212,10 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     let frame = m.frame;
     let mut net = Network::three_layer(
         &eqs.cap,
-        |e| eqs.bodies(e).map(|x| if x == frame { NONE } else { x as u32 }),
+        |e| {
+            eqs.bodies(e)
+                .map(|x| if x == frame { NONE } else { x as u32 })
+        },
         &sink_caps,
     );
     drop(sink_caps);
@@ -535,7 +538,13 @@ fn canonical_flat(
     let members = &*members;
     let comp = |c: usize| &members[bounds[c]..bounds[c + 1]];
     let mut order: Vec<usize> = (0..nc).collect();
-    order.sort_by_key(|&c| (level[c], comp(c).len(), comp(c).first().map(|&x| x as usize)));
+    order.sort_by_key(|&c| {
+        (
+            level[c],
+            comp(c).len(),
+            comp(c).first().map(|&x| x as usize),
+        )
+    });
     let mut rank = vec![0u32; nc];
     for (r, &c) in order.iter().enumerate() {
         rank[c] = r as u32;
@@ -612,7 +621,10 @@ mod tests {
             }
             edges += (0..eqs.nodes).filter(|&b| b != m.frame).count() as u64;
             let over = dec.body_part.iter().filter(|&&p| p == Part::Over).count();
-            assert!(over > 100, "{over} over-determined bodies: the case this is about");
+            assert!(
+                over > 100,
+                "{over} over-determined bodies: the case this is about"
+            );
             assert!(
                 scanned <= 2 * edges,
                 "{scanned} edges examined, the network has {}",

@@ -341,10 +341,7 @@ impl Network {
                         self.push(e, d);
                     }
                     total += u64::from(d);
-                    let k = path
-                        .iter()
-                        .position(|&e| self.arc[e].cap == 0)
-                        .unwrap_or(0);
+                    let k = path.iter().position(|&e| self.arc[e].cap == 0).unwrap_or(0);
                     path.truncate(k);
                     u = match path.last() {
                         Some(&e) => self.head(e),
