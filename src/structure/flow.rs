@@ -6,14 +6,25 @@
 /// Capacity used for the uncapacitated middle edges (equation → body).
 pub(crate) const INF: u32 = u32::MAX / 4;
 
+/// An edge's head and residual capacity, side by side: the searches read both of every edge
+/// they scan (two arrays were two cache misses an edge at 10^6 bodies).
+#[derive(Clone, Copy, Default)]
+struct Arc {
+    to: u32,
+    cap: u32,
+}
+
 /// A flow network in compressed sparse row form. Edge `e` and its reverse are paired through
-/// `rev`; the residual capacity of an edge is `cap[e]`.
+/// `rev`; the residual capacity of an edge is `arc[e].cap`.
 pub(crate) struct Network {
     /// First edge of each node (`u32`: a network of 10^6 bodies has about 2·10^7 edges).
     start: Vec<u32>,
-    to: Vec<u32>,
-    cap: Vec<u32>,
+    arc: Vec<Arc>,
     rev: Vec<u32>,
+    /// Edges examined by the searches whose answer is a set of nodes (the maximum flow's last
+    /// breadth-first search, [`Network::reachable_from`], [`Network::reaching`]): the work of
+    /// the Dulmage–Mendelsohn split, for tests that bound it.
+    scanned: std::cell::Cell<u64>,
 }
 
 impl Network {
@@ -41,8 +52,7 @@ impl Network {
         }
         let m = start[n] as usize;
         let mut fill = start.clone();
-        let mut to = vec![0u32; m];
-        let mut cap = vec![0u32; m];
+        let mut arc = vec![Arc::default(); m];
         let mut rev = vec![0u32; m];
         edges(&mut |u, v, c| {
             let a = fill[u as usize];
@@ -50,19 +60,110 @@ impl Network {
             let b = fill[v as usize];
             fill[v as usize] += 1;
             let (a, b) = (a as usize, b as usize);
-            to[a] = v;
-            cap[a] = c;
+            arc[a] = Arc { to: v, cap: c };
             rev[a] = b as u32;
-            to[b] = u;
-            cap[b] = 0;
+            arc[b] = Arc { to: u, cap: 0 };
             rev[b] = a as u32;
         });
         Network {
             start,
-            to,
-            cap,
+            arc,
             rev,
+            scanned: std::cell::Cell::new(0),
         }
+    }
+
+    /// The three-layer network of the count (source 0, sink 1, left node `i` is node `2 + i`,
+    /// right node `j` is node `2 + left.len() + j`): the one [`Network::new`] builds from the
+    /// edge list s → left `i` (capacity `left[i]`), then left `i` → each right node of
+    /// `ends(i)` (`u32::MAX`: none; capacity [`INF`]), for every `i` in order; then right `j` →
+    /// t (capacity `right[j]`, `u32::MAX`: no edge) for every `j` in order. Same nodes, same
+    /// edges in the same order at every node, so the same flow; built directly, without the
+    /// edge list or a call per edge. `ends` is called twice per left node and must answer the
+    /// same both times; a right node listed twice by one left node gets one edge.
+    pub(crate) fn three_layer(
+        left: &[u32],
+        ends: impl Fn(usize) -> [u32; 2],
+        right: &[u32],
+    ) -> Network {
+        const NONE: u32 = u32::MAX;
+        let (nl, nr) = (left.len(), right.len());
+        let n = 2 + nl + nr;
+        let rnode = |j: u32| 2 + nl + j as usize;
+        let ends = |i: usize| {
+            let [a, b] = ends(i);
+            [a, if b == a { NONE } else { b }]
+        };
+        // Degrees, then offsets.
+        let mut start = vec![0u32; n + 1];
+        start[1] = nl as u32;
+        start[2] = right.iter().filter(|&&c| c != NONE).count() as u32;
+        for i in 0..nl {
+            let mut d = 1;
+            for j in ends(i) {
+                if j != NONE {
+                    d += 1;
+                    start[rnode(j) + 1] += 1;
+                }
+            }
+            start[2 + i + 1] = d;
+        }
+        for (j, &c) in right.iter().enumerate() {
+            if c != NONE {
+                start[rnode(j as u32) + 1] += 1;
+            }
+        }
+        for x in 0..n {
+            start[x + 1] += start[x];
+        }
+        let m = start[n] as usize;
+        let mut arc = vec![Arc::default(); m];
+        let mut rev = vec![0u32; m];
+        // Next free slot of each right node (the left nodes' slots are written in order).
+        let mut fill: Vec<u32> = start[2 + nl..2 + nl + nr].to_vec();
+        let pair = |arc: &mut [Arc], rev: &mut [u32], a: u32, b: u32, to: u32, from: u32, c| {
+            arc[a as usize] = Arc { to, cap: c };
+            rev[a as usize] = b;
+            arc[b as usize] = Arc { to: from, cap: 0 };
+            rev[b as usize] = a;
+        };
+        for (i, &c) in left.iter().enumerate() {
+            let x = (2 + i) as u32;
+            let mut a = start[2 + i];
+            pair(&mut arc, &mut rev, i as u32, a, x, 0, c);
+            for j in ends(i) {
+                if j != NONE {
+                    a += 1;
+                    let b = fill[j as usize];
+                    fill[j as usize] += 1;
+                    pair(&mut arc, &mut rev, a, b, rnode(j) as u32, x, INF);
+                }
+            }
+        }
+        let mut b = start[1];
+        for (j, &c) in right.iter().enumerate() {
+            if c != NONE {
+                let a = fill[j];
+                pair(&mut arc, &mut rev, a, b, 1, rnode(j as u32) as u32, c);
+                b += 1;
+            }
+        }
+        Network {
+            start,
+            arc,
+            rev,
+            scanned: std::cell::Cell::new(0),
+        }
+    }
+
+    /// Edges examined by the searches that answer a set of nodes so far.
+    pub(crate) fn scanned(&self) -> u64 {
+        self.scanned.get()
+    }
+
+    /// Count `n` more edges examined.
+    fn scan(&self, n: usize) {
+        self.scanned.set(self.scanned.get() + n as u64);
     }
 
     /// Number of nodes.
@@ -77,17 +178,23 @@ impl Network {
 
     /// Head of edge `e`.
     pub(crate) fn head(&self, e: usize) -> usize {
-        self.to[e] as usize
+        self.arc[e].to as usize
     }
 
     /// Residual capacity of edge `e`.
     pub(crate) fn residual(&self, e: usize) -> u32 {
-        self.cap[e]
+        self.arc[e].cap
     }
 
     /// Residual capacity of the edge paired with `e` (for a forward edge: the flow on it).
     pub(crate) fn reverse_residual(&self, e: usize) -> u32 {
-        self.cap[self.rev[e] as usize]
+        self.arc[self.rev[e] as usize].cap
+    }
+
+    /// Push `d` units along edge `e` (residual `d` or more).
+    fn push(&mut self, e: usize, d: u32) {
+        self.arc[e].cap -= d;
+        self.arc[self.rev[e] as usize].cap += d;
     }
 
     /// Warm start for a three-layer network (s → left → right → t): push up to `d` units
@@ -97,11 +204,11 @@ impl Network {
         let n = self.nodes();
         let mut from_s = vec![usize::MAX; n];
         for e in self.edges(s) {
-            from_s[self.to[e] as usize] = e;
+            from_s[self.head(e)] = e;
         }
         let mut to_t = vec![usize::MAX; n];
         for e in self.edges(t) {
-            to_t[self.to[e] as usize] = self.rev[e] as usize;
+            to_t[self.head(e)] = self.rev[e] as usize;
         }
         for &(u, v, d) in paths {
             let (e0, e2) = (from_s[u], to_t[v]);
@@ -109,16 +216,18 @@ impl Network {
                 continue;
             }
             // The forward edge u → v (only forward edges leave a left node towards the right).
-            let Some(e1) = self.edges(u).find(|&e| self.to[e] as usize == v) else {
+            let Some(e1) = self.edges(u).find(|&e| self.head(e) == v) else {
                 continue;
             };
-            let d = d.min(self.cap[e0]).min(self.cap[e1]).min(self.cap[e2]);
+            let d = d
+                .min(self.arc[e0].cap)
+                .min(self.arc[e1].cap)
+                .min(self.arc[e2].cap);
             if d == 0 {
                 continue;
             }
             for e in [e0, e1, e2] {
-                self.cap[e] -= d;
-                self.cap[self.rev[e] as usize] += d;
+                self.push(e, d);
             }
         }
     }
@@ -127,31 +236,32 @@ impl Network {
     /// s-u-v-t path while capacity remains. On mechanisms listed in build order this finds
     /// almost all the flow, leaving few and short augmenting paths.
     fn greedy(&mut self, s: usize, t: usize) -> u64 {
+        const NONE: u32 = u32::MAX;
         let n = self.nodes();
-        let mut to_sink = vec![usize::MAX; n];
+        let mut to_sink = vec![NONE; n];
         for e in self.edges(t) {
             // e goes t -> v; its pair is the edge v -> t.
-            to_sink[self.to[e] as usize] = self.rev[e] as usize;
+            to_sink[self.head(e)] = self.rev[e];
         }
         let mut total = 0u64;
         for e0 in self.edges(s) {
-            let u = self.to[e0] as usize;
+            let u = self.head(e0);
             for e1 in self.edges(u) {
-                if self.cap[e0] == 0 {
+                if self.arc[e0].cap == 0 {
                     break;
                 }
-                let v = self.to[e1] as usize;
-                let e2 = to_sink[v];
-                if v == s || e2 == usize::MAX || self.cap[e1] == 0 {
+                let Arc { to: v, cap: c1 } = self.arc[e1];
+                let e2 = to_sink[v as usize];
+                if v as usize == s || e2 == NONE || c1 == 0 {
                     continue;
                 }
-                let d = self.cap[e0].min(self.cap[e1]).min(self.cap[e2]);
+                let e2 = e2 as usize;
+                let d = self.arc[e0].cap.min(c1).min(self.arc[e2].cap);
                 if d == 0 {
                     continue;
                 }
                 for e in [e0, e1, e2] {
-                    self.cap[e] -= d;
-                    self.cap[self.rev[e] as usize] += d;
+                    self.push(e, d);
                 }
                 total += d as u64;
             }
@@ -160,6 +270,13 @@ impl Network {
     }
 
     /// Push the maximum flow from `s` to `t`; returns its value.
+    pub(crate) fn max_flow(&mut self, s: usize, t: usize) -> u64 {
+        self.max_flow_cut(s, t).0
+    }
+
+    /// Push the maximum flow from `s` to `t`; returns its value and the nodes reachable from
+    /// `s` in the residual network (what [`Network::reachable_from`] would give: the last
+    /// breadth-first search, the one that finds no path to `t`, has just visited them).
     ///
     /// A greedy start, then Dinic's phases: a breadth-first search labels the nodes by their
     /// distance from `s` in the residual network, and a depth-first search with a current-edge
@@ -167,12 +284,12 @@ impl Network {
     /// for the rest of the phase. Each phase costs O(edges) and lengthens the shortest
     /// augmenting path, so a few phases finish the flow the greedy start leaves (the previous
     /// method ran one search per missing unit of flow).
-    pub(crate) fn max_flow(&mut self, s: usize, t: usize) -> u64 {
+    pub(crate) fn max_flow_cut(&mut self, s: usize, t: usize) -> (u64, Vec<bool>) {
         const UNSEEN: u32 = u32::MAX;
         let n = self.nodes();
         let mut total = self.greedy(s, t);
         if s == t {
-            return total;
+            return (total, self.reachable_from(s));
         }
         let mut level = vec![UNSEEN; n];
         let mut next = vec![0u32; n];
@@ -187,26 +304,28 @@ impl Network {
             level[s] = 0;
             queue.push(s);
             let mut qi = 0;
+            let mut scanned = 0;
             while qi < queue.len() {
                 let x = queue[qi];
                 qi += 1;
                 if level[t] != UNSEEN && level[x] >= level[t] {
                     break;
                 }
-                for e in self.edges(x) {
-                    let v = self.to[e] as usize;
-                    if self.cap[e] > 0 && level[v] == UNSEEN {
-                        level[v] = level[x] + 1;
+                let lx = level[x] + 1;
+                scanned += self.edges(x).len();
+                for a in &self.arc[self.edges(x)] {
+                    let v = a.to as usize;
+                    if a.cap > 0 && level[v] == UNSEEN {
+                        level[v] = lx;
                         queue.push(v);
                     }
                 }
             }
             if level[t] == UNSEEN {
-                level[s] = UNSEEN;
-                for &x in &queue {
-                    level[x] = UNSEEN;
-                }
-                break;
+                // This search ran to the end: it labelled exactly the nodes reachable from s
+                // (the labels of earlier phases were cleared before it).
+                self.scan(scanned);
+                return (total, level.iter().map(|&l| l != UNSEEN).collect());
             }
             for &x in &queue {
                 next[x] = self.start[x];
@@ -217,16 +336,15 @@ impl Network {
             let mut u = s;
             loop {
                 if u == t {
-                    let d = path.iter().map(|&e| self.cap[e]).min().unwrap_or(0);
+                    let d = path.iter().map(|&e| self.arc[e].cap).min().unwrap_or(0);
                     for &e in &path {
-                        self.cap[e] -= d;
-                        self.cap[self.rev[e] as usize] += d;
+                        self.push(e, d);
                     }
                     total += u64::from(d);
-                    let k = path.iter().position(|&e| self.cap[e] == 0).unwrap_or(0);
+                    let k = path.iter().position(|&e| self.arc[e].cap == 0).unwrap_or(0);
                     path.truncate(k);
                     u = match path.last() {
-                        Some(&e) => self.to[e] as usize,
+                        Some(&e) => self.head(e),
                         None => s,
                     };
                     continue;
@@ -235,8 +353,9 @@ impl Network {
                 let mut advanced = false;
                 while next[u] < end {
                     let e = next[u] as usize;
-                    let v = self.to[e] as usize;
-                    if self.cap[e] > 0 && level[v] != UNSEEN && level[v] == level[u] + 1 {
+                    let Arc { to: v, cap } = self.arc[e];
+                    let v = v as usize;
+                    if cap > 0 && level[v] != UNSEEN && level[v] == level[u] + 1 {
                         path.push(e);
                         u = v;
                         advanced = true;
@@ -254,14 +373,13 @@ impl Network {
                 level[u] = UNSEEN;
                 match path.pop() {
                     Some(e) => {
-                        u = self.to[self.rev[e] as usize] as usize;
+                        u = self.head(self.rev[e] as usize);
                         next[u] += 1;
                     }
                     None => break,
                 }
             }
         }
-        total
     }
 
     /// Nodes reachable from `s` through edges with residual capacity.
@@ -270,9 +388,10 @@ impl Network {
         let mut stack = vec![s];
         seen[s] = true;
         while let Some(u) = stack.pop() {
-            for e in self.edges(u) {
-                let v = self.to[e] as usize;
-                if self.cap[e] > 0 && !seen[v] {
+            self.scan(self.edges(u).len());
+            for a in &self.arc[self.edges(u)] {
+                let v = a.to as usize;
+                if a.cap > 0 && !seen[v] {
                     seen[v] = true;
                     stack.push(v);
                 }
@@ -287,10 +406,11 @@ impl Network {
         let mut stack = vec![t];
         seen[t] = true;
         while let Some(v) = stack.pop() {
+            self.scan(self.edges(v).len());
             for e in self.edges(v) {
                 // Edge e goes v -> u; its pair goes u -> v.
-                let u = self.to[e] as usize;
-                if self.cap[self.rev[e] as usize] > 0 && !seen[u] {
+                let u = self.head(e);
+                if !seen[u] && self.reverse_residual(e) > 0 {
                     seen[u] = true;
                     stack.push(u);
                 }
@@ -398,9 +518,59 @@ mod tests {
             }
             let want = reference(n as usize, &edges, 0, 1);
             let mut net = Network::new(n as usize, &edges);
-            assert_eq!(net.max_flow(0, 1), want, "round {round}: {edges:?}");
-            // The residual network has no augmenting path left.
-            assert!(!net.reachable_from(0)[1]);
+            let (got, side) = net.max_flow_cut(0, 1);
+            assert_eq!(got, want, "round {round}: {edges:?}");
+            // The residual network has no augmenting path left, and the source side the
+            // flow returns is what a search of the residual network finds.
+            assert!(!side[1]);
+            assert_eq!(side, net.reachable_from(0), "round {round}: {edges:?}");
+        }
+    }
+
+    /// The count's network built directly is the one built from its edge list: same edges
+    /// at every node in the same order (so the same flow).
+    #[test]
+    fn three_layer_is_the_edge_list_network() {
+        let mut rng = crate::rng::SplitMix64::new(11);
+        for round in 0..300 {
+            let (l, r) = (rng.below(10) as usize, 1 + rng.below(10) as usize);
+            let none = u32::MAX;
+            let pick = |rng: &mut crate::rng::SplitMix64| match rng.below(4) {
+                0 => none,
+                _ => rng.below(r as u64) as u32,
+            };
+            let left: Vec<u32> = (0..l).map(|_| rng.below(5) as u32).collect();
+            let ends: Vec<[u32; 2]> = (0..l).map(|_| [pick(&mut rng), pick(&mut rng)]).collect();
+            let right: Vec<u32> = (0..r)
+                .map(|_| match rng.below(5) {
+                    0 => none,
+                    c => c as u32,
+                })
+                .collect();
+            let mut edges = Vec::new();
+            let rnode = |j: u32| (2 + l) as u32 + j;
+            for i in 0..l {
+                let x = 2 + i as u32;
+                edges.push((0, x, left[i]));
+                let [a, b] = ends[i];
+                if a != none {
+                    edges.push((x, rnode(a), INF));
+                }
+                if b != none && b != a {
+                    edges.push((x, rnode(b), INF));
+                }
+            }
+            for (j, &c) in right.iter().enumerate() {
+                if c != none {
+                    edges.push((rnode(j as u32), 1, c));
+                }
+            }
+            let want = Network::new(2 + l + r, &edges);
+            let got = Network::three_layer(&left, |i| ends[i], &right);
+            assert_eq!(got.start, want.start, "round {round}");
+            assert_eq!(got.rev, want.rev, "round {round}");
+            let arcs = |n: &Network| n.arc.iter().map(|a| (a.to, a.cap)).collect::<Vec<_>>();
+            assert_eq!(arcs(&got), arcs(&want), "round {round}");
         }
     }
 }
