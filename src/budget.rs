@@ -225,8 +225,18 @@ impl Budget {
     /// come (at most one byte past the limit is read: `/dev/zero` or an endless pipe costs the
     /// limit, no more). `what` names the source in the error (`"`big.toml`"`, `"standard input"`).
     pub fn read_to_end<R: Read>(&self, reader: R, what: &str) -> Result<Vec<u8>, ReadError> {
+        self.read_to_end_sized(reader, what, 0)
+    }
+
+    /// [`Budget::read_to_end`] into a buffer sized for `expected` bytes (at most the limit).
+    fn read_to_end_sized<R: Read>(
+        &self,
+        reader: R,
+        what: &str,
+        expected: u64,
+    ) -> Result<Vec<u8>, ReadError> {
         let limit = self.max_input_bytes;
-        let mut buf = Vec::new();
+        let mut buf = Vec::with_capacity(usize::try_from(expected.min(limit)).unwrap_or(0));
         reader
             .take(limit.saturating_add(1))
             .read_to_end(&mut buf)
@@ -249,19 +259,23 @@ impl Budget {
     pub fn read_file(&self, path: &std::path::Path) -> Result<Vec<u8>, ReadError> {
         let file = std::fs::File::open(path).map_err(ReadError::Io)?;
         let what = format!("`{}`", path.display());
-        if let Ok(meta) = file.metadata()
-            && meta.is_file()
-            && meta.len() > self.max_input_bytes
-        {
+        // A regular file's length (0 for others): refused at once over the limit, else the
+        // size of the buffer (read into at once, not grown by doubling and copying).
+        let len = file
+            .metadata()
+            .ok()
+            .filter(|m| m.is_file())
+            .map_or(0, |m| m.len());
+        if len > self.max_input_bytes {
             return Err(ReadError::TooLarge(BudgetExceeded {
                 limit: Limit::InputBytes,
                 what: format!("reading {what}"),
-                needed: meta.len(),
+                needed: len,
                 at_least: false,
                 allowed: self.max_input_bytes,
             }));
         }
-        self.read_to_end(file, &what)
+        self.read_to_end_sized(file, &what, len)
     }
 }
 

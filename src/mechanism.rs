@@ -781,18 +781,26 @@ fn natural_order(joints: &[Joint]) -> Vec<usize> {
     // Fast path: ids made of numbers without leading zeros joined by `-` or `#` (`12-5`,
     // `3-4#2`), the default ids of integer bodies. Their natural order is the order of the
     // token sequences (numbers by value, separators by character, a prefix first), and equal
-    // sequences are equal texts. At most three tokens (`a-b`): a packed key sorted in place
-    // (a separator is never 0, so a shorter sequence padded with zeros still sorts first).
+    // sequences are equal texts. At most five tokens (`a-b#n`): a packed key sorted in place,
+    // the first number, then each separator with the number after it (the separator's rank
+    // above the number: 0 none, 1 `#`, 2 `-`, as `#` < `-`; so a shorter sequence padded with
+    // zeros still sorts first).
     let mut buf: Vec<u64> = Vec::with_capacity(8);
     let mut keyed: Vec<([u64; 3], u32)> = Vec::with_capacity(joints.len());
     let short = joints.len() <= u32::MAX as usize
         && joints.iter().enumerate().all(|(k, j)| {
             buf.clear();
-            if !numeric_tokens(&j.id, &mut buf) || buf.len() > 3 {
+            if !numeric_tokens(&j.id, &mut buf) || buf.len() > 5 {
                 return false;
             }
-            let mut key = [0u64; 3];
-            key[..buf.len()].copy_from_slice(&buf);
+            let mut key = [buf[0], 0, 0];
+            for (slot, pair) in key[1..].iter_mut().zip(buf[1..].chunks_exact(2)) {
+                let rank = if pair[0] == u64::from(b'#') { 1 } else { 2 };
+                if pair[1] >= 1 << 56 {
+                    return false;
+                }
+                *slot = (rank << 56) | pair[1];
+            }
             keyed.push((key, k as u32));
             true
         });
@@ -1049,10 +1057,27 @@ mod tests {
     /// The packed-key and flat-token fast paths of `natural_order` agree with `natural_cmp`.
     #[test]
     fn natural_order_fast_paths_agree_with_natural_cmp() {
-        let sets: [&[&str]; 3] = [
+        let sets: [&[&str]; 5] = [
             &[
                 "12-5", "3-4", "0-1", "10-2", "3-4", "1", "1-0", "2-10", "2-9", "0",
             ],
+            // Up to five tokens packed (separator above number), numbers below 2^56.
+            &[
+                "1-2#2",
+                "1#2",
+                "1-2",
+                "1",
+                "2-1#10",
+                "2-1#9",
+                "1-2-3",
+                "1#2#3",
+                "1#2-3",
+                "1-72057594037927935",
+                "1-72057594037927935#2",
+                "72057594037927936-1",
+            ],
+            // A number from 2^56 after a separator: the flat tokens instead.
+            &["1-72057594037927936", "1-2#2", "1-2", "1-72057594037927935"],
             &[
                 "3-4#2", "3-4", "1-2-3", "1-2#2", "1-2", "12-5", "3-4#10", "3-4#9", "1-2-3",
             ],

@@ -1574,7 +1574,8 @@ fn lacking_of(m: &Mechanism, j: &crate::mechanism::Joint) -> Option<Lacking> {
 
 /// Whether every joint has the geometry fields its kind needs ([`lacking`] is empty).
 pub fn has_geometry(m: &Mechanism) -> bool {
-    lacking(m).is_empty()
+    // No list built: a mechanism without geometry lacks it at every joint.
+    !m.joints.iter().any(|j| lacks(m, j))
 }
 
 /// How precisely the file's geometry numbers are known: the largest rounding uncertainty of a

@@ -17,25 +17,42 @@ use std::ops::Range;
 /// The joint table header.
 const JOINT: &str = "[[joint]]";
 
+/// The `[[joint]]` tables [`parse`] found: where the first header is and how many there are.
+/// Their lines are read later, one table at a time, by a [`JointReader`].
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct JointTables {
+    /// The `[` of the first `[[joint]]` header (meaningless when `count` is 0).
+    pub first: usize,
+    /// How many `[[joint]]` headers the text has.
+    pub count: usize,
+}
+
 /// The top-level tree with the joint list [`Value::Deferred`] (when there are `[[joint]]`
-/// tables), and the byte range of each joint table: from its header to the next header.
-pub(crate) fn parse(text: &str) -> Option<(Node<'_>, Vec<Range<usize>>)> {
+/// tables), and where the joint tables are. The lines of the joint tables are only looked at
+/// for headers here (a scan for line starts, no vector per table).
+pub(crate) fn parse(text: &str) -> Option<(Node<'_>, JointTables)> {
     let bytes = text.as_bytes();
     let mut top: Vec<Entry<'_>> = Vec::new();
     // The table being filled: `None` the top level, `Some(i)` the `[name]` table top[i].
     let mut table: Option<usize> = None;
     let mut in_joints = false;
-    let mut joints: Vec<Range<usize>> = Vec::new();
+    let mut joints = JointTables { first: 0, count: 0 };
     let mut joint_entry: Option<Entry<'_>> = None;
+    // Top-level arrays are few: no pool of vectors to reuse.
+    let mut no_pool = Vec::new();
     let mut pos = 0;
     while pos < bytes.len() {
-        let end = text[pos..].find('\n').map_or(bytes.len(), |i| pos + i);
-        let first = skip_ws(bytes, pos, end);
-        if bytes.get(first) == Some(&b'[') {
-            // A header closes the joint table before it.
-            if in_joints && let Some(last) = joints.last_mut() {
-                last.end = pos;
+        let first = if in_joints {
+            // The joints' own lines are read later: only the next header matters here.
+            match next_header(bytes, pos) {
+                Some(first) => first,
+                None => break,
             }
+        } else {
+            skip_ws(bytes, pos, bytes.len())
+        };
+        let end = line_break(bytes, first);
+        if bytes.get(first) == Some(&b'[') {
             if bytes[first..end].starts_with(JOINT.as_bytes()) {
                 line_end(bytes, first + JOINT.len(), end)?;
                 if joint_entry.is_none() {
@@ -50,8 +67,9 @@ pub(crate) fn parse(text: &str) -> Option<(Node<'_>, Vec<Range<usize>>)> {
                             value: Value::Deferred,
                         },
                     });
+                    joints.first = first;
                 }
-                joints.push(first..bytes.len());
+                joints.count += 1;
                 in_joints = true;
             } else {
                 let (name, after) = bare_key(bytes, first + 1, end)?;
@@ -74,23 +92,20 @@ pub(crate) fn parse(text: &str) -> Option<(Node<'_>, Vec<Range<usize>>)> {
                 table = Some(top.len() - 1);
                 in_joints = false;
             }
-        } else if !in_joints {
-            // Lines of the joint tables are read later, one table at a time.
-            if let Some(entry) = line(text, pos, end)? {
-                let entries = match table {
-                    None => &mut top,
-                    Some(i) => match &mut top[i].value.value {
-                        Value::Map(es) => es,
-                        _ => return None,
-                    },
-                };
-                if entries.iter().any(|e| e.key == entry.key)
-                    || (table.is_none() && is_joint_key(&entry.key))
-                {
-                    return None;
-                }
-                entries.push(entry);
+        } else if let Some(entry) = line(text, pos, end, &mut no_pool)? {
+            let entries = match table {
+                None => &mut top,
+                Some(i) => match &mut top[i].value.value {
+                    Value::Map(es) => es,
+                    _ => return None,
+                },
+            };
+            if entries.iter().any(|e| e.key == entry.key)
+                || (table.is_none() && is_joint_key(&entry.key))
+            {
+                return None;
             }
+            entries.push(entry);
         }
         pos = end + 1;
     }
@@ -113,30 +128,109 @@ fn is_joint_key(key: &str) -> bool {
     key == "joint"
 }
 
-/// One joint table: `range` from its `[[joint]]` header to the next header.
-pub(crate) fn joint(text: &str, range: Range<usize>) -> Option<Node<'_>> {
-    let header = range.start..range.start + JOINT.len();
-    let mut pos = text[range.clone()]
-        .find('\n')
-        .map_or(range.end, |i| range.start + i)
-        + 1;
-    let mut entries: Vec<Entry<'_>> = Vec::with_capacity(4);
-    while pos < range.end {
-        let end = text[pos..range.end]
-            .find('\n')
-            .map_or(range.end, |i| pos + i);
-        if let Some(entry) = line(text, pos, end)? {
-            if entries.iter().any(|e| e.key == entry.key) {
-                return None;
-            }
-            entries.push(entry);
+/// The `[[joint]]` tables of a text [`parse`] read, one at a time: each table's lines, from
+/// its header to the next header line (lines of other tables are skipped: `parse` read them).
+/// One node is reused for every table (and the arrays of one table for the next): a million
+/// joints are then read without a million allocations.
+pub(crate) struct JointReader<'a> {
+    text: &'a str,
+    /// The `[` of the next `[[joint]]` header; `None` after the last.
+    next: Option<usize>,
+    /// The table last read (its entries are cleared before the next one is read).
+    node: Node<'a>,
+    /// Emptied arrays of earlier tables.
+    pool: Vec<Vec<Node<'a>>>,
+}
+
+impl<'a> JointReader<'a> {
+    /// A reader of the tables `joints` of `text` (as [`parse`] found them).
+    pub(crate) fn new(text: &'a str, joints: JointTables) -> JointReader<'a> {
+        JointReader {
+            text,
+            next: (joints.count > 0).then_some(joints.first),
+            node: Node {
+                span: 0..0,
+                value: Value::Map(Vec::with_capacity(8)),
+            },
+            pool: Vec::new(),
         }
-        pos = end + 1;
     }
-    Some(Node {
-        span: header,
-        value: Value::Map(entries),
-    })
+
+    /// The next joint table (`Some(None)` after the last); `None` at a line the fast path
+    /// does not read, or a key given twice.
+    pub(crate) fn next_table(&mut self) -> Option<Option<&Node<'a>>> {
+        let Value::Map(entries) = &mut self.node.value else {
+            return None;
+        };
+        for e in entries.drain(..) {
+            if let Value::Seq(mut items) = e.value.value {
+                items.clear();
+                self.pool.push(items);
+            }
+        }
+        let Some(header) = self.next else {
+            return Some(None);
+        };
+        let text = self.text;
+        let bytes = text.as_bytes();
+        self.node.span = header..header + JOINT.len();
+        let mut pos = line_break(bytes, header) + 1;
+        self.next = loop {
+            if pos >= bytes.len() {
+                break None;
+            }
+            let first = skip_ws(bytes, pos, bytes.len());
+            if bytes.get(first) == Some(&b'[') {
+                break if bytes[first..].starts_with(JOINT.as_bytes()) {
+                    Some(first)
+                } else {
+                    // Another table (read by `parse`): the next joint is after it.
+                    next_joint_header(bytes, first)
+                };
+            }
+            let end = line_break(bytes, first);
+            if let Some(entry) = line(text, pos, end, &mut self.pool)? {
+                if entries.iter().any(|e| e.key == entry.key) {
+                    return None;
+                }
+                entries.push(entry);
+            }
+            pos = end + 1;
+        };
+        Some(Some(&self.node))
+    }
+}
+
+/// Where the line holding `at` ends: its `\n`, or the text's length.
+fn line_break(bytes: &[u8], at: usize) -> usize {
+    // Lines are short: a plain loop beats a search call per line.
+    bytes[at.min(bytes.len())..]
+        .iter()
+        .position(|&b| b == b'\n')
+        .map_or(bytes.len(), |i| at + i)
+}
+
+/// The first non-blank byte of the first line from `pos` (a line start) on that starts (after
+/// blanks) with `[`; `None` when no line does.
+fn next_header(bytes: &[u8], mut pos: usize) -> Option<usize> {
+    while pos < bytes.len() {
+        let first = skip_ws(bytes, pos, bytes.len());
+        if bytes.get(first) == Some(&b'[') {
+            return Some(first);
+        }
+        pos = line_break(bytes, first) + 1;
+    }
+    None
+}
+
+/// The `[` of the first `[[joint]]` header after the header line at `at`.
+fn next_joint_header(bytes: &[u8], mut at: usize) -> Option<usize> {
+    loop {
+        at = next_header(bytes, line_break(bytes, at) + 1)?;
+        if bytes[at..].starts_with(JOINT.as_bytes()) {
+            return Some(at);
+        }
+    }
 }
 
 fn skip_ws(bytes: &[u8], mut i: usize, end: usize) -> usize {
@@ -175,8 +269,14 @@ fn bare_key(bytes: &[u8], from: usize, end: usize) -> Option<(Range<usize>, usiz
     (i > from).then_some((from..i, i))
 }
 
-/// A blank line, a comment line, or `key = value` (`Some(None)`, `Some(Some(entry))`).
-fn line(text: &str, start: usize, end: usize) -> Option<Option<Entry<'_>>> {
+/// A blank line, a comment line, or `key = value` (`Some(None)`, `Some(Some(entry))`). An
+/// array's vector comes from `pool` when it has one.
+fn line<'a>(
+    text: &'a str,
+    start: usize,
+    end: usize,
+    pool: &mut Vec<Vec<Node<'a>>>,
+) -> Option<Option<Entry<'a>>> {
     let bytes = text.as_bytes();
     let i = skip_ws(bytes, start, end);
     if i == end || (i + 1 == end && bytes[i] == b'\r') {
@@ -192,7 +292,7 @@ fn line(text: &str, start: usize, end: usize) -> Option<Option<Entry<'_>>> {
     }
     let at = skip_ws(bytes, eq + 1, end);
     let (value, after) = match bytes.get(at) {
-        Some(b'[') if at < end => array(text, at, end)?,
+        Some(b'[') if at < end => array(text, at, end, pool.pop().unwrap_or_default())?,
         _ => scalar(text, at, end)?,
     };
     line_end(bytes, after, end)?;
@@ -203,10 +303,15 @@ fn line(text: &str, start: usize, end: usize) -> Option<Option<Entry<'_>>> {
     }))
 }
 
-/// A one-line array of scalars at `at` (its `[`), trailing comma allowed.
-fn array(text: &str, at: usize, end: usize) -> Option<(Node<'_>, usize)> {
+/// A one-line array of scalars at `at` (its `[`), trailing comma allowed, its items pushed on
+/// `items` (empty).
+fn array<'a>(
+    text: &'a str,
+    at: usize,
+    end: usize,
+    mut items: Vec<Node<'a>>,
+) -> Option<(Node<'a>, usize)> {
     let bytes = text.as_bytes();
-    let mut items = Vec::new();
     let mut i = skip_ws(bytes, at + 1, end);
     loop {
         if i >= end {
@@ -290,10 +395,17 @@ fn number(t: &str) -> Option<Value<'static>> {
     if int_end == i || (b[i] == b'0' && int_end > i + 1) {
         return None;
     }
-    i = int_end;
-    if i == b.len() {
+    if int_end == b.len() {
+        // Up to 18 digits cannot overflow: summed here (nearly every integer of a file).
+        if int_end - i <= 18 {
+            let n = b[i..]
+                .iter()
+                .fold(0i64, |n, &d| 10 * n + i64::from(d - b'0'));
+            return Some(Value::Int(if b[0] == b'-' { -n } else { n }));
+        }
         return t.parse::<i64>().ok().map(Value::Int);
     }
+    i = int_end;
     if b[i] == b'.' {
         let frac_end = digits(i + 1);
         if frac_end == i + 1 {
@@ -322,10 +434,12 @@ mod tests {
     /// The fast tree with its joints read, or `None` where the fast path declines.
     pub(crate) fn whole(text: &str) -> Option<Node<'_>> {
         let (mut root, joints) = parse(text)?;
-        let mut items = Vec::with_capacity(joints.len());
-        for r in joints {
-            items.push(joint(text, r)?);
+        let mut items = Vec::with_capacity(joints.count);
+        let mut reader = JointReader::new(text, joints);
+        while let Some(table) = reader.next_table()? {
+            items.push(table.clone());
         }
+        assert_eq!(items.len(), joints.count);
         if let Value::Map(es) = &mut root.value
             && let Some(e) = es.iter_mut().find(|e| e.key == "joint")
         {
@@ -367,6 +481,14 @@ mod tests {
         ] {
             assert!(agrees(&crate::generate::to_toml(&m)));
         }
+        // Tables between and after the joint tables, indented headers, comments and blank
+        // lines between tables: each joint ends at the next header of any kind.
+        assert!(agrees(
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n[expect]\nmobility = 1\n\n  [[joint]]\n# c\nbodies = [2, 3]\n[[joint]]\n[e2]\nx = 1\n[e3]\n[[joint]]\nid = 7\n"
+        ));
+        assert!(agrees(
+            "frame = 1\n[[joint]]\n\t[e]\ny = [1]\n[[joint]]\nbodies = [4, 5]\n"
+        ));
         for (_, _, text) in crate::examples::EXAMPLES {
             agrees(text);
         }

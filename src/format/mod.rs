@@ -178,7 +178,7 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             // The common shapes in one pass (`fast_toml`); anything it does not read, and any
             // error, read again by the toml crate below, which finds and locates every error.
             if let Some((root, joints)) = fast_toml::parse(text) {
-                let lazy = if joints.is_empty() {
+                let lazy = if joints.count == 0 {
                     tree::Lazy::None
                 } else {
                     tree::Lazy::TomlLines { text, joints }

@@ -5,9 +5,12 @@ use super::error::{ErrorKind, Label, LoadError};
 use super::tree::{Entry, Lazy, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
 use crate::mechanism::{
-    Body, BodyId, Expect, Geometry, Joint, JointBodies, JointSpec, Mechanism, Second, Space,
+    Body, BodyId, Expect, Geometry, Joint, JointBodies, JointGeometry, JointSpec, Mechanism,
+    Second, Space,
 };
-use std::collections::{BTreeMap, BTreeSet, HashSet};
+use std::borrow::Cow;
+use std::collections::hash_map;
+use std::collections::{BTreeMap, BTreeSet, HashMap, HashSet};
 use std::fmt::Write as _;
 use std::ops::Range;
 
@@ -681,21 +684,24 @@ fn build_joints<'a>(
     interner.renumbered = None;
     let mut read: Vec<Joint> = Vec::with_capacity(hint);
     // The span that locates each joint in later errors.
-    let mut joint_spans: Vec<Range<usize>> = Vec::new();
-    let mut explicit: BTreeMap<String, Range<usize>> = BTreeMap::new();
+    let mut joint_spans: Vec<Range<usize>> = Vec::with_capacity(hint);
+    // Explicit ids and where each is: a hash map (looked up once per joint below; the
+    // standard keyed hasher, so crafted ids cannot make it quadratic), keys borrowed from the
+    // text where the reader could.
+    let mut explicit: HashMap<Cow<'a, str>, Range<usize>> = HashMap::new();
     let mut any_name = false;
     // Per body: the last joint of more than SCAN_BODIES bodies that named it, and where.
     let mut seen: Vec<(u32, u32)> = Vec::new();
     // Per joint: whether its id is the default `a-b` (suffixed below).
     let mut defaulted: Vec<bool> = Vec::with_capacity(read.capacity());
     let mut ids_buf: Vec<usize> = Vec::new();
-    lazy.for_each(list, &mut |j: Node<'a>| {
-        let es = as_map(&j, "a joint")?;
+    lazy.for_each(list, &mut |j: &Node<'a>| {
+        let es = as_map(j, "a joint")?;
         // One pass over the keys: the entries looked up below, and whether any is unknown
         // (then `check_keys` names it, as it would have first).
         let (mut type_entry, mut bodies_entry, mut id_entry, mut driven_entry, mut second_entry) =
             (None, None, None, None, None);
-        let mut unknown = false;
+        let (mut unknown, mut any_geometry) = (false, false);
         for e in es {
             match e.key.as_ref() {
                 "type" => type_entry = Some(e),
@@ -703,7 +709,7 @@ fn build_joints<'a>(
                 "id" => id_entry = Some(e),
                 "driven" => driven_entry = Some(e),
                 "second" => second_entry = Some(e),
-                "origin" | "origin2" | "axis" | "axis2" | "normal" | "pitch" => {}
+                "origin" | "origin2" | "axis" | "axis2" | "normal" | "pitch" => any_geometry = true,
                 _ => unknown = true,
             }
         }
@@ -713,7 +719,7 @@ fn build_joints<'a>(
         // Type.
         let type_entry = match type_entry {
             Some(e) => e,
-            None => required(es, "type", &j, "joint")?,
+            None => required(es, "type", j, "joint")?,
         };
         let type_text = as_str(&type_entry.value, "a joint `type`")?;
         // A code as written (`R`, `SPSP`) first: `JointType::parse` normalizes every spelling.
@@ -749,7 +755,7 @@ fn build_joints<'a>(
         // Bodies.
         let bodies_entry = match bodies_entry {
             Some(e) => e,
-            None => required(es, "bodies", &j, "joint")?,
+            None => required(es, "bodies", j, "joint")?,
         };
         let items = as_seq(&bodies_entry.value, "a joint's `bodies`")?;
         if items.len() < 2 {
@@ -874,9 +880,10 @@ fn build_joints<'a>(
         let id = match id_entry {
             None => base,
             Some(e) => {
-                let id = match &e.value.value {
-                    Value::Int(i) => i.to_string(),
-                    _ => as_str(&e.value, "a joint `id`")?.to_string(),
+                let id: Cow<'a, str> = match &e.value.value {
+                    Value::Int(i) => Cow::Owned(i.to_string()),
+                    Value::Str(Cow::Borrowed(s)) => Cow::Borrowed(*s),
+                    _ => Cow::Owned(as_str(&e.value, "a joint `id`")?.to_string()),
                 };
                 if id.trim().is_empty() {
                     return Err(err(
@@ -887,35 +894,46 @@ fn build_joints<'a>(
                         Some("omit `id` for the default `<a>-<b>`".into()),
                     ));
                 }
-                if let Some(first) = explicit.get(&id) {
-                    return Err(LoadError::new(
-                        ErrorKind::DuplicateJointId,
-                        format!("two joints have the id `{id}`"),
-                        vec![
-                            label(&e.value.span, "again here"),
-                            label(first, "first here"),
-                        ],
-                        Some(
-                            "joint ids must be unique; `--inputs` and reports name joints by id"
-                                .into(),
-                        ),
-                    ));
+                let owned = id.to_string();
+                match explicit.entry(id) {
+                    hash_map::Entry::Occupied(first) => {
+                        return Err(LoadError::new(
+                            ErrorKind::DuplicateJointId,
+                            format!("two joints have the id `{owned}`"),
+                            vec![
+                                label(&e.value.span, "again here"),
+                                label(first.get(), "first here"),
+                            ],
+                            Some(
+                                "joint ids must be unique; `--inputs` and reports name joints by id"
+                                    .into(),
+                            ),
+                        ));
+                    }
+                    hash_map::Entry::Vacant(v) => {
+                        v.insert(e.value.span.clone());
+                    }
                 }
-                explicit.insert(id.clone(), e.value.span.clone());
-                id
+                owned
             }
         };
-        let mut geometry = parse_geometry(es, space)?;
-        if let Some(e) = second_entry {
-            geometry.second = Some(parse_second(e, kind, space, ids.len())?);
-        }
+        // Most large files give no geometry: no `Geometry` built, moved and compared then.
+        let geometry = if any_geometry || second_entry.is_some() {
+            let mut geometry = parse_geometry(es, space)?;
+            if let Some(e) = second_entry {
+                geometry.second = Some(parse_second(e, kind, space, ids.len())?);
+            }
+            geometry.into()
+        } else {
+            JointGeometry::default()
+        };
         joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
         read.push(Joint {
             id,
             kind,
             bodies: JointBodies::from(&ids[..]),
             driven,
-            geometry: geometry.into(),
+            geometry,
         });
         Ok(())
     })?;
@@ -927,6 +945,11 @@ fn build_joints<'a>(
     // Default ids: `a-b`, suffixed `#2`, `#3`... when taken (by an explicit id too). Without
     // explicit ids, the n-th joint of a body list gets `#n` (as `Mechanism::from_parts` does),
     // and a default that another joint's body list gives too is an error naming both.
+    // The spans locate only a clash of default ids, which integer bodies never give: freed
+    // before the sorts below.
+    if !any_name {
+        joint_spans = Vec::new();
+    }
     if explicit.is_empty() {
         let by_list = default_joint_ids(&mut read, &interner, &joint_spans, !any_name)?;
         // Every id `a-b` or `a-b#n` with integer bodies numbered by their ids: the order by
@@ -939,19 +962,21 @@ fn build_joints<'a>(
         // lists never meet; the k-th default of a list takes the k-th suffix not taken by an
         // explicit id (as the general loop below, without a set of every id).
         let ByList { order, same, .. } = by_body_list(&read, |k| defaulted[k]);
+        let maybe = MaybeTaken::new(explicit.keys().map(|id| id.as_ref()), explicit.len());
         let mut k = 0;
         while k < order.len() {
-            let mut n = 1u64;
+            let mut n = 1i64;
             while k < order.len() && (n == 1 || same[k]) {
                 let j = &mut read[order[k] as usize];
                 let base = j.id.len();
                 loop {
                     j.id.truncate(base);
                     if n > 1 {
-                        let _ = write!(j.id, "#{n}");
+                        j.id.push('#');
+                        push_int(&mut j.id, n);
                     }
                     n += 1;
-                    if !explicit.contains_key(j.id.as_str()) {
+                    if !(maybe.may_hold(&j.id) && explicit.contains_key(j.id.as_str())) {
                         break;
                     }
                 }
@@ -959,7 +984,7 @@ fn build_joints<'a>(
             }
         }
     } else {
-        let mut taken: HashSet<String> = explicit.into_keys().collect();
+        let mut taken: HashSet<String> = explicit.into_keys().map(Cow::into_owned).collect();
         for (j, _) in read.iter_mut().zip(&defaulted).filter(|(_, d)| **d) {
             {
                 let base = std::mem::take(&mut j.id);
@@ -1055,6 +1080,54 @@ fn build_joints<'a>(
         bodies,
         read,
     ))
+}
+
+/// A one-hash Bloom filter over a set of ids: most default joint ids are no explicit id, and
+/// one bit answers that without hashing them with the map's keyed (and slower) hasher. Its
+/// hash is not keyed, but crafted ids can only make it answer "maybe" (the map lookup it
+/// saves), never a wrong "no".
+struct MaybeTaken {
+    bits: Vec<u64>,
+    /// 64 minus the number of index bits.
+    shift: u32,
+}
+
+impl MaybeTaken {
+    /// The filter of `ids` (`count` of them): 16 bits per id, a "maybe" for about one id in 16
+    /// that is not in the set.
+    fn new<'s>(ids: impl Iterator<Item = &'s str>, count: usize) -> MaybeTaken {
+        let bits = count
+            .saturating_mul(16)
+            .min(1 << 40)
+            .next_power_of_two()
+            .max(64);
+        let mut f = MaybeTaken {
+            bits: vec![0; bits / 64],
+            shift: 64 - bits.trailing_zeros(),
+        };
+        for id in ids {
+            let i = f.index(id);
+            f.bits[i / 64] |= 1 << (i % 64);
+        }
+        f
+    }
+
+    fn index(&self, id: &str) -> usize {
+        // Eight bytes a step, mixed by a multiplication; the high bits index the table.
+        let mut h = id.len() as u64;
+        for c in id.as_bytes().chunks(8) {
+            let mut w = [0u8; 8];
+            w[..c.len()].copy_from_slice(c);
+            h = (h.rotate_left(5) ^ u64::from_le_bytes(w)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        }
+        (h >> self.shift) as usize
+    }
+
+    /// Whether `id` may be in the set (`false`: it is not).
+    fn may_hold(&self, id: &str) -> bool {
+        let i = self.index(id);
+        self.bits[i / 64] & (1 << (i % 64)) != 0
+    }
 }
 
 /// `a-b-c` for a joint's body list.

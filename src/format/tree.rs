@@ -134,12 +134,11 @@ pub(crate) enum Lazy<'a> {
         text: &'a str,
         items: super::fast_yaml::Items<'a>,
     },
-    /// TOML read by [`super::fast_toml`]: the byte range of each `[[joint]]` table, read one
-    /// at a time. A table it does not read is an error (the caller then reads the text with
-    /// the toml crate).
+    /// TOML read by [`super::fast_toml`]: its `[[joint]]` tables, read one at a time. A table
+    /// it does not read is an error (the caller then reads the text with the toml crate).
     TomlLines {
         text: &'a str,
-        joints: Vec<Range<usize>>,
+        joints: super::fast_toml::JointTables,
     },
 }
 
@@ -152,7 +151,7 @@ impl<'a> Lazy<'a> {
         match (list, self) {
             (Value::Seq(items), _) => items.len(),
             (Value::Deferred, Lazy::Json { items, .. } | Lazy::JsonResume { items, .. }) => *items,
-            (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.len(),
+            (Value::Deferred, Lazy::TomlLines { joints, .. }) => joints.count,
             (Value::Deferred, Lazy::Yaml { text }) => text.matches("bodies").count(),
             (Value::Deferred, Lazy::YamlResume(r)) => r.index.text.matches("bodies").count(),
             (Value::Deferred, Lazy::YamlLines { text, .. }) => text.matches("bodies").count(),
@@ -163,14 +162,14 @@ impl<'a> Lazy<'a> {
     }
 
     /// Call `f` on every item of `list` (a `Seq`, or the `Deferred` list), in order, each item
-    /// dropped after its call; stops at the first error.
+    /// dropped (or its memory reused) after its call; stops at the first error.
     pub(crate) fn for_each(
         self,
         list: Value<'a>,
-        f: &mut dyn FnMut(Node<'a>) -> Result<(), LoadError>,
+        f: &mut dyn FnMut(&Node<'a>) -> Result<(), LoadError>,
     ) -> Result<(), LoadError> {
         match (list, self) {
-            (Value::Seq(items), _) => items.into_iter().try_for_each(f),
+            (Value::Seq(items), _) => items.into_iter().try_for_each(|item| f(&item)),
             (Value::Deferred, Lazy::Json { text, span, .. }) => {
                 let mut p = JsonParser {
                     text,
@@ -188,7 +187,7 @@ impl<'a> Lazy<'a> {
                     // After a model error, only the tree's own errors (found first when the
                     // whole tree was built before the model) can still take its place.
                     if failed.is_none()
-                        && let Err(e) = f(item)
+                        && let Err(e) = f(&item)
                     {
                         failed = Some(e);
                     }
@@ -208,7 +207,7 @@ impl<'a> Lazy<'a> {
                 };
                 loop {
                     p.ws();
-                    f(p.value(3)?)?;
+                    f(&p.value(3)?)?;
                     if p.list_end(b']')? {
                         break;
                     }
@@ -237,7 +236,7 @@ impl<'a> Lazy<'a> {
                     fallback.store(true, std::sync::atomic::Ordering::Relaxed);
                     Err(syntax("TOML", "read again", 0..0, "here"))
                 };
-                let mut failed = first.into_iter().try_for_each(&mut *f).err();
+                let mut failed = first.into_iter().try_for_each(|item| f(&item)).err();
                 for pieces in rest.chunks(batch) {
                     let parsed: Vec<Option<Vec<Node<'a>>>> = pieces
                         .par_iter()
@@ -250,25 +249,26 @@ impl<'a> Lazy<'a> {
                             return again();
                         };
                         if failed.is_none() {
-                            failed = items.into_iter().try_for_each(&mut *f).err();
+                            failed = items.into_iter().try_for_each(|item| f(&item)).err();
                         }
                     }
                 }
                 failed.map_or(Ok(()), Err)
             }
             (Value::Deferred, Lazy::TomlLines { text, joints }) => {
-                for r in joints {
-                    match super::fast_toml::joint(text, r) {
-                        Some(item) => f(item)?,
+                let mut reader = super::fast_toml::JointReader::new(text, joints);
+                loop {
+                    match reader.next_table() {
+                        Some(Some(item)) => f(item)?,
+                        Some(None) => return Ok(()),
                         None => return Err(syntax("TOML", "read again", 0..0, "here")),
                     }
                 }
-                Ok(())
             }
             (Value::Deferred, Lazy::Yaml { text }) => yaml_joint_items(text, f),
             (Value::Deferred, Lazy::YamlLines { mut items, .. }) => loop {
                 match items.next_item() {
-                    Some(Some(item)) => f(item)?,
+                    Some(Some(item)) => f(&item)?,
                     Some(None) => return Ok(()),
                     None => return Err(syntax("YAML", "read again", 0..0, "here")),
                 }
@@ -280,7 +280,7 @@ impl<'a> Lazy<'a> {
                     if let Event::SequenceEnd = next.0 {
                         break;
                     }
-                    f(r.node(next, 3)?)?;
+                    f(&r.node(next, 3)?)?;
                 }
                 // Nothing after the list: the mapping, the document and the stream end.
                 if !matches!(r.next()?.0, Event::MappingEnd) {
@@ -1051,7 +1051,7 @@ pub(crate) fn parse_yaml_fast(text: &str) -> Option<(Node<'_>, Lazy<'_>)> {
 /// The second read of [`Lazy::Yaml`]: `f` on each item of the top-level joint list.
 fn yaml_joint_items<'a>(
     text: &'a str,
-    f: &mut dyn FnMut(Node<'a>) -> Result<(), LoadError>,
+    f: &mut dyn FnMut(&Node<'a>) -> Result<(), LoadError>,
 ) -> Result<(), LoadError> {
     use saphyr_parser::Event;
     let mut r = YamlReader {
@@ -1080,7 +1080,7 @@ fn yaml_joint_items<'a>(
                 if let Event::SequenceEnd = next.0 {
                     return Ok(());
                 }
-                f(r.node(next, 3)?)?;
+                f(&r.node(next, 3)?)?;
             }
         }
         r.skip(value)?;
@@ -1827,7 +1827,7 @@ mod tests {
         {
             let list = std::mem::replace(&mut e.value.value, Value::Null);
             lazy.for_each(list, &mut |n| {
-                items.push(n);
+                items.push(n.clone());
                 Ok(())
             })
             .ok()?;
