@@ -310,11 +310,7 @@ pub fn pairs_factor(
     if a.nrows() == 0 {
         return Ok(None);
     }
-    if track {
-        Factor::new_tracked_within(&a, limits).map(Some)
-    } else {
-        Factor::new_within(&a, limits).map(Some)
-    }
+    Factor::from_matrix_within(a, track, limits).map(Some)
 }
 
 /// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, from

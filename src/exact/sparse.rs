@@ -668,6 +668,43 @@ impl Factor {
         Factor::build_tracked(a, None, true, &mut |work, bytes| limits.charge(work, bytes))
     }
 
+    /// [`Factor::new_within`] (`track`: [`Factor::new_tracked_within`]) taking the matrix,
+    /// which is dropped once split into its blocks, before the elimination: its rows are a
+    /// vector each (hundreds of megabytes at 10^6 bodies) and nothing reads them afterwards.
+    pub fn from_matrix_within(
+        a: SparseMatrix,
+        track: bool,
+        limits: &mut Limits<'_>,
+    ) -> Result<Factor, BudgetExceeded> {
+        let (groups, blocks, input, trace) = Factor::prepare(&a, track);
+        drop(a);
+        let charge = &mut |work, bytes| limits.charge(work, bytes);
+        charge(input.1, 0)?;
+        Factor::run(groups, blocks, input.0, None, trace, charge)
+    }
+
+    /// The blocks of `a` and what [`Factor::run`] needs besides: the column groups, (the
+    /// input's entries, the work of reading it) and the trace to start from.
+    #[allow(clippy::type_complexity)]
+    fn prepare(
+        a: &SparseMatrix,
+        track: bool,
+    ) -> (Vec<usize>, Vec<Blk>, (usize, u64), Option<Trace>) {
+        let (blocks, orig) = blocks_of(a);
+        let input: usize = a.rows.iter().map(|r| r.len()).sum();
+        let trace = track.then(|| Trace {
+            nids: orig.len() as u32,
+            empty: (0..a.rows.len() as u32)
+                .filter(|&i| a.rows[i as usize].is_empty())
+                .collect(),
+            orig,
+            outputs: Vec::new(),
+            terms: Vec::new(),
+        });
+        let read = (input + a.ncols + a.rows.len()) as u64;
+        (a.groups(), blocks, (input, read), trace)
+    }
+
     fn build<E>(
         a: &SparseMatrix,
         tiers: Option<&[u32]>,
@@ -682,19 +719,9 @@ impl Factor {
         track: bool,
         charge: &mut dyn FnMut(u64, u64) -> Result<(), E>,
     ) -> Result<Factor, E> {
-        let (blocks, orig) = blocks_of(a);
-        let input: usize = a.rows.iter().map(|r| r.len()).sum();
-        charge((input + a.ncols + a.rows.len()) as u64, 0)?;
-        let trace = track.then(|| Trace {
-            nids: orig.len() as u32,
-            empty: (0..a.rows.len() as u32)
-                .filter(|&i| a.rows[i as usize].is_empty())
-                .collect(),
-            orig,
-            outputs: Vec::new(),
-            terms: Vec::new(),
-        });
-        Factor::run(a.groups(), blocks, input, tiers, trace, charge)
+        let (groups, blocks, input, trace) = Factor::prepare(a, track);
+        charge(input.1, 0)?;
+        Factor::run(groups, blocks, input.0, tiers, trace, charge)
     }
 
     /// Factor a matrix given as dense blocks over column groups of the given sizes (the
@@ -792,11 +819,10 @@ impl Factor {
         let mut clock = 0usize;
         let mut pos = vec![0usize; n];
         let mut stamp_rescore = vec![0usize; n];
-        let mut heap = BinaryHeap::with_capacity(n);
-        let mut version = vec![0usize; n];
+        let mut queue = GroupQueue::new(n);
         for (g, &tg) in tier.iter().enumerate().take(n) {
             let s = pool.score(g, &mut stamp, &mut clock);
-            heap.push(Reverse((tg, s, g, 0usize)));
+            queue.set(g, (tg, s.0, s.1));
         }
         let mut done = vec![false; n];
         let mut records = Vec::with_capacity(n);
@@ -812,10 +838,17 @@ impl Factor {
         let mut carried: Vec<Option<Carried>> = Vec::new();
         let mut carried_on: Vec<Vec<u32>> = vec![Vec::new(); n];
         let mut carried_len = 0usize;
-        while let Some(Reverse((_, _, g, ver))) = heap.pop() {
-            if done[g] || ver != version[g] {
-                continue;
-            }
+        // Scratch vectors of one front, kept from front to front (a dozen allocations per
+        // front were a tenth of the elimination at 10^6 bodies).
+        let mut sc_others: Vec<usize> = Vec::new();
+        let mut sc_front: Vec<Fp> = Vec::new();
+        let mut sc_masks: Vec<u64> = Vec::new();
+        let mut sc_order: Vec<usize> = Vec::new();
+        let mut sc_in: Vec<u32> = Vec::new();
+        let mut sc_own: Vec<u32> = Vec::new();
+        let mut sc_tr: Vec<Fp> = Vec::new();
+        let mut sc_chosen: Vec<u32> = Vec::new();
+        while let Some(g) = queue.pop() {
             done[g] = true;
             let mut members = pool.take(g);
             let mut touching = std::mem::take(&mut carried_on[g]);
@@ -843,7 +876,8 @@ impl Factor {
             members.sort_by_key(Blk::width);
             clock += 1;
             stamp[g] = clock;
-            let mut others = Vec::new();
+            let mut others = std::mem::take(&mut sc_others);
+            others.clear();
             for b in &members {
                 for &h in &b.groups {
                     if stamp[h] != clock {
@@ -875,21 +909,27 @@ impl Factor {
                     .saturating_add((carried_len as u64).saturating_mul(FP_BYTES))
                     .saturating_add(front_len.saturating_mul(FP_BYTES)),
             )?;
-            let mut front = vec![Fp::ZERO; nrows * width];
+            let mut front = std::mem::take(&mut sc_front);
+            front.clear();
+            front.resize(nrows * width, Fp::ZERO);
             // Tracking: each front row's input position (`own`, until it is chosen as a
             // pivot) and its coefficients on the rows chosen so far (`tr`, `sg` per row).
             let tracking = trace.is_some();
-            let mut in_ids: Vec<u32> = Vec::new();
-            let mut own: Vec<u32> = Vec::new();
-            let mut tr: Vec<Fp> = Vec::new();
-            let mut chosen: Vec<u32> = Vec::new();
+            let mut in_ids = std::mem::take(&mut sc_in);
+            let mut own = std::mem::take(&mut sc_own);
+            let mut tr = std::mem::take(&mut sc_tr);
+            let mut chosen = std::mem::take(&mut sc_chosen);
+            in_ids.clear();
+            own.clear();
+            tr.clear();
+            chosen.clear();
             if tracking {
                 charge((nrows as u64).saturating_mul((sg * (sg + 2)) as u64), 0)?;
                 for b in &members {
                     in_ids.extend(b.id..b.id + b.nrows as u32);
                 }
                 own.extend(0..nrows as u32);
-                tr = vec![Fp::ZERO; nrows * sg];
+                tr.resize(nrows * sg, Fp::ZERO);
             }
             let mut r0 = 0;
             for b in &members {
@@ -951,7 +991,9 @@ impl Factor {
             rank += r;
             // Which of the others' groups each row touches.
             let words = others.len().div_ceil(64);
-            let mut masks = vec![0u64; nrows * words];
+            let mut masks = std::mem::take(&mut sc_masks);
+            masks.clear();
+            masks.resize(nrows * words, 0);
             for i in 0..nrows {
                 let row = &front[i * width..(i + 1) * width];
                 for (k, &h) in others.iter().enumerate() {
@@ -962,7 +1004,9 @@ impl Factor {
             }
             // The rest: rows r.. split by the groups they touch, each part compressed.
             if r < nrows {
-                let mut order: Vec<usize> = (r..nrows).collect();
+                let mut order = std::mem::take(&mut sc_order);
+                order.clear();
+                order.extend(r..nrows);
                 order.sort_by(|&a, &b| {
                     masks[a * words..(a + 1) * words].cmp(&masks[b * words..(b + 1) * words])
                 });
@@ -1096,6 +1140,7 @@ impl Factor {
                     }
                     i = j;
                 }
+                sc_order = order;
             }
             // The pivot rows, over the group's columns and the others they touch.
             let mut used = vec![0u64; words];
@@ -1117,7 +1162,7 @@ impl Factor {
                     rows.extend_from_slice(&row[pos[h]..pos[h] + sizes[h]]);
                 }
             }
-            drop(front);
+            sc_front = front;
             let extra = if touching.is_empty() {
                 Vec::new()
             } else {
@@ -1156,9 +1201,8 @@ impl Factor {
             );
             for &h in &others {
                 if !done[h] && stamp_rescore[h] == rescore_mark {
-                    version[h] += 1;
                     let s = pool.score(h, &mut stamp, &mut clock);
-                    heap.push(Reverse((tier[h], s, h, version[h])));
+                    queue.set(h, (tier[h], s.0, s.1));
                 }
             }
             records.push(Record {
@@ -1170,6 +1214,8 @@ impl Factor {
                 width: rec_width,
                 extra,
             });
+            (sc_others, sc_masks) = (others, masks);
+            (sc_in, sc_own, sc_tr, sc_chosen) = (in_ids, own, tr, chosen);
         }
         Ok(Factor {
             sizes,
@@ -1684,6 +1730,104 @@ fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
     (comp, work)
 }
 
+/// The groups waiting to be eliminated, least key first: `(tier, estimated fill, front
+/// width)`, ties by group. An indexed 4-ary heap holding one entry per group, its key changed
+/// in place when the group is rescored. It pops the groups in the very order of the former
+/// `BinaryHeap` of `Reverse((tier, score, group, version))` that took a new entry at every
+/// rescore and skipped the stale ones (the keys are distinct, so the order is the keys' order
+/// whatever the heap), without the stale entries: at 10^6 bodies they were tens of megabytes
+/// and every pop walked down a heap several times the size of the live one.
+struct GroupQueue {
+    /// `(tier, fill, width, group)`, a 4-ary min-heap.
+    heap: Vec<(u32, usize, usize, usize)>,
+    /// Each group's place in `heap` ([`GroupQueue::NONE`]: not in it).
+    pos: Vec<usize>,
+}
+
+impl GroupQueue {
+    const NONE: usize = usize::MAX;
+
+    fn new(n: usize) -> GroupQueue {
+        GroupQueue {
+            heap: Vec::with_capacity(n),
+            pos: vec![Self::NONE; n],
+        }
+    }
+
+    /// Put `g` in the queue with `key`, or change its key.
+    fn set(&mut self, g: usize, key: (u32, usize, usize)) {
+        let e = (key.0, key.1, key.2, g);
+        let i = self.pos[g];
+        if i == Self::NONE {
+            self.heap.push(e);
+            let i = self.heap.len() - 1;
+            self.pos[g] = i;
+            self.up(i);
+        } else {
+            let old = self.heap[i];
+            self.heap[i] = e;
+            if e < old {
+                self.up(i);
+            } else {
+                self.down(i);
+            }
+        }
+    }
+
+    /// The group of least key, taken out of the queue.
+    fn pop(&mut self) -> Option<usize> {
+        let top = *self.heap.first()?;
+        let last = self.heap.pop()?;
+        self.pos[top.3] = Self::NONE;
+        if !self.heap.is_empty() {
+            self.heap[0] = last;
+            self.pos[last.3] = 0;
+            self.down(0);
+        }
+        Some(top.3)
+    }
+
+    fn up(&mut self, mut i: usize) {
+        let e = self.heap[i];
+        while i > 0 {
+            let p = (i - 1) / 4;
+            if self.heap[p] <= e {
+                break;
+            }
+            self.heap[i] = self.heap[p];
+            self.pos[self.heap[i].3] = i;
+            i = p;
+        }
+        self.heap[i] = e;
+        self.pos[e.3] = i;
+    }
+
+    fn down(&mut self, mut i: usize) {
+        let e = self.heap[i];
+        let n = self.heap.len();
+        loop {
+            let c0 = 4 * i + 1;
+            if c0 >= n {
+                break;
+            }
+            let mut m = c0;
+            for c in c0 + 1..(c0 + 4).min(n) {
+                if self.heap[c] < self.heap[m] {
+                    m = c;
+                }
+            }
+            if self.heap[m] >= e {
+                break;
+            }
+            self.heap[i] = self.heap[m];
+            self.pos[self.heap[i].3] = i;
+            i = m;
+        }
+        self.heap[i] = e;
+        self.pos[e.3] = i;
+    }
+}
+
 /// The live blocks of an elimination, indexed by group, with per-group row and width sums
 /// kept up to date for the pivot order.
 struct Pool<'a> {
@@ -1697,6 +1841,9 @@ struct Pool<'a> {
     wsum: Vec<usize>,
     /// Bytes held by the live blocks.
     bytes: u64,
+    /// Scratch of [`Pool::score`]: the group's blocks and the groups of `U`.
+    sc_blocks: Vec<(usize, usize, usize)>,
+    sc_u: Vec<usize>,
 }
 
 /// Blocks on more groups than this are "wide" (a carried row): the pivot order treats them
@@ -1717,6 +1864,8 @@ impl<'a> Pool<'a> {
             rsum: vec![0; n],
             wsum: vec![0; n],
             bytes: 0,
+            sc_blocks: Vec::new(),
+            sc_u: Vec::new(),
         }
     }
 
@@ -1775,19 +1924,19 @@ impl<'a> Pool<'a> {
             let width = (self.wsum[g] + sg).saturating_sub(self.nblk[g] * sg);
             return (self.rsum[g].saturating_mul(width), width);
         }
-        let mut blocks: Vec<(usize, usize, usize)> = self.of_group[g]
-            .iter()
-            .filter_map(|&id| {
-                let b = self.store[id].as_ref()?;
-                Some((self.width(b), b.nrows, id))
-            })
-            .collect();
+        let mut blocks = std::mem::take(&mut self.sc_blocks);
+        blocks.clear();
+        blocks.extend(self.of_group[g].iter().filter_map(|&id| {
+            let b = self.store[id].as_ref()?;
+            Some((self.width(b), b.nrows, id))
+        }));
         blocks.sort_unstable();
         // U: the union of the narrowest blocks supplying sg rows.
         *clock += 1;
         let mark = *clock;
         stamp[g] = mark;
-        let mut u_groups: Vec<usize> = Vec::new();
+        let mut u_groups = std::mem::take(&mut self.sc_u);
+        u_groups.clear();
         let mut uw = sg;
         let mut need = sg;
         for &(_, nr, id) in &blocks {
@@ -1839,6 +1988,7 @@ impl<'a> Pool<'a> {
             }
             fill += rest * uw.saturating_sub(inside);
         }
+        (self.sc_blocks, self.sc_u) = (blocks, u_groups);
         (fill, width)
     }
 }
@@ -2246,6 +2396,55 @@ pub fn random_pair_matrix(
 mod tests {
     use super::super::dense;
     use super::*;
+
+    /// The indexed queue of the elimination pops the groups in the order of the heap it
+    /// replaced (a new entry per rescore, stale ones skipped), ties in the key included.
+    #[test]
+    fn group_queue_pops_in_the_order_of_the_versioned_heap() {
+        let mut rng = SplitMix64::new(0x0071_7565_7565);
+        for _ in 0..60 {
+            let n = 1 + rng.below(200) as usize;
+            let key = |rng: &mut SplitMix64| {
+                (
+                    rng.below(3) as u32,
+                    rng.below(20) as usize,
+                    rng.below(20) as usize,
+                )
+            };
+            let mut queue = GroupQueue::new(n);
+            let mut heap = BinaryHeap::new();
+            let mut version = vec![0usize; n];
+            let mut done = vec![false; n];
+            for g in 0..n {
+                let k = key(&mut rng);
+                queue.set(g, k);
+                heap.push(Reverse((k.0, (k.1, k.2), g, 0usize)));
+            }
+            loop {
+                let want = loop {
+                    match heap.pop() {
+                        None => break None,
+                        Some(Reverse((_, _, g, v))) if !done[g] && v == version[g] => {
+                            break Some(g);
+                        }
+                        Some(_) => {}
+                    }
+                };
+                assert_eq!(queue.pop(), want);
+                let Some(g) = want else { break };
+                done[g] = true;
+                for _ in 0..rng.below(5) {
+                    let h = rng.below(n as u64) as usize;
+                    if !done[h] {
+                        version[h] += 1;
+                        let k = key(&mut rng);
+                        queue.set(h, k);
+                        heap.push(Reverse((k.0, (k.1, k.2), h, version[h])));
+                    }
+                }
+            }
+        }
+    }
 
     fn tracked(a: &SparseMatrix) -> Factor {
         let budget = Budget::UNLIMITED;

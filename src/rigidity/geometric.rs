@@ -616,14 +616,18 @@ impl ExactPart<'_> {
     ) -> Result<ExactOutcome, BudgetExceeded> {
         let (part, pairs, b) = (self.part, self.pairs, self.b);
         let fixed = |x: usize| x == self.frame || x == part.root;
-        let mut local: BTreeMap<usize, usize> = BTreeMap::new();
-        for &x in &part.bodies {
-            if !fixed(x) {
-                let g = local.len();
-                local.insert(x, g);
-            }
-        }
-        let ng = local.len();
+        let nb = self.iso.len();
+        let ng = part.bodies.iter().filter(|&&x| !fixed(x)).count();
+        let local = BodyIndex::new(
+            nb,
+            ng,
+            part.bodies
+                .iter()
+                .copied()
+                .filter(|&x| !fixed(x))
+                .enumerate()
+                .map(|(g, x)| (x, g)),
+        );
         let k = b;
         let nl = part.bodies.len();
         let what = || {
@@ -646,7 +650,7 @@ impl ExactPart<'_> {
             ng,
             self.rows,
             list.iter().copied(),
-            |x| local.get(&x).copied(),
+            |x| local.get(x),
             true,
             &mut Limits {
                 budget,
@@ -666,7 +670,7 @@ impl ExactPart<'_> {
                 factor.as_ref(),
                 self.rows,
                 &list,
-                |x| local.get(&x).copied(),
+                |x| local.get(x),
                 0x7374_7265_7373 ^ seed,
                 meter,
             )?
@@ -688,7 +692,7 @@ impl ExactPart<'_> {
         let bk = b * k;
         let mut sig = vec![Fp::ZERO; nl * bk];
         for (li, &x) in part.bodies.iter().enumerate() {
-            if let Some(&g) = local.get(&x) {
+            if let Some(g) = local.get(x) {
                 for (j, v) in samples.iter().enumerate() {
                     sig[li * bk + j * b..li * bk + (j + 1) * b]
                         .copy_from_slice(&v[g * b..(g + 1) * b]);
@@ -719,7 +723,12 @@ impl ExactPart<'_> {
             let (sx, sy) = (sig_of(x), sig_of(y));
             DMatrix::from_fn(b, k, |i, j| sx[j * b + i] - sy[j * b + i])
         };
-        let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
+        let lpos = BodyIndex::new(
+            nb,
+            nl,
+            part.bodies.iter().enumerate().map(|(li, &x)| (x, li)),
+        );
+        let lidx = |x: usize| lpos.get(x).unwrap_or(0);
 
         // Each body's own isolated motions, exactly (bodies the floating-point analysis
         // found some for: the null space of its joints' rows with its neighbours fixed).
@@ -809,6 +818,44 @@ impl ExactPart<'_> {
             luf[x] = r;
         }
         Ok((rank, luf, support))
+    }
+}
+
+/// A map from bodies to local indices within one part. A part holding a large share of the
+/// mechanism's bodies takes a table over all bodies (a lookup per pair was a search through
+/// a `BTreeMap` or the sorted body list: a cache miss per level at 10^6 bodies); a small one a
+/// `BTreeMap`, so that the many small parts of a chain or a star cost no table each (the parts
+/// share only cut bodies, so at most a few of them are large).
+enum BodyIndex {
+    Table(Vec<u32>),
+    Map(BTreeMap<usize, usize>),
+}
+
+impl BodyIndex {
+    /// The index of `entries` (body, local index), `nb` bodies in all, `len` entries.
+    fn new(nb: usize, len: usize, entries: impl Iterator<Item = (usize, usize)>) -> BodyIndex {
+        if len.saturating_mul(8) >= nb && u32::try_from(len).is_ok() {
+            let mut t = vec![u32::MAX; nb];
+            for (x, l) in entries {
+                if let Some(v) = t.get_mut(x) {
+                    *v = l as u32;
+                }
+            }
+            BodyIndex::Table(t)
+        } else {
+            BodyIndex::Map(entries.collect())
+        }
+    }
+
+    fn get(&self, x: usize) -> Option<usize> {
+        match self {
+            BodyIndex::Table(t) => t
+                .get(x)
+                .copied()
+                .filter(|&v| v != u32::MAX)
+                .map(|v| v as usize),
+            BodyIndex::Map(m) => m.get(&x).copied(),
+        }
     }
 }
 
@@ -905,25 +952,28 @@ fn build_part(
     let mut groups = Vec::new();
     let mut sizes = Vec::new();
     let mut offsets = Vec::new();
-    let mut local: BTreeMap<usize, usize> = BTreeMap::new();
     let mut acc = 0;
     for &x in &part.bodies {
         if x != frame && x != part.root && comp[x].ncols() > 0 {
-            local.insert(x, groups.len());
             groups.push(x);
             sizes.push(comp[x].ncols());
             offsets.push(acc);
             acc += comp[x].ncols();
         }
     }
+    let local = BodyIndex::new(
+        comp.len(),
+        groups.len(),
+        groups.iter().enumerate().map(|(g, &x)| (x, g)),
+    );
     let mut blocks = Vec::new();
     for &pi in &part.pairs {
         let p = pairs[pi];
         let mut bodies: Vec<usize> = [p.hub, p.other]
             .into_iter()
-            .filter(|x| local.contains_key(x))
+            .filter(|&x| local.get(x).is_some())
             .collect();
-        bodies.sort_by_key(|x| local.get(x).copied());
+        bodies.sort_by_key(|&x| local.get(x));
         bodies.dedup();
         let r = models[p.joint].rows.nrows();
         if bodies.is_empty() || r == 0 {
@@ -938,10 +988,7 @@ fn build_part(
             c += blk.ncols();
         }
         blocks.push(Block {
-            groups: bodies
-                .iter()
-                .filter_map(|x| local.get(x).copied())
-                .collect(),
+            groups: bodies.iter().filter_map(|&x| local.get(x)).collect(),
             mat,
         });
     }
@@ -1032,16 +1079,22 @@ fn analyze_split(
     exact_from: usize,
 ) -> Result<GeometricReport, GeometricError> {
     let real = motion::realization(m, opts.geometry, opts.precision)?;
-    // Full (undriven) twists for loop spatiality, at the same geometry.
-    let mut free = m.clone();
-    for j in &mut free.joints {
-        j.driven = 0;
-    }
-    let full_models = match real.used.seed {
-        Some(seed) => motion::realize(&free, seed),
-        None => motion::configure(&free).unwrap_or_default(),
+    // Full (undriven) twists for loop spatiality, at the same geometry: built only when the
+    // loops are listed (a copy of the mechanism and a model per joint, hundreds of megabytes
+    // at 10^6 bodies, where the loops are too many to list).
+    let seed = real.used.seed;
+    let full_twists = || -> Vec<DMatrix<f64>> {
+        let mut free = m.clone();
+        for j in &mut free.joints {
+            j.driven = 0;
+        }
+        let full_models = match seed {
+            Some(seed) => motion::realize(&free, seed),
+            None => motion::configure(&free).unwrap_or_default(),
+        };
+        drop(free);
+        full_models.into_iter().map(|jm| jm.twists).collect()
     };
-    let full_twists: Vec<DMatrix<f64>> = full_models.into_iter().map(|jm| jm.twists).collect();
     // At a random realization, every joint's exact rows (once per joint, shared by the pairs
     // of a multiple joint).
     let exact_rows: Option<Vec<DMatrix<Fp>>> = real.used.seed.map(|seed| {
@@ -1082,7 +1135,7 @@ fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f
 fn analyze_models(
     m: &Mechanism,
     models: &[JointModel],
-    full_twists: &[DMatrix<f64>],
+    full_twists: &dyn Fn() -> Vec<DMatrix<f64>>,
     used: GeometryUsed,
     exact: Option<&[DMatrix<Fp>]>,
     check_finite: bool,
@@ -1210,7 +1263,13 @@ fn analyze_models(
     let mut built: Vec<Built> = Vec::with_capacity(parts.len());
     for part in &parts {
         meter.charge(part.pairs.len() as u64 * (b * b * 4) as u64 + part.bodies.len() as u64)?;
-        built.push(build_part(part, &pairs, models, &comp, frame));
+        let mut bp = build_part(part, &pairs, models, &comp, frame);
+        if exact.is_some() && bp.sizes.iter().sum::<usize>() > exact_from {
+            // The exact path takes its rows from `exact`: the floating-point blocks were
+            // needed for σ_max only (hundreds of megabytes at 10^6 bodies).
+            bp.blocks = Vec::new();
+        }
+        built.push(bp);
     }
     let smax = built.iter().map(|x| x.smax).fold(0.0, f64::max);
     let (base_tol, base_abs) = threshold(m, &used, smax, rows_total.max(b * m.movable()));
@@ -1242,10 +1301,6 @@ fn analyze_models(
         if let Some(rows) = exact
             && lcols > exact_from
         {
-            let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
-            for (g, &x) in lbody.iter().enumerate() {
-                lgroup.insert(x, g);
-            }
             let ctx = ExactPart {
                 part,
                 pairs: &pairs,
@@ -1289,6 +1344,10 @@ fn analyze_models(
                     .collect();
                 sbodies.sort_unstable();
                 sbodies.dedup();
+                let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
+                for (g, &x) in lbody.iter().enumerate() {
+                    lgroup.insert(x, g);
+                }
                 let mut sgroup: BTreeMap<usize, usize> = BTreeMap::new();
                 for &x in &sbodies {
                     if lgroup.contains_key(&x) {
@@ -1773,6 +1832,7 @@ fn analyze_models(
             )),
         ),
         Some(cycles) => {
+            let full_twists = full_twists();
             let mut out = Vec::new();
             for cyc in cycles {
                 let seq = walk(&cyc, &gedges);
