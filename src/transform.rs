@@ -189,6 +189,13 @@ pub enum TransformError {
     /// The work of the search or of the analyses passed the budget.
     #[error(transparent)]
     Budget(#[from] BudgetExceeded),
+    /// The groups of a listed placement could not be made again for output (never expected:
+    /// they were made once during the search, from the same placement).
+    #[error("internal error: the groups of the placement ranked {rank} could not be made again")]
+    Regenerate {
+        /// Rank of the placement.
+        rank: usize,
+    },
     /// A joint both kept and excluded.
     #[error("joint `{joint}` is both kept (--keep) and excluded (--exclude)")]
     KeepExcluded {
@@ -262,6 +269,11 @@ pub struct Placement {
     /// Whether the library covers each group of `partition`.
     #[serde(skip)]
     in_lib: Vec<bool>,
+    /// The placement (units per pair of the expansion, sparse) when its groups came from the
+    /// search's flow ([`Lean`]) of a mechanism placed whole: [`ranked`] drops the partition
+    /// and makes it again from this when it is written.
+    #[serde(skip)]
+    lean: Option<Vec<(usize, u32)>>,
 }
 
 impl Placement {
@@ -298,14 +310,6 @@ enum Repr {
         ends: Vec<u32>,
     },
     /// The ids themselves: an analysis named a body the id table lacks (never expected).
-    Text(Vec<Vec<String>>),
-}
-
-/// A partition as an order-independent key: equal keys are equal partitions (the same sets of
-/// groups with the same bodies in the same order), as the sorted lists of ids were.
-#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
-enum PartitionKey {
-    Indexed(Vec<Vec<u32>>),
     Text(Vec<Vec<String>>),
 }
 
@@ -376,23 +380,37 @@ impl Partition {
             .collect()
     }
 
-    fn key(&self) -> PartitionKey {
-        match &self.0 {
-            Repr::Indexed { bodies, ends, .. } => {
-                let mut k: Vec<Vec<u32>> = (0..ends.len())
-                    .map(|g| bodies[Self::range(ends, g)].to_vec())
-                    .collect();
-                k.sort();
-                PartitionKey::Indexed(k)
-            }
-            Repr::Text(v) => {
-                let mut k = v.clone();
-                k.sort();
-                PartitionKey::Text(k)
+    /// An order-independent fingerprint of the groups (the number of groups and two 64-bit
+    /// sums of a SipHash of each group's bodies in order): equal partitions (the same groups,
+    /// each with its bodies in the same order, in any group order) have equal fingerprints,
+    /// and different ones equal fingerprints with probability about 2^-128. Families are
+    /// made by it, so a listed placement's partition need not be held.
+    fn fingerprint(&self) -> Fingerprint {
+        use std::hash::{DefaultHasher, Hash, Hasher};
+        let mut sums = [0u64; 2];
+        for g in 0..self.len() {
+            for (lane, sum) in sums.iter_mut().enumerate() {
+                let mut h = DefaultHasher::new();
+                (lane as u8).hash(&mut h);
+                match &self.0 {
+                    Repr::Indexed { bodies, ends, .. } => {
+                        0u8.hash(&mut h);
+                        bodies[Self::range(ends, g)].hash(&mut h);
+                    }
+                    Repr::Text(v) => {
+                        1u8.hash(&mut h);
+                        v[g].hash(&mut h);
+                    }
+                }
+                *sum = sum.wrapping_add(h.finish());
             }
         }
+        (self.len(), sums[0], sums[1])
     }
 }
+
+/// [`Partition::fingerprint`].
+type Fingerprint = (usize, u64, u64);
 
 impl PartialEq for Partition {
     fn eq(&self, other: &Partition) -> bool {
@@ -405,9 +423,23 @@ impl Eq for Partition {}
 impl Serialize for Partition {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         use serde::ser::SerializeSeq;
+        /// One group's body ids, written without collecting them.
+        struct Group<'a>(&'a Partition, usize);
+        impl Serialize for Group<'_> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                match &self.0.0 {
+                    Repr::Indexed { ids, bodies, ends } if self.1 < ends.len() => s.collect_seq(
+                        bodies[Partition::range(ends, self.1)]
+                            .iter()
+                            .map(|&x| ids.get(x as usize).map_or("", String::as_str)),
+                    ),
+                    _ => s.collect_seq(self.0.group(self.1)),
+                }
+            }
+        }
         let mut seq = s.serialize_seq(Some(self.len()))?;
         for g in 0..self.len() {
-            seq.serialize_element(&self.group(g))?;
+            seq.serialize_element(&Group(self, g))?;
         }
         seq.end()
     }
@@ -584,6 +616,20 @@ pub fn enumerate(
     progress: Option<ProgressFn<'_>>,
     sink: &mut dyn FnMut(Placement),
 ) -> Result<Summary, TransformError> {
+    enumerate_kept(m, opts, lib, progress, sink, None)
+}
+
+/// [`enumerate`]; with `keep`, a mechanism placed whole in one expansion keeps its problem
+/// there, and the placements analysed from the search's flow carry their inputs to make
+/// their groups again ([`Placement::lean`]).
+fn enumerate_kept(
+    m: &Mechanism,
+    opts: &TransformOptions,
+    lib: &Library,
+    progress: Option<ProgressFn<'_>>,
+    sink: &mut dyn FnMut(Placement),
+    keep: Option<&mut Option<Problem>>,
+) -> Result<Summary, TransformError> {
     let mut rules = Rules::of(m, opts)?;
     // A geometry that cannot be used is the user's error, said once, before any work.
     let geometry = if opts.analysis.count_only {
@@ -619,10 +665,19 @@ pub fn enumerate(
         notes: rules.notes.clone(),
     };
     if parts.len() <= 1 {
-        let r = place(m, &rules, opts, lib, &mut meter, progress, &mut |p| {
-            sink(p);
-            true
-        })?;
+        let r = place(
+            m,
+            &rules,
+            opts,
+            lib,
+            &mut meter,
+            progress,
+            &mut |p| {
+                sink(p);
+                true
+            },
+            keep,
+        )?;
         summary.absorb(&r);
         summary.count_valid = r.count_valid as u128;
         summary.excluded_by_rank = r.excluded as u128;
@@ -749,8 +804,12 @@ fn place(
     meter: &mut Meter,
     progress: Option<ProgressFn<'_>>,
     sink: &mut dyn FnMut(Placement) -> bool,
+    mut keep: Option<&mut Option<Problem>>,
 ) -> Result<Placed, TransformError> {
     let exps = Expansions::of(m, opts.max_expansions);
+    // With `keep` and one expansion, a placement analysed from the search's flow carries its
+    // inputs (`Placement::lean`), and the expansion's problem is kept to make its groups again.
+    let defer = keep.is_some() && exps.len == 1;
     let mut r = Placed {
         expansions: exps.len,
         expansions_total: exps.total,
@@ -797,10 +856,11 @@ fn place(
                     };
                     if certified && let Some(l) = lean {
                         let g = l.groups(&e.mech, flow, lib);
-                        return (
-                            Some(placement_of(&e.mech, e, *x, w, g)),
-                            decided.saturating_add(l.work),
-                        );
+                        let mut p = placement_of(&e.mech, e, *x, w, g);
+                        if defer {
+                            p.lean = Some(w.clone());
+                        }
+                        return (Some(p), decided.saturating_add(l.work));
                     }
                     let mech = mech.get_or_insert_with(|| e.mech.clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
@@ -978,6 +1038,16 @@ fn place(
             &mut stopped,
             &mut *sink,
         )?;
+        if defer
+            && x == 0
+            && p.lean.is_some()
+            && let Some(k) = keep.as_deref_mut()
+        {
+            // Only what making the groups again needs: the exact oracle's null vectors go.
+            let mut p = p;
+            p.oracle = Oracle::Undecided;
+            *k = Some(p);
+        }
         if r.cut || stopped {
             break;
         }
@@ -1078,10 +1148,19 @@ impl ExpansionParts {
                     let origins: Vec<usize> = joints.iter().map(|&q| e.origin[q]).collect();
                     let prules = rules.restrict(&origins);
                     let mut first: Option<Placement> = None;
-                    let placed = place(&mech, &prules, &popts, lib, meter, None, &mut |p| {
-                        first.get_or_insert(p);
-                        true
-                    })?;
+                    let placed = place(
+                        &mech,
+                        &prules,
+                        &popts,
+                        lib,
+                        meter,
+                        None,
+                        &mut |p| {
+                            first.get_or_insert(p);
+                            true
+                        },
+                        None,
+                    )?;
                     self.results.push(PartResult {
                         placed,
                         placement: first,
@@ -1291,35 +1370,97 @@ fn join_parts(
         groups_at: groups.iter().map(|g| (g.0, g.2)).collect(),
         kinds,
         in_lib,
+        lean: None,
     })
 }
 
 /// Enumerate, rank and group the determined placements (at most [`list_cap`] listed, the best
-/// ones; the counts cover them all).
+/// ones; the counts cover them all). [`ranked`] with every partition made.
 pub fn transform(
     m: &Mechanism,
     opts: &TransformOptions,
     lib: &Library,
     progress: Option<ProgressFn<'_>>,
 ) -> Result<Transform, TransformError> {
+    ranked(m, opts, lib, progress)?.into_transform()
+}
+
+/// The ranked result of [`ranked`]: [`Transform`] without the partitions the search's flow
+/// gave, each made again when it is written (it serializes as [`Transform`] does, byte for
+/// byte, streaming). A listed placement of a 10^6-body linkage held its partition (about
+/// 10 MB with its bookkeeping), and each family a copy: 100 of them were over 1 GB of
+/// `transform --limit 100`; held now is O(bodies) for the search's problem plus each
+/// placement's inputs and scores.
+#[derive(Debug)]
+pub struct Ranked {
+    /// Counts and notes.
+    pub summary: Summary,
+    /// The ranking criteria used.
+    pub criteria: Vec<Criterion>,
+    /// Rank of the file's own placement among the determined ones, if it is one of them.
+    pub original_rank: Option<usize>,
+    /// Every listed placement, best first; one whose groups came from the search's flow has
+    /// an empty partition here ([`Ranked::partition`] makes it).
+    pub placements: Vec<Placement>,
+    /// Each family's members (ranks, best first), best family first (family `i + 1`).
+    pub families: Vec<Vec<usize>>,
+    /// The fingerprint of each placement's partition (a check on the ones made again).
+    fingerprints: Vec<Fingerprint>,
+    /// The search's problem, to make the partitions again.
+    problem: Option<Problem>,
+}
+
+impl std::fmt::Debug for Problem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Problem")
+            .field("pairs", &self.a.len())
+            .finish_non_exhaustive()
+    }
+}
+
+/// Enumerate, rank and group the determined placements as [`transform`] does, holding each
+/// listed placement's partition only where it cannot be made again ([`Ranked`]).
+pub fn ranked(
+    m: &Mechanism,
+    opts: &TransformOptions,
+    lib: &Library,
+    progress: Option<ProgressFn<'_>>,
+) -> Result<Ranked, TransformError> {
     let criteria = if opts.rank.is_empty() {
         Criterion::DEFAULT.to_vec()
     } else {
         opts.rank.clone()
     };
     let cap = list_cap(m, None);
-    let order = |a: &Placement, b: &Placement| {
-        compare_scores(&a.scores, &b.scores, &criteria).then(a.seq.cmp(&b.seq))
+    let order = |a: &(Placement, Fingerprint), b: &(Placement, Fingerprint)| {
+        compare_scores(&a.0.scores, &b.0.scores, &criteria).then(a.0.seq.cmp(&b.0.seq))
     };
-    let mut placements: Vec<Placement> = Vec::new();
-    let mut summary = enumerate(m, opts, lib, progress, &mut |p| {
-        placements.push(p);
-        // Keep the best `cap` only: memory stays bounded however many there are.
-        if placements.len() >= 2 * cap {
-            placements.sort_by(order);
-            placements.truncate(cap);
-        }
-    })?;
+    let mut placements: Vec<(Placement, Fingerprint)> = Vec::new();
+    let mut problem: Option<Problem> = None;
+    let mut summary = enumerate_kept(
+        m,
+        opts,
+        lib,
+        progress,
+        &mut |mut p| {
+            let fp = p.partition.fingerprint();
+            if p.lean.is_some() {
+                p.partition = Partition(Repr::Text(Vec::new()));
+            }
+            // Bookkeeping only the joining of parts reads (a whole's placement is never a
+            // part's): one record a group.
+            p.groups_at = Vec::new();
+            p.kinds = Vec::new();
+            p.in_lib = Vec::new();
+            placements.push((p, fp));
+            // Keep the best `cap` only: memory stays bounded however many there are.
+            if placements.len() >= 2 * cap {
+                placements.sort_by(order);
+                placements.truncate(cap);
+            }
+        },
+        Some(&mut problem),
+    )?;
     placements.sort_by(order);
     if placements.len() > cap {
         placements.truncate(cap);
@@ -1329,34 +1470,154 @@ pub fn transform(
         summary.listed = placements.len();
         finish_listing_note(&mut summary);
     }
-    let mut index: BTreeMap<PartitionKey, usize> = BTreeMap::new();
-    let mut families: Vec<Family> = Vec::new();
-    for (i, p) in placements.iter_mut().enumerate() {
+    let mut index: HashMap<Fingerprint, usize> = HashMap::new();
+    let mut families: Vec<Vec<usize>> = Vec::new();
+    for (i, (p, fp)) in placements.iter_mut().enumerate() {
         p.rank = Some(i + 1);
-        let key = p.partition.key();
-        let f = *index.entry(key).or_insert_with(|| {
-            families.push(Family {
-                id: families.len() + 1,
-                partition: p.partition.clone(),
-                placements: Vec::new(),
-            });
+        let f = *index.entry(*fp).or_insert_with(|| {
+            families.push(Vec::new());
             families.len()
         });
-        families[f - 1].placements.push(i + 1);
+        families[f - 1].push(i + 1);
         p.family = Some(f);
     }
     let own = exps_default_inputs(m, opts.max_expansions);
     let original_rank = placements
         .iter()
-        .find(|p| p.exp == 0 && p.inputs == own)
-        .and_then(|p| p.rank);
-    Ok(Transform {
+        .find(|(p, _)| p.exp == 0 && p.inputs == own)
+        .and_then(|(p, _)| p.rank);
+    let (placements, fingerprints) = placements.into_iter().unzip();
+    Ok(Ranked {
         summary,
         criteria,
         original_rank,
         placements,
         families,
+        fingerprints,
+        problem,
     })
+}
+
+impl Ranked {
+    /// The partition of the placement at index `i` (rank `i + 1`): held, or made again from
+    /// its inputs and the search's problem (checked against the fingerprint taken when it
+    /// was first made).
+    pub fn partition(&self, i: usize) -> Result<std::borrow::Cow<'_, Partition>, TransformError> {
+        use std::borrow::Cow;
+        let failed = TransformError::Regenerate { rank: i + 1 };
+        let p = self.placements.get(i).ok_or(failed.clone())?;
+        let Some(w) = &p.lean else {
+            return Ok(Cow::Borrowed(&p.partition));
+        };
+        let made = self.problem.as_ref().and_then(|pr| {
+            let l = pr.lean.as_ref()?;
+            let flow = pr.flow_of(w)?;
+            Some(Partition::indexed(
+                &l.ids,
+                l.raw(&flow)
+                    .into_iter()
+                    .map(|(_, g)| g.into_iter().map(|x| x as u32).collect()),
+            ))
+        });
+        match made {
+            Some(part) if Some(&part.fingerprint()) == self.fingerprints.get(i) => {
+                Ok(Cow::Owned(part))
+            }
+            _ => Err(failed),
+        }
+    }
+
+    /// The placement at index `i` with its partition, as [`Transform`] lists it.
+    fn full(&self, i: usize) -> Result<std::borrow::Cow<'_, Placement>, TransformError> {
+        use std::borrow::Cow;
+        let failed = TransformError::Regenerate { rank: i + 1 };
+        let p = self.placements.get(i).ok_or(failed)?;
+        Ok(match self.partition(i)? {
+            Cow::Borrowed(_) => Cow::Borrowed(p),
+            Cow::Owned(part) => {
+                let mut q = p.clone();
+                q.partition = part;
+                q.lean = None;
+                Cow::Owned(q)
+            }
+        })
+    }
+
+    /// Every partition made: the [`Transform`].
+    pub fn into_transform(self) -> Result<Transform, TransformError> {
+        let mut placements = Vec::with_capacity(self.placements.len());
+        for i in 0..self.placements.len() {
+            placements.push(self.full(i)?.into_owned());
+        }
+        let mut families = Vec::with_capacity(self.families.len());
+        for (f, members) in self.families.iter().enumerate() {
+            let best = members.first().and_then(|&r| placements.get(r - 1));
+            let Some(best) = best else {
+                return Err(TransformError::Regenerate { rank: 0 });
+            };
+            families.push(Family {
+                id: f + 1,
+                partition: best.partition.clone(),
+                placements: members.clone(),
+            });
+        }
+        Ok(Transform {
+            summary: self.summary,
+            criteria: self.criteria,
+            original_rank: self.original_rank,
+            placements,
+            families,
+        })
+    }
+}
+
+impl Serialize for Ranked {
+    /// As [`Transform`] serializes, each partition made when it is written.
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::{Error, SerializeSeq, SerializeStruct};
+        struct Placements<'a>(&'a Ranked);
+        impl Serialize for Placements<'_> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                let mut seq = s.serialize_seq(Some(self.0.placements.len()))?;
+                for i in 0..self.0.placements.len() {
+                    let p = self.0.full(i).map_err(S::Error::custom)?;
+                    seq.serialize_element(&*p)?;
+                }
+                seq.end()
+            }
+        }
+        /// A family as [`Family`] serializes.
+        #[derive(Serialize)]
+        struct FamilyRef<'a> {
+            id: usize,
+            partition: &'a Partition,
+            placements: &'a [usize],
+        }
+        struct Families<'a>(&'a Ranked);
+        impl Serialize for Families<'_> {
+            fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                let r = self.0;
+                let mut seq = s.serialize_seq(Some(r.families.len()))?;
+                for (f, members) in r.families.iter().enumerate() {
+                    let best = members.first().map_or(0, |&r| r - 1);
+                    let part = r.partition(best).map_err(S::Error::custom)?;
+                    seq.serialize_element(&FamilyRef {
+                        id: f + 1,
+                        partition: &part,
+                        placements: members,
+                    })?;
+                }
+                seq.end()
+            }
+        }
+        let mut st = s.serialize_struct("Transform", 5)?;
+        st.serialize_field("summary", &self.summary)?;
+        st.serialize_field("criteria", &self.criteria)?;
+        st.serialize_field("original_rank", &self.original_rank)?;
+        st.serialize_field("placements", &Placements(self))?;
+        st.serialize_field("families", &Families(self))?;
+        st.end()
+    }
 }
 
 fn finish_listing_note(s: &mut Summary) {
@@ -1668,14 +1929,23 @@ fn combine_parts(
                 let mech = part_mechanism(m, joints, bodies, &mut local);
                 let prules = rules.restrict(joints);
                 let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
-                let placed = place(&mech, &prules, opts, lib, meter, None, &mut |p| {
-                    let e = by.entry(Key::of(&p.scores)).or_default();
-                    e.0 += 1;
-                    if e.1.len() < cap {
-                        e.1.push(p);
-                    }
-                    true
-                })?;
+                let placed = place(
+                    &mech,
+                    &prules,
+                    opts,
+                    lib,
+                    meter,
+                    None,
+                    &mut |p| {
+                        let e = by.entry(Key::of(&p.scores)).or_default();
+                        e.0 += 1;
+                        if e.1.len() < cap {
+                            e.1.push(p);
+                        }
+                        true
+                    },
+                    None,
+                )?;
                 memo.push(PartKeys {
                     placed,
                     keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
@@ -2545,6 +2815,28 @@ impl Problem {
         Ok(p)
     }
 
+    /// A flow routing the equations and the inputs of placement `w` (units per pair, sparse,
+    /// kept units included), clipped to a byte as the search's flows are: the root's, then
+    /// each input unit beyond the kept ones augmented. Any such flow gives the same groups
+    /// ([`Lean`]). `None` if a unit does not fit (never expected: `w` is a count-valid
+    /// placement of this problem, so a flow with all its units exists and every partial one
+    /// has an augmenting path from the pair of a missing unit).
+    fn flow_of(&self, w: &[(usize, u32)]) -> Option<Vec<[u8; 2]>> {
+        let mut s = self.root.clone()?;
+        let mut sc = self.scratch();
+        for &(q, n) in w {
+            for _ in *self.lo.get(q)?..n {
+                self.augment(&mut s, &[q], &mut sc)?;
+            }
+        }
+        Some(
+            s.flow
+                .iter()
+                .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                .collect(),
+        )
+    }
+
     /// Pairs that may be driven (including kept ones).
     fn drivable(&self) -> usize {
         self.hi.iter().filter(|&&h| h > 0).count()
@@ -2671,6 +2963,7 @@ impl Problem {
             sc: self.scratch(),
             dead: vec![0; self.u.len()],
             version: 1,
+            free: 0,
         };
         // The greedy first placement: as many units as fit on each candidate in order.
         let mut placed = 0usize;
@@ -2732,6 +3025,7 @@ impl Problem {
             }
         }
         t.trail.clear();
+        t.free = (0..t.w.len()).map(|q| t.free_of(q)).sum();
         // Choice points: (trail mark, candidate position) whose "no more units" branch is
         // still to be explored.
         let mut choices: Vec<(usize, usize)> = Vec::new();
@@ -2785,6 +3079,12 @@ impl Problem {
         q: usize,
         meter: &mut Meter,
     ) -> Result<bool, BudgetExceeded> {
+        // No unit above its lower bound on another pair: nothing to drop (the search below
+        // would visit every body it reaches to find none, once a placement: the place of the
+        // only input of an Assur linkage is then fixed).
+        if t.free == t.free_of(q) {
+            return Ok(false);
+        }
         let found = {
             let Search {
                 s,
@@ -2952,9 +3252,16 @@ struct Search {
     /// removing units ([`Problem::cap`]) and undoing bump `version`.
     dead: Vec<u64>,
     version: u64,
+    /// Units above their lower bound, summed over the pairs (`Σ w − lo` where positive):
+    /// with none but on the pair itself, an exchange has none to drop and fails at once.
+    free: u64,
 }
 
 impl Search {
+    /// Units of `q` above its lower bound.
+    fn free_of(&self, q: usize) -> u64 {
+        u64::from(self.w[q].saturating_sub(self.lo[q]))
+    }
     fn flow_add(&mut self, q: usize, side: usize, d: i32) {
         let old = self.s.flow[q][side];
         self.trail.push((side as u8, q as u32, old));
@@ -2963,11 +3270,15 @@ impl Search {
     fn w_add(&mut self, q: usize, d: i32) {
         let old = self.w[q];
         self.trail.push((2, q as u32, old));
+        self.free -= self.free_of(q);
         self.w[q] = old.wrapping_add_signed(d);
+        self.free += self.free_of(q);
     }
     fn set_lo(&mut self, q: usize, v: u32) {
         self.trail.push((3, q as u32, self.lo[q]));
+        self.free -= self.free_of(q);
         self.lo[q] = v;
+        self.free += self.free_of(q);
     }
     fn set_hi(&mut self, q: usize, v: u32) {
         self.trail.push((4, q as u32, self.hi[q]));
@@ -2984,8 +3295,15 @@ impl Search {
             }
             match k {
                 0 | 1 => self.s.flow[q][k as usize] = old,
-                2 => self.w[q] = old,
-                3 => self.lo[q] = old,
+                2 | 3 => {
+                    self.free -= self.free_of(q);
+                    if k == 2 {
+                        self.w[q] = old;
+                    } else {
+                        self.lo[q] = old;
+                    }
+                    self.free += self.free_of(q);
+                }
                 _ => self.hi[q] = old,
             }
         }
@@ -3097,6 +3415,7 @@ fn placement_of(
         groups_at: g.groups_at,
         kinds: g.kinds,
         in_lib: g.in_lib,
+        lean: None,
     }
 }
 
@@ -3125,6 +3444,8 @@ struct Lean {
     /// each was a cache miss).
     ends: Vec<[u32; 2]>,
     kind: Vec<JointType>,
+    /// The frame's index.
+    frame: usize,
     /// Work units of one lean analysis: a few passes over the bodies and pairs.
     work: u64,
 }
@@ -3170,14 +3491,16 @@ impl Lean {
             ids: Arc::clone(ids),
             ends,
             kind: m.joints.iter().map(|j| j.kind).collect(),
+            frame: m.frame,
             work: 8 * (m.bodies.len() + m.joints.len()) as u64 + 100,
         }
     }
 
-    /// The groups of placement `w` (pairs of `m`, all binary) whose search flow is `flow`.
-    fn groups(&self, m: &Mechanism, flow: &[[u8; 2]], lib: &Library) -> Groups {
-        let nb = m.bodies.len();
-        let frame = m.frame;
+    /// The groups (level and bodies, canonical order) of the placement whose search flow (any flow routing all
+    /// its equations and inputs: the components do not depend on which) is `flow`.
+    fn raw(&self, flow: &[[u8; 2]]) -> Vec<(usize, Vec<usize>)> {
+        let nb = self.start.len() - 1;
+        let frame = self.frame;
         let ends = |q: usize| {
             let [a, c] = self.ends[q];
             (a as usize, c as usize)
@@ -3190,7 +3513,7 @@ impl Lean {
             (flow.get(q).is_some_and(|f| f[i] > 0) && x != frame && y != frame && x != y)
                 .then_some((x, y))
         };
-        for q in 0..m.joints.len() {
+        for q in 0..self.ends.len() {
             for i in 0..2 {
                 if let Some((x, _)) = edge(q, i) {
                     deg[x + 1] += 1;
@@ -3202,7 +3525,7 @@ impl Lean {
         }
         let mut fill = deg.clone();
         let mut adj = vec![0u32; deg[nb]];
-        for q in 0..m.joints.len() {
+        for q in 0..self.ends.len() {
             for i in 0..2 {
                 if let Some((x, y)) = edge(q, i) {
                     adj[fill[x]] = y as u32;
@@ -3236,11 +3559,24 @@ impl Lean {
             level[c] = 1 + lv;
         }
         let n = sccs.len();
-        let raw = structure::canonical(sccs, level, vec![Vec::new(); n]);
+        structure::canonical(sccs, level, vec![Vec::new(); n])
+            .into_iter()
+            .map(|g| (g.level, g.bodies))
+            .collect()
+    }
+
+    /// The groups of placement `w` (pairs of `m`, all binary) whose search flow is `flow`.
+    fn groups(&self, m: &Mechanism, flow: &[[u8; 2]], lib: &Library) -> Groups {
+        let nb = m.bodies.len();
+        let ends = |q: usize| {
+            let [a, c] = self.ends[q];
+            (a as usize, c as usize)
+        };
+        let raw = self.raw(flow);
         // Solve-order key: the frame (and bodies no joint names) first, then the groups.
         let mut key = vec![-2i64; nb];
         for (g, grp) in raw.iter().enumerate() {
-            for &x in &grp.bodies {
+            for &x in &grp.1 {
                 key[x] = g as i64;
             }
         }
@@ -3264,7 +3600,7 @@ impl Lean {
         for (g, grp) in raw.iter().enumerate() {
             let gk = g as i64;
             kinds.clear();
-            for &x in &grp.bodies {
+            for &x in &grp.1 {
                 for &q in &self.touch[self.start[x]..self.start[x + 1]] {
                     let q = q as usize;
                     let (a, c) = ends(q);
@@ -3302,11 +3638,11 @@ impl Lean {
             };
             types[t].count += 1;
             let covered = types[t].in_library;
-            out.scores.largest = out.scores.largest.max(grp.bodies.len());
-            out.scores.levels = out.scores.levels.max(grp.level);
+            out.scores.largest = out.scores.largest.max(grp.1.len());
+            out.scores.levels = out.scores.levels.max(grp.0);
             out.scores.covered += usize::from(covered);
             out.groups_at
-                .push((grp.level, grp.bodies.first().copied().unwrap_or(usize::MAX)));
+                .push((grp.0, grp.1.first().copied().unwrap_or(usize::MAX)));
             out.kinds.push(t as u32);
             out.in_lib.push(covered);
         }
@@ -3315,7 +3651,7 @@ impl Lean {
         out.partition = Partition::indexed(
             &self.ids,
             raw.iter()
-                .map(|grp| grp.bodies.iter().map(|&x| x as u32).collect()),
+                .map(|grp| grp.1.iter().map(|&x| x as u32).collect()),
         );
         out
     }

@@ -141,12 +141,15 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
             emit(&mbsa::report::transform::jsonl(&summary))
         }
         TransformFormat::Json | TransformFormat::Table => {
-            let t = transform::transform(&m, &opts, &lib, progress).map_err(failed)?;
+            // Partitions are made as they are written (none for the table): not held.
+            let t = transform::ranked(&m, &opts, &lib, progress).map_err(failed)?;
             if let Some(bar) = &bar {
                 bar.finish_and_clear();
             }
             match args.format {
-                TransformFormat::Table => emit(&mbsa::report::transform::table(&t, args.top)),
+                TransformFormat::Table => {
+                    emit(&mbsa::report::transform::table_of_ranked(&t, args.top))
+                }
                 _ => emit_json(&t),
             }
         }

@@ -2,7 +2,9 @@
 //! one given placement beside the file's own; JSON lines for streaming.
 
 use crate::structure::Status;
-use crate::transform::{Comparison, Evaluation, Input, Placement, Summary, Transform, count_words};
+use crate::transform::{
+    Comparison, Criterion, Evaluation, Input, Placement, Ranked, Summary, Transform, count_words,
+};
 use std::fmt::Write;
 
 /// How many member placements a family row lists before `+n more`.
@@ -87,24 +89,57 @@ pub fn summary(s: &Summary) -> String {
 /// The top `top` families of placements (placements with the same partition into groups
 /// share a row; the row shows its best member's scores).
 pub fn table(t: &Transform, top: usize) -> String {
-    let mut out = summary(&t.summary);
-    let crit: Vec<&str> = t.criteria.iter().map(|c| c.name()).collect();
+    let families: Vec<&[usize]> = t.families.iter().map(|f| &f.placements[..]).collect();
+    ranked_table(
+        &t.summary,
+        &t.criteria,
+        t.original_rank,
+        &t.placements,
+        &families,
+        top,
+    )
+}
+
+/// [`table`] of a [`Ranked`] (the table shows no partition: none is made).
+pub fn table_of_ranked(t: &Ranked, top: usize) -> String {
+    let families: Vec<&[usize]> = t.families.iter().map(|f| &f[..]).collect();
+    ranked_table(
+        &t.summary,
+        &t.criteria,
+        t.original_rank,
+        &t.placements,
+        &families,
+        top,
+    )
+}
+
+/// The table of ranked `placements` grouped into `families` (each its members' ranks).
+fn ranked_table(
+    summary_: &Summary,
+    criteria: &[Criterion],
+    original_rank: Option<usize>,
+    placements: &[Placement],
+    families: &[&[usize]],
+    top: usize,
+) -> String {
+    let mut out = summary(summary_);
+    let crit: Vec<&str> = criteria.iter().map(|c| c.name()).collect();
     let _ = writeln!(
         out,
         "{} placement(s) in {} famil{} with distinct groups; ranked by {}{}",
-        t.placements.len(),
-        t.families.len(),
-        if t.families.len() == 1 { "y" } else { "ies" },
+        placements.len(),
+        families.len(),
+        if families.len() == 1 { "y" } else { "ies" },
         crit.join(", "),
-        match t.original_rank {
+        match original_rank {
             Some(r) => format!("; the file's own inputs rank {r}"),
             None => String::new(),
         }
     );
-    if t.families.is_empty() {
+    if families.is_empty() {
         return out;
     }
-    let expansions = t.placements.iter().any(|p| p.expansion.is_some());
+    let expansions = placements.iter().any(|p| p.expansion.is_some());
     let mut tbl = super::new_table();
     let mut header = vec!["rank", "inputs"];
     if expansions {
@@ -118,12 +153,8 @@ pub fn table(t: &Transform, top: usize) -> String {
         "types (* not in library)",
     ]);
     tbl.set_header(header);
-    for fam in t.families.iter().take(top) {
-        let members: Vec<&Placement> = fam
-            .placements
-            .iter()
-            .filter_map(|&r| t.placements.get(r - 1))
-            .collect();
+    for fam in families.iter().take(top) {
+        let members: Vec<&Placement> = fam.iter().filter_map(|&r| placements.get(r - 1)).collect();
         let Some(best) = members.first() else {
             continue;
         };
@@ -157,12 +188,12 @@ pub fn table(t: &Transform, top: usize) -> String {
         tbl.add_row(row);
     }
     let _ = writeln!(out, "{tbl}");
-    if t.families.len() > top {
+    if families.len() > top {
         let _ = writeln!(
             out,
             "{} more famil{} not shown (raise --top, or use --format json)",
-            t.families.len() - top,
-            if t.families.len() - top == 1 {
+            families.len() - top,
+            if families.len() - top == 1 {
                 "y"
             } else {
                 "ies"
