@@ -788,7 +788,7 @@ fn build(
             inputs,
         )
     });
-    // The pair lists are written: their inputs (160 MB at 10^6 bodies) are freed before the
+    // The pair lists are written: their inputs (115 MB at 10^6 bodies) are freed before the
     // groups are made, not held with them.
     drop(near);
     drop(start);
