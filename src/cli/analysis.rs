@@ -146,7 +146,8 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
     }
     let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
     let out = match format {
-        OutputFormat::Table => emit(&mbsa::report::structure::table(&a)),
+        // Streamed: at 10^6 bodies the table is hundreds of megabytes.
+        OutputFormat::Table => emit_with(|w| mbsa::report::structure::write_table(w, &a)),
         OutputFormat::Json => emit_json(&a),
     };
     keep_until_exit((m, a));
@@ -157,13 +158,21 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
 /// text of a 10^6-body analysis is over 100 MB, and held whole it was the largest allocation
 /// after the analysis (with the copies of its growth).
 fn emit_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
+    emit_with(|out| {
+        serde_json::to_writer_pretty(&mut *out, value)
+            .map_err(std::io::Error::from)
+            .and_then(|()| out.write_all(b"\n"))
+    })
+}
+
+/// [`emit`] of the text `write` writes, through a buffer, as it is written (a closed pipe
+/// ends the program quietly).
+fn emit_with(
+    write: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<(), Failure> {
     use std::io::Write;
     let mut out = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
-    let written = serde_json::to_writer_pretty(&mut out, value)
-        .map_err(std::io::Error::from)
-        .and_then(|()| out.write_all(b"\n"))
-        .and_then(|()| out.flush());
-    match written {
+    match write(&mut out).and_then(|()| out.flush()) {
         Ok(()) => Ok(()),
         Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => std::process::exit(0),
         Err(e) => Err(Failure::Input(format!("error: cannot write output: {e}"))),

@@ -2,7 +2,6 @@
 //! and Table 9 (types against the library), followed by the findings.
 
 use crate::structure::{Analysis, Status};
-use std::borrow::Cow;
 use std::fmt::Write;
 
 fn dash(s: &str) -> &str {
@@ -12,6 +11,33 @@ fn dash(s: &str) -> &str {
 /// Render the analysis.
 pub fn table(a: &Analysis) -> String {
     let mut out = String::new();
+    // Never flushed: the whole table stays in `out`.
+    let _ = render(a, &mut out, &mut |_: &mut String| Ok(()));
+    out
+}
+
+/// Bytes of rendered text held before [`write_table`] hands them to its writer.
+const FLUSH_AT: usize = 1 << 16;
+
+/// [`table`], written to `w` as it is rendered: the same bytes, without holding them. The
+/// table of a 10^6-body analysis is hundreds of megabytes (280 MB for 667,261 groups), and
+/// held whole with its rows it was the peak of `analyze --count-only`.
+pub fn write_table<W: std::io::Write + ?Sized>(w: &mut W, a: &Analysis) -> std::io::Result<()> {
+    let mut out = String::with_capacity(2 * FLUSH_AT);
+    render(a, &mut out, &mut |s: &mut String| {
+        if s.len() >= FLUSH_AT {
+            w.write_all(s.as_bytes())?;
+            s.clear();
+        }
+        Ok(())
+    })?;
+    w.write_all(out.as_bytes())
+}
+
+/// Called with the text rendered so far at row boundaries: it may write it out and clear it.
+type Flush<'a> = dyn FnMut(&mut String) -> std::io::Result<()> + 'a;
+
+fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Result<()> {
     let status = match a.status {
         Status::Determined => "determined",
         Status::Overdetermined => "over-determined",
@@ -33,32 +59,18 @@ pub fn table(a: &Analysis) -> String {
         let _ = writeln!(out, "{}", g.line());
     }
     if !a.groups.is_empty() {
-        // Cells borrowed from the groups where they need no change (a 10^6-body analysis has
-        // 250,000 rows: nine new strings a row were a third of the rendering).
-        let rows: Vec<Vec<Cow<'_, str>>> = a
-            .groups
-            .iter()
-            .map(|g| {
-                vec![
-                    Cow::Borrowed(g.name.as_str()),
-                    Cow::Owned(wrap(&g.bodies.join(","), ',').into_owned()),
-                    Cow::Owned(g.nm.to_string()),
-                    Cow::Owned(g.inputs.to_string()),
-                    Cow::Owned(g.level.to_string()),
-                    Cow::Borrowed(g.kind.as_str()),
-                    wrap(dash(&g.from), '.'),
-                    wrap(dash(&g.internal), '.'),
-                    wrap(dash(&g.to), '.'),
-                ]
-            })
-            .collect();
+        // The rows are made one at a time into one buffer, twice (widths, then the lines):
+        // held at once, a 10^6-body analysis's 250,000 to 670,000 rows of nine cells were
+        // hundreds of megabytes.
         let header = [
             "SG", "bodies", "Nm", "inputs", "level", "type", "from", "internal", "to",
-        ]
-        .map(Cow::Borrowed);
-        plain_table(&mut out, &header, &rows);
+        ];
+        let mut rows = GroupRows {
+            groups: &a.groups,
+            joined: String::new(),
+        };
+        plain_table_with(out, &header, &mut rows, flush)?;
         out.push('\n');
-        drop(rows);
         let header = [
             "SG type".to_string(),
             "SGs".to_string(),
@@ -75,7 +87,7 @@ pub fn table(a: &Analysis) -> String {
                 ]
             })
             .collect();
-        plain_table(&mut out, &header, &rows);
+        plain_table_with(out, &header, &mut SliceRows(&rows), flush)?;
         out.push('\n');
     }
     if !a.unchecked.is_empty() {
@@ -103,33 +115,115 @@ pub fn table(a: &Analysis) -> String {
             list.join(", ")
         );
     }
+    flush(out)?;
     if let Some(d) = &a.diagnosis {
         if !d.unsolved.is_empty() {
             let _ = writeln!(out, "bodies left unsolved: {}", d.unsolved.join(", "));
         }
         for n in &d.notes {
             let _ = writeln!(out, "- {n}");
+            flush(out)?;
         }
     } else {
         for n in &a.notes {
             let _ = writeln!(out, "- {n}");
+            flush(out)?;
         }
     }
-    out
+    Ok(())
+}
+
+/// The rows of a table, made on demand one at a time into a reused buffer.
+trait Rows {
+    /// Number of rows.
+    fn len(&self) -> usize;
+    /// Append row `i`'s cells to `buf`, pushing the end of each cell in `buf` onto `ends`.
+    fn row(&mut self, i: usize, buf: &mut String, ends: &mut Vec<usize>);
+}
+
+/// Rows held as cells.
+struct SliceRows<'a, S>(&'a [Vec<S>]);
+
+impl<S: AsRef<str>> Rows for SliceRows<'_, S> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn row(&mut self, i: usize, buf: &mut String, ends: &mut Vec<usize>) {
+        for c in &self.0[i] {
+            buf.push_str(c.as_ref());
+            ends.push(buf.len());
+        }
+    }
+}
+
+/// The rows of the group table: `SG`, bodies, `Nm`, inputs, level, type, from, internal, to.
+struct GroupRows<'a> {
+    groups: &'a [crate::structure::Group],
+    /// The body list before it is wrapped.
+    joined: String,
+}
+
+impl Rows for GroupRows<'_> {
+    fn len(&self) -> usize {
+        self.groups.len()
+    }
+
+    fn row(&mut self, i: usize, buf: &mut String, ends: &mut Vec<usize>) {
+        let g = &self.groups[i];
+        let mut end = |buf: &mut String| ends.push(buf.len());
+        buf.push_str(&g.name);
+        end(buf);
+        self.joined.clear();
+        for (k, b) in g.bodies.iter().enumerate() {
+            if k > 0 {
+                self.joined.push(',');
+            }
+            self.joined.push_str(b);
+        }
+        wrap_into(buf, &self.joined, ',');
+        end(buf);
+        for n in [g.nm, g.inputs as usize, g.level] {
+            push_usize(buf, n);
+            end(buf);
+        }
+        buf.push_str(&g.kind);
+        end(buf);
+        for list in [&g.from, &g.internal, &g.to] {
+            wrap_into(buf, dash(list), '.');
+            end(buf);
+        }
+    }
+}
+
+/// Append `n` in decimal, as `Display` writes it.
+fn push_usize(s: &mut String, mut n: usize) {
+    let mut digits = [0u8; 20];
+    let mut k = digits.len();
+    loop {
+        k -= 1;
+        digits[k] = b'0' + (n % 10) as u8;
+        n /= 10;
+        if n == 0 {
+            break;
+        }
+    }
+    // ASCII digits: always UTF-8.
+    s.push_str(std::str::from_utf8(&digits[k..]).unwrap_or_default());
 }
 
 /// Widest line of a list cell. Tables pad every row to the widest cell, so one giant group
 /// (thousands of pairs) would otherwise make every row of the table as wide as its list.
 const CELL_WIDTH: usize = 48;
 
-/// Break a list (`9&10S.9&13R.` or `3,5,7`) into lines of at most [`CELL_WIDTH`] characters,
-/// after a separator, so that no entry is split.
-fn wrap(text: &str, sep: char) -> Cow<'_, str> {
+/// Append a list (`9&10S.9&13R.` or `3,5,7`) to `out`, broken into lines of at most
+/// [`CELL_WIDTH`] characters after a separator, so that no entry is split.
+fn wrap_into(out: &mut String, text: &str, sep: char) {
     // Never more than one line (characters are at most bytes): nothing to break.
     if text.len() <= CELL_WIDTH {
-        return Cow::Borrowed(text);
+        out.push_str(text);
+        return;
     }
-    let mut out = String::with_capacity(text.len() + text.len() / CELL_WIDTH + 1);
     let mut line = 0;
     for entry in text.split_inclusive(sep) {
         let n = entry.chars().count();
@@ -140,7 +234,6 @@ fn wrap(text: &str, sep: char) -> Cow<'_, str> {
         out.push_str(entry);
         line += n;
     }
-    Cow::Owned(out)
 }
 
 /// Append `header` and `rows` as [`super::new_table`] renders them (without the final newline),
@@ -150,22 +243,47 @@ fn wrap(text: &str, sep: char) -> Cow<'_, str> {
 /// every generated and bundled mechanism) is one column per byte, so the layout is computed
 /// directly; anything else (wide or combining characters, control characters) goes through
 /// comfy-table itself, so the bytes are the same either way.
+#[cfg(test)]
 fn plain_table<S: AsRef<str>>(out: &mut String, header: &[S], rows: &[Vec<S>]) {
+    let _ = plain_table_with(out, header, &mut SliceRows(rows), &mut |_: &mut String| {
+        Ok(())
+    });
+}
+
+/// [`plain_table`] over rows made on demand (see [`Rows`]), calling `flush` after each row.
+fn plain_table_with<S: AsRef<str>>(
+    out: &mut String,
+    header: &[S],
+    rows: &mut impl Rows,
+    flush: &mut Flush<'_>,
+) -> std::io::Result<()> {
     let ncols = header.len();
-    let simple = |c: &S| {
-        c.as_ref()
-            .bytes()
-            .all(|b| b == b'\n' || (0x20..0x7f).contains(&b))
-    };
-    let fits = header.iter().all(simple)
-        && rows
-            .iter()
-            .all(|r| r.len() == ncols && r.iter().all(simple));
+    let simple = |c: &str| c.bytes().all(|b| b == b'\n' || (0x20..0x7f).contains(&b));
+    let mut fits = header.iter().all(|c| simple(c.as_ref()));
     let mut width = vec![1usize; ncols];
+    let mut buf = String::new();
+    let mut ends: Vec<usize> = Vec::with_capacity(ncols);
+    let cells = |rows: &mut dyn Rows, i: usize, buf: &mut String, ends: &mut Vec<usize>| {
+        buf.clear();
+        ends.clear();
+        rows.row(i, buf, ends);
+    };
+    // Cell `c` of the row in the buffer.
+    let cell = |ends: &[usize], c: usize| (if c == 0 { 0 } else { ends[c - 1] })..ends[c];
     if fits {
-        for row in std::iter::once(header).chain(rows.iter().map(Vec::as_slice)) {
-            for (c, cell) in row.iter().enumerate() {
-                for line in cell.as_ref().split('\n') {
+        for c in 0..ncols {
+            for line in header[c].as_ref().split('\n') {
+                width[c] = width[c].max(line.len());
+            }
+        }
+        for i in 0..rows.len() {
+            cells(rows, i, &mut buf, &mut ends);
+            if ends.len() != ncols || !simple(&buf) {
+                fits = false;
+                break;
+            }
+            for c in 0..ncols {
+                for line in buf[cell(&ends, c)].split('\n') {
                     width[c] = width[c].max(line.len());
                 }
             }
@@ -175,29 +293,39 @@ fn plain_table<S: AsRef<str>>(out: &mut String, header: &[S], rows: &[Vec<S>]) {
     if !fits || width.iter().any(|&w| w + 2 > usize::from(u16::MAX)) {
         let mut t = super::new_table();
         t.set_header(header.iter().map(|c| c.as_ref().to_string()));
-        for r in rows {
-            t.add_row(r.iter().map(|c| c.as_ref().to_string()));
+        for i in 0..rows.len() {
+            cells(rows, i, &mut buf, &mut ends);
+            t.add_row((0..ends.len()).map(|c| buf[cell(&ends, c)].to_string()));
         }
         let _ = write!(out, "{t}");
-        return;
+        return flush(out);
     }
     let rule: usize = width.iter().map(|w| w + 2).sum::<usize>() + ncols.saturating_sub(1);
     let hr = |out: &mut String| out.extend(std::iter::repeat_n('─', rule));
-    let put_row = |out: &mut String, row: &[S]| {
-        let mut lines: Vec<std::str::Split<'_, char>> =
-            row.iter().map(|c| c.as_ref().split('\n')).collect();
-        let height = row
-            .iter()
-            .map(|c| c.as_ref().split('\n').count())
+    // Where the next line of each cell starts (past its end: no line left).
+    let mut cursor: Vec<usize> = Vec::with_capacity(ncols);
+    let mut put_row = |out: &mut String, buf: &str, ends: &[usize]| {
+        cursor.clear();
+        cursor.extend((0..ncols).map(|c| cell(ends, c).start));
+        let height = (0..ncols)
+            .map(|c| buf[cell(ends, c)].bytes().filter(|&b| b == b'\n').count() + 1)
             .max()
             .unwrap_or(0);
         for _ in 0..height {
             out.push('\n');
-            for (c, it) in lines.iter_mut().enumerate() {
+            for c in 0..ncols {
                 if c > 0 {
                     out.push(' ');
                 }
-                let text = it.next().unwrap_or("");
+                let (at, end) = (cursor[c], ends[c]);
+                // The lines `split('\n')` gives, then empty ones.
+                let text = if at > end {
+                    ""
+                } else {
+                    let stop = buf[at..end].find('\n').map_or(end, |k| at + k);
+                    cursor[c] = stop + 1;
+                    &buf[at..stop]
+                };
                 out.push(' ');
                 out.push_str(text);
                 out.extend(std::iter::repeat_n(' ', width[c] - text.len() + 1));
@@ -205,14 +333,23 @@ fn plain_table<S: AsRef<str>>(out: &mut String, header: &[S], rows: &[Vec<S>]) {
         }
     };
     hr(out);
-    put_row(out, header);
+    buf.clear();
+    ends.clear();
+    for h in header {
+        buf.push_str(h.as_ref());
+        ends.push(buf.len());
+    }
+    put_row(out, &buf, &ends);
     out.push('\n');
     hr(out);
-    for r in rows {
-        put_row(out, r);
+    for i in 0..rows.len() {
+        cells(rows, i, &mut buf, &mut ends);
+        put_row(out, &buf, &ends);
+        flush(out)?;
     }
     out.push('\n');
     hr(out);
+    Ok(())
 }
 
 #[cfg(test)]

@@ -1655,9 +1655,11 @@ fn check_at(
         c.put_basis(k, &v);
         v
     });
-    let mut q: Vec<Option<DMatrix<f64>>> = Vec::with_capacity(nb);
+    // The bases are the reduced unknowns as they are (moved into a second list of 10^6
+    // entries, both were held at once).
+    let q: Vec<Option<DMatrix<f64>>> = bases;
     let mut isolated = Vec::new();
-    for (body, basis) in bases.into_iter().enumerate() {
+    for (body, basis) in q.iter().enumerate() {
         let kept = basis.as_ref().map_or(b, |x| x.ncols());
         let iso = b - kept;
         if body != m.frame && iso > 0 && !eqs.is_element(body) {
@@ -1667,7 +1669,6 @@ fn check_at(
             });
         }
         u[body] = kept as u32;
-        q.push(basis);
     }
     // An isolated freedom at a random realization is confirmed at a second one: the body's
     // pairs drawn again (a generic nullity is the smallest over realizations).
@@ -2444,8 +2445,16 @@ fn pair_rows(
     // Chunks of consecutive pairs, each built on its own (in parallel): a joint's models are
     // built once per chunk (its pairs are consecutive), on the stack.
     let chunk = |c: usize| {
-        let mut rows = Chunk::default();
-        let mut free = Chunk::default();
+        let pairs = c * PAIRS_PER_CHUNK..n.min((c + 1) * PAIRS_PER_CHUNK);
+        // Room for the rows the count gives each pair (the models give that many): a chunk
+        // grown by doubling copied its rows about twice over.
+        let expected: usize = eqs.cap[pairs.clone()].iter().map(|&k| k as usize).sum();
+        let mut rows = Chunk::with_capacity(pairs.len(), expected * b);
+        let mut free = if with_free {
+            Chunk::with_capacity(pairs.len(), expected * b)
+        } else {
+            Chunk::default()
+        };
         let mut memo: [Option<(usize, u32, motion::Vecs)>; 2] = [None, None];
         let mut model = |ji: usize, driven: u32| {
             let slot = usize::from(driven == 0);
@@ -2464,7 +2473,7 @@ fn pair_rows(
                 }
             }
         };
-        for e in c * PAIRS_PER_CHUNK..n.min((c + 1) * PAIRS_PER_CHUNK) {
+        for e in pairs {
             let ji = eqs.joint[e];
             if eqs.input_only[e] {
                 // A multiple joint's inputs between two of its bodies: the driven rows alone.
@@ -2523,6 +2532,14 @@ struct Chunk {
 }
 
 impl Chunk {
+    /// A chunk with room for `pairs` pairs and `values` values.
+    fn with_capacity(pairs: usize, values: usize) -> Chunk {
+        Chunk {
+            values: Vec::with_capacity(values),
+            counts: Vec::with_capacity(pairs),
+        }
+    }
+
     fn push_rows(&mut self, rows: &[[f64; 6]], b: usize) {
         for r in rows {
             self.values.extend_from_slice(&r[..b]);
@@ -3650,6 +3667,30 @@ mod tests {
                     motion::pair_model(m, ji, &geoms[ji], 0).rows
                 };
                 assert_eq!(free.get(e).into_owned(), want_free, "pair {e}");
+            }
+        }
+    }
+
+    /// Every chunk of rows is built in the room the count gives its pairs (its equations: the
+    /// models give as many rows at a random realization), never grown: grown by doubling, the
+    /// chunks of a 10^6-body mechanism copied their 330 MB of rows about once more and held up
+    /// to twice the room.
+    #[test]
+    fn pair_rows_chunks_are_sized_once() {
+        let cases = [
+            crate::generate::random(3000, false, 2).expect("valid").0,
+            crate::generate::random(3000, true, 5).expect("valid").0,
+            crate::generate::star(2500, JointType::S, false, true, true).expect("valid"),
+        ];
+        for m in &cases {
+            let eqs = Equations::of(m);
+            let (_, used) =
+                motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
+            let (rows, _) = pair_rows(m, &[], used.seed, &HashMap::new(), &eqs, false);
+            assert!(rows.chunks.len() > 2, "several chunks");
+            for (c, chunk) in rows.chunks.iter().enumerate() {
+                assert!(!chunk.is_empty());
+                assert_eq!(chunk.capacity(), chunk.len(), "chunk {c} of {}", m.name);
             }
         }
     }
