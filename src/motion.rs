@@ -599,6 +599,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
 
 /// A joint's allowed twists ([`full_twists`]) before any Gram-Schmidt: listed, or the
 /// annihilator of one line (SPSP, spatial only), which [`batch`] builds in lanes.
+#[allow(clippy::large_enum_variant)] // On the stack, returned once per joint: no box.
 enum TwistSpec {
     /// The twists themselves.
     Listed(Vecs),

@@ -403,12 +403,12 @@ pub(crate) fn pair_rows_many<'s, G: Borrow<Geometry>>(
 }
 
 /// [`pair_rows_many`] on `(kind, geometry, driven, fallback seed)` requests (`total` of them).
-pub(super) fn rows_many<'s, const N: usize, G: Borrow<Geometry>>(
+pub(super) fn rows_many<const N: usize, G: Borrow<Geometry>>(
     space: Space,
     total: usize,
     requests: impl Iterator<Item = (JointType, G, u32, u64)>,
-    scratch: &'s mut Scratch,
-) -> &'s Slots {
+    scratch: &mut Scratch,
+) -> &Slots {
     let Scratch {
         rows,
         work,
