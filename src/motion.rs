@@ -46,6 +46,8 @@ use nalgebra::{DMatrix, Vector3};
 
 pub use crate::rng::SplitMix64;
 
+mod batch;
+pub(crate) use batch::{Scratch, pair_rows_many};
 #[cfg(test)]
 mod reference;
 
@@ -589,6 +591,25 @@ fn contact_rows<const N: usize>(kind: JointType, g: &Geometry, space: Space) -> 
 /// All allowed twists of `kind` in driven-DOF order (before removing driven ones).
 #[inline]
 fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, MotionError> {
+    Ok(match twist_spec(kind, g, space)? {
+        TwistSpec::Listed(full) => full,
+        TwistSpec::AnnihilatorOf(line) => complement::<6>(&[line]),
+    })
+}
+
+/// A joint's allowed twists ([`full_twists`]) before any Gram-Schmidt: listed, or the
+/// annihilator of one line (SPSP, spatial only), which [`batch`] builds in lanes.
+#[allow(clippy::large_enum_variant)] // On the stack, returned once per joint: no box.
+enum TwistSpec {
+    /// The twists themselves.
+    Listed(Vecs),
+    /// The twists are [`complement`] of this one line.
+    AnnihilatorOf(Vb),
+}
+
+/// [`full_twists`] up to the Gram-Schmidt it may need.
+#[inline]
+fn twist_spec(kind: JointType, g: &Geometry, space: Space) -> Result<TwistSpec, MotionError> {
     use JointType::*;
     let code = kind.code();
     let origin = |g: &Geometry| need(kind, "origin", g.origin).map(v3);
@@ -596,7 +617,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
     let normal =
         |g: &Geometry| need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
     match space {
-        Space::Spatial => Ok(match kind {
+        Space::Spatial => Ok(TwistSpec::Listed(match kind {
             R => Vecs::of(&[spatial_rot(&axis(g)?, &origin(g)?)]),
             P => Vecs::of(&[spatial_trans(&axis(g)?)]),
             H => {
@@ -689,7 +710,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
                 }
                 let d = d / d.norm();
                 let m = c1.cross(&d);
-                complement::<6>(&[[m.x, m.y, m.z, d.x, d.y, d.z]])
+                return Ok(TwistSpec::AnnihilatorOf([m.x, m.y, m.z, d.x, d.y, d.z]));
             }
             F => {
                 let mut out = Vecs::EMPTY;
@@ -702,8 +723,8 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
                 out
             }
             _ => Vecs::EMPTY,
-        }),
-        Space::Planar => Ok(match kind {
+        })),
+        Space::Planar => Ok(TwistSpec::Listed(match kind {
             R => {
                 let p = origin(g)?;
                 Vecs::of(&[v3b(1.0, p.y, -p.x)])
@@ -724,8 +745,8 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
                     space: "planar",
                 });
             }
-        }),
-        Space::Spherical => Ok(match kind {
+        })),
+        Space::Spherical => Ok(TwistSpec::Listed(match kind {
             R => {
                 let u = axis(g)?;
                 Vecs::of(&[v3b(u.x, u.y, u.z)])
@@ -738,7 +759,7 @@ fn full_twists(kind: JointType, g: &Geometry, space: Space) -> Result<Vecs, Moti
                     space: "spherical",
                 });
             }
-        }),
+        })),
     }
 }
 
@@ -1424,18 +1445,12 @@ pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geome
     )
 }
 
-/// [`pair_stack_model`] of joint `i` at the random realization `seed`: at
-/// [`random_joint_geometry`], only the fields its model reads drawn.
-pub(crate) fn random_pair_stack_model(
-    m: &Mechanism,
-    seed: u64,
-    i: usize,
-    driven: u32,
-) -> StackModel {
+/// Joint `i`'s geometry in the random realization `seed` as its pair model reads it: the
+/// fields of [`random_joint_geometry`] its model reads, the later ones not drawn.
+pub(crate) fn random_pair_geometry(m: &Mechanism, seed: u64, i: usize) -> Geometry {
     let kind = m.joints[i].kind;
     let mut rng = SplitMix64::new(joint_seed(seed, i));
-    let g = random_geometry_to(kind, m.space, &mut rng, model_reads(kind, m.space));
-    pair_stack_model(m, i, &g, driven)
+    random_geometry_to(kind, m.space, &mut rng, model_reads(kind, m.space))
 }
 
 /// Every joint's geometry when the file's is used ([`geometries`]), made dimensionless
@@ -1806,6 +1821,8 @@ mod tests {
         };
         let mut rng = SplitMix64::new(1611);
         let mut compared = 0;
+        #[allow(clippy::type_complexity)]
+        let mut many: [Vec<(JointType, Geometry, u32, u64, Vecs, String)>; 3] = Default::default();
         for space in [Space::Spatial, Space::Planar, Space::Spherical] {
             for kind in JointType::all() {
                 for trial in 0..300 {
@@ -1857,15 +1874,30 @@ mod tests {
                     }
                     for driven in 0..=kind.grade() as u32 + 1 {
                         let what = format!("{kind:?} {space:?} driven {driven} trial {trial}");
-                        match (
+                        let seed = rng.next_u64();
+                        let want = match (
                             stack_model(kind, &g, space, driven),
                             old::stack_model(kind, &g, space, driven),
                         ) {
-                            (Ok(a), Ok(b)) => same(&a, &b, &what),
-                            (Err(a), Err(b)) => assert_eq!(a.to_string(), b.to_string(), "{what}"),
+                            (Ok(a), Ok(b)) => {
+                                same(&a, &b, &what);
+                                b.rows
+                            }
+                            (Err(a), Err(b)) => {
+                                assert_eq!(a.to_string(), b.to_string(), "{what}");
+                                old::fallback_model(kind, space, driven, seed).rows
+                            }
                             (a, b) => panic!("{what}: {a:?} against {b:?}"),
-                        }
-                        let seed = rng.next_u64();
+                        };
+                        // The rows of many models at once ([`batch`]), in a random order.
+                        many[space as usize].push((
+                            kind,
+                            g.clone(),
+                            driven,
+                            seed,
+                            want,
+                            what.clone(),
+                        ));
                         same(
                             &fallback_model(kind, space, driven, seed),
                             &old::fallback_model(kind, space, driven, seed),
@@ -1877,9 +1909,35 @@ mod tests {
             }
         }
         assert!(compared > 30_000, "{compared}");
+        batch::RUNS.with(|c| c.set([0; 2]));
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let cases = &mut many[space as usize];
+            // Kinds and driven DOF mixed in the lanes.
+            for i in (1..cases.len()).rev() {
+                cases.swap(i, rng.below(i as u64 + 1) as usize);
+            }
+            let requests = cases.iter().map(|(k, g, d, s, _, _)| (*k, g, *d, *s));
+            let mut scratch = batch::Scratch::default();
+            let rows = match space {
+                Space::Spatial => {
+                    batch::rows_many::<6, _>(space, cases.len(), requests, &mut scratch)
+                }
+                _ => batch::rows_many::<3, _>(space, cases.len(), requests, &mut scratch),
+            };
+            for (j, (_, _, _, _, want, what)) in cases.iter().enumerate() {
+                let got = Vecs::of(rows.get(j));
+                assert_eq!(bits(&got), bits(want), "{what}: rows of many");
+            }
+        }
+        // Lanes as well as one at a time (errors, count-only kinds, a length's last few).
+        let [lanes, single] = batch::RUNS.with(|c| c.get());
+        assert!(
+            lanes > 10_000 && single > 1_000,
+            "{lanes} in lanes, {single} alone"
+        );
     }
 
-    /// [`random_pair_stack_model`] draws only the fields a model reads: its models are bit
+    /// [`random_pair_geometry`] draws only the fields a model reads: its models are bit
     /// for bit those at the whole [`random_geometry`] (a field the model reads but not drawn
     /// would be an error, then the fallback model), and the fields drawn are the same.
     #[test]

@@ -2443,9 +2443,36 @@ fn pair_rows(
     let b = m.b() as usize;
     let n = eqs.len();
     // Chunks of consecutive pairs, each built on its own (in parallel): a joint's models are
-    // built once per chunk (its pairs are consecutive), on the stack.
+    // built once per chunk (its pairs are consecutive), on the stack, all of a chunk's
+    // together ([`motion::pair_rows_many`] runs several joints' Gram-Schmidt in lockstep).
     let chunk = |c: usize| {
         let pairs = c * PAIRS_PER_CHUNK..n.min((c + 1) * PAIRS_PER_CHUNK);
+        // The models the pairs need (joint, driven), and which of them each pair reads: a
+        // pair's own, and the free one (nothing driven) where it needs it.
+        let mut jobs: Vec<(usize, u32)> = Vec::with_capacity(pairs.len());
+        let mut reads: Vec<[usize; 2]> = Vec::with_capacity(pairs.len());
+        let mut memo: [Option<(usize, u32, usize)>; 2] = [None, None];
+        let mut model = |ji: usize, driven: u32| {
+            let slot = usize::from(driven == 0);
+            match memo[slot] {
+                Some((j, d, k)) if j == ji && d == driven => k,
+                _ => {
+                    jobs.push((ji, driven));
+                    memo[slot] = Some((ji, driven, jobs.len() - 1));
+                    jobs.len() - 1
+                }
+            }
+        };
+        for e in pairs.clone() {
+            let ji = eqs.joint[e];
+            let own = model(ji, eqs.driven[e]);
+            let free = if eqs.input_only[e] || with_free {
+                model(ji, 0)
+            } else {
+                usize::MAX
+            };
+            reads.push([own, free]);
+        }
         // Room for the rows the count gives each pair (the models give that many): a chunk
         // grown by doubling copied its rows about twice over.
         let expected: usize = eqs.cap[pairs.clone()].iter().map(|&k| k as usize).sum();
@@ -2455,55 +2482,45 @@ fn pair_rows(
         } else {
             Chunk::default()
         };
-        let mut memo: [Option<(usize, u32, motion::Vecs)>; 2] = [None, None];
-        let mut model = |ji: usize, driven: u32| {
-            let slot = usize::from(driven == 0);
-            match memo[slot] {
-                Some((j, d, v)) if j == ji && d == driven => v,
-                _ => {
-                    let v = match seed {
-                        Some(seed) => {
-                            let seed = redrawn.get(&ji).copied().unwrap_or(seed);
-                            motion::random_pair_stack_model(m, seed, ji, driven).rows
-                        }
-                        None => motion::pair_stack_model(m, ji, &geoms[ji], driven).rows,
+        SCRATCH.with_borrow_mut(|scratch| {
+            let models = match seed {
+                Some(seed) => motion::pair_rows_many(
+                    m,
+                    &jobs,
+                    |ji| {
+                        let seed = redrawn.get(&ji).copied().unwrap_or(seed);
+                        motion::random_pair_geometry(m, seed, ji)
+                    },
+                    scratch,
+                ),
+                None => motion::pair_rows_many(m, &jobs, |ji| &geoms[ji], scratch),
+            };
+            for (e, [own, f]) in pairs.zip(reads) {
+                let own = models.get(own);
+                if eqs.input_only[e] {
+                    // A multiple joint's inputs between two of its bodies: the driven rows alone.
+                    let f = models.get(f);
+                    let flat = |v: &[[f64; 6]]| -> Vec<f64> {
+                        v.iter().flat_map(|r| r[..b].iter().copied()).collect()
                     };
-                    memo[slot] = Some((ji, driven, v));
-                    v
+                    let (dv, fv) = (flat(own), flat(f));
+                    let r = input_rows(
+                        RowsView::from_slice_with_strides(&dv, own.len(), b, b, 1),
+                        RowsView::from_slice_with_strides(&fv, f.len(), b, b, 1),
+                    );
+                    rows.push_matrix(&r);
+                    if with_free {
+                        free.push_rows(&[], b);
+                    }
+                } else {
+                    // A pair's rows with its own share of the driven DOF fixed; without input.
+                    rows.push_rows(own, b);
+                    if with_free {
+                        free.push_rows(models.get(f), b);
+                    }
                 }
             }
-        };
-        for e in pairs {
-            let ji = eqs.joint[e];
-            if eqs.input_only[e] {
-                // A multiple joint's inputs between two of its bodies: the driven rows alone.
-                let driven = model(ji, eqs.driven[e]);
-                let f = model(ji, 0);
-                let flat = |v: &motion::Vecs| -> Vec<f64> {
-                    v.as_slice()
-                        .iter()
-                        .flat_map(|r| r[..b].iter().copied())
-                        .collect()
-                };
-                let (dv, fv) = (flat(&driven), flat(&f));
-                let r = input_rows(
-                    RowsView::from_slice_with_strides(&dv, driven.len(), b, b, 1),
-                    RowsView::from_slice_with_strides(&fv, f.len(), b, b, 1),
-                );
-                rows.push_matrix(&r);
-                if with_free {
-                    free.push_rows(&[], b);
-                }
-            } else {
-                // A pair's rows with its own share of the driven DOF fixed; without input.
-                let own = model(ji, eqs.driven[e]);
-                rows.push_rows(own.as_slice(), b);
-                if with_free {
-                    let f = model(ji, 0);
-                    free.push_rows(f.as_slice(), b);
-                }
-            }
-        }
+        });
         (rows, free)
     };
     let chunks = n.div_ceil(PAIRS_PER_CHUNK);
@@ -2519,6 +2536,11 @@ fn pair_rows(
         PairRows::from_chunks(b, Vec::new())
     };
     (PairRows::from_chunks(b, rows), free)
+}
+
+thread_local! {
+    /// [`pair_rows`]' model buffers, one per thread, reused from chunk to chunk.
+    static SCRATCH: std::cell::RefCell<motion::Scratch> = std::cell::RefCell::default();
 }
 
 /// Pairs per chunk of [`PairRows`].
@@ -3659,8 +3681,15 @@ mod tests {
                 } else {
                     motion::pair_model(m, ji, &geoms[ji], eqs.driven[e]).rows
                 };
+                // Bit for bit (the rows are built several joints at a time).
+                let bits = |a: &DMatrix<f64>| a.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(rows.get(e).into_owned(), want, "pair {e}");
-                assert_eq!(file_rows.get(e).into_owned(), want, "pair {e}");
+                assert_eq!(bits(&rows.get(e).into_owned()), bits(&want), "pair {e}");
+                assert_eq!(
+                    bits(&file_rows.get(e).into_owned()),
+                    bits(&want),
+                    "pair {e}"
+                );
                 let want_free = if eqs.input_only[e] {
                     DMatrix::zeros(0, m.b() as usize)
                 } else {

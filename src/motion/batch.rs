@@ -1,0 +1,668 @@
+//! Many joints' constraint rows at once: the Gram-Schmidt steps of [`super::stack_model`] run
+//! for [`LANES`] joints in lockstep. Each step is one dependent chain of dot products per
+//! joint (its latency, not its arithmetic, was the cost); the lanes are independent chains,
+//! laid out lane-innermost so that one instruction serves several joints. Every lane does
+//! the same operations in the same order as the one-joint code, so the rows are bit for bit
+//! those of [`super::pair_stack_model`] (tested against it and against `reference.rs`); a
+//! lane that leaves the common path (a vector dropped, a non-finite value) is computed again
+//! by the one-joint code.
+
+use super::{
+    CANDIDATE_GAP, MAX_B, TwistSpec, Vb, Vecs, complement_of, fallback_model, joint_seed,
+    kept_twists, mix_seed, modelled, norm, orthonormal, project_unit, stack_model_in, twist_spec,
+};
+use crate::joint::JointType;
+use crate::mechanism::{Geometry, Mechanism, Space};
+use std::borrow::Borrow;
+
+/// Joints per lockstep step.
+const LANES: usize = 4;
+
+/// One coordinate of [`LANES`] vectors.
+type Lane = [f64; LANES];
+
+/// [`LANES`] vectors of the motion space, coordinate by coordinate (`v[x][lane]`).
+type Wide = [Lane; MAX_B];
+
+const WIDE_ZERO: Wide = [[0.0; LANES]; MAX_B];
+
+#[cfg(test)]
+thread_local! {
+    /// Gram-Schmidt runs (orthonormal bases and complements) done in lanes, and done one
+    /// joint at a time, on this thread (the tests' measure of how much runs in lanes).
+    pub(super) static RUNS: std::cell::Cell<[usize; 2]> = const { std::cell::Cell::new([0; 2]) };
+}
+
+#[cfg(test)]
+fn count(in_lanes: usize, single: usize) {
+    RUNS.with(|c| {
+        let [a, b] = c.get();
+        c.set([a + in_lanes, b + single]);
+    });
+}
+
+#[cfg(not(test))]
+fn count(_: usize, _: usize) {}
+
+fn wide_dot<const N: usize>(a: &Wide, b: &Wide) -> Lane {
+    // The sum of each lane in index order from 0, as [`dot`].
+    let mut r = [0.0; LANES];
+    for (x, y) in a.iter().zip(b).take(N) {
+        for l in 0..LANES {
+            r[l] += x[l] * y[l];
+        }
+    }
+    r
+}
+
+/// `v -= q d` lane by lane (as the loops of [`super::project_out`]).
+fn wide_sub<const N: usize>(v: &mut Wide, q: &Wide, d: &Lane) {
+    for (x, y) in v.iter_mut().zip(q).take(N) {
+        for l in 0..LANES {
+            x[l] -= y[l] * d[l];
+        }
+    }
+}
+
+/// [`super::project_out`] in lanes.
+fn wide_project_out<const N: usize>(v: &mut Wide, basis: &[Wide]) {
+    for _ in 0..2 {
+        for q in basis {
+            let d = wide_dot::<N>(q, v);
+            wide_sub::<N>(v, q, &d);
+        }
+    }
+}
+
+fn wide_sqrt(a: Lane) -> Lane {
+    a.map(f64::sqrt)
+}
+
+/// The vectors of lane `l` (the coordinates past `N` zero, as [`super::normalized`] leaves
+/// them).
+fn lane_of<const N: usize>(vs: &[Wide], l: usize) -> Vecs {
+    let mut out = Vecs::EMPTY;
+    for w in vs {
+        let mut v = [0.0; MAX_B];
+        for (o, x) in v.iter_mut().zip(w).take(N) {
+            *o = x[l];
+        }
+        out.push(v);
+    }
+    out
+}
+
+/// Lane vectors from one list of vectors per lane (all of the same length `k`).
+fn widen(lists: [&[Vb]; LANES], out: &mut [Wide; MAX_B]) -> usize {
+    let k = lists[0].len();
+    for (i, w) in out.iter_mut().enumerate().take(k) {
+        for (x, coord) in w.iter_mut().enumerate() {
+            for l in 0..LANES {
+                coord[l] = lists[l][i][x];
+            }
+        }
+    }
+    k
+}
+
+/// [`orthonormal`] of the `k` lane vectors `cols` into `out`: per lane, whether it kept every
+/// vector (a lane that drops one has a shorter basis than the others: not this result).
+fn orthonormal_wide<const N: usize>(
+    cols: &[Wide; MAX_B],
+    k: usize,
+    out: &mut [Wide; MAX_B],
+) -> [bool; LANES] {
+    let mut sq = [0.0; LANES];
+    for c in &cols[..k] {
+        let d = wide_dot::<N>(c, c);
+        for l in 0..LANES {
+            sq[l] += d[l];
+        }
+    }
+    let scale = wide_sqrt(sq).map(|s| s.max(1e-300));
+    let mut kept = [true; LANES];
+    for i in 0..k {
+        let mut v = cols[i];
+        wide_project_out::<N>(&mut v, &out[..i]);
+        let n = wide_sqrt(wide_dot::<N>(&v, &v));
+        let q = &mut out[i];
+        *q = WIDE_ZERO;
+        for (o, x) in q.iter_mut().zip(&v).take(N) {
+            for l in 0..LANES {
+                o[l] = x[l] / n[l];
+            }
+        }
+        for l in 0..LANES {
+            kept[l] &= n[l] > 1e-10 * scale[l];
+        }
+    }
+    kept
+}
+
+/// [`complement_of`] of the lanes' orthonormal bases (`basis[..k]`, `k` at least 1), the
+/// complement appended (`basis[k..N]`): per lane, whether its squared norms stayed finite
+/// (else the one-joint code projects every unit vector: not this result). The first
+/// candidate unit vector of every lane is projected in lockstep, the others (ties, rare at
+/// generic geometry) one at a time, each exactly as [`project_unit`].
+fn complement_wide<const N: usize>(basis: &mut [Wide; MAX_B], k: usize) -> [bool; LANES] {
+    let mut sq = WIDE_ZERO;
+    for q in &basis[..k] {
+        for (s, x) in sq.iter_mut().zip(q).take(N) {
+            for l in 0..LANES {
+                s[l] += x[l] * x[l];
+            }
+        }
+    }
+    let mut regular = [true; LANES];
+    for n in k..N {
+        // The candidates of each lane, as [`complement_of`] chooses them.
+        let mut first = [0usize; LANES];
+        let mut more = [0u8; LANES];
+        for l in 0..LANES {
+            let mut top = f64::NEG_INFINITY;
+            let mut finite = true;
+            for s in sq.iter().take(N) {
+                finite &= s[l].is_finite();
+                top = top.max(1.0 - s[l]);
+            }
+            regular[l] &= finite;
+            let mut found = false;
+            for (i, s) in sq.iter().enumerate().take(N) {
+                if finite && 1.0 - s[l] < top - CANDIDATE_GAP {
+                    continue;
+                }
+                if found {
+                    more[l] |= 1 << i;
+                } else {
+                    first[l] = i;
+                    found = true;
+                }
+            }
+        }
+        // [`project_unit`] of each lane's first candidate (the first basis vector is finite:
+        // its squares are terms of finite sums).
+        let mut v = WIDE_ZERO;
+        let mut d = [0.0; LANES];
+        for l in 0..LANES {
+            v[first[l]][l] = 1.0;
+            d[l] = basis[0][first[l]][l] + 0.0;
+        }
+        wide_sub::<N>(&mut v, &basis[0], &d);
+        for q in &basis[1..n] {
+            let d = wide_dot::<N>(q, &v);
+            wide_sub::<N>(&mut v, q, &d);
+        }
+        for q in &basis[..n] {
+            let d = wide_dot::<N>(q, &v);
+            wide_sub::<N>(&mut v, q, &d);
+        }
+        let mut len = wide_sqrt(wide_dot::<N>(&v, &v));
+        // The other candidates, one lane at a time; the first largest is kept.
+        for l in 0..LANES {
+            if more[l] == 0 || !regular[l] {
+                continue;
+            }
+            let mine = lane_of::<N>(&basis[..n], l);
+            for i in (0..N).filter(|&i| more[l] & (1 << i) != 0) {
+                let w = project_unit::<N>(i, mine.as_slice());
+                let wn = norm::<N>(&w);
+                if wn > len[l] {
+                    len[l] = wn;
+                    for (x, c) in v.iter_mut().zip(&w).take(N) {
+                        x[l] = *c;
+                    }
+                }
+            }
+        }
+        let q = &mut basis[n];
+        *q = WIDE_ZERO;
+        for (o, x) in q.iter_mut().zip(&v).take(N) {
+            for l in 0..LANES {
+                o[l] = x[l] / len[l];
+            }
+        }
+        for (s, x) in sq.iter_mut().zip(q.iter()).take(N) {
+            for l in 0..LANES {
+                s[l] += x[l] * x[l];
+            }
+        }
+    }
+    regular
+}
+
+/// Up to [`MAX_B`] vectors per job, each job in its own slot (no vector list is moved
+/// around whole: copies of them were a fifth of the time).
+#[derive(Default)]
+pub(crate) struct Slots {
+    v: Vec<Vb>,
+    n: Vec<u8>,
+}
+
+impl Slots {
+    /// Room for `jobs` jobs (the memory kept: scratch reused from chunk to chunk).
+    fn reserve(&mut self, jobs: usize) {
+        if self.n.len() < jobs {
+            self.v.resize(jobs * MAX_B, [0.0; MAX_B]);
+            self.n.resize(jobs, 0);
+        }
+    }
+
+    /// Job `j`'s vectors.
+    pub(crate) fn get(&self, j: usize) -> &[Vb] {
+        &self.v[j * MAX_B..j * MAX_B + self.n[j] as usize]
+    }
+
+    fn set(&mut self, j: usize, vs: &[Vb]) {
+        let k = vs.len().min(MAX_B);
+        self.v[j * MAX_B..j * MAX_B + k].copy_from_slice(&vs[..k]);
+        self.n[j] = k as u8;
+    }
+
+    /// Lane `l` of `vs` as job `j`'s vectors.
+    fn set_lane<const N: usize>(&mut self, j: usize, vs: &[Wide], l: usize) {
+        let slot = &mut self.v[j * MAX_B..j * MAX_B + vs.len()];
+        for (o, w) in slot.iter_mut().zip(vs) {
+            *o = [0.0; MAX_B];
+            for (x, c) in o.iter_mut().zip(w).take(N) {
+                *x = c[l];
+            }
+        }
+        self.n[j] = vs.len() as u8;
+    }
+}
+
+/// The items in groups of [`LANES`] of the same `len` where `takes` that length, and the
+/// rest (fewer than [`LANES`] of a length, or of a length not taken) one by one.
+fn grouped(
+    items: &[usize],
+    len: impl Fn(usize) -> usize,
+    takes: impl Fn(usize) -> bool,
+) -> (Vec<[usize; LANES]>, Vec<usize>) {
+    let mut by_len: [Vec<usize>; MAX_B + 1] = Default::default();
+    let mut single = Vec::new();
+    for &i in items {
+        match by_len.get_mut(len(i)) {
+            Some(v) => v.push(i),
+            None => single.push(i),
+        }
+    }
+    let mut lanes = Vec::with_capacity(items.len() / LANES);
+    for (k, group) in by_len.iter().enumerate() {
+        if !takes(k) {
+            single.extend_from_slice(group);
+            continue;
+        }
+        let mut it = group.chunks_exact(LANES);
+        lanes.extend((&mut it).map(|c| std::array::from_fn(|l| c[l])));
+        single.extend_from_slice(it.remainder());
+    }
+    (lanes, single)
+}
+
+/// [`orthonormal`] of `src`'s vectors into `dst` for the jobs `items`, in lanes where it can.
+fn orthonormal_many<const N: usize>(src: &Slots, dst: &mut Slots, items: &[usize]) {
+    let (lanes, single) = grouped(items, |j| src.get(j).len(), |k| k >= 1);
+    let (mut cols, mut out) = ([WIDE_ZERO; MAX_B], [WIDE_ZERO; MAX_B]);
+    for js in lanes {
+        let k = widen(js.map(|j| src.get(j)), &mut cols);
+        let kept = orthonormal_wide::<N>(&cols, k, &mut out);
+        count(LANES, 0);
+        for (l, &j) in js.iter().enumerate() {
+            if kept[l] {
+                dst.set_lane::<N>(j, &out[..k], l);
+            } else {
+                dst.set(j, orthonormal::<N>(src.get(j)).as_slice());
+            }
+        }
+    }
+    for j in single {
+        count(0, 1);
+        dst.set(j, orthonormal::<N>(src.get(j)).as_slice());
+    }
+}
+
+/// [`complement_of`] of `src`'s orthonormal bases into `dst` for the jobs `items`, in lanes
+/// where it can.
+fn complement_many<const N: usize>(src: &Slots, dst: &mut Slots, items: &[usize]) {
+    let (lanes, single) = grouped(items, |j| src.get(j).len(), |k| (1..N).contains(&k));
+    let mut basis = [WIDE_ZERO; MAX_B];
+    let one = |vs: &[Vb]| complement_of::<N>(Vecs::of(vs));
+    for js in lanes {
+        let k = widen(js.map(|j| src.get(j)), &mut basis);
+        let regular = complement_wide::<N>(&mut basis, k);
+        count(LANES, 0);
+        for (l, &j) in js.iter().enumerate() {
+            if regular[l] {
+                dst.set_lane::<N>(j, &basis[k..N], l);
+            } else {
+                dst.set(j, one(src.get(j)).as_slice());
+            }
+        }
+    }
+    for j in single {
+        count(0, 1);
+        dst.set(j, one(src.get(j)).as_slice());
+    }
+}
+
+/// Where a model is in its construction.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Step {
+    /// Its rows are built.
+    Done,
+    /// SPSP: the line whose annihilator is its twists.
+    Line,
+    /// Its full twists are built.
+    Full,
+}
+
+/// A model's request and its progress.
+struct Job {
+    kind: JointType,
+    driven: u32,
+    fallback: u64,
+    mix: u64,
+    step: Step,
+}
+
+/// Jobs built together: enough of each length to fill the lanes, few enough that their
+/// vectors stay in cache.
+const BATCH: usize = 256;
+
+/// The buffers of [`pair_rows_many`], kept by the caller from one call to the next: a
+/// chunk's worth of them allocated and freed 2,500 times at 10^6 joints left the heap
+/// fragmented (200 MB more at the peak).
+#[derive(Default)]
+pub(crate) struct Scratch {
+    rows: Slots,
+    work: Slots,
+    basis: Slots,
+    full: Slots,
+    done: Slots,
+    jobs: Vec<Job>,
+}
+
+/// The constraint rows of [`super::pair_stack_model`] for every `(joint, driven)` of `jobs`, in
+/// order, bit for bit (job `j`'s rows are `get(j)`); `geometry` gives a joint's geometry.
+pub(crate) fn pair_rows_many<'s, G: Borrow<Geometry>>(
+    m: &Mechanism,
+    jobs: &[(usize, u32)],
+    geometry: impl Fn(usize) -> G,
+    scratch: &'s mut Scratch,
+) -> &'s Slots {
+    let requests = jobs.iter().map(|&(ji, driven)| {
+        let g = geometry(ji);
+        (m.joints[ji].kind, g, driven, joint_seed(0, ji))
+    });
+    match m.space {
+        Space::Spatial => rows_many::<6, G>(m.space, jobs.len(), requests, scratch),
+        Space::Planar | Space::Spherical => {
+            rows_many::<3, G>(m.space, jobs.len(), requests, scratch)
+        }
+    }
+}
+
+/// [`pair_rows_many`] on `(kind, geometry, driven, fallback seed)` requests (`total` of them).
+pub(super) fn rows_many<const N: usize, G: Borrow<Geometry>>(
+    space: Space,
+    total: usize,
+    requests: impl Iterator<Item = (JointType, G, u32, u64)>,
+    scratch: &mut Scratch,
+) -> &Slots {
+    let Scratch {
+        rows,
+        work,
+        basis,
+        full,
+        done,
+        jobs,
+    } = scratch;
+    rows.reserve(total);
+    for s in [&mut *work, &mut *basis, &mut *full, &mut *done] {
+        s.reserve(BATCH);
+    }
+    let mut requests = requests.enumerate().peekable();
+    while requests.peek().is_some() {
+        jobs.clear();
+        let base = requests.peek().map_or(0, |(i, _)| *i);
+        for (i, (kind, g, driven, fallback)) in requests.by_ref().take(BATCH) {
+            let g = g.borrow();
+            let j = i - base;
+            let step = first_step::<N>(kind, g, space, driven, fallback, j, done, work, full);
+            jobs.push(Job {
+                kind,
+                driven,
+                fallback,
+                // Only a driven SPSP mixes its twists ([`kept_twists`]).
+                mix: if kind == JointType::SPSP && driven > 0 {
+                    mix_seed(g)
+                } else {
+                    0
+                },
+                step,
+            });
+        }
+        let at = |f: Step, jobs: &[Job]| -> Vec<usize> {
+            (0..jobs.len()).filter(|&j| jobs[j].step == f).collect()
+        };
+        // SPSP: its twists, the complement of its line.
+        let lines = at(Step::Line, jobs);
+        orthonormal_many::<N>(work, basis, &lines);
+        complement_many::<N>(basis, full, &lines);
+        // The basis of the full twists; with driven DOF, the twists kept.
+        let built = (0..jobs.len())
+            .filter(|&j| jobs[j].step != Step::Done)
+            .collect::<Vec<_>>();
+        orthonormal_many::<N>(full, basis, &built);
+        let mut kept = Vec::new();
+        let mut last = Vec::with_capacity(built.len());
+        for &j in &built {
+            let job = &jobs[j];
+            let f = full.get(j);
+            if basis.get(j).len() != f.len() {
+                // Degenerate: the fallback model.
+                let r = fallback_model(job.kind, space, job.driven, job.fallback).rows;
+                done.set(j, r.as_slice());
+            } else if job.driven == 0 {
+                last.push(j);
+            } else {
+                if job.kind == JointType::SPSP {
+                    let t = kept_twists::<N>(&Vecs::of(f), job.driven as usize, job.mix);
+                    work.set(j, t.as_slice());
+                } else {
+                    work.set(j, f.get(job.driven as usize..).unwrap_or(&[]));
+                }
+                kept.push(j);
+            }
+        }
+        orthonormal_many::<N>(work, basis, &kept);
+        last.extend_from_slice(&kept);
+        complement_many::<N>(basis, done, &last);
+        for j in 0..jobs.len() {
+            rows.set(base + j, done.get(j));
+        }
+    }
+    rows
+}
+
+/// The first step of job `j`: its rows into `done` when no lane helps (count-only kinds,
+/// errors: the one-joint code), else its twists into `full` or SPSP's line into `work`.
+#[allow(clippy::too_many_arguments)]
+fn first_step<const N: usize>(
+    kind: JointType,
+    g: &Geometry,
+    space: Space,
+    driven: u32,
+    fallback: u64,
+    j: usize,
+    done: &mut Slots,
+    work: &mut Slots,
+    full: &mut Slots,
+) -> Step {
+    let fall = || fallback_model(kind, space, driven, fallback).rows;
+    let one = || {
+        count(0, 1);
+        stack_model_in::<N>(kind, g, space, driven).map_or_else(|_| fall(), |s| s.rows)
+    };
+    let grade = kind.grade() as u32;
+    if grade as usize > N || driven > grade || !modelled(kind, space) {
+        done.set(j, one().as_slice());
+        return Step::Done;
+    }
+    match twist_spec(kind, g, space) {
+        Ok(TwistSpec::Listed(t)) => {
+            full.set(j, t.as_slice());
+            Step::Full
+        }
+        // SPSP is modelled in space only (`N` = 6).
+        Ok(TwistSpec::AnnihilatorOf(line)) if N == 6 => {
+            work.set(j, &[line]);
+            Step::Line
+        }
+        Ok(TwistSpec::AnnihilatorOf(_)) => {
+            done.set(j, one().as_slice());
+            Step::Done
+        }
+        // The model's error: the fallback model, as [`super::pair_stack_model`] gives.
+        Err(_) => {
+            done.set(j, fall().as_slice());
+            Step::Done
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::SplitMix64;
+
+    /// Work regression: the models of a random spatial mechanism (every kind of its mix,
+    /// some driven) are built in lanes, nearly all of them; before, one joint at a time (the
+    /// Gram-Schmidt's chain of dependent products waited on itself). Their rows are the
+    /// one-joint code's, bit for bit.
+    #[test]
+    fn a_random_mechanism_is_built_in_lanes() {
+        for (planar, seed) in [(false, 3), (true, 4)] {
+            let (m, _) = crate::generate::random(3000, planar, seed).expect("valid");
+            let jobs: Vec<(usize, u32)> = (0..m.joints.len())
+                .map(|i| (i, m.joints[i].driven))
+                .collect();
+            RUNS.with(|c| c.set([0; 2]));
+            let mut scratch = Scratch::default();
+            let geometry = |i| super::super::random_pair_geometry(&m, 9, i);
+            let rows = pair_rows_many(&m, &jobs, geometry, &mut scratch);
+            let [lanes, single] = RUNS.with(|c| c.get());
+            // (Planar: the count-only kinds of its mix, two thirds of the joints, are built
+            // one at a time.)
+            let ratio = if planar { 0 } else { 10 };
+            assert!(
+                lanes > ratio * single && lanes > 1000,
+                "{lanes} in lanes, {single} alone"
+            );
+            for (j, &(i, driven)) in jobs.iter().enumerate() {
+                let want = super::super::pair_stack_model(&m, i, &geometry(i), driven).rows;
+                let bits = |v: &[Vb]| v.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
+                assert_eq!(bits(rows.get(j)), bits(want.as_slice()), "joint {i}");
+            }
+        }
+    }
+
+    /// The lane kernels on random lists, with exact zeros, ties and dependent vectors, are bit
+    /// for bit the one-joint functions.
+    #[test]
+    fn lanes_are_the_one_joint_code() {
+        let mut rng = SplitMix64::new(99);
+        let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
+            v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
+        };
+        let mut irregular = 0;
+        for trial in 0..20_000 {
+            let n = [3, 6][trial % 2];
+            let k = 1 + (trial / 2) % (n - 1);
+            let lists: Vec<Vec<Vb>> = (0..LANES)
+                .map(|_| {
+                    (0..k)
+                        .map(|_| {
+                            let mut v = [0.0; MAX_B];
+                            for x in v.iter_mut().take(n) {
+                                let r = rng.next_signed();
+                                *x = match rng.below(8) {
+                                    0 => 0.0,
+                                    1 => (r * 3.0).round(),
+                                    2 => r * 1e-12,
+                                    3 if trial % 97 == 0 => f64::NAN,
+                                    4 if trial % 89 == 0 => 1e300,
+                                    _ => r,
+                                };
+                            }
+                            v
+                        })
+                        .collect()
+                })
+                .collect();
+            let refs: [&[Vb]; LANES] = std::array::from_fn(|l| lists[l].as_slice());
+            let want_o: Vec<Vecs> = refs
+                .iter()
+                .map(|r| {
+                    if n == 6 {
+                        orthonormal::<6>(r)
+                    } else {
+                        orthonormal::<3>(r)
+                    }
+                })
+                .collect();
+            let (mut cols, mut out) = ([WIDE_ZERO; MAX_B], [WIDE_ZERO; MAX_B]);
+            widen(refs, &mut cols);
+            let kept = if n == 6 {
+                orthonormal_wide::<6>(&cols, k, &mut out)
+            } else {
+                orthonormal_wide::<3>(&cols, k, &mut out)
+            };
+            for l in 0..LANES {
+                if kept[l] {
+                    let got = if n == 6 {
+                        lane_of::<6>(&out[..k], l)
+                    } else {
+                        lane_of::<3>(&out[..k], l)
+                    };
+                    assert_eq!(bits(&got), bits(&want_o[l]), "trial {trial}");
+                } else {
+                    assert!(
+                        want_o[l].len() < k,
+                        "trial {trial}: a lane dropped a vector"
+                    );
+                    irregular += 1;
+                }
+            }
+            // Complements of the bases that kept every vector.
+            if want_o.iter().all(|b| b.len() == k) {
+                let refs: [&[Vb]; LANES] = std::array::from_fn(|l| want_o[l].as_slice());
+                let mut basis = [WIDE_ZERO; MAX_B];
+                widen(refs, &mut basis);
+                let regular = if n == 6 {
+                    complement_wide::<6>(&mut basis, k)
+                } else {
+                    complement_wide::<3>(&mut basis, k)
+                };
+                for l in 0..LANES {
+                    let want = if n == 6 {
+                        complement_of::<6>(want_o[l])
+                    } else {
+                        complement_of::<3>(want_o[l])
+                    };
+                    if regular[l] {
+                        let got = if n == 6 {
+                            lane_of::<6>(&basis[k..n], l)
+                        } else {
+                            lane_of::<3>(&basis[k..n], l)
+                        };
+                        assert_eq!(bits(&got), bits(&want), "trial {trial}");
+                    } else {
+                        irregular += 1;
+                    }
+                }
+            }
+        }
+        assert!(irregular > 0, "the irregular lanes are exercised");
+    }
+}
