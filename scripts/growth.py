@@ -11,8 +11,8 @@ A command that exceeds the cap at one size is not run at the larger sizes of tha
 table says so). The growth exponent is the least-squares slope of log(user CPU) against
 log(bodies) over the sizes whose CPU is at least 20 ms (below that, process start dominates).
 
-Usage: python3 scripts/growth.py [--max 1000000] [--cap-seconds 60] [--write] [--families a,b]
-       [--commands "mobility,rigid geometric"]
+Usage: python3 scripts/growth.py [--max 1000000] [--cap-seconds 60] [--memory-cap-gb 8] [--write]
+       [--families a,b] [--commands "mobility,rigid geometric"]
 """
 
 import argparse
@@ -52,17 +52,17 @@ COMMANDS = [
 ]
 
 SIZES = [1_000, 10_000, 100_000, 1_000_000]
-MEMORY_CAP_KB = 8 * 1024 * 1024  # address space, not resident memory
+MEMORY_CAP_GB = 8  # address space, not resident memory (--memory-cap-gb)
 
 
-def run(args, cap_seconds, stdout=subprocess.DEVNULL):
+def run(args, cap_seconds, memory_cap_gb=MEMORY_CAP_GB, stdout=subprocess.DEVNULL):
     """Run under /usr/bin/time; return (wall s, user s, peak RSS MB, exit code or 'timeout')."""
     fmt = "%e %U %S %M %x"
     with tempfile.NamedTemporaryFile("r", suffix=".time") as t:
         # The cap is on CPU seconds (RLIMIT_CPU), so a busy machine does not cut a run short;
         # the wall-clock timeout only catches a process that waits forever.
         cmd = ["/usr/bin/time", "-f", fmt, "-o", t.name, "prlimit",
-               f"--as={MEMORY_CAP_KB * 1024}", f"--cpu={int(cap_seconds)}", "--"] + args
+               f"--as={memory_cap_gb * 1024 ** 3}", f"--cpu={int(cap_seconds)}", "--"] + args
         try:
             subprocess.run(cmd, stdout=stdout, stderr=subprocess.DEVNULL,
                            timeout=10 * cap_seconds, check=False)
@@ -105,6 +105,7 @@ def main():
     ap.add_argument("--write", action="store_true")
     ap.add_argument("--families", default="")
     ap.add_argument("--commands", default="")
+    ap.add_argument("--memory-cap-gb", type=int, default=MEMORY_CAP_GB)
     a = ap.parse_args()
     fams = [f for f in FAMILIES if not a.families or f[0] in a.families.split(",")]
     cmds = [c for c in COMMANDS if not a.commands or c[0] in a.commands.split(",")]
@@ -123,7 +124,7 @@ def main():
                 if name in capped:
                     results[name].append((n, None, None, "not run"))
                     continue
-                wall, cpu, rss, code = run([BIN] + args + [path], a.cap_seconds)
+                wall, cpu, rss, code = run([BIN] + args + [path], a.cap_seconds, a.memory_cap_gb)
                 print(f"{label:32} {n:>9} {name:24} wall {wall} cpu {cpu} rss {rss} -> {code}",
                       file=sys.stderr, flush=True)
                 if code == "timeout" or (cpu is not None and cpu > a.cap_seconds / 4):
