@@ -5,50 +5,11 @@
 
 use mbsa::generate::{Variant, assur};
 use mbsa::rigidity::geometric::{GeometricOptions, analyze};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// The system allocator, keeping the bytes held and their peak.
-struct Peak;
-
-static HELD: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn add(n: usize) {
-    let now = HELD.fetch_add(n, Ordering::Relaxed) + n;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Peak {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        // SAFETY: the caller's guarantees for `layout` are the system allocator's.
-        let p = unsafe { System.alloc(layout) };
-        if !p.is_null() {
-            add(layout.size());
-        }
-        p
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        HELD.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: `ptr` came from the system allocator with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // SAFETY: as for `alloc` and `dealloc`.
-        let p = unsafe { System.realloc(ptr, layout, new_size) };
-        if !p.is_null() {
-            HELD.fetch_sub(layout.size(), Ordering::Relaxed);
-            add(new_size);
-        }
-        p
-    }
-}
+#[path = "common/peak_alloc.rs"]
+mod peak_alloc;
 
 #[global_allocator]
-static ALLOCATOR: Peak = Peak;
+static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
 
 /// The planar Assur linkage of 5,002 bodies (the benchmark family, one rigid block analysed
 /// exactly): the analysis holds at most 2,000 bytes a body at its peak above the mechanism
@@ -60,10 +21,9 @@ static ALLOCATOR: Peak = Peak;
 fn the_planar_assur_linkage_is_analysed_within_a_bounded_memory_per_body() {
     let m = assur(2, 1250, 364, Variant::A).expect("an Assur linkage");
     let bodies = m.bodies.len();
-    let base = HELD.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
+    let base = peak_alloc::reset_peak();
     let r = analyze(&m, &GeometricOptions::default()).expect("random geometry");
-    let peak = PEAK.load(Ordering::Relaxed) - base;
+    let peak = peak_alloc::peak() - base;
     assert_eq!(r.redundant, 0);
     let per_body = peak / bodies;
     eprintln!("peak {peak} bytes above the mechanism, {per_body} a body");

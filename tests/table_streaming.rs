@@ -3,45 +3,11 @@
 //! A counting allocator around the system one measures the bytes live at once; one test in
 //! this binary, so that no other test's allocations are counted.
 
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// The system allocator, keeping the bytes live now and the most live at once.
-struct Peak;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grow(n: usize) {
-    let now = LIVE.fetch_add(n, Ordering::Relaxed) + n;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Peak {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        grow(layout.size());
-        // SAFETY: the caller's guarantees for `layout` are the system allocator's.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: `ptr` came from the system allocator with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        // Counted as the new block allocated before the old one is freed (as a move is).
-        grow(new_size);
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: as for `alloc` and `dealloc`.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/peak_alloc.rs"]
+mod peak_alloc;
 
 #[global_allocator]
-static ALLOCATOR: Peak = Peak;
+static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
 
 /// A writer that keeps only the length and a digest of what it is given.
 #[derive(Default)]
@@ -78,11 +44,10 @@ fn the_table_streams_in_bounded_memory() {
     let a = mbsa::structure::analyze(&m, &opts, &lib).expect("analysis");
     assert!(a.groups.len() > 10_000, "{} groups", a.groups.len());
 
-    let base = LIVE.load(Ordering::Relaxed);
-    PEAK.store(base, Ordering::Relaxed);
+    let base = peak_alloc::reset_peak();
     let mut streamed = Digest::default();
     mbsa::report::structure::write_table(&mut streamed, &a).expect("written");
-    let held = PEAK.load(Ordering::Relaxed) - base;
+    let held = peak_alloc::peak() - base;
 
     let whole = mbsa::report::structure::table(&a);
     let mut want = Digest::default();

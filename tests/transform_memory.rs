@@ -7,54 +7,21 @@
 use mbsa::generate::{self, Variant};
 use mbsa::structure::Library;
 use mbsa::transform::{self, TransformOptions};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::sync::atomic::{AtomicUsize, Ordering};
-
-/// The system allocator, counting live bytes and their peak.
-struct Counting;
-
-static LIVE: AtomicUsize = AtomicUsize::new(0);
-static PEAK: AtomicUsize = AtomicUsize::new(0);
-
-fn grow(n: usize) {
-    let now = LIVE.fetch_add(n, Ordering::Relaxed) + n;
-    PEAK.fetch_max(now, Ordering::Relaxed);
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        grow(layout.size());
-        // SAFETY: the caller's guarantees for `layout` are the system allocator's.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: `ptr` came from the system allocator with this layout.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        grow(new_size);
-        LIVE.fetch_sub(layout.size(), Ordering::Relaxed);
-        // SAFETY: as for `alloc` and `dealloc`.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-}
+#[path = "common/peak_alloc.rs"]
+mod peak_alloc;
 
 #[global_allocator]
-static ALLOCATOR: Counting = Counting;
+static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
 
 /// Live bytes above those live at the start once `f` has made its value, and the peak
 /// while `write` runs on it.
 fn held_by<T>(f: impl FnOnce() -> T, write: impl FnOnce(&T)) -> (usize, usize) {
-    let base = LIVE.load(Ordering::Relaxed);
+    let base = peak_alloc::live();
     let value = f();
-    let held = LIVE.load(Ordering::Relaxed) - base;
-    PEAK.store(LIVE.load(Ordering::Relaxed), Ordering::Relaxed);
+    let held = peak_alloc::live() - base;
+    peak_alloc::reset_peak();
     write(&value);
-    let peak = PEAK.load(Ordering::Relaxed) - base;
+    let peak = peak_alloc::peak() - base;
     drop(value);
     (held, peak)
 }
