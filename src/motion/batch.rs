@@ -155,29 +155,38 @@ fn complement_wide<const N: usize>(basis: &mut [Wide; MAX_B], k: usize) -> [bool
     }
     let mut regular = [true; LANES];
     for n in k..N {
-        // The candidates of each lane, as [`complement_of`] chooses them.
+        // The candidates of each lane, as [`complement_of`] chooses them, without a branch
+        // per unit vector (which one is first is as random as the geometry: the branches
+        // were mispredicted). The candidates' bits: the lowest is the first one, the others
+        // are the ties. With finite sums, the largest `1 − s` is a candidate (no set is
+        // empty); otherwise all are.
+        let mut top = [f64::NEG_INFINITY; LANES];
+        let mut finite = [true; LANES];
+        for s in sq.iter().take(N) {
+            for l in 0..LANES {
+                finite[l] &= s[l].is_finite();
+                top[l] = top[l].max(1.0 - s[l]);
+            }
+        }
+        let cut = top.map(|t| t - CANDIDATE_GAP);
+        let mut set = [0u8; LANES];
+        for (i, s) in sq.iter().enumerate().take(N) {
+            for l in 0..LANES {
+                let skip = finite[l] & (1.0 - s[l] < cut[l]);
+                set[l] |= u8::from(!skip) << i;
+            }
+        }
         let mut first = [0usize; LANES];
         let mut more = [0u8; LANES];
         for l in 0..LANES {
-            let mut top = f64::NEG_INFINITY;
-            let mut finite = true;
-            for s in sq.iter().take(N) {
-                finite &= s[l].is_finite();
-                top = top.max(1.0 - s[l]);
-            }
-            regular[l] &= finite;
-            let mut found = false;
-            for (i, s) in sq.iter().enumerate().take(N) {
-                if finite && 1.0 - s[l] < top - CANDIDATE_GAP {
-                    continue;
-                }
-                if found {
-                    more[l] |= 1 << i;
-                } else {
-                    first[l] = i;
-                    found = true;
-                }
-            }
+            regular[l] &= finite[l];
+            let c = set[l];
+            first[l] = if c == 0 {
+                0
+            } else {
+                c.trailing_zeros() as usize
+            };
+            more[l] = c & c.wrapping_sub(1);
         }
         // [`project_unit`] of each lane's first candidate (the first basis vector is finite:
         // its squares are terms of finite sums).
@@ -565,6 +574,84 @@ mod tests {
                 assert_eq!(bits(rows.get(j)), bits(want.as_slice()), "joint {i}");
             }
         }
+    }
+
+    /// The candidates of the lanes' complement (chosen without a branch per unit vector) are
+    /// the one-joint code's: bases with exact ties between unit vectors (axis-aligned,
+    /// permuted, signed, a rotation in one plane), nearly tied ones (within the gap or just
+    /// outside it), and lanes with infinite or NaN entries (all candidates, or the lane left
+    /// to the one-joint code); every lane's complement bit for bit.
+    #[test]
+    fn lane_candidates_are_the_one_joint_choice() {
+        fn case<const N: usize>(rng: &mut SplitMix64, seen: &mut [usize; 3]) {
+            let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
+                v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
+            };
+            let k = 1 + rng.below(N as u64 - 1) as usize;
+            let bases: Vec<Vecs> = (0..LANES)
+                .map(|_| {
+                    // Unit vectors along distinct axes, signed.
+                    let mut axes: Vec<usize> = (0..N).collect();
+                    for i in (1..N).rev() {
+                        axes.swap(i, rng.below(i as u64 + 1) as usize);
+                    }
+                    let mut vs: Vec<Vb> = axes[..k]
+                        .iter()
+                        .map(|&a| {
+                            let mut v = [0.0; MAX_B];
+                            v[a] = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+                            v
+                        })
+                        .collect();
+                    match rng.below(6) {
+                        // A rotation in the plane of the first two axes (k ≥ 2).
+                        0 | 1 if k >= 2 => {
+                            let t =
+                                rng.next_signed() * [1.0, 1e-3, 1e-5, 1e-9][rng.below(4) as usize];
+                            let (c, s) = (t.cos(), t.sin());
+                            let (a, b) = (vs[0], vs[1]);
+                            for x in 0..N {
+                                vs[0][x] = c * a[x] - s * b[x];
+                                vs[1][x] = s * a[x] + c * b[x];
+                            }
+                        }
+                        2 => {
+                            let x = rng.below(N as u64) as usize;
+                            vs[0][x] = [f64::NAN, f64::INFINITY, 1e300][rng.below(3) as usize];
+                        }
+                        _ => {}
+                    }
+                    Vecs::of(&vs)
+                })
+                .collect();
+            let refs: [&[Vb]; LANES] = std::array::from_fn(|l| bases[l].as_slice());
+            let mut wide = [WIDE_ZERO; MAX_B];
+            widen(refs, &mut wide);
+            let regular = complement_wide::<N>(&mut wide, k);
+            for l in 0..LANES {
+                if regular[l] {
+                    let got = lane_of::<N>(&wide[k..N], l);
+                    assert_eq!(bits(&got), bits(&complement_of::<N>(bases[l])));
+                    let tied = bases[l]
+                        .as_slice()
+                        .iter()
+                        .all(|v| v.iter().all(|x| *x == 0.0 || x.abs() == 1.0));
+                    seen[usize::from(tied)] += 1;
+                } else {
+                    seen[2] += 1;
+                }
+            }
+        }
+        let mut rng = SplitMix64::new(5);
+        let mut seen = [0; 3];
+        for t in 0..20_000 {
+            if t % 2 == 0 {
+                case::<6>(&mut rng, &mut seen);
+            } else {
+                case::<3>(&mut rng, &mut seen);
+            }
+        }
+        assert!(seen.iter().all(|&c| c > 100), "{seen:?}");
     }
 
     /// The lane kernels on random lists, with exact zeros, ties and dependent vectors, are bit

@@ -1123,6 +1123,8 @@ fn surely_full_rank<'a>(b: usize, total: usize, rows: impl Iterator<Item = RowsV
     match total {
         0..=8 => full_rank_within::<8>(b, rows),
         9..=16 => full_rank_within::<16>(b, rows),
+        17..=24 => full_rank_within::<24>(b, rows),
+        25..=32 => full_rank_within::<32>(b, rows),
         _ => full_rank_within::<48>(b, rows),
     }
 }
@@ -1133,71 +1135,122 @@ fn full_rank_within<'a, const MAX_ROWS: usize>(
     b: usize,
     rows: impl Iterator<Item = RowsView<'a>>,
 ) -> bool {
-    let mut a = [[0.0f64; 6]; MAX_ROWS];
+    elimination::<MAX_ROWS>(b, rows).is_some_and(|e| e.proves(b))
+}
+
+/// What [`full_rank_within`] decides on: `|det T|` (the product of the pivots' magnitudes),
+/// `F²` (all rows) and `‖T‖_F²` (the pivot rows).
+#[derive(Clone, Copy, Debug)]
+struct Eliminated {
+    det: f64,
+    frob2: f64,
+    sub2: f64,
+}
+
+impl Eliminated {
+    /// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)`.
+    fn proves(&self, b: usize) -> bool {
+        self.det > 1e-6 * self.frob2.sqrt() * self.sub2.sqrt().powi(b as i32 - 1)
+    }
+}
+
+/// The elimination of [`full_rank_within`]; `None` where it answers `false` before the test
+/// (more than `MAX_ROWS` rows, fewer than `b`, all zero, a zero pivot).
+///
+/// The stack is held column by column (`a[k][row]`): a step's multipliers `row[c] / pivot`
+/// and its updates `row[k] −= f · top[k]` run over consecutive rows, two to an instruction,
+/// and only on the columns still to be read (`c + 1 .. b`). Every entry that is read gets
+/// the operations of the row-major elimination it replaced (kept as the tests' reference,
+/// `elimination_reference`) in the same order, and each pivot is the same row (the last of
+/// the largest magnitudes, as `max_by` of `total_cmp` chose it), so the three numbers are
+/// bit for bit the same. The row-major elimination divided one row at a time and updated
+/// the dead columns too.
+#[allow(clippy::needless_range_loop)]
+fn elimination<'a, const MAX_ROWS: usize>(
+    b: usize,
+    rows: impl Iterator<Item = RowsView<'a>>,
+) -> Option<Eliminated> {
+    if b > 6 {
+        return None;
+    }
+    let mut a = [[0.0f64; MAX_ROWS]; 6];
     let mut norm2 = [0.0f64; MAX_ROWS];
     let mut n = 0;
-    if b > 6 {
-        return false;
-    }
     for r in rows {
         for i in 0..r.nrows() {
             if n == MAX_ROWS {
-                return false;
+                return None;
             }
+            let mut s = 0.0;
             for k in 0..b {
-                a[n][k] = r[(i, k)];
-                norm2[n] += a[n][k] * a[n][k];
+                let v = r[(i, k)];
+                a[k][n] = v;
+                s += v * v;
             }
+            norm2[n] = s;
             n += 1;
         }
     }
     let frob2: f64 = norm2[..n].iter().sum();
     if n < b || frob2 == 0.0 {
-        return false;
+        return None;
     }
     let mut det = 1.0f64;
     let mut sub2 = 0.0;
+    let mut f = [0.0f64; MAX_ROWS];
     for c in 0..b {
-        let p = (c..n)
-            .max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))
-            .unwrap_or(c);
-        let pivot = a[p][c];
-        if pivot == 0.0 {
-            return false;
+        // Magnitudes have no sign bit: `total_cmp` orders them as their bits do. `>=` keeps
+        // the last of equal ones, as `max_by` did.
+        let mut p = c;
+        let mut best = 0u64;
+        for (i, v) in a[c][..n].iter().enumerate().skip(c) {
+            let key = v.to_bits() & !(1u64 << 63);
+            if key >= best {
+                best = key;
+                p = i;
+            }
         }
-        a.swap(c, p);
+        let pivot = a[c][p];
+        if pivot == 0.0 {
+            return None;
+        }
+        // Columns before `c` are never read again: only the live ones swap.
+        for col in a[c..b].iter_mut() {
+            col.swap(c, p);
+        }
         norm2.swap(c, p);
         det *= pivot.abs();
         sub2 += norm2[c];
-        let top = a[c];
-        for row in a.iter_mut().take(n).skip(c + 1) {
-            let f = row[c] / pivot;
-            // All six columns in one fixed-width pass: the columns before `c` and from `b` on
-            // are never read again, so only the live ones matter, and they are as before.
-            for (x, &y) in row.iter_mut().zip(&top) {
-                *x -= f * y;
+        for (fi, &x) in f[c + 1..n].iter_mut().zip(&a[c][c + 1..n]) {
+            *fi = x / pivot;
+        }
+        for k in c + 1..b {
+            let t = a[k][c];
+            for (x, &fi) in a[k][c + 1..n].iter_mut().zip(&f[c + 1..n]) {
+                *x -= fi * t;
             }
         }
     }
-    det > 1e-6 * frob2.sqrt() * sub2.sqrt().powi(b as i32 - 1)
+    Some(Eliminated { det, frob2, sub2 })
 }
 
-/// [`full_rank_within`] as it was (the row updates over columns `c..b`): the tests' reference.
+/// [`elimination`] as it was (row by row, the row updates over columns `c..b`): the tests'
+/// reference.
 #[cfg(test)]
-fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
+fn elimination_reference<'a, const MAX_ROWS: usize>(
     b: usize,
     rows: impl Iterator<Item = RowsView<'a>>,
-) -> bool {
+) -> Option<Eliminated> {
     let mut a = [[0.0f64; 6]; MAX_ROWS];
     let mut norm2 = [0.0f64; MAX_ROWS];
     let mut n = 0;
     if b > 6 {
-        return false;
+        return None;
     }
     for r in rows {
         for i in 0..r.nrows() {
             if n == MAX_ROWS {
-                return false;
+                return None;
             }
             for k in 0..b {
                 a[n][k] = r[(i, k)];
@@ -1208,7 +1261,7 @@ fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
     }
     let frob2: f64 = norm2[..n].iter().sum();
     if n < b || frob2 == 0.0 {
-        return false;
+        return None;
     }
     let mut det = 1.0f64;
     let mut sub2 = 0.0;
@@ -1218,7 +1271,7 @@ fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
             .unwrap_or(c);
         let pivot = a[p][c];
         if pivot == 0.0 {
-            return false;
+            return None;
         }
         a.swap(c, p);
         norm2.swap(c, p);
@@ -1232,7 +1285,16 @@ fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
             }
         }
     }
-    det > 1e-6 * frob2.sqrt() * sub2.sqrt().powi(b as i32 - 1)
+    Some(Eliminated { det, frob2, sub2 })
+}
+
+/// [`full_rank_within`] as it was: the tests' reference.
+#[cfg(test)]
+fn full_rank_within_reference<'a, const MAX_ROWS: usize>(
+    b: usize,
+    rows: impl Iterator<Item = RowsView<'a>>,
+) -> bool {
+    elimination_reference::<MAX_ROWS>(b, rows).is_some_and(|e| e.proves(b))
 }
 
 /// Decisions of the rank check kept across analyses of one mechanism under different inputs
@@ -3644,6 +3706,75 @@ mod tests {
             seen[usize::from(new)] += 1;
         }
         assert!(seen.iter().all(|&c| c > 500), "{seen:?}");
+    }
+
+    /// The column-major elimination gives the numbers of the row-major one bit for bit
+    /// (`|det T|`, `F²`, `‖T‖_F²`, or the same early stop), on stacks of 3 or 6 columns and 1
+    /// to 50 rows: random, small integers (ties between pivot candidates of either sign),
+    /// exact zeros (zero pivots), repeated rows, tiny, huge, infinite and NaN entries.
+    #[test]
+    fn column_major_elimination_is_the_reference() {
+        fn numbers<const M: usize>(a: &DMatrix<f64>, b: usize) -> [Option<[u64; 3]>; 2] {
+            let bits = |e: Option<Eliminated>| {
+                e.map(|e| [e.det.to_bits(), e.frob2.to_bits(), e.sub2.to_bits()])
+            };
+            // Split into pairs of one to three rows, as the bodies' stacks come.
+            let split = |a: &DMatrix<f64>| -> Vec<DMatrix<f64>> {
+                let mut out = Vec::new();
+                let mut r = 0;
+                while r < a.nrows() {
+                    let k = (1 + r % 3).min(a.nrows() - r);
+                    out.push(a.rows(r, k).into_owned());
+                    r += k;
+                }
+                out
+            };
+            let parts = split(a);
+            [
+                bits(elimination::<M>(b, parts.iter().map(view))),
+                bits(elimination_reference::<M>(b, parts.iter().map(view))),
+            ]
+        }
+        let mut rng = crate::rng::SplitMix64::new(11);
+        let mut seen = [0usize; 3];
+        for i in 0..30_000 {
+            let b = if i % 2 == 0 { 6 } else { 3 };
+            let n = 1 + rng.below(50) as usize;
+            let style = rng.below(8);
+            let a = DMatrix::<f64>::from_fn(n, b, |_, _| {
+                let r = rng.next_signed();
+                match (style, rng.below(16)) {
+                    (0, _) => (r * 3.0).round(),
+                    (1, 0..=7) => 0.0,
+                    (2, 0) => [f64::NAN, f64::INFINITY, -f64::INFINITY][rng.below(3) as usize],
+                    (3, _) => r * 1e-160,
+                    (4, _) => r * 1e160,
+                    (5, 0..=3) => -0.0,
+                    _ => r,
+                }
+            });
+            let a = if style == 6 && n > 1 {
+                // Repeated rows (a deficient stack).
+                DMatrix::from_fn(n, b, |r, c| a[(r / 2, c)])
+            } else {
+                a
+            };
+            let [new, old] = match n {
+                0..=8 => numbers::<8>(&a, b),
+                9..=16 => numbers::<16>(&a, b),
+                17..=24 => numbers::<24>(&a, b),
+                25..=32 => numbers::<32>(&a, b),
+                _ => numbers::<48>(&a, b),
+            };
+            assert_eq!(new, old, "case {i}");
+            let k = match new {
+                None => 0,
+                Some(e) if f64::from_bits(e[0]).is_finite() => 1,
+                Some(_) => 2,
+            };
+            seen[k] += 1;
+        }
+        assert!(seen.iter().all(|&c| c > 200), "{seen:?}");
     }
 
     /// The flat rows of every pair (built chunk by chunk, each joint's model once per chunk,
