@@ -788,22 +788,16 @@ fn natural_order(joints: &[Joint]) -> Vec<usize> {
     let mut buf: Vec<u64> = Vec::with_capacity(8);
     let mut keyed: Vec<([u64; 3], u32)> = Vec::with_capacity(joints.len());
     let short = joints.len() <= u32::MAX as usize
-        && joints.iter().enumerate().all(|(k, j)| {
-            buf.clear();
-            if !numeric_tokens(&j.id, &mut buf) || buf.len() > 5 {
-                return false;
-            }
-            let mut key = [buf[0], 0, 0];
-            for (slot, pair) in key[1..].iter_mut().zip(buf[1..].chunks_exact(2)) {
-                let rank = if pair[0] == u64::from(b'#') { 1 } else { 2 };
-                if pair[1] >= 1 << 56 {
-                    return false;
+        && joints
+            .iter()
+            .enumerate()
+            .all(|(k, j)| match short_natural_key(&j.id, &mut buf) {
+                Some(key) => {
+                    keyed.push((key, k as u32));
+                    true
                 }
-                *slot = (rank << 56) | pair[1];
-            }
-            keyed.push((key, k as u32));
-            true
-        });
+                None => false,
+            });
     if short {
         keyed.sort_unstable();
         return keyed.into_iter().map(|(_, k)| k as usize).collect();
@@ -835,6 +829,26 @@ fn natural_order(joints: &[Joint]) -> Vec<usize> {
             .then_with(|| joints[a].id.cmp(&joints[b].id))
     });
     order
+}
+
+/// The packed natural-order key of an id of at most five numeric tokens (`a`, `a-b`,
+/// `a-b#n`, ...: see [`natural_order`]): the first number, then each separator's rank (0 none,
+/// 1 `#`, 2 `-`) above the number after it. Keys compare as the ids' natural order; `None`
+/// for other ids (and numbers from 2^56 after a separator). `buf` is scratch.
+pub(crate) fn short_natural_key(id: &str, buf: &mut Vec<u64>) -> Option<[u64; 3]> {
+    buf.clear();
+    if !numeric_tokens(id, buf) || buf.len() > 5 {
+        return None;
+    }
+    let mut key = [buf[0], 0, 0];
+    for (slot, pair) in key[1..].iter_mut().zip(buf[1..].chunks_exact(2)) {
+        let rank = if pair[0] == u64::from(b'#') { 1 } else { 2 };
+        if pair[1] >= 1 << 56 {
+            return None;
+        }
+        *slot = (rank << 56) | pair[1];
+    }
+    Some(key)
 }
 
 /// Append the tokens of `id` (numbers, separators as their byte) when it is numbers without

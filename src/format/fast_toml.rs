@@ -92,7 +92,7 @@ pub(crate) fn parse(text: &str) -> Option<(Node<'_>, JointTables)> {
                 table = Some(top.len() - 1);
                 in_joints = false;
             }
-        } else if let Some(entry) = line(text, pos, end, &mut no_pool)? {
+        } else if let Some(entry) = line_entry(text, pos, end, &mut no_pool)? {
             let entries = match table {
                 None => &mut top,
                 Some(i) => match &mut top[i].value.value {
@@ -188,17 +188,26 @@ impl<'a> JointReader<'a> {
                     next_joint_header(bytes, first)
                 };
             }
-            let end = line_break(bytes, first);
-            if let Some(entry) = line(text, pos, end, &mut self.pool)? {
-                if entries.iter().any(|e| e.key == entry.key) {
-                    return None;
-                }
-                entries.push(entry);
+            // The line's end is found by reading it (no separate search for the line break).
+            // The entry is written in place (not returned: moving it showed in profiles).
+            let before = entries.len();
+            let end = line(text, first, bytes.len(), &mut self.pool, entries)?;
+            if entries.len() > before
+                && let Some((entry, earlier)) = entries.split_last()
+                && earlier.iter().any(|e| same_key(&e.key, &entry.key))
+            {
+                return None;
             }
             pos = end + 1;
         };
         Some(Some(&self.node))
     }
+}
+
+/// Whether two keys are equal: lengths and first bytes first (`bodies` and `driven` have one
+/// length: a call to compare bytes for each pair of keys of each table showed in profiles).
+fn same_key(a: &str, b: &str) -> bool {
+    a.len() == b.len() && a.as_bytes().first() == b.as_bytes().first() && a == b
 }
 
 /// Where the line holding `at` ends: its `\n`, or the text's length.
@@ -212,15 +221,20 @@ fn line_break(bytes: &[u8], at: usize) -> usize {
 
 /// The first non-blank byte of the first line from `pos` (a line start) on that starts (after
 /// blanks) with `[`; `None` when no line does.
-fn next_header(bytes: &[u8], mut pos: usize) -> Option<usize> {
-    while pos < bytes.len() {
-        let first = skip_ws(bytes, pos, bytes.len());
-        if bytes.get(first) == Some(&b'[') {
-            return Some(first);
-        }
-        pos = line_break(bytes, first) + 1;
-    }
-    None
+fn next_header(bytes: &[u8], pos: usize) -> Option<usize> {
+    // Every `[` from `pos` on (a vectorized search: two a joint table, its header's and its
+    // `bodies`'), not every line: a `[` starts its line when only blanks come before it on
+    // the line (or from `pos`, itself a line start).
+    let from = pos.min(bytes.len());
+    memchr::memchr_iter(b'[', &bytes[from..])
+        .map(|i| from + i)
+        .find(|&i| {
+            let mut j = i;
+            while j > from && matches!(bytes[j - 1], b' ' | b'\t') {
+                j -= 1;
+            }
+            j == from || bytes[j - 1] == b'\n'
+        })
 }
 
 /// The `[` of the first `[[joint]]` header after the header line at `at`.
@@ -249,13 +263,19 @@ fn comment_ok(bytes: &[u8], from: usize, end: usize) -> bool {
     body.iter().all(|&b| (b >= 0x20 || b == b'\t') && b != 0x7F)
 }
 
-/// The rest of a line after a value or header: blanks, then nothing or a comment.
-fn line_end(bytes: &[u8], from: usize, end: usize) -> Option<()> {
+/// The rest of a line after a value or header: blanks, then nothing or a comment. Gives the
+/// line's end: its `\n`, or `end` (the line's end, or the text's when the caller has not
+/// looked for the line break).
+fn line_end(bytes: &[u8], from: usize, end: usize) -> Option<usize> {
     let i = skip_ws(bytes, from, end);
     match bytes.get(i) {
-        _ if i == end => Some(()),
-        Some(b'\r') if i + 1 == end => Some(()),
-        Some(b'#') => comment_ok(bytes, i + 1, end).then_some(()),
+        _ if i == end => Some(end),
+        Some(b'\n') => Some(i),
+        Some(b'\r') if i + 1 == end || bytes.get(i + 1) == Some(&b'\n') => Some(i + 1),
+        Some(b'#') => {
+            let end = line_break(bytes, i).min(end);
+            comment_ok(bytes, i + 1, end).then_some(end)
+        }
         _ => None,
     }
 }
@@ -269,21 +289,28 @@ fn bare_key(bytes: &[u8], from: usize, end: usize) -> Option<(Range<usize>, usiz
     (i > from).then_some((from..i, i))
 }
 
-/// A blank line, a comment line, or `key = value` (`Some(None)`, `Some(Some(entry))`). An
+/// A blank line, a comment line, or `key = value` (its entry pushed on `out`); gives where
+/// the line ends (its `\n`, or the text's length). `end` is the line's end, or the text's
+/// length: then the line ends at its first `\n` (every part of a line stops at one). An
 /// array's vector comes from `pool` when it has one.
 fn line<'a>(
     text: &'a str,
     start: usize,
     end: usize,
     pool: &mut Vec<Vec<Node<'a>>>,
-) -> Option<Option<Entry<'a>>> {
+    out: &mut Vec<Entry<'a>>,
+) -> Option<usize> {
     let bytes = text.as_bytes();
     let i = skip_ws(bytes, start, end);
-    if i == end || (i + 1 == end && bytes[i] == b'\r') {
-        return Some(None);
+    if i == end || bytes[i] == b'\n' {
+        return Some(i);
+    }
+    if bytes[i] == b'\r' && (i + 1 == end || bytes[i + 1] == b'\n') {
+        return Some(i + 1);
     }
     if bytes[i] == b'#' {
-        return comment_ok(bytes, i + 1, end).then_some(None);
+        let end = line_break(bytes, i).min(end);
+        return comment_ok(bytes, i + 1, end).then_some(end);
     }
     let (key_span, after) = bare_key(bytes, i, end)?;
     let eq = skip_ws(bytes, after, end);
@@ -295,12 +322,25 @@ fn line<'a>(
         Some(b'[') if at < end => array(text, at, end, pool.pop().unwrap_or_default())?,
         _ => scalar(text, at, end)?,
     };
-    line_end(bytes, after, end)?;
-    Some(Some(Entry {
+    let end = line_end(bytes, after, end)?;
+    out.push(Entry {
         key: Cow::Borrowed(&text[key_span.clone()]),
         key_span,
         value,
-    }))
+    });
+    Some(end)
+}
+
+/// [`line`] for a line of the top level (a few lines): its entry, if it has one.
+fn line_entry<'a>(
+    text: &'a str,
+    start: usize,
+    end: usize,
+    pool: &mut Vec<Vec<Node<'a>>>,
+) -> Option<Option<Entry<'a>>> {
+    let mut one = Vec::new();
+    line(text, start, end, pool, &mut one)?;
+    Some(one.pop())
 }
 
 /// A one-line array of scalars at `at` (its `[`), trailing comma allowed, its items pushed on
@@ -367,13 +407,14 @@ fn scalar(text: &str, at: usize, end: usize) -> Option<(Node<'_>, usize)> {
         ));
     }
     let mut i = at;
-    while i < end && !matches!(bytes[i], b' ' | b'\t' | b',' | b']' | b'#' | b'\r') {
+    while i < end && !matches!(bytes[i], b' ' | b'\t' | b',' | b']' | b'#' | b'\r' | b'\n') {
         i += 1;
     }
     let token = &text[at..i];
-    let value = match token {
-        "true" => Value::Bool(true),
-        "false" => Value::Bool(false),
+    // Numbers (nearly every token) go straight to `number`: not compared with the booleans.
+    let value = match token.as_bytes().first() {
+        Some(b't') if token == "true" => Value::Bool(true),
+        Some(b'f') if token == "false" => Value::Bool(false),
         _ => number(token)?,
     };
     Some((Node { span: at..i, value }, i))

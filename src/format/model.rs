@@ -6,7 +6,7 @@ use super::tree::{Entry, Lazy, Node, Value};
 use crate::joint::{CATALOGUE, JointType};
 use crate::mechanism::{
     Body, BodyId, Expect, Geometry, Joint, JointBodies, JointGeometry, JointSpec, Mechanism,
-    Second, Space,
+    Second, Space, short_natural_key,
 };
 use std::borrow::Cow;
 use std::collections::hash_map;
@@ -515,7 +515,13 @@ impl Interner {
     fn new(dense: bool, hint: usize) -> Interner {
         Interner {
             dense,
-            present: Vec::new(),
+            // Sized for ids up to the joint count (a file's bodies are about that many or
+            // fewer): grown by doubling only past it.
+            present: if dense {
+                vec![0; hint / 64 + 1]
+            } else {
+                Vec::new()
+            },
             count: 0,
             hint,
             renumbered: None,
@@ -544,7 +550,28 @@ impl Interner {
     }
 
     /// The index of `id`, added if new.
+    #[inline]
     fn get(&mut self, id: BodyId) -> usize {
+        // The common case inline (a dense id within the bitmap); the rest in `get_slow`.
+        if self.dense
+            && let BodyId::Int(i) = id
+            && let Ok(i) = usize::try_from(i)
+            && i / 4 < self.hint + self.count + 4096
+            && let Some(word) = self.present.get_mut(i / 64)
+        {
+            let bit = 1u64 << (i % 64);
+            if *word & bit == 0 {
+                *word |= bit;
+                self.count += 1;
+            }
+            return i;
+        }
+        self.get_slow(id)
+    }
+
+    /// [`Interner::get`] in every case.
+    #[inline(never)]
+    fn get_slow(&mut self, id: BodyId) -> usize {
         if self.dense {
             if let BodyId::Int(i) = id
                 && let Ok(i) = usize::try_from(i)
@@ -684,7 +711,10 @@ fn build_joints<'a>(
     interner.renumbered = None;
     let mut read: Vec<Joint> = Vec::with_capacity(hint);
     // The span that locates each joint in later errors.
-    let mut joint_spans: Vec<Range<usize>> = Vec::with_capacity(hint);
+    // Not kept when the error would be thrown away (`Lazy::errors_discarded`): 16 bytes a
+    // joint, written for every joint of a large file and needed only by the error.
+    let keep_spans = !lazy.errors_discarded();
+    let mut joint_spans: Vec<Range<usize>> = Vec::with_capacity(if keep_spans { hint } else { 0 });
     // Explicit ids and where each is: a hash map (looked up once per joint below; the
     // standard keyed hasher, so crafted ids cannot make it quadratic), keys borrowed from the
     // text where the reader could.
@@ -927,7 +957,9 @@ fn build_joints<'a>(
         } else {
             JointGeometry::default()
         };
-        joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
+        if keep_spans {
+            joint_spans.push(es.first().map_or(j.span.clone(), |e| e.key_span.clone()));
+        }
         read.push(Joint {
             id,
             kind,
@@ -961,8 +993,19 @@ fn build_joints<'a>(
         // Integer bodies: a default `a-b` or `a-b#n` has no other `#`, so defaults of two body
         // lists never meet; the k-th default of a list takes the k-th suffix not taken by an
         // explicit id (as the general loop below, without a set of every id).
-        let ByList { order, same, .. } = by_body_list(&read, |k| defaulted[k]);
+        let merge = interner.dense;
+        let ByList {
+            order,
+            same,
+            pairs_only,
+            pair_keys,
+        } = by_body_list(&read, |k| defaulted[k], merge);
         let maybe = MaybeTaken::new(explicit.keys().map(|id| id.as_ref()), explicit.len());
+        // With integer bodies numbered by their ids and two bodies a default, the defaults in
+        // `order` are in natural order already: the suffix each took is kept, and the natural
+        // order is a merge with the explicit ids (no key parsed back from 10^6 id texts).
+        let mut suffixes: Option<Vec<u32>> =
+            (merge && pairs_only).then(|| Vec::with_capacity(order.len()));
         let mut k = 0;
         while k < order.len() {
             let mut n = 1i64;
@@ -980,8 +1023,17 @@ fn build_joints<'a>(
                         break;
                     }
                 }
+                if let Some(s) = &mut suffixes {
+                    match u32::try_from(n - 1) {
+                        Ok(n) => s.push(n),
+                        Err(_) => suffixes = None,
+                    }
+                }
                 k += 1;
             }
+        }
+        if let Some(suffixes) = suffixes {
+            in_order = merged_natural_order(&read, &order, &pair_keys, &suffixes, |k| defaulted[k]);
         }
     } else {
         let mut taken: HashSet<String> = explicit.into_keys().map(Cow::into_owned).collect();
@@ -1017,8 +1069,11 @@ fn build_joints<'a>(
             .collect();
         let frame = if hi - lo + 1 == met.len() {
             if lo > 0 {
-                for b in read.iter_mut().flat_map(|j| j.bodies.iter_mut()) {
-                    *b -= lo;
+                // Plain loops: a `flat_map` over the joints' bodies showed in profiles.
+                for j in &mut read {
+                    for b in j.bodies.iter_mut() {
+                        *b -= lo;
+                    }
                 }
             }
             frame_index - lo
@@ -1027,8 +1082,10 @@ fn build_joints<'a>(
             for (r, &i) in met.iter().enumerate() {
                 rank[i] = r as u32;
             }
-            for b in read.iter_mut().flat_map(|j| j.bodies.iter_mut()) {
-                *b = rank[*b] as usize;
+            for j in &mut read {
+                for b in j.bodies.iter_mut() {
+                    *b = rank[*b] as usize;
+                }
             }
             rank[frame_index] as usize
         };
@@ -1116,9 +1173,13 @@ impl MaybeTaken {
         // Eight bytes a step, mixed by a multiplication; the high bits index the table.
         let mut h = id.len() as u64;
         for c in id.as_bytes().chunks(8) {
-            let mut w = [0u8; 8];
-            w[..c.len()].copy_from_slice(c);
-            h = (h.rotate_left(5) ^ u64::from_le_bytes(w)).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+            // The chunk's bytes little-endian, zero-padded (a loop: a copy call for a few
+            // bytes, once per default id of a large file, showed in profiles).
+            let w = c
+                .iter()
+                .enumerate()
+                .fold(0u64, |w, (k, &b)| w | u64::from(b) << (8 * k));
+            h = (h.rotate_left(5) ^ w).wrapping_mul(0x9E37_79B9_7F4A_7C15);
         }
         (h >> self.shift) as usize
     }
@@ -1176,8 +1237,10 @@ fn push_int(out: &mut String, n: i64) {
 /// it. Two-body lists (nearly all) come first, sorted and compared by a packed key (not by
 /// their vectors: a million scattered reads), then the others, by list; `pairs_only` when
 /// there are no others.
-fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> ByList {
-    let mut pairs: Vec<(u64, u32)> = Vec::new();
+fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool, with_keys: bool) -> ByList {
+    // Sized for every joint (a vector of 10^6 pairs grown by doubling copies itself about
+    // once more, and holds both copies at each step).
+    let mut pairs: Vec<(u64, u32)> = Vec::with_capacity(joints.len());
     let mut others: Vec<u32> = Vec::new();
     for (k, j) in joints.iter().enumerate().filter(|(k, _)| keep(*k)) {
         match j.bodies[..] {
@@ -1200,13 +1263,67 @@ fn by_body_list(joints: &[Joint], keep: impl Fn(usize) -> bool) -> ByList {
         w > 0 && joints[others[w - 1] as usize].bodies == joints[others[w] as usize].bodies
     }));
     let pairs_only = others.is_empty();
-    let mut order: Vec<u32> = pairs.into_iter().map(|(_, k)| k).collect();
+    let mut order: Vec<u32> = Vec::with_capacity(pairs.len() + others.len());
+    order.extend(pairs.iter().map(|&(_, k)| k));
+    let pair_keys = if with_keys {
+        pairs.iter().map(|&(key, _)| key).collect()
+    } else {
+        Vec::new()
+    };
+    drop(pairs);
     order.extend(others);
     ByList {
         order,
         same,
         pairs_only,
+        pair_keys,
     }
+}
+
+/// The joints' natural order (as [`Mechanism::from_indexed`] sorts them) when every default
+/// id is `a-b` or `a-b#s` of two integer bodies numbered by their ids, listed in natural order
+/// by `order` (positions of the joints `defaulted` selects) with their bodies `pair_keys`
+/// (`a << 32 | b`, from [`by_body_list`]) and their suffixes `s` (1: none),
+/// and every explicit id is a short numeric id (`mechanism::short_natural_key`): the explicit
+/// ids sorted by that key, then merged with the defaults' keys, made from the bodies. `None`
+/// otherwise (the caller sorts every id). The ids are distinct, so the order is the sort's.
+fn merged_natural_order(
+    read: &[Joint],
+    order: &[u32],
+    pair_keys: &[u64],
+    suffixes: &[u32],
+    defaulted: impl Fn(usize) -> bool,
+) -> Option<Vec<u32>> {
+    if pair_keys.len() != order.len() || suffixes.len() != order.len() {
+        return None;
+    }
+    let mut buf = Vec::with_capacity(8);
+    let mut explicit: Vec<([u64; 3], u32)> = Vec::with_capacity(read.len() - order.len());
+    for (k, j) in read.iter().enumerate().filter(|(k, _)| !defaulted(*k)) {
+        explicit.push((short_natural_key(&j.id, &mut buf)?, k as u32));
+    }
+    explicit.sort_unstable();
+    let mut merged = Vec::with_capacity(read.len());
+    let mut rest = explicit.iter().peekable();
+    for ((&k, &s), &pair) in order.iter().zip(suffixes).zip(pair_keys) {
+        // The key of `a-b` / `a-b#s`: a first, `-` rank 2 above b, `#` rank 1 above s (as
+        // `short_natural_key` packs the tokens; a and b below 2^32 here).
+        let (a, b) = (pair >> 32, pair & u64::from(u32::MAX));
+        let key = [
+            a,
+            (2 << 56) | b,
+            if s > 1 { (1 << 56) | u64::from(s) } else { 0 },
+        ];
+        while let Some(&&(e, i)) = rest.peek()
+            && (e, i) < (key, k)
+        {
+            merged.push(i);
+            rest.next();
+        }
+        merged.push(k);
+    }
+    merged.extend(rest.map(|&(_, i)| i));
+    Some(merged)
 }
 
 /// Joint positions by body list ([`by_body_list`]).
@@ -1214,6 +1331,9 @@ struct ByList {
     order: Vec<u32>,
     same: Vec<bool>,
     pairs_only: bool,
+    /// When asked for: the two-body lists in `order`'s order (first `<< 32 |` second), so
+    /// that they are read in order, not from the joints at random.
+    pair_keys: Vec<u64>,
 }
 
 /// Default ids when no joint has an explicit one: the n-th joint of a body list `a-b` gets
@@ -1232,7 +1352,7 @@ fn default_joint_ids(
     // sorted by body list, then by position (a sort, not a hash map: no hash flooding). The
     // joints hold their base `a-b` already (written as they were read); only the repeated
     // lists get a suffix.
-    let by_list = by_body_list(joints, |_| true);
+    let by_list = by_body_list(joints, |_| true, false);
     let mut n = 1u32;
     for (&k, &same) in by_list.order.iter().zip(&by_list.same) {
         n = if same { n + 1 } else { 1 };
@@ -1260,9 +1380,10 @@ fn default_joint_ids(
                         b + 1,
                         list(b)
                     ),
+                    // No spans: the error is thrown away (see `Lazy::errors_discarded`).
                     vec![
-                        label(&spans[a], format!("joint {} gets `{id}`", a + 1)),
-                        label(&spans[b], format!("joint {} gets `{id}` too", b + 1)),
+                        label(&spans.get(a).cloned().unwrap_or_default(), format!("joint {} gets `{id}`", a + 1)),
+                        label(&spans.get(b).cloned().unwrap_or_default(), format!("joint {} gets `{id}` too", b + 1)),
                     ],
                     Some(
                         "give one of them an explicit `id`; `--inputs` and reports name joints by id"
@@ -1278,8 +1399,43 @@ fn default_joint_ids(
 
 /// The joint type whose code is exactly `text` (as [`JointType::parse`] reads it).
 fn exact_code(text: &str) -> Option<JointType> {
-    CATALOGUE.iter().find(|i| i.code == text).map(|i| i.kind)
+    // Codes are 1 to 4 bytes: compared as one packed integer each (a call to compare bytes
+    // per catalogue entry, a million joints over, showed in profiles).
+    let key = packed_code(text.as_bytes())?;
+    CODE_KEYS
+        .iter()
+        .position(|&k| k == key)
+        .and_then(|i| CATALOGUE.get(i))
+        .map(|c| c.kind)
 }
+
+/// The bytes of a code of 1 to 4 bytes in one integer, its length in the top byte (`None`
+/// for other lengths).
+const fn packed_code(b: &[u8]) -> Option<u64> {
+    if b.is_empty() || b.len() > 4 {
+        return None;
+    }
+    let mut key = (b.len() as u64) << 32;
+    let mut i = 0;
+    while i < b.len() {
+        key |= (b[i] as u64) << (8 * i);
+        i += 1;
+    }
+    Some(key)
+}
+
+/// [`packed_code`] of each catalogue code, in catalogue order.
+const CODE_KEYS: [u64; CATALOGUE.len()] = {
+    let mut keys = [u64::MAX; CATALOGUE.len()];
+    let mut i = 0;
+    while i < CATALOGUE.len() {
+        if let Some(k) = packed_code(CATALOGUE[i].code.as_bytes()) {
+            keys[i] = k;
+        }
+        i += 1;
+    }
+    keys
+};
 
 fn c_name(code: &str) -> &'static str {
     CATALOGUE
@@ -1701,6 +1857,10 @@ mod fast_tests {
             assert_eq!(exact_code(i.code), JointType::parse(i.code), "{}", i.code);
         }
         assert_eq!(exact_code("r"), None);
+        for t in ["", "RR", "SPSPS", "S\0", "SPS", "Rx"] {
+            assert_eq!(exact_code(t), None, "{t:?}");
+        }
+        assert!(CODE_KEYS.iter().all(|&k| k != u64::MAX));
     }
 
     #[test]

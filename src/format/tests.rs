@@ -456,3 +456,59 @@ fn body_numbering_equals_from_parts() {
         }
     }
 }
+
+/// Integer bodies with explicit ids: the reader's natural order (defaults merged with the
+/// explicit ids when they are short numeric ids) is the order `Mechanism::from_indexed` sorts
+/// the same joints into. Explicit ids that are defaults of other lists, suffixed defaults,
+/// single numbers, long numeric ids (`1-2-3-4`, not packed) and names.
+#[test]
+fn explicit_ids_merge_into_the_natural_order() {
+    use crate::mechanism::Mechanism;
+    let mut state = 0x2545_F491_4F6C_DD1Du64;
+    let mut next = move |n: u64| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state % n
+    };
+    for case in 0..300u64 {
+        let n_joints = 1 + next(50) as usize;
+        let mut used = std::collections::HashSet::new();
+        let mut toml = String::from("frame = 0\n");
+        for k in 0..n_joints {
+            let spread = if case % 3 == 0 { 40 } else { 6 };
+            let a = if k == 0 { 0 } else { next(spread) };
+            let mut b = next(spread);
+            while b == a {
+                b = next(spread);
+            }
+            let third = (case % 5 == 4 && next(6) == 0).then(|| next(spread) + spread);
+            let id = match next(10) {
+                0 => Some(format!("{a}-{b}")),
+                1 => Some(format!("{}-{}#{}", next(spread), next(spread), 2 + next(3))),
+                2 => Some(format!("{}", next(60))),
+                3 if case % 4 == 0 => Some(format!("{}-{}-{}-{}", a, b, next(9), next(9))),
+                4 if case % 7 == 0 => Some(format!("j{}", next(9))),
+                5 => Some(format!("{}-{}", next(spread), next(spread))),
+                _ => None,
+            }
+            .filter(|id| used.insert(id.clone()));
+            toml.push_str("\n[[joint]]\n");
+            if let Some(id) = id {
+                toml.push_str(&format!("id = \"{id}\"\n"));
+            }
+            match third {
+                Some(c) if c != a && c != b => {
+                    toml.push_str(&format!("type = \"S\"\nbodies = [{a}, {b}, {c}]\n"));
+                }
+                _ => toml.push_str(&format!("type = \"S\"\nbodies = [{a}, {b}]\n")),
+            }
+        }
+        let m = load("t", &toml, Format::Toml).unwrap_or_else(|e| panic!("{e:?}\n{toml}"));
+        let mut joints = m.joints.clone();
+        joints.reverse();
+        let sorted =
+            Mechanism::from_indexed(m.name.clone(), m.space, m.frame, m.bodies.clone(), joints);
+        assert_eq!(m, sorted, "case {case}\n{toml}");
+    }
+}

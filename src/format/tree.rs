@@ -161,6 +161,19 @@ impl<'a> Lazy<'a> {
         }
     }
 
+    /// Whether an error of the model read from this source is thrown away: the fast readers'
+    /// (the caller then reads the text again by a reader that reports every error, located).
+    /// What only locates an error need not be kept then.
+    pub(crate) fn errors_discarded(&self) -> bool {
+        matches!(
+            self,
+            Lazy::TomlLines { .. }
+                | Lazy::YamlLines { .. }
+                | Lazy::YamlResume(_)
+                | Lazy::JsonResume { .. }
+        )
+    }
+
     /// Call `f` on every item of `list` (a `Seq`, or the `Deferred` list), in order, each item
     /// dropped (or its memory reused) after its call; stops at the first error.
     pub(crate) fn for_each(
