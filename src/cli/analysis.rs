@@ -220,9 +220,38 @@ pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Fa
         ViewArg::Topology => View::Topology,
         ViewArg::Rigid => View::Rigid,
     };
-    let out = emit(&mbsa::report::dot::render(view, &m, &a));
+    let out = match view {
+        // The diagram is written as it is made (tens of MB at 10^6 bodies, not held whole).
+        View::Diagram => emit_with(|out| {
+            let mut w = FmtToIo { out, error: None };
+            mbsa::report::dot::write_diagram(&a, &mut w).map_err(|_| {
+                w.error
+                    .take()
+                    .unwrap_or_else(|| std::io::Error::other("formatting failed"))
+            })
+        }),
+        _ => emit(&mbsa::report::dot::render(view, &m, &a)),
+    };
     keep_until_exit((m, a));
     out
+}
+
+/// A text sink ([`std::fmt::Write`]) over an output stream, keeping the stream's first error.
+struct FmtToIo<'a> {
+    out: &'a mut dyn std::io::Write,
+    error: Option<std::io::Error>,
+}
+
+impl std::fmt::Write for FmtToIo<'_> {
+    fn write_str(&mut self, s: &str) -> std::fmt::Result {
+        if self.error.is_some() {
+            return Err(std::fmt::Error);
+        }
+        self.out.write_all(s.as_bytes()).map_err(|e| {
+            self.error = Some(e);
+            std::fmt::Error
+        })
+    }
 }
 
 /// Which rigidity analyses `mbsa rigid` runs.

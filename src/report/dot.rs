@@ -200,17 +200,26 @@ fn html(s: &str) -> String {
 /// depends on, and one `rank=same` row per level.
 pub fn diagram(a: &Analysis) -> String {
     let mut out = String::new();
+    let _ = write_diagram(a, &mut out);
+    out
+}
+
+/// [`diagram`], written to `out` as it is made: at 10^6 bodies the text is tens of MB, and
+/// held whole (grown by doubling) it set the peak of `mbsa dot` after the analysis.
+pub fn write_diagram(a: &Analysis, out: &mut dyn std::fmt::Write) -> std::fmt::Result {
+    let mut head = String::new();
     let note = closure_note(a.geometry.as_ref().and_then(|g| g.closure.as_ref()));
     header(
-        &mut out,
+        &mut head,
         &format!("{}: structural diagram", a.name),
         "TB",
         note,
     );
-    let _ = writeln!(
+    out.write_str(&head)?;
+    writeln!(
         out,
         "  frame [label=\"0\\nframe\", shape=doublecircle, style=filled, fillcolor=\"#dddddd\"];"
-    );
+    )?;
     let mut by_level: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for (i, g) in a.groups.iter().enumerate() {
         by_level.entry(g.level).or_default().push(i);
@@ -227,13 +236,13 @@ pub fn diagram(a: &Analysis) -> String {
         } else {
             UNCOVERED_COLOUR
         };
-        let _ = writeln!(
+        writeln!(
             out,
             "  {} [label={}, shape=ellipse, style=filled, fillcolor={}];",
             sg_node(i),
             quote(&label),
             quote(fill)
-        );
+        )?;
     }
     let (over, under) = troubled(a);
     for (name, bodies, colour) in [
@@ -243,35 +252,36 @@ pub fn diagram(a: &Analysis) -> String {
         if !bodies.is_empty() {
             let list: Vec<&str> = bodies.iter().copied().collect();
             let label = format!("{name}\n{{{}}}", list.join(","));
-            let _ = writeln!(
+            writeln!(
                 out,
                 "  {} [label={}, shape=box, style=\"filled,dashed\", fillcolor={}];",
                 quote(name),
                 quote(&label),
                 quote(colour)
-            );
+            )?;
         }
     }
     for (i, g) in a.groups.iter().enumerate() {
         if g.depends_on.is_empty() {
-            let _ = writeln!(out, "  frame -> {};", sg_node(i));
+            writeln!(out, "  frame -> {};", sg_node(i))?;
         }
         for &d in &g.depends_on {
-            let _ = writeln!(out, "  {} -> {};", sg_node(d), sg_node(i));
+            writeln!(out, "  {} -> {};", sg_node(d), sg_node(i))?;
         }
     }
-    let _ = writeln!(out, "  {{ rank=same; frame; }}");
+    writeln!(out, "  {{ rank=same; frame; }}")?;
     for (level, groups) in &by_level {
         let nodes: Vec<String> = groups.iter().map(|&i| sg_node(i)).collect();
-        let _ = writeln!(
+        writeln!(
             out,
             "  {{ rank=same; {}; }}  // level {level}",
             nodes.join("; ")
-        );
+        )?;
     }
-    legend(&mut out, a, !over.is_empty(), !under.is_empty());
-    out.push_str("}\n");
-    out
+    let mut tail = String::new();
+    legend(&mut tail, a, !over.is_empty(), !under.is_empty());
+    out.write_str(&tail)?;
+    out.write_str("}\n")
 }
 
 /// The structural graph (paper Fig. 13b, 14a): bodies inside one cluster per group, edges

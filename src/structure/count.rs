@@ -248,8 +248,9 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     // The nodes reachable from the source come with the flow (its last search).
     let (_, from_src) = net.max_flow_cut(src, sink);
 
-    // Read the flow back.
-    let mut flow = vec![[0u32; 2]; ne];
+    // Read the flow back: whether each side of each pair carries flow (all that is read of
+    // it below; two bytes a pair rather than eight, held with the network).
+    let mut flow = vec![[false; 2]; ne];
     let mut eq_excess = vec![0u32; ne];
     for (e, f) in flow.iter_mut().enumerate() {
         let [h, o] = eqs.bodies(e);
@@ -261,9 +262,9 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
             } else if v == body_node(h) && h != m.frame {
                 // A forward edge of capacity INF: what it lost is its flow (read here rather
                 // than on its reverse, which sits at the body, far away).
-                f[0] = INF - net.residual(a);
+                f[0] = net.residual(a) < INF;
             } else if v == body_node(o) {
-                f[1] = INF - net.residual(a);
+                f[1] = net.residual(a) < INF;
             }
         }
     }
@@ -288,6 +289,9 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     // Dulmage–Mendelsohn: reachable from the source = over-determined, reaching the sink =
     // under-determined, the rest is perfectly matched within itself.
     let to_sink = net.reaching(sink);
+    // The network is read no more: its pages take the parts' lists below.
+    let scanned = net.scanned();
+    drop(net);
     let classify = |node: usize| {
         if from_src[node] {
             Part::Over
@@ -306,8 +310,8 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
         }
     }
     let mut eq_part: Vec<Part> = (0..ne).map(|e| classify(eq_node(e))).collect();
-    let scanned = net.scanned();
-    drop(net);
+    drop(from_src);
+    drop(to_sink);
 
     // Dependency graph among well-determined bodies: b depends on a when an equation that
     // flows into b also touches a.
@@ -315,7 +319,7 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     // The dependency `x -> y` of side `i` of pair `e`, if any (counted, then placed: no list
     // of edges next to the arrays).
     let dep = |e: usize, i: usize| -> Option<(usize, usize)> {
-        if !matches!(eq_part[e], Part::Group(_)) || flow[e][i] == 0 {
+        if !matches!(eq_part[e], Part::Group(_)) || !flow[e][i] {
             return None;
         }
         let bs = eqs.bodies(e);
@@ -389,9 +393,9 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     for e in 0..ne {
         if matches!(eq_part[e], Part::Group(_)) {
             let bs = eqs.bodies(e);
-            let receiving = if flow[e][0] > 0 {
+            let receiving = if flow[e][0] {
                 Some(bs[0])
-            } else if flow[e][1] > 0 {
+            } else if flow[e][1] {
                 Some(bs[1])
             } else {
                 None

@@ -335,24 +335,31 @@ impl Network {
         let mut seen = vec![0u64; n.div_ceil(64)];
         let bit = |seen: &[u64], x: usize| seen[x / 64] >> (x % 64) & 1 != 0;
         let mut next = vec![0u32; n];
-        // Nodes with their levels (the popped node's level is not read back from `level`).
-        let mut queue: Vec<(u32, u32)> = Vec::new();
+        // Nodes in order of their levels (a node's level is not read back from `level`: the
+        // search knows where each level ends in the queue). Four bytes a node: the queue
+        // holds most nodes while the network is at its largest.
+        let mut queue: Vec<u32> = Vec::new();
         let mut path: Vec<usize> = Vec::new();
         loop {
             // Levels: distance from s in the residual network, up to t's.
-            for &(x, _) in &queue {
+            for &x in &queue {
                 level[x as usize] = UNSEEN;
                 seen[x as usize / 64] = 0;
             }
             queue.clear();
             level[s] = 0;
             seen[s / 64] |= 1 << (s % 64);
-            queue.push((s as u32, 0));
+            queue.push(s as u32);
             let mut qi = 0;
             let mut scanned = 0;
+            // The level of the nodes popped now, and where the nodes of that level end.
+            let (mut lx, mut level_end) = (0u32, 1usize);
             while qi < queue.len() {
-                let (x, lx) = queue[qi];
-                let x = x as usize;
+                if qi == level_end {
+                    lx += 1;
+                    level_end = queue.len();
+                }
+                let x = queue[qi] as usize;
                 qi += 1;
                 if level[t] != UNSEEN && lx >= level[t] {
                     break;
@@ -364,7 +371,7 @@ impl Network {
                     if a.cap > 0 && !bit(&seen, v) {
                         seen[v / 64] |= 1 << (v % 64);
                         level[v] = lx;
-                        queue.push((v as u32, lx));
+                        queue.push(v as u32);
                     }
                 }
             }
@@ -374,7 +381,7 @@ impl Network {
                 self.scan(scanned);
                 return (total, (0..n).map(|x| bit(&seen, x)).collect());
             }
-            for &(x, _) in &queue {
+            for &x in &queue {
                 next[x as usize] = self.start[x as usize];
             }
             // Blocking flow: advance along level-increasing edges, augment at t, retreat

@@ -81,7 +81,7 @@ type Bases = Vec<Option<DMatrix<f64>>>;
 /// count, and the bodies' reduced unknowns (recomputed only where a pair changed).
 struct Kept {
     rows: PairRows,
-    first: Vec<usize>,
+    first: Vec<u8>,
     bases: Bases,
 }
 
@@ -379,7 +379,7 @@ fn local_basis<'a>(
 
 /// A block to check: its pairs, its bodies (ascending), its part, its signature and its
 /// matrix's (rows, columns).
-type Pending<'a> = (&'a [usize], &'a [usize], Part, Vec<usize>, (usize, usize));
+type Pending<'a> = (&'a [usize], &'a [usize], Part, Vec<u32>, (usize, usize));
 
 /// Blocks with more unknowns than this are screened by the sparse elimination first.
 const SCREEN_UNKNOWNS: usize = 8;
@@ -1373,7 +1373,7 @@ struct KeyContext<'a> {
     seed: Option<u64>,
     qd: &'a [u128],
     rd: &'a [u128],
-    orig_rows: &'a [usize],
+    orig_rows: &'a [u8],
 }
 
 impl KeyContext<'_> {
@@ -1407,7 +1407,7 @@ impl KeyContext<'_> {
             d.word(h as u64);
             d.word(o as u64);
             d.wide(self.rd[e]);
-            d.word(u64::from(rows.nrows(e) == self.orig_rows[e]));
+            d.word(u64::from(rows.nrows(e) == usize::from(self.orig_rows[e])));
         }
         d.finish()
     }
@@ -1500,7 +1500,25 @@ pub(crate) fn check(
 /// Signatures of the blocks found sound (bodies, then pairs with their rows), hashed word by
 /// word: the under- and over-determined blocks' signatures have millions of words at 10^6
 /// bodies, and SipHash over them (again at every growth of the set) was 2 % of `analyze`.
-type Signatures = HashSet<Vec<usize>, std::hash::BuildHasherDefault<SignatureHasher>>;
+type Signatures = HashSet<Vec<u32>, std::hash::BuildHasherDefault<SignatureHasher>>;
+
+/// A block's signature: its bodies, a separator, then each pair with its row count, four
+/// bytes a word (every index fits: the flow network numbers its nodes and edges in `u32`).
+/// The sound blocks' signatures are held through the next rounds' decompositions.
+fn block_signature(bodies: &[usize], block_eqs: &[usize], rows: &PairRows) -> Vec<u32> {
+    let word = |x: usize| {
+        debug_assert!(x < u32::MAX as usize);
+        x as u32
+    };
+    let mut signature = Vec::with_capacity(bodies.len() + 1 + 2 * block_eqs.len());
+    signature.extend(bodies.iter().map(|&x| word(x)));
+    signature.push(u32::MAX);
+    for &e in block_eqs {
+        signature.push(word(e));
+        signature.push(word(rows.nrows(e)));
+    }
+    signature
+}
 
 /// A multiplicative hash of 64-bit words (Fx-like; the keys are our own indices, not input
 /// an attacker chooses to collide).
@@ -1567,7 +1585,7 @@ fn check_at(
             let mut changed = vec![false; first.len()];
             for (e, &n) in first.iter().enumerate() {
                 let ji = eqs.joint[e];
-                if rows.nrows(e) != n || redraw.fresh.contains(&ji) {
+                if rows.nrows(e) != usize::from(n) || redraw.fresh.contains(&ji) {
                     let s = redraw.joints.get(&ji).copied().unwrap_or(seed);
                     rows.set(e, &pair_rows_at(m, eqs, e, s));
                     changed[e] = true;
@@ -1620,7 +1638,10 @@ fn check_at(
     for (e, cap) in eqs.cap.iter_mut().enumerate() {
         *cap = rows.nrows(e) as u32;
     }
-    let orig_rows: Vec<usize> = (0..rows.len()).map(|e| rows.nrows(e)).collect();
+    // Each pair's first row count (at most `b`, six: one byte a pair).
+    let orig_rows: Vec<u8> = (0..rows.len())
+        .map(|e| u8::try_from(rows.nrows(e)).expect("a pair has at most six rows"))
+        .collect();
     // Digests of every pair's rows (only with a cache), and of the tolerance.
     let mut rd: Vec<u128> = match cache {
         Some(_) => crate::par::map(rows.len(), |e| matrix_digest(&rows.get(e))),
@@ -2061,13 +2082,7 @@ fn check_at(
             } else {
                 (&under, Part::Under)
             };
-            let mut signature = Vec::with_capacity(bodies.len() + 1 + 2 * block_eqs.len());
-            signature.extend_from_slice(bodies);
-            signature.push(usize::MAX);
-            for &e in block_eqs {
-                signature.push(e);
-                signature.push(rows.nrows(e));
-            }
+            let signature = block_signature(bodies, block_eqs, &rows);
             if verified.contains(&signature) {
                 continue;
             }
@@ -2094,7 +2109,9 @@ fn check_at(
                 // exactly, by sparse elimination over GF(2^61 − 1), unless a pair of it was
                 // already lowered (its exact rows would not be the ones kept).
                 let needed = if part == Part::Over { ncols } else { nrows };
-                let untouched = block_eqs.iter().all(|&e| rows.nrows(e) == orig_rows[e]);
+                let untouched = block_eqs
+                    .iter()
+                    .all(|&e| rows.nrows(e) == usize::from(orig_rows[e]));
                 if let Some(seed) = used.seed
                     && untouched
                     && needed <= nrows.min(ncols)
@@ -2167,7 +2184,7 @@ fn check_at(
                 _ if changed => break,
                 _ => {}
             }
-            let sound = |verified: &mut Signatures, signature: Vec<usize>| {
+            let sound = |verified: &mut Signatures, signature: Vec<u32>| {
                 if let (Some(c), Some(k)) = (cache, key) {
                     c.put_block(k, None);
                 }
@@ -2280,13 +2297,7 @@ fn check_at(
                 && ncols <= MAX_EXACT_UNKNOWNS
             {
                 let (block_eqs, bodies) = round.under_lists(&rows);
-                let mut signature = Vec::with_capacity(bodies.len() + 1 + 2 * block_eqs.len());
-                signature.extend_from_slice(&bodies);
-                signature.push(usize::MAX);
-                for &e in &block_eqs {
-                    signature.push(e);
-                    signature.push(rows.nrows(e));
-                }
+                let signature = block_signature(&bodies, &block_eqs, &rows);
                 if verified.contains(&signature) {
                     continue;
                 }
@@ -2371,7 +2382,7 @@ impl<'a> Round<'a> {
         b: usize,
         q: &[Option<DMatrix<f64>>],
         rows: &PairRows,
-        orig_rows: &[usize],
+        orig_rows: &[u8],
         dec: &'a Decomposition,
         first_group: usize,
         bstart: &'a [usize],
@@ -2398,7 +2409,7 @@ impl<'a> Round<'a> {
             under_cols: under.iter().map(|&x| width(b, q, x)).sum(),
             under_touched: under_eqs
                 .iter()
-                .filter(|&&e| rows.nrows(e) != orig_rows[e])
+                .filter(|&&e| rows.nrows(e) != usize::from(orig_rows[e]))
                 .count(),
             under,
             under_eqs,
@@ -2423,7 +2434,7 @@ impl<'a> Round<'a> {
         g: usize,
         q: &[Option<DMatrix<f64>>],
         rows: &PairRows,
-        orig_rows: &[usize],
+        orig_rows: &[u8],
     ) -> Option<(usize, usize, bool)> {
         let groups = &self.dec.groups;
         if self.dependents_start.is_empty() {
@@ -2464,7 +2475,7 @@ impl<'a> Round<'a> {
                 let n = rows.nrows(e);
                 if n > 0 {
                     self.under_rows += n;
-                    self.under_touched += usize::from(n != orig_rows[e]);
+                    self.under_touched += usize::from(n != usize::from(orig_rows[e]));
                 }
             }
             for &d in &self.dependents[self.dependents_start[h]..self.dependents_start[h + 1]] {
@@ -2758,13 +2769,15 @@ fn unconfirmed(
     block_eqs: &[usize],
     bodies: &[usize],
     rows: &PairRows,
-    orig_rows: &[usize],
+    orig_rows: &[u8],
     (nrows, ncols): (usize, usize),
     needed: usize,
     seeds: impl Iterator<Item = u64>,
     work: &mut u64,
 ) -> Option<u64> {
-    let untouched = block_eqs.iter().all(|&e| rows.nrows(e) == orig_rows[e]);
+    let untouched = block_eqs
+        .iter()
+        .all(|&e| rows.nrows(e) == usize::from(orig_rows[e]));
     if needed > nrows.min(ncols) {
         return None;
     }
