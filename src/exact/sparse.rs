@@ -1525,20 +1525,15 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         acc += s;
         group_of.extend(std::iter::repeat_n(g, s));
     }
-    // Each nonempty row's set of groups (its columns are increasing, so the set is sorted and
-    // the groups of a row are consecutive), all in one flat array: `sets[start[k]..start[k +
-    // 1]]` for the `k`-th nonempty row, `rows[k]` its index. One vector of groups per row,
-    // sorted with its row index, held 64 bytes a row and its sort chased a pointer per
-    // comparison (at 10^6 bodies, 200 MB at the command's peak).
-    let nonempty = a.rows.iter().filter(|r| !r.is_empty()).count();
-    let mut rows: Vec<u32> = Vec::with_capacity(nonempty);
-    let mut start: Vec<usize> = Vec::with_capacity(nonempty + 1);
+    // Each row's set of groups (its columns are increasing, so the set is sorted and the
+    // groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
+    // for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
+    // row and its sort chased a pointer per comparison.
+    let mut start: Vec<usize> = Vec::with_capacity(a.rows.len() + 1);
     let mut sets: Vec<u32> = Vec::new();
     start.push(0);
-    for (i, r) in a.rows.iter().enumerate() {
-        if r.is_empty() {
-            continue;
-        }
+    let mut longest = 0;
+    for r in &a.rows {
         let from = sets.len();
         for &(c, _) in r {
             let g = group_of[c as usize] as u32;
@@ -1546,24 +1541,28 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
                 sets.push(g);
             }
         }
-        rows.push(i as u32);
+        longest = longest.max(sets.len() - from);
         start.push(sets.len());
     }
-    let set = |k: u32| &sets[start[k as usize]..start[k as usize + 1]];
-    // By set, then by row (the rows' positions `k` ascend with their indices): the order
-    // of the former sort of `(set, row)` pairs. The keys are distinct, so an unstable sort
-    // gives that order. Each row is sorted with a prefix key of its set, its first group
-    // and one more than its second (zero without), which orders sets of one or two groups
-    // as their lexicographic order does; longer sets (or more groups than a `u32` holds)
-    // are compared in full where the keys tie.
+    let set = |i: u32| &sets[start[i as usize]..start[i as usize + 1]];
+    // The nonempty rows by set, then by index: the order of the former sort of `(set, row)`
+    // pairs (the keys are distinct, so an unstable sort gives that order). Each row is
+    // sorted with a prefix key of its set, its first group and one more than its second
+    // (zero without), which orders sets of one or two groups as their lexicographic order
+    // does; longer sets (or more groups than a `u32` holds) are compared in full where the
+    // keys tie. With sets of at most two groups, equal keys are equal sets.
     let narrow = sizes.len() < u32::MAX as usize;
+    let exact = narrow && longest <= 2;
     let prefix = |s: &[u32]| match (narrow, s) {
         (true, [a, b, ..]) => (u64::from(*a) << 32) | (u64::from(*b) + 1),
         (true, [a]) => u64::from(*a) << 32,
         _ => 0,
     };
-    let mut order: Vec<(u64, u32)> = (0..nonempty as u32).map(|k| (prefix(set(k)), k)).collect();
-    if narrow && start.windows(2).all(|w| w[1] - w[0] <= 2) {
+    let mut order: Vec<(u64, u32)> = (0..a.rows.len() as u32)
+        .filter(|&i| !a.rows[i as usize].is_empty())
+        .map(|i| (prefix(set(i)), i))
+        .collect();
+    if exact {
         order.sort_unstable();
     } else {
         order.sort_unstable_by(|x, y| {
@@ -1572,20 +1571,20 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
                 .then(x.1.cmp(&y.1))
         });
     }
-    let order: Vec<u32> = order.into_iter().map(|(_, k)| k).collect();
+    let same = |x: &(u64, u32), y: &(u64, u32)| x.0 == y.0 && (exact || set(x.1) == set(y.1));
     let nblocks = order
         .iter()
         .enumerate()
-        .filter(|&(i, &k)| i == 0 || set(order[i - 1]) != set(k))
+        .filter(|&(i, k)| i == 0 || !same(&order[i - 1], k))
         .count();
     let mut blocks = Vec::with_capacity(nblocks);
-    let mut orig = Vec::with_capacity(nonempty);
+    let mut orig = Vec::with_capacity(order.len());
     let mut i = 0;
     let mut local = vec![0usize; sizes.len()];
     while i < order.len() {
-        let groups = set(order[i]);
+        let groups = set(order[i].1);
         let mut j = i;
-        while j < order.len() && set(order[j]) == groups {
+        while j < order.len() && same(&order[j], &order[i]) {
             j += 1;
         }
         let mut width = 0;
@@ -1594,8 +1593,8 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
             width += sizes[g as usize];
         }
         let mut data = vec![Fp::ZERO; (j - i) * width];
-        for (k, &pos) in order[i..j].iter().enumerate() {
-            for &(c, v) in &a.rows[rows[pos as usize] as usize] {
+        for (k, &(_, ri)) in order[i..j].iter().enumerate() {
+            for &(c, v) in &a.rows[ri as usize] {
                 let g = group_of[c as usize];
                 data[k * width + local[g] + c as usize - offsets[g]] = v;
             }
@@ -1606,7 +1605,7 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
             data,
             id: orig.len() as u32,
         });
-        orig.extend(order[i..j].iter().map(|&pos| rows[pos as usize]));
+        orig.extend(order[i..j].iter().map(|&(_, ri)| ri));
         i = j;
     }
     (blocks, orig)
