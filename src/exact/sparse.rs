@@ -1525,6 +1525,105 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         acc += s;
         group_of.extend(std::iter::repeat_n(g, s));
     }
+    // Each row's set of groups (its columns are increasing, so the set is sorted and the
+    // groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
+    // for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
+    // row and its sort chased a pointer per comparison.
+    let mut start: Vec<usize> = Vec::with_capacity(a.rows.len() + 1);
+    let mut sets: Vec<u32> = Vec::new();
+    start.push(0);
+    let mut longest = 0;
+    for r in &a.rows {
+        let from = sets.len();
+        for &(c, _) in r {
+            let g = group_of[c as usize] as u32;
+            if sets.len() == from || sets[sets.len() - 1] != g {
+                sets.push(g);
+            }
+        }
+        longest = longest.max(sets.len() - from);
+        start.push(sets.len());
+    }
+    let set = |i: u32| &sets[start[i as usize]..start[i as usize + 1]];
+    // The nonempty rows by set, then by index: the order of the former sort of `(set, row)`
+    // pairs (the keys are distinct, so an unstable sort gives that order). Each row is
+    // sorted with a prefix key of its set, its first group and one more than its second
+    // (zero without), which orders sets of one or two groups as their lexicographic order
+    // does; longer sets (or more groups than a `u32` holds) are compared in full where the
+    // keys tie. With sets of at most two groups, equal keys are equal sets.
+    let narrow = sizes.len() < u32::MAX as usize;
+    let exact = narrow && longest <= 2;
+    let prefix = |s: &[u32]| match (narrow, s) {
+        (true, [a, b, ..]) => (u64::from(*a) << 32) | (u64::from(*b) + 1),
+        (true, [a]) => u64::from(*a) << 32,
+        _ => 0,
+    };
+    let mut order: Vec<(u64, u32)> = (0..a.rows.len() as u32)
+        .filter(|&i| !a.rows[i as usize].is_empty())
+        .map(|i| (prefix(set(i)), i))
+        .collect();
+    if exact {
+        order.sort_unstable();
+    } else {
+        order.sort_unstable_by(|x, y| {
+            x.0.cmp(&y.0)
+                .then_with(|| set(x.1).cmp(set(y.1)))
+                .then(x.1.cmp(&y.1))
+        });
+    }
+    let same = |x: &(u64, u32), y: &(u64, u32)| x.0 == y.0 && (exact || set(x.1) == set(y.1));
+    let nblocks = order
+        .iter()
+        .enumerate()
+        .filter(|&(i, k)| i == 0 || !same(&order[i - 1], k))
+        .count();
+    let mut blocks = Vec::with_capacity(nblocks);
+    let mut orig = Vec::with_capacity(order.len());
+    let mut i = 0;
+    let mut local = vec![0usize; sizes.len()];
+    while i < order.len() {
+        let groups = set(order[i].1);
+        let mut j = i;
+        while j < order.len() && same(&order[j], &order[i]) {
+            j += 1;
+        }
+        let mut width = 0;
+        for &g in groups {
+            local[g as usize] = width;
+            width += sizes[g as usize];
+        }
+        let mut data = vec![Fp::ZERO; (j - i) * width];
+        for (k, &(_, ri)) in order[i..j].iter().enumerate() {
+            for &(c, v) in &a.rows[ri as usize] {
+                let g = group_of[c as usize];
+                data[k * width + local[g] + c as usize - offsets[g]] = v;
+            }
+        }
+        blocks.push(Blk {
+            groups: groups.iter().map(|&g| g as usize).collect(),
+            nrows: j - i,
+            data,
+            id: orig.len() as u32,
+        });
+        orig.extend(order[i..j].iter().map(|&(_, ri)| ri));
+        i = j;
+    }
+    (blocks, orig)
+}
+
+/// The former [`blocks_of`] (a vector of groups per row, sorted with the row's index), kept
+/// to check the new one block for block.
+#[cfg(test)]
+fn blocks_of_reference(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
+    let sizes = a.groups();
+    let mut offsets = Vec::with_capacity(sizes.len());
+    let mut group_of = Vec::with_capacity(a.ncols);
+    let mut acc = 0;
+    for (g, &s) in sizes.iter().enumerate() {
+        offsets.push(acc);
+        acc += s;
+        group_of.extend(std::iter::repeat_n(g, s));
+    }
     let mut keyed: Vec<(Vec<usize>, usize)> = a
         .rows
         .iter()
@@ -2396,6 +2495,88 @@ pub fn random_pair_matrix(
 mod tests {
     use super::super::dense;
     use super::*;
+
+    /// The working blocks from the flat group sets are those of the former vector-per-row
+    /// sort, block for block and row for row: groups of 1 to 6 columns (or one group per
+    /// column), rows on 0 to 3 groups drawn from a few sets (so that blocks merge rows), a
+    /// few rows with their columns out of order (kept by hand, not by `push_row`).
+    #[test]
+    fn blocks_from_flat_group_sets_are_the_former_ones() {
+        let mut rng = SplitMix64::new(0x626c_6b73);
+        let same = |a: &SparseMatrix| {
+            let (nb, no) = blocks_of(a);
+            let (ob, oo) = blocks_of_reference(a);
+            assert_eq!(no, oo);
+            assert_eq!(nb.len(), ob.len());
+            for (x, y) in nb.iter().zip(&ob) {
+                assert_eq!(
+                    (&x.groups, x.nrows, &x.data, x.id),
+                    (&y.groups, y.nrows, &y.data, y.id)
+                );
+            }
+            nb.len()
+        };
+        let mut merged = 0;
+        for round in 0..80 {
+            let ng = 1 + rng.below(40) as usize;
+            let sizes: Vec<usize> = (0..ng).map(|_| 1 + rng.below(6) as usize).collect();
+            let mut a = if round % 4 == 0 {
+                SparseMatrix::new(sizes.iter().sum())
+            } else {
+                SparseMatrix::with_groups(sizes.clone())
+            };
+            let gsizes = a.groups();
+            let offsets: Vec<usize> = gsizes
+                .iter()
+                .scan(0, |acc, &s| {
+                    *acc += s;
+                    Some(*acc - s)
+                })
+                .collect();
+            let nsets = 1 + rng.below(8) as usize;
+            let sets: Vec<Vec<usize>> = (0..nsets)
+                .map(|_| {
+                    let mut s: Vec<usize> = (0..rng.below(4))
+                        .map(|_| rng.below(gsizes.len() as u64) as usize)
+                        .collect();
+                    s.sort_unstable();
+                    s.dedup();
+                    s
+                })
+                .collect();
+            for _ in 0..rng.below(60) {
+                let set = &sets[rng.below(nsets as u64) as usize];
+                let mut row: SparseRow = Vec::new();
+                for &g in set {
+                    for c in offsets[g]..offsets[g] + gsizes[g] {
+                        if rng.below(3) > 0 {
+                            row.push((c as u32, Fp::random_nonzero(&mut rng)));
+                        }
+                    }
+                }
+                if rng.below(10) == 0 {
+                    row.reverse();
+                }
+                a.rows.push(row);
+            }
+            merged += a.rows.len() - same(&a);
+        }
+        assert!(merged > 100, "too few merged rows: {merged}");
+        same(&random_pair_matrix(
+            30,
+            3,
+            &[
+                (0, 1, 2),
+                (1, 2, 2),
+                (2, 0, 1),
+                (5, 7, 3),
+                (7, 5, 2),
+                (9, 9, 1),
+            ],
+            7,
+        ));
+        same(&square_dag(200, 3, 9, 4, 11));
+    }
 
     /// The indexed queue of the elimination pops the groups in the order of the heap it
     /// replaced (a new entry per rescore, stale ones skipped), ties in the key included.
