@@ -3,10 +3,16 @@ use std::{env, fs, path::Path};
 
 fn main() {
     println!("cargo:rerun-if-changed=mechanisms");
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("mechanisms");
+    // The manifest directory when the script runs, not when it was compiled (`env!`): one
+    // compiled script is reused by every checkout sharing a target directory, and a stale path
+    // embedded nothing once that checkout was gone.
+    let manifest = env::var("CARGO_MANIFEST_DIR").expect("cargo sets CARGO_MANIFEST_DIR");
+    let dir = Path::new(&manifest).join("mechanisms");
     let mut files: Vec<_> = fs::read_dir(&dir)
-        .map(|rd| rd.filter_map(Result::ok).map(|e| e.path()).collect())
-        .unwrap_or_default();
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.display()))
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .collect();
     files.retain(|p| p.extension().is_some_and(|e| e == "toml"));
     files.sort();
     let mut out = String::from(
