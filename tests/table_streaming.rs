@@ -9,26 +9,9 @@ mod peak_alloc;
 #[global_allocator]
 static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
 
-/// A writer that keeps only the length and a digest of what it is given.
-#[derive(Default)]
-struct Digest {
-    len: usize,
-    hash: u64,
-}
-
-impl std::io::Write for Digest {
-    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
-        for &b in buf {
-            self.hash = (self.hash ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
-        }
-        self.len += buf.len();
-        Ok(buf.len())
-    }
-
-    fn flush(&mut self) -> std::io::Result<()> {
-        Ok(())
-    }
-}
+#[path = "common/digest.rs"]
+mod digest;
+use digest::Digest;
 
 /// The table of a 20,000-body random spatial mechanism (count only: 13,000 groups, 5 MB of
 /// text) is written with under 1 MB live beyond the analysis, and is byte for byte the table

@@ -1510,12 +1510,8 @@ fn solve_extra(rec: &Record, off: usize, x: &mut [Fp]) -> bool {
     any
 }
 
-/// The rows of `a` as working blocks: rows touching the same set of groups merged, in the
-/// order of their sorted group sets (deterministic).
-/// The rows of `a` merged into blocks (rows on the same set of groups), with the matrix row
-/// of each row of the blocks in order (the blocks' rows are the working ids `0..`, see
-/// [`Trace`]). Rows without entries are left out.
-fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
+/// Each group's size and first column, and each column's group.
+fn group_columns(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
     let sizes = a.groups();
     let mut offsets = Vec::with_capacity(sizes.len());
     let mut group_of = Vec::with_capacity(a.ncols);
@@ -1525,6 +1521,15 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         acc += s;
         group_of.extend(std::iter::repeat_n(g, s));
     }
+    (sizes, offsets, group_of)
+}
+
+/// The rows of `a` merged into blocks (rows on the same set of groups, in the order of their
+/// sorted group sets: deterministic), with the matrix row of each row of the blocks in order
+/// (the blocks' rows are the working ids `0..`, see [`Trace`]). Rows without entries are left
+/// out.
+fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
+    let (sizes, offsets, group_of) = group_columns(a);
     // Each row's set of groups (its columns are increasing, so the set is sorted and the
     // groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
     // for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
@@ -1615,15 +1620,7 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
 /// to check the new one block for block.
 #[cfg(test)]
 fn blocks_of_reference(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
-    let sizes = a.groups();
-    let mut offsets = Vec::with_capacity(sizes.len());
-    let mut group_of = Vec::with_capacity(a.ncols);
-    let mut acc = 0;
-    for (g, &s) in sizes.iter().enumerate() {
-        offsets.push(acc);
-        acc += s;
-        group_of.extend(std::iter::repeat_n(g, s));
-    }
+    let (sizes, offsets, group_of) = group_columns(a);
     let mut keyed: Vec<(Vec<usize>, usize)> = a
         .rows
         .iter()
