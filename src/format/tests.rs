@@ -464,13 +464,8 @@ fn body_numbering_equals_from_parts() {
 #[test]
 fn explicit_ids_merge_into_the_natural_order() {
     use crate::mechanism::Mechanism;
-    let mut state = 0x2545_F491_4F6C_DD1Du64;
-    let mut next = move |n: u64| {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state % n
-    };
+    let mut rng = crate::rng::SplitMix64::new(0x2545_F491_4F6C_DD1D);
+    let mut next = move |n: u64| rng.below(n);
     for case in 0..300u64 {
         let n_joints = 1 + next(50) as usize;
         let mut used = std::collections::HashSet::new();
