@@ -13,7 +13,7 @@
 
 use super::dense::{complement_rows, rank};
 use super::field::Fp;
-use super::sparse::{Factor, Limits, SparseMatrix};
+use super::sparse::{Factor, Limits, Rows, SparseMatrix, SparseRow};
 use crate::budget::BudgetExceeded;
 use crate::joint::JointType;
 use crate::mechanism::{Mechanism, Space};
@@ -306,11 +306,122 @@ pub fn pairs_factor(
     track: bool,
     limits: &mut Limits<'_>,
 ) -> Result<Option<Factor>, BudgetExceeded> {
-    let a = pairs_matrix(b, ngroups, rows, pairs, group);
+    let pairs: Vec<(usize, usize, usize)> = pairs.collect();
+    if let Some(p) = PairRows::new(b, ngroups, rows, &pairs, &group) {
+        if p.nrows() == 0 {
+            return Ok(None);
+        }
+        return Factor::from_rows_within(&p, track, limits).map(Some);
+    }
+    let a = pairs_matrix(b, ngroups, rows, pairs.into_iter(), group);
     if a.nrows() == 0 {
         return Ok(None);
     }
     Factor::from_matrix_within(a, track, limits).map(Some)
+}
+
+/// The rows of [`pairs_matrix`] made one at a time from the pairs and their joints' rows
+/// (16 bytes a pair and 4 a row instead of a vector a row): the same rows, in the same
+/// order, with the same entries.
+struct PairRows<'a> {
+    b: usize,
+    ngroups: usize,
+    rows: &'a [DMatrix<Fp>],
+    /// Per pair giving rows: its joint, the hub's and the other body's groups ([`NO_GROUP`]
+    /// for none), and its first row.
+    pairs: Vec<[u32; 4]>,
+    /// The pair (index into `pairs`) of each row.
+    owner: Vec<u32>,
+}
+
+/// A body without a column group (held fixed) in [`PairRows`].
+const NO_GROUP: u32 = u32::MAX;
+
+impl<'a> PairRows<'a> {
+    /// `None` where the compact form does not fit (indices beyond `u32`, a group out of
+    /// range: [`pairs_matrix`]'s own check then reports it).
+    fn new(
+        b: usize,
+        ngroups: usize,
+        rows: &'a [DMatrix<Fp>],
+        pairs: &[(usize, usize, usize)],
+        group: &impl Fn(usize) -> Option<usize>,
+    ) -> Option<PairRows<'a>> {
+        let small = |x: usize| u32::try_from(x).ok().filter(|&x| x != NO_GROUP);
+        small(ngroups.checked_mul(b)?)?;
+        let mut kept = Vec::new();
+        let mut nrows = 0usize;
+        for &(joint, hub, other) in pairs {
+            let (gh, go) = (group(hub), group(other));
+            if hub == other || (gh.is_none() && go.is_none()) {
+                continue;
+            }
+            let g = |x: Option<usize>| match x {
+                None => Some(NO_GROUP),
+                Some(x) if x < ngroups => small(x),
+                Some(_) => None,
+            };
+            let r = rows.get(joint)?;
+            if r.nrows() > 0 && r.ncols() < b {
+                return None;
+            }
+            kept.push([small(joint)?, g(gh)?, g(go)?, small(nrows)?]);
+            nrows += r.nrows();
+        }
+        small(nrows)?;
+        let mut owner = Vec::with_capacity(nrows);
+        for (k, p) in kept.iter().enumerate() {
+            owner.extend(std::iter::repeat_n(k as u32, rows[p[0] as usize].nrows()));
+        }
+        Some(PairRows {
+            b,
+            ngroups,
+            rows,
+            pairs: kept,
+            owner,
+        })
+    }
+}
+
+impl Rows for PairRows<'_> {
+    fn ncols(&self) -> usize {
+        self.ngroups * self.b
+    }
+    fn nrows(&self) -> usize {
+        self.owner.len()
+    }
+    fn group_sizes(&self) -> Vec<usize> {
+        vec![self.b; self.ngroups]
+    }
+    /// As `push_row` leaves the row [`pairs_matrix`] pushes: the hub's entries negated,
+    /// the two groups' columns in increasing order, zeros dropped; on one group twice the
+    /// two entries of each column cancel.
+    fn row<'b>(&'b self, i: usize, buf: &'b mut SparseRow) -> &'b [(u32, Fp)] {
+        buf.clear();
+        let [joint, gh, go, first] = self.pairs[self.owner[i] as usize];
+        if gh == go {
+            return buf;
+        }
+        let r = &self.rows[joint as usize];
+        let ri = i - first as usize;
+        let mut sides = [(gh, true), (go, false)];
+        if go < gh {
+            sides.swap(0, 1);
+        }
+        for (g, hub) in sides {
+            if g == NO_GROUP {
+                continue;
+            }
+            for k in 0..self.b {
+                let v = r[(ri, k)];
+                let v = if hub { -v } else { v };
+                if !v.is_zero() {
+                    buf.push((g * self.b as u32 + k as u32, v));
+                }
+            }
+        }
+        buf
+    }
 }
 
 /// The pairs carrying the self-stresses (the left null space) of the rows of some pairs, from
@@ -500,6 +611,81 @@ mod tests {
                     t.iter().all(|x| !x.is_zero()),
                     "{kind:?} seed {seed}: {t:?}"
                 );
+            }
+        }
+    }
+
+    /// The rows [`PairRows`] makes one at a time are those [`pairs_matrix`] stores, row for
+    /// row, and the factorization from them is the one from the matrix (rank, random null
+    /// vectors drawn alike, which solve the matrix): on random mechanisms with a body held
+    /// fixed, a pair on one body twice and two bodies sharing a group (rows that cancel).
+    #[test]
+    fn pair_rows_made_on_demand_are_the_matrix_rows() {
+        let budget = crate::budget::Budget::UNLIMITED;
+        let what = || "test".to_string();
+        for (n, planar, seed) in [(40, false, 1), (90, true, 2), (200, false, 3)] {
+            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            let b = m.b() as usize;
+            let rows: Vec<DMatrix<Fp>> = (0..m.joints.len())
+                .map(|ji| joint_rows(&m, ji, 7, m.joints[ji].driven))
+                .collect();
+            let mut pairs = vec![(0, 1, 1)];
+            for (ji, j) in m.joints.iter().enumerate() {
+                if let Some((&hub, others)) = j.bodies.split_first() {
+                    pairs.extend(others.iter().map(|&o| (ji, hub, o)));
+                }
+            }
+            let fixed = (m.frame + 1) % m.bodies.len();
+            let mut local = vec![None; m.bodies.len()];
+            let mut ng = 0;
+            for (x, l) in local.iter_mut().enumerate() {
+                if x != m.frame && x != fixed {
+                    *l = Some(ng);
+                    ng += 1;
+                }
+            }
+            for shared in [false, true] {
+                let group = |x: usize| {
+                    if shared && x == m.bodies.len() - 1 {
+                        Some(0)
+                    } else {
+                        local[x]
+                    }
+                };
+                let a = pairs_matrix(b, ng, &rows, pairs.iter().copied(), group);
+                let p = PairRows::new(b, ng, &rows, &pairs, &group).expect("fits");
+                assert_eq!((p.nrows(), p.ncols()), (a.nrows(), a.ncols));
+                assert_eq!(p.group_sizes(), a.groups());
+                let mut buf = Vec::new();
+                for (i, r) in a.rows.iter().enumerate() {
+                    assert_eq!(p.row(i, &mut buf), &r[..], "{n} {seed} row {i}");
+                }
+                let mut meter = budget.meter("test");
+                let mut limits = Limits {
+                    budget: &budget,
+                    meter: &mut meter,
+                    what: &what,
+                };
+                let f = pairs_factor(
+                    b,
+                    ng,
+                    &rows,
+                    pairs.iter().copied(),
+                    group,
+                    true,
+                    &mut limits,
+                )
+                .expect("fits")
+                .expect("rows");
+                let g = Factor::from_matrix_within(a.clone(), true, &mut limits).expect("fits");
+                assert_eq!((f.rank(), f.nullity()), (g.rank(), g.nullity()));
+                let mut r1 = SplitMix64::new(seed);
+                let mut r2 = SplitMix64::new(seed);
+                let v = f.random_null_vectors(3, &mut r1);
+                assert_eq!(v, g.random_null_vectors(3, &mut r2));
+                for x in &v {
+                    assert!(a.mul_dense(x).iter().all(|e| e.is_zero()));
+                }
             }
         }
     }

@@ -233,30 +233,58 @@ impl Blk {
 /// The eliminated rows of one group: pivots reduced to the identity on the group's columns.
 #[derive(Clone, Debug)]
 struct Record {
-    group: usize,
-    /// Local columns of the pivots, in the order of the rows.
-    pivots: Vec<usize>,
-    /// Local columns left free (each gives a null vector).
-    free: Vec<usize>,
-    /// The other groups of the front, in column order after the group's own.
-    others: Vec<usize>,
-    /// `pivots.len() × width` row-major, width = the group's size + the others' sizes.
-    rows: Vec<Fp>,
-    width: usize,
+    /// The group eliminated.
+    group: u32,
+    /// Entries per row of `rows`: `free`'s count + the others' sizes.
+    width: u32,
+    /// How many of `cols` are pivots, and how many after them are free columns.
+    npiv: u32,
+    nfree: u32,
+    /// One allocation for three lists (a record per group: 10^6 of them at 10^6 bodies):
+    /// the local columns of the pivots, in the order of the rows; the local columns left
+    /// free (each gives a null vector); the other groups of the front, in column order
+    /// after the group's own. Local columns and groups fit in `u32` (a front that wide
+    /// would not fit in memory).
+    cols: Box<[u32]>,
+    /// The pivot rows without their pivot columns (in reduced echelon form those are the
+    /// identity, and nothing reads them once the front is done): `npiv × width` row-major,
+    /// each row its entries on the free columns (in that order), then on the others'
+    /// columns.
+    rows: Box<[Fp]>,
     /// Rows set aside by earlier tiers that took one of the group's free columns as their
     /// pivot ([`Carried`]), in that order: each is `x[col] = −Σ row · x` (global columns,
     /// the group's later free columns and groups eliminated after it). Their columns are in
     /// `free` (the pivot rows read them) but are not free in the null space.
-    extra: Vec<(usize, SparseRow)>,
+    extra: Box<[(usize, SparseRow)]>,
 }
 
 impl Record {
+    fn group(&self) -> usize {
+        self.group as usize
+    }
+
+    fn width(&self) -> usize {
+        self.width as usize
+    }
+
+    fn pivots(&self) -> &[u32] {
+        &self.cols[..self.npiv as usize]
+    }
+
+    fn free(&self) -> &[u32] {
+        &self.cols[self.npiv as usize..(self.npiv + self.nfree) as usize]
+    }
+
+    fn others(&self) -> &[u32] {
+        &self.cols[(self.npiv + self.nfree) as usize..]
+    }
+
     /// The local columns that are free in the null space (`free` minus the columns the
     /// set-aside rows took).
     fn open(&self) -> impl Iterator<Item = usize> + '_ {
-        self.free
+        self.free()
             .iter()
-            .copied()
+            .map(|&q| q as usize)
             .filter(|&q| self.extra.iter().all(|e| e.0 != q))
     }
 }
@@ -686,23 +714,36 @@ impl Factor {
     /// The blocks of `a` and what [`Factor::run`] needs besides: the column groups, (the
     /// input's entries, the work of reading it) and the trace to start from.
     #[allow(clippy::type_complexity)]
-    fn prepare(
-        a: &SparseMatrix,
+    fn prepare<R: Rows + ?Sized>(
+        a: &R,
         track: bool,
     ) -> (Vec<usize>, Vec<Blk>, (usize, u64), Option<Trace>) {
-        let (blocks, orig) = blocks_of(a);
-        let input: usize = a.rows.iter().map(|r| r.len()).sum();
+        let split = split_rows(a);
+        let (blocks, orig, input) = (split.blocks, split.orig, split.entries);
         let trace = track.then(|| Trace {
             nids: orig.len() as u32,
-            empty: (0..a.rows.len() as u32)
-                .filter(|&i| a.rows[i as usize].is_empty())
-                .collect(),
+            empty: split.empty,
             orig,
             outputs: Vec::new(),
             terms: Vec::new(),
         });
-        let read = (input + a.ncols + a.rows.len()) as u64;
-        (a.groups(), blocks, (input, read), trace)
+        let read = (input + a.ncols() + a.nrows()) as u64;
+        (a.group_sizes(), blocks, (input, read), trace)
+    }
+
+    /// [`Factor::from_matrix_within`] for rows made one at a time ([`Rows`]) instead of
+    /// held in a [`SparseMatrix`]: the same blocks, the same elimination, the same factor,
+    /// without a vector per row alive beside the blocks (the peak of the geometric
+    /// analysis at 10^6 bodies).
+    pub(crate) fn from_rows_within<R: Rows + ?Sized>(
+        a: &R,
+        track: bool,
+        limits: &mut Limits<'_>,
+    ) -> Result<Factor, BudgetExceeded> {
+        let (groups, blocks, input, trace) = Factor::prepare(a, track);
+        let charge = &mut |work, bytes| limits.charge(work, bytes);
+        charge(input.1, 0)?;
+        Factor::run(groups, blocks, input.0, None, trace, charge)
     }
 
     fn build<E>(
@@ -848,6 +889,7 @@ impl Factor {
         let mut sc_own: Vec<u32> = Vec::new();
         let mut sc_tr: Vec<Fp> = Vec::new();
         let mut sc_chosen: Vec<u32> = Vec::new();
+        let mut sc_rows: Vec<Fp> = Vec::new();
         while let Some(g) = queue.pop() {
             done[g] = true;
             let mut members = pool.take(g);
@@ -1154,7 +1196,9 @@ impl Factor {
                 .map(|k| others[k])
                 .collect();
             let rec_width = sg + rec_others.iter().map(|&h| sizes[h]).sum::<usize>();
-            let mut rows = Vec::with_capacity(r * rec_width);
+            let mut rows = std::mem::take(&mut sc_rows);
+            rows.clear();
+            rows.reserve(r * rec_width);
             for i in 0..r {
                 let row = &front[i * width..(i + 1) * width];
                 rows.extend_from_slice(&row[..sg]);
@@ -1163,6 +1207,15 @@ impl Factor {
                 }
             }
             sc_front = front;
+            // What the record keeps: the columns after the pivots' (`row[..sg]` is read only
+            // by `meet` below, through `rows`).
+            let kept_width = free.len() + rec_width - sg;
+            let mut kept = Vec::with_capacity(r * kept_width);
+            for i in 0..r {
+                let row = &rows[i * rec_width..(i + 1) * rec_width];
+                kept.extend(free.iter().map(|&q| row[q]));
+                kept.extend_from_slice(&row[sg..]);
+            }
             let extra = if touching.is_empty() {
                 Vec::new()
             } else {
@@ -1205,14 +1258,23 @@ impl Factor {
                     queue.set(h, (tier[h], s.0, s.1));
                 }
             }
+            sc_rows = rows;
+            let mut cols = Vec::with_capacity(pivots.len() + free.len() + rec_others.len());
+            cols.extend(
+                pivots
+                    .iter()
+                    .chain(&free)
+                    .chain(&rec_others)
+                    .map(|&c| c as u32),
+            );
             records.push(Record {
-                group: g,
-                pivots,
-                free,
-                others: rec_others,
-                rows,
-                width: rec_width,
-                extra,
+                group: g as u32,
+                width: kept_width as u32,
+                npiv: pivots.len() as u32,
+                nfree: free.len() as u32,
+                cols: cols.into_boxed_slice(),
+                rows: kept.into_boxed_slice(),
+                extra: extra.into_boxed_slice(),
             });
             (sc_others, sc_masks) = (others, masks);
             (sc_in, sc_own, sc_tr, sc_chosen) = (in_ids, own, tr, chosen);
@@ -1303,9 +1365,9 @@ impl Factor {
         let mut out = Vec::with_capacity(self.ncols());
         let mut seen = vec![false; self.sizes.len()];
         for rec in &self.records {
-            seen[rec.group] = true;
-            let off = self.offsets[rec.group];
-            out.extend((off..off + self.sizes[rec.group]).map(|c| c as u32));
+            seen[rec.group()] = true;
+            let off = self.offsets[rec.group()];
+            out.extend((off..off + self.sizes[rec.group()]).map(|c| c as u32));
         }
         for (g, &s) in self.sizes.iter().enumerate() {
             if !seen[g] {
@@ -1322,7 +1384,7 @@ impl Factor {
     pub fn free_columns(&self) -> Vec<u32> {
         self.records
             .iter()
-            .flat_map(|rec| rec.open().map(|f| (self.offsets[rec.group] + f) as u32))
+            .flat_map(|rec| rec.open().map(|f| (self.offsets[rec.group()] + f) as u32))
             .collect()
     }
 
@@ -1338,19 +1400,20 @@ impl Factor {
         for _ in 0..k {
             let mut x = vec![Fp::ZERO; total];
             for rec in self.records.iter().rev() {
-                let off = self.offsets[rec.group];
+                let off = self.offsets[rec.group()];
                 for q in rec.open() {
                     x[off + q] = Fp::random(rng);
                 }
                 solve_extra(rec, off, &mut x);
-                for (i, &pc) in rec.pivots.iter().enumerate() {
-                    let row = &rec.rows[i * rec.width..(i + 1) * rec.width];
+                for (i, &pc) in rec.pivots().iter().enumerate() {
+                    let row = &rec.rows[i * rec.width()..(i + 1) * rec.width()];
                     let mut s = Fp::ZERO;
-                    for &q in &rec.free {
-                        s += row[q] * x[off + q];
+                    for (j, &q) in rec.free().iter().enumerate() {
+                        s += row[j] * x[off + q as usize];
                     }
-                    let mut c = self.sizes[rec.group];
-                    for &o in &rec.others {
+                    let mut c = rec.free().len();
+                    for &o in rec.others() {
+                        let o = o as usize;
                         let so = self.sizes[o];
                         let oo = self.offsets[o];
                         for kk in 0..so {
@@ -1358,7 +1421,7 @@ impl Factor {
                         }
                         c += so;
                     }
-                    x[off + pc] = -s;
+                    x[off + pc as usize] = -s;
                 }
             }
             out.push(x);
@@ -1377,9 +1440,9 @@ impl Factor {
         let mut users: Vec<Vec<usize>> = vec![Vec::new(); n];
         let mut rec_of = vec![usize::MAX; n];
         for (ri, rec) in self.records.iter().enumerate() {
-            rec_of[rec.group] = ri;
-            for &h in &rec.others {
-                users[h].push(ri);
+            rec_of[rec.group()] = ri;
+            for &h in rec.others() {
+                users[h as usize].push(ri);
             }
             // A set-aside row's columns on groups outside the record's front.
             let mut hs: Vec<usize> = rec
@@ -1387,7 +1450,7 @@ impl Factor {
                 .iter()
                 .flat_map(|e| e.1.iter())
                 .map(|&(col, _)| self.offsets.partition_point(|&o| o <= col as usize) - 1)
-                .filter(|&h| h != rec.group && !rec.others.contains(&h))
+                .filter(|&h| h != rec.group() && !rec.others().contains(&(h as u32)))
                 .collect();
             hs.sort_unstable();
             hs.dedup();
@@ -1402,7 +1465,7 @@ impl Factor {
         let mut out = Vec::with_capacity(self.nullity());
         for (ri, rec) in self.records.iter().enumerate() {
             for f in rec.open() {
-                let col = self.offsets[rec.group] + f;
+                let col = self.offsets[rec.group()] + f;
                 x[col] = Fp::ONE;
                 let mut heap: BinaryHeap<usize> = BinaryHeap::new();
                 heap.push(ri);
@@ -1414,22 +1477,23 @@ impl Factor {
                         list.push(g);
                     }
                 };
-                mark(rec.group, &mut group_seen, &mut touched_groups);
+                mark(rec.group(), &mut group_seen, &mut touched_groups);
                 while let Some(hi) = heap.pop() {
                     let h = &self.records[hi];
-                    let off = self.offsets[h.group];
+                    let off = self.offsets[h.group()];
                     let mut any = solve_extra(h, off, &mut x);
-                    for (i, &pc) in h.pivots.iter().enumerate() {
-                        let row = &h.rows[i * h.width..(i + 1) * h.width];
+                    for (i, &pc) in h.pivots().iter().enumerate() {
+                        let row = &h.rows[i * h.width()..(i + 1) * h.width()];
                         let mut s = Fp::ZERO;
-                        for &q in &h.free {
-                            let v = x[off + q];
+                        for (j, &q) in h.free().iter().enumerate() {
+                            let v = x[off + q as usize];
                             if !v.is_zero() {
-                                s += row[q] * v;
+                                s += row[j] * v;
                             }
                         }
-                        let mut c = self.sizes[h.group];
-                        for &o in &h.others {
+                        let mut c = h.free().len();
+                        for &o in h.others() {
+                            let o = o as usize;
                             let so = self.sizes[o];
                             let xo = &x[self.offsets[o]..self.offsets[o] + so];
                             for (k, &v) in xo.iter().enumerate() {
@@ -1440,14 +1504,14 @@ impl Factor {
                             c += so;
                         }
                         let val = -s;
-                        x[off + pc] = val;
+                        x[off + pc as usize] = val;
                         any |= !val.is_zero();
                     }
                     if any {
-                        mark(h.group, &mut group_seen, &mut touched_groups);
+                        mark(h.group(), &mut group_seen, &mut touched_groups);
                     }
                     if any || hi == ri {
-                        for &u in &users[h.group] {
+                        for &u in &users[h.group()] {
                             if !queued[u] {
                                 queued[u] = true;
                                 queued_list.push(u);
@@ -1511,10 +1575,10 @@ fn solve_extra(rec: &Record, off: usize, x: &mut [Fp]) -> bool {
 }
 
 /// Each group's size and first column, and each column's group.
-fn group_columns(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
-    let sizes = a.groups();
+fn group_columns<R: Rows + ?Sized>(a: &R) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let sizes = a.group_sizes();
     let mut offsets = Vec::with_capacity(sizes.len());
-    let mut group_of = Vec::with_capacity(a.ncols);
+    let mut group_of = Vec::with_capacity(a.ncols());
     let mut acc = 0;
     for (g, &s) in sizes.iter().enumerate() {
         offsets.push(acc);
@@ -1529,16 +1593,68 @@ fn group_columns(a: &SparseMatrix) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
 /// (the blocks' rows are the working ids `0..`, see [`Trace`]). Rows without entries are left
 /// out.
 fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
+    let split = split_rows(a);
+    (split.blocks, split.orig)
+}
+
+/// Rows read one at a time, by index: what [`split_rows`] needs of a matrix. A
+/// [`SparseMatrix`] lends its rows; a compact description of the rows (the joints of a
+/// mechanism's pairs, [`crate::exact::models::pairs_factor`]) makes each when asked, so
+/// that the rows never exist all at once as a vector each (about 230 bytes a row, more than
+/// the blocks made from them).
+pub(crate) trait Rows {
+    /// Number of columns.
+    fn ncols(&self) -> usize;
+    /// Number of rows.
+    fn nrows(&self) -> usize;
+    /// The sizes of the column groups (consecutive, summing to `ncols`).
+    fn group_sizes(&self) -> Vec<usize>;
+    /// Row `i` as [`SparseMatrix::push_row`] leaves it (columns increasing, no zeros),
+    /// made in `buf` if it is not stored.
+    fn row<'a>(&'a self, i: usize, buf: &'a mut SparseRow) -> &'a [(u32, Fp)];
+}
+
+impl Rows for SparseMatrix {
+    fn ncols(&self) -> usize {
+        self.ncols
+    }
+    fn nrows(&self) -> usize {
+        self.rows.len()
+    }
+    fn group_sizes(&self) -> Vec<usize> {
+        self.groups()
+    }
+    fn row<'a>(&'a self, i: usize, _: &'a mut SparseRow) -> &'a [(u32, Fp)] {
+        &self.rows[i]
+    }
+}
+
+/// What [`split_rows`] gives: the blocks, the row of each working id, the rows without
+/// entries and the entries in all.
+struct Split {
+    blocks: Vec<Blk>,
+    orig: Vec<u32>,
+    empty: Vec<u32>,
+    entries: usize,
+}
+
+/// [`blocks_of`] for any [`Rows`], with the rows without entries and the count of entries.
+fn split_rows<R: Rows + ?Sized>(a: &R) -> Split {
     let (sizes, offsets, group_of) = group_columns(a);
+    let nrows = a.nrows();
+    let mut buf: SparseRow = Vec::new();
+    let mut entries = 0;
     // Each row's set of groups (its columns are increasing, so the set is sorted and the
     // groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
     // for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
     // row and its sort chased a pointer per comparison.
-    let mut start: Vec<usize> = Vec::with_capacity(a.rows.len() + 1);
+    let mut start: Vec<usize> = Vec::with_capacity(nrows + 1);
     let mut sets: Vec<u32> = Vec::new();
     start.push(0);
     let mut longest = 0;
-    for r in &a.rows {
+    for i in 0..nrows {
+        let r = a.row(i, &mut buf);
+        entries += r.len();
         let from = sets.len();
         for &(c, _) in r {
             let g = group_of[c as usize] as u32;
@@ -1563,10 +1679,16 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         (true, [a]) => u64::from(*a) << 32,
         _ => 0,
     };
-    let mut order: Vec<(u64, u32)> = (0..a.rows.len() as u32)
-        .filter(|&i| !a.rows[i as usize].is_empty())
-        .map(|i| (prefix(set(i)), i))
+    // A row without entries has no groups.
+    let empty: Vec<u32> = (0..nrows as u32)
+        .filter(|&i| start[i as usize] == start[i as usize + 1])
         .collect();
+    let mut order: Vec<(u64, u32)> = Vec::with_capacity(nrows - empty.len());
+    order.extend(
+        (0..nrows as u32)
+            .filter(|&i| start[i as usize] != start[i as usize + 1])
+            .map(|i| (prefix(set(i)), i)),
+    );
     if exact {
         order.sort_unstable();
     } else {
@@ -1599,7 +1721,7 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         }
         let mut data = vec![Fp::ZERO; (j - i) * width];
         for (k, &(_, ri)) in order[i..j].iter().enumerate() {
-            for &(c, v) in &a.rows[ri as usize] {
+            for &(c, v) in a.row(ri as usize, &mut buf) {
                 let g = group_of[c as usize];
                 data[k * width + local[g] + c as usize - offsets[g]] = v;
             }
@@ -1613,7 +1735,12 @@ fn blocks_of(a: &SparseMatrix) -> (Vec<Blk>, Vec<u32>) {
         orig.extend(order[i..j].iter().map(|&(_, ri)| ri));
         i = j;
     }
-    (blocks, orig)
+    Split {
+        blocks,
+        orig,
+        empty,
+        entries,
+    }
 }
 
 /// The former [`blocks_of`] (a vector of groups per row, sorted with the row's index), kept
