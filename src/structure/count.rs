@@ -254,7 +254,7 @@ fn decompose_counted(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Decompositio
     let mut eq_excess = vec![0u32; ne];
     for (e, f) in flow.iter_mut().enumerate() {
         let [h, o] = eqs.bodies(e);
-        for a in net.edges(eq_node(e)) {
+        for a in net.all_edges(eq_node(e)) {
             let v = net.head(a);
             if v == src {
                 // Reverse of source edge: its residual is the flow in.
