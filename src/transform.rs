@@ -862,7 +862,7 @@ fn place(
                         }
                         return (Some(p), decided.saturating_add(l.work));
                     }
-                    let mech = mech.get_or_insert_with(|| e.mech.clone());
+                    let mech = mech.get_or_insert_with(|| e.mech.as_ref().clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
                     (
                         a.map(|a| placement(mech, e, *x, &a, w, &names)),
@@ -2274,9 +2274,12 @@ impl Rules {
 /// of one spanning tree of its bodies. The first pair takes the joint's place (so the other
 /// joints keep their index, and their random geometry in the rank check); the rest are
 /// appended after the last joint.
-struct Expansion {
+struct Expansion<'a> {
     label: Option<String>,
-    mech: Mechanism,
+    /// The file's mechanism itself when it has no multiple joint and no driven joint: a
+    /// 10^6-body mechanism was held three times (the file's, a copy without inputs, and the
+    /// expansion's copy of that).
+    mech: std::borrow::Cow<'a, Mechanism>,
     /// Original joint of each joint of `mech`.
     origin: Vec<usize>,
 }
@@ -2344,8 +2347,6 @@ fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
 /// only one expansion's mechanism is held at once.
 struct Expansions<'a> {
     m: &'a Mechanism,
-    /// `m` with no joint driven.
-    base: Mechanism,
     /// Multiple joints, and their spanning trees.
     multi: Vec<usize>,
     counts: Vec<u64>,
@@ -2358,10 +2359,6 @@ struct Expansions<'a> {
 impl<'a> Expansions<'a> {
     /// Up to `max` expansions (at least one) and how many there are.
     fn of(m: &'a Mechanism, max: usize) -> Expansions<'a> {
-        let mut base = m.clone();
-        for j in &mut base.joints {
-            j.driven = 0;
-        }
         let multi: Vec<usize> = (0..m.joints.len())
             .filter(|&j| m.joints[j].bodies.len() > 2)
             .collect();
@@ -2373,7 +2370,6 @@ impl<'a> Expansions<'a> {
         let len = (max.max(1) as u64).min(total) as usize;
         Expansions {
             m,
-            base,
             multi,
             counts,
             len,
@@ -2430,17 +2426,28 @@ impl<'a> Expansions<'a> {
     }
 
     /// Expansion `k` (mixed radix over the multiple joints' trees, the last varying fastest).
-    fn get(&self, k: usize) -> Expansion {
+    fn get(&self, k: usize) -> Expansion<'a> {
         let m = self.m;
+        if self.multi.is_empty() && m.joints.iter().all(|j| j.driven == 0) {
+            return Expansion {
+                label: None,
+                mech: std::borrow::Cow::Borrowed(m),
+                origin: (0..m.joints.len()).collect(),
+            };
+        }
+        // `m` with no joint driven.
+        let mut mech = m.clone();
+        for j in &mut mech.joints {
+            j.driven = 0;
+        }
         if self.multi.is_empty() {
             return Expansion {
                 label: None,
-                mech: self.base.clone(),
+                mech: std::borrow::Cow::Owned(mech),
                 origin: (0..m.joints.len()).collect(),
             };
         }
         let digits = self.digits(k);
-        let mut mech = self.base.clone();
         let mut origin: Vec<usize> = (0..m.joints.len()).collect();
         let mut labels = Vec::new();
         let mut appended: Vec<Joint> = Vec::new();
@@ -2471,7 +2478,7 @@ impl<'a> Expansions<'a> {
         mech.joints.extend(appended);
         Expansion {
             label: Some(labels.join("; ")),
-            mech,
+            mech: std::borrow::Cow::Owned(mech),
             origin,
         }
     }
@@ -4472,6 +4479,26 @@ fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A mechanism with only binary joints and none driven is its own one expansion,
+    /// borrowed (not copied); with a driven joint the expansion is a copy without inputs.
+    #[test]
+    fn expansion_borrows_an_undriven_binary_mechanism() {
+        let text = "space = \"planar\"\nframe = 1\n\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n\n[[joint]]\ntype = \"R\"\nbodies = [2, 3]\n\n[[joint]]\ntype = \"R\"\nbodies = [3, 1]\n";
+        let mut m = crate::format::load("t", text, crate::format::Format::Toml).expect("loads");
+        let exps = Expansions::of(&m, 8);
+        assert_eq!(exps.len, 1);
+        let e = exps.get(0);
+        assert!(matches!(e.mech, std::borrow::Cow::Borrowed(_)));
+        assert!(std::ptr::eq(e.mech.as_ref(), &m));
+        assert_eq!(e.origin, vec![0, 1, 2]);
+        m.joints[0].driven = 1;
+        let exps = Expansions::of(&m, 8);
+        let e = exps.get(0);
+        assert!(matches!(e.mech, std::borrow::Cow::Owned(_)));
+        assert!(e.mech.joints.iter().all(|j| j.driven == 0));
+        assert_eq!(e.mech.joints.len(), 3);
+    }
 
     /// `J v` for the null vectors `v` of [`block_null_vectors`], through [`jacobian`]'s rows.
     fn j_times(m: &Mechanism, seed: u64, v: &[crate::exact::Fp]) -> Vec<crate::exact::Fp> {
