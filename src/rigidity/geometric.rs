@@ -217,6 +217,45 @@ struct Pair {
     other: usize,
 }
 
+/// The pairs incident to each body, in one flat array: `incident[body]` lists them in
+/// increasing order, a pair on one body twice listed twice (as its hub, then as its other).
+/// One `Vec` per body (an allocation each, 20 MB on the spatial Assur 10^5 file) was alive
+/// through every phase of the analysis, at both of its peaks.
+struct Incidence {
+    /// `list[start[body]..start[body + 1]]`: the pairs of `body`.
+    start: Vec<usize>,
+    list: Vec<usize>,
+}
+
+impl Incidence {
+    fn new(nb: usize, pairs: &[Pair]) -> Self {
+        let mut start = vec![0usize; nb + 1];
+        for p in pairs {
+            start[p.hub + 1] += 1;
+            start[p.other + 1] += 1;
+        }
+        for i in 0..nb {
+            start[i + 1] += start[i];
+        }
+        let mut next = start.clone();
+        let mut list = vec![0usize; start[nb]];
+        for (pi, p) in pairs.iter().enumerate() {
+            for x in [p.hub, p.other] {
+                list[next[x]] = pi;
+                next[x] += 1;
+            }
+        }
+        Self { start, list }
+    }
+}
+
+impl std::ops::Index<usize> for Incidence {
+    type Output = [usize];
+    fn index(&self, body: usize) -> &[usize] {
+        &self.list[self.start[body]..self.start[body + 1]]
+    }
+}
+
 fn pairs_of(m: &Mechanism) -> Vec<Pair> {
     let mut out = Vec::new();
     for (ji, j) in m.joints.iter().enumerate() {
@@ -594,7 +633,7 @@ struct ExactPart<'a> {
     models: &'a [JointModel],
     rows: &'a [DMatrix<Fp>],
     iso: &'a [DMatrix<f64>],
-    incident: &'a [Vec<usize>],
+    incident: &'a Incidence,
     frame: usize,
     b: usize,
 }
@@ -1172,11 +1211,7 @@ fn analyze_models(
             .sum::<i64>();
 
     // Pairs incident to each body.
-    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nb];
-    for (pi, p) in pairs.iter().enumerate() {
-        incident[p.hub].push(pi);
-        incident[p.other].push(pi);
-    }
+    let incident = Incidence::new(nb, &pairs);
 
     // 2. Fully isolated motions per body.
     let local_rel = 1e-9 * b as f64 * 10.0;
@@ -2091,6 +2126,37 @@ fn eliminate(
 mod tests {
     use super::*;
     use crate::generate::{self, Variant};
+
+    /// The flat incidence lists each body's pairs as the former `Vec` per body did: in
+    /// increasing order, a pair on one body twice (hub = other) listed twice, bodies without
+    /// pairs empty.
+    #[test]
+    fn incidence_lists_the_pairs_of_each_body_in_order() {
+        let mut seed = 0x1234_5678_u64;
+        let mut next = |n: usize| {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            ((seed >> 33) as usize) % n
+        };
+        for nb in [1usize, 2, 5, 17, 60] {
+            let np = next(3 * nb + 1);
+            let pairs: Vec<Pair> = (0..np)
+                .map(|j| Pair {
+                    joint: j,
+                    hub: next(nb),
+                    other: next(nb),
+                })
+                .collect();
+            let mut former: Vec<Vec<usize>> = vec![Vec::new(); nb];
+            for (pi, p) in pairs.iter().enumerate() {
+                former[p.hub].push(pi);
+                former[p.other].push(pi);
+            }
+            let flat = Incidence::new(nb, &pairs);
+            for (body, list) in former.iter().enumerate() {
+                assert_eq!(&flat[body], list.as_slice(), "body {body} of {nb}");
+            }
+        }
+    }
 
     /// The block-by-block path agrees with the whole-Jacobian one on every number and list.
     fn same_both_ways(m: &Mechanism, opts: &GeometricOptions) {
