@@ -702,39 +702,8 @@ mod tests {
     fn three_layer_is_the_edge_list_network() {
         let mut rng = crate::rng::SplitMix64::new(11);
         for round in 0..300 {
-            let (l, r) = (rng.below(10) as usize, 1 + rng.below(10) as usize);
-            let none = u32::MAX;
-            let pick = |rng: &mut crate::rng::SplitMix64| match rng.below(4) {
-                0 => none,
-                _ => rng.below(r as u64) as u32,
-            };
-            let left: Vec<u32> = (0..l).map(|_| rng.below(5) as u32).collect();
-            let ends: Vec<[u32; 2]> = (0..l).map(|_| [pick(&mut rng), pick(&mut rng)]).collect();
-            let right: Vec<u32> = (0..r)
-                .map(|_| match rng.below(5) {
-                    0 => none,
-                    c => c as u32,
-                })
-                .collect();
-            let mut edges = Vec::new();
-            let rnode = |j: u32| (2 + l) as u32 + j;
-            for i in 0..l {
-                let x = 2 + i as u32;
-                edges.push((0, x, left[i]));
-                let [a, b] = ends[i];
-                if a != none {
-                    edges.push((x, rnode(a), INF));
-                }
-                if b != none && b != a {
-                    edges.push((x, rnode(b), INF));
-                }
-            }
-            for (j, &c) in right.iter().enumerate() {
-                if c != none {
-                    edges.push((rnode(j as u32), 1, c));
-                }
-            }
-            let want = Network::new(2 + l + r, &edges);
+            let (left, ends, right, want) = random_three_layer(&mut rng);
+            let l = left.len();
             let got = Network::three_layer(&left, |i| ends[i], &right);
             assert_eq!(listing(&got), listing(&want), "round {round}");
             assert_eq!(got.nl, l, "round {round}: source edges implicit");
