@@ -615,6 +615,44 @@ mod tests {
         }
     }
 
+    /// A random mechanism's joint rows at realization `rseed`, its pairs `(joint, hub,
+    /// other)`, and a group per body with the frame and body `frame + 1` held fixed (as a
+    /// part's root is): `(mechanism, rows, pairs, group of each body, groups)`.
+    #[allow(clippy::type_complexity)]
+    fn random_pairs(
+        n: u64,
+        planar: bool,
+        seed: u64,
+        rseed: u64,
+    ) -> (
+        Mechanism,
+        Vec<DMatrix<Fp>>,
+        Vec<(usize, usize, usize)>,
+        Vec<Option<usize>>,
+        usize,
+    ) {
+        let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+        let rows: Vec<DMatrix<Fp>> = (0..m.joints.len())
+            .map(|ji| joint_rows(&m, ji, rseed, m.joints[ji].driven))
+            .collect();
+        let mut pairs = Vec::new();
+        for (ji, j) in m.joints.iter().enumerate() {
+            if let Some((&hub, others)) = j.bodies.split_first() {
+                pairs.extend(others.iter().map(|&o| (ji, hub, o)));
+            }
+        }
+        let fixed = (m.frame + 1) % m.bodies.len();
+        let mut local = vec![None; m.bodies.len()];
+        let mut ng = 0;
+        for (x, l) in local.iter_mut().enumerate() {
+            if x != m.frame && x != fixed {
+                *l = Some(ng);
+                ng += 1;
+            }
+        }
+        (m, rows, pairs, local, ng)
+    }
+
     /// The rows [`PairRows`] makes one at a time are those [`pairs_matrix`] stores, row for
     /// row, and the factorization from them is the one from the matrix (rank, random null
     /// vectors drawn alike, which solve the matrix): on random mechanisms with a body held
@@ -624,26 +662,9 @@ mod tests {
         let budget = crate::budget::Budget::UNLIMITED;
         let what = || "test".to_string();
         for (n, planar, seed) in [(40, false, 1), (90, true, 2), (200, false, 3)] {
-            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            let (m, rows, mut pairs, local, ng) = random_pairs(n, planar, seed, 7);
             let b = m.b() as usize;
-            let rows: Vec<DMatrix<Fp>> = (0..m.joints.len())
-                .map(|ji| joint_rows(&m, ji, 7, m.joints[ji].driven))
-                .collect();
-            let mut pairs = vec![(0, 1, 1)];
-            for (ji, j) in m.joints.iter().enumerate() {
-                if let Some((&hub, others)) = j.bodies.split_first() {
-                    pairs.extend(others.iter().map(|&o| (ji, hub, o)));
-                }
-            }
-            let fixed = (m.frame + 1) % m.bodies.len();
-            let mut local = vec![None; m.bodies.len()];
-            let mut ng = 0;
-            for (x, l) in local.iter_mut().enumerate() {
-                if x != m.frame && x != fixed {
-                    *l = Some(ng);
-                    ng += 1;
-                }
-            }
+            pairs.insert(0, (0, 1, 1));
             for shared in [false, true] {
                 let group = |x: usize| {
                     if shared && x == m.bodies.len() - 1 {
@@ -704,27 +725,8 @@ mod tests {
             (150, true, 3),
             (300, false, 4),
         ] {
-            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            let (m, rows, pairs, local, ng) = random_pairs(n, planar, seed, 9);
             let b = m.b() as usize;
-            let rows: Vec<DMatrix<Fp>> = (0..m.joints.len())
-                .map(|ji| joint_rows(&m, ji, 9, m.joints[ji].driven))
-                .collect();
-            let mut pairs = Vec::new();
-            for (ji, j) in m.joints.iter().enumerate() {
-                if let Some((&hub, others)) = j.bodies.split_first() {
-                    pairs.extend(others.iter().map(|&o| (ji, hub, o)));
-                }
-            }
-            // Body 1 held fixed too (besides the frame).
-            let fixed = (m.frame + 1) % m.bodies.len();
-            let mut local = vec![None; m.bodies.len()];
-            let mut ng = 0;
-            for (x, l) in local.iter_mut().enumerate() {
-                if x != m.frame && x != fixed {
-                    *l = Some(ng);
-                    ng += 1;
-                }
-            }
             let group = |x: usize| local[x];
             let mut meter = budget.meter("test");
             let mut limits = Limits {
