@@ -3,6 +3,7 @@
 //! group are merged into a front, a Householder QR with column pivoting on that group's
 //! columns decides its rank, and the remaining rows become a new block on its neighbours.
 
+use crate::budget::{BudgetExceeded, Meter};
 use crate::motion::SplitMix64;
 use nalgebra::{DMatrix, DVector};
 use std::cmp::Reverse;
@@ -24,6 +25,25 @@ pub(crate) struct Record {
     pub(crate) rank: usize,
     others: Vec<usize>,
     r: DMatrix<f64>,
+}
+
+/// Why a bounded elimination stopped before its end.
+#[derive(Debug)]
+pub(crate) enum Stop {
+    /// The next front would have passed the byte cap: the bytes that step needed.
+    Memory(u64),
+    /// The meter's work limit was passed.
+    Work(BudgetExceeded),
+}
+
+impl Stop {
+    /// The bytes needed, for the callers without a meter (their only way to stop).
+    fn bytes(self) -> u64 {
+        match self {
+            Stop::Memory(n) => n,
+            Stop::Work(_) => u64::MAX,
+        }
+    }
 }
 
 pub(crate) struct Elimination {
@@ -54,7 +74,24 @@ impl Elimination {
         abs_tol: f64,
         max_bytes: u64,
     ) -> Result<Elimination, u64> {
-        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, None)
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, None, None).map_err(Stop::bytes)
+    }
+
+    /// [`Elimination::run_within`] that also charges `meter`, front by front and before doing
+    /// it, the work it really does: building each front and copying out the rows it leaves
+    /// over (rows × columns, three times), its Householder steps (rows × columns, twice per
+    /// pivot tried) and the compression of the rows left over (2 · rows × columns² of that
+    /// block). On an over-determined, filling elimination (the
+    /// transpose of a self-stress support) this is many times the triangular factors
+    /// ([`Elimination::work`]), so the work limit stops it where that count would not.
+    pub(crate) fn run_metered(
+        sizes: &[usize],
+        blocks: Vec<Block>,
+        abs_tol: f64,
+        max_bytes: u64,
+        meter: &mut Meter,
+    ) -> Result<Elimination, Stop> {
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, None, Some(meter))
     }
 
     /// [`Elimination::run_within`] with the groups eliminated in the given `order` (every group
@@ -68,7 +105,7 @@ impl Elimination {
         max_bytes: u64,
         order: &[usize],
     ) -> Result<Elimination, u64> {
-        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, Some(order))
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, Some(order), None).map_err(Stop::bytes)
     }
 
     fn run_ordered(
@@ -77,7 +114,8 @@ impl Elimination {
         abs_tol: f64,
         max_bytes: u64,
         order: Option<&[usize]>,
-    ) -> Result<Elimination, u64> {
+        mut meter: Option<&mut Meter>,
+    ) -> Result<Elimination, Stop> {
         let bytes = |m: &DMatrix<f64>| (m.len() as u64).saturating_mul(8);
         let mut held: u64 = blocks.iter().map(|b| bytes(&b.mat)).sum();
         let n = sizes.len();
@@ -216,7 +254,17 @@ impl Elimination {
                 .saturating_add(members_bytes)
                 .saturating_add(front_bytes.saturating_mul(2));
             if need > max_bytes {
-                return Err(need);
+                return Err(Stop::Memory(need));
+            }
+            if let Some(m) = meter.as_deref_mut() {
+                // Per cell of the front: zeroing and filling it, copying the rows left over
+                // out, and two passes (vᵀ·front, then the rank-one update) per pivot tried
+                // (at most min(group size, rows) of them). Large fronts run at memory speed,
+                // so each pass is charged, not each pivot once.
+                let steps = sg.min(nrows) as u64;
+                let cells = (nrows as u64).saturating_mul(width as u64);
+                m.charge(cells.saturating_mul(steps.saturating_mul(2).saturating_add(3)))
+                    .map_err(Stop::Work)?;
             }
             let mut front = DMatrix::zeros(nrows, width);
             let mut r0 = 0;
@@ -258,6 +306,12 @@ impl Elimination {
                 if rest.nrows() > rest.ncols() {
                     // Compress: an orthogonal transformation keeps the row space.
                     let k = rest.ncols();
+                    if let Some(m) = meter.as_deref_mut() {
+                        // Two passes over at most all of it per column.
+                        let cells = (rest.nrows() as u64).saturating_mul(k as u64);
+                        m.charge(cells.saturating_mul(k as u64).saturating_mul(2))
+                            .map_err(Stop::Work)?;
+                    }
                     for c in 0..k {
                         householder(&mut rest, c, c);
                     }
@@ -992,6 +1046,73 @@ mod tests {
             let sv = dense.singular_values();
             let expected = sv.iter().filter(|&&s| s > 1e-9 * sv.max().max(1.0)).count();
             assert_eq!(e.rank, expected, "case {case}");
+        }
+    }
+
+    /// The metered elimination charges its fronts' real work, which on an over-determined
+    /// system with fill (the shape of a self-stress support's transpose: more rows than
+    /// columns per group, rows left over on the union of their neighbours) is far more than
+    /// the triangular factors [`Elimination::work`] counts; it gives the same elimination as
+    /// the unmetered one, and a work limit below its charge stops it with the meter's error.
+    #[test]
+    fn metered_elimination_charges_fronts_and_compressions() {
+        let mut rng = SplitMix64::new(0x5e1f_5743);
+        let n = 60;
+        let sizes = vec![6usize; n];
+        let make = |rng: &mut SplitMix64| -> Vec<Block> {
+            (0..n)
+                .map(|g| {
+                    // Each group's six equations on itself and two random other groups.
+                    let mut groups = vec![
+                        g,
+                        rng.below(n as u64) as usize,
+                        rng.below(n as u64) as usize,
+                    ];
+                    groups.sort_unstable();
+                    groups.dedup();
+                    let width = 6 * groups.len();
+                    let mat = DMatrix::from_fn(8, width, |_, _| rng.next_signed());
+                    Block { groups, mat }
+                })
+                .collect()
+        };
+        let blocks = make(&mut rng);
+        let plain = Elimination::run(&sizes, blocks.clone(), 1e-9);
+        let mut meter = crate::budget::Budget::UNLIMITED.meter("test");
+        let metered = Elimination::run_metered(&sizes, blocks.clone(), 1e-9, u64::MAX, &mut meter)
+            .expect("no limit");
+        assert_eq!(metered.rank, plain.rank);
+        assert_eq!(metered.records.len(), plain.records.len());
+        for (a, b) in metered.records.iter().zip(&plain.records) {
+            assert_eq!(a.group, b.group);
+            assert_eq!(a.r, b.r);
+        }
+        let used = meter.used();
+        // Every front's rows × columns at least once per pivot: here well over the factors.
+        assert!(
+            used > 4 * plain.work(),
+            "charged {used}, factors {}",
+            plain.work()
+        );
+        // The same charge again (deterministic), and a limit one unit short stops it.
+        let budget = crate::budget::Budget {
+            max_work: used,
+            ..crate::budget::Budget::UNLIMITED
+        };
+        let mut exact = budget.meter("test");
+        assert!(
+            Elimination::run_metered(&sizes, blocks.clone(), 1e-9, u64::MAX, &mut exact).is_ok()
+        );
+        assert_eq!(exact.used(), used);
+        let short = crate::budget::Budget {
+            max_work: used - 1,
+            ..crate::budget::Budget::UNLIMITED
+        };
+        let mut meter = short.meter("the test elimination");
+        match Elimination::run_metered(&sizes, blocks, 1e-9, u64::MAX, &mut meter) {
+            Err(Stop::Work(e)) => assert_eq!(e.limit, crate::budget::Limit::Work),
+            Err(Stop::Memory(n)) => panic!("memory {n}"),
+            Ok(_) => panic!("answered within {} units", used - 1),
         }
     }
 }

@@ -28,7 +28,7 @@
 //! Results hold for the configuration analysed (instantaneous, first order).
 
 use crate::budget::{Budget, BudgetExceeded, Limit, Meter};
-use crate::elimination::{Block, Elimination, sigma_max};
+use crate::elimination::{Block, Elimination, Stop, sigma_max};
 use crate::exact::Fp;
 use crate::exact::sparse::Limits;
 use crate::mechanism::{Mechanism, Space};
@@ -1462,7 +1462,7 @@ fn analyze_models(
             },
         )?;
         let mut abs_tol = base_abs;
-        let mut elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv)?;
+        let mut elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv, meter)?;
         meter.charge(elim_work(&elim))?;
         // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating
         // point cannot tell a large, badly conditioned full-rank system from a deficient one
@@ -1502,7 +1502,7 @@ fn analyze_models(
                 } else {
                     elim.dropped_max * (1.0 - 1e-9)
                 };
-                elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv)?;
+                elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv, meter)?;
                 meter.charge(elim_work(&elim))?;
             }
             if one_part {
@@ -2061,7 +2061,7 @@ fn self_stresses(
         tblocks.push(Block { groups: ps, mat });
     }
     let nv = part.bodies.len() as u64;
-    let mut telim = eliminate(&psizes, tblocks.clone(), abs_tol, budget, nv)?;
+    let mut telim = eliminate(&psizes, tblocks.clone(), abs_tol, budget, nv, meter)?;
     meter.charge(elim_work(&telim))?;
     if let Some(target) = retry {
         let mut tries = 0;
@@ -2072,7 +2072,7 @@ fn self_stresses(
             } else {
                 telim.dropped_max * (1.0 - 1e-9)
             };
-            telim = eliminate(&psizes, tblocks.clone(), t, budget, nv)?;
+            telim = eliminate(&psizes, tblocks.clone(), t, budget, nv, meter)?;
             meter.charge(elim_work(&telim))?;
         }
     }
@@ -2097,17 +2097,21 @@ fn self_stresses(
 /// [`Elimination::run`] within the memory budget: fill-in on a large, densely coupled block
 /// can exceed any estimate made before eliminating, so the elimination stops itself. It may
 /// hold half the memory limit: the blocks it eliminates (and their copy kept for a retry at
-/// another threshold) and the joint models stay alive beside it.
+/// another threshold) and the joint models stay alive beside it. Its real work (fronts built,
+/// Householder steps, compressions) is charged to `meter` as it goes
+/// ([`Elimination::run_metered`]), so the work limit stops it too.
 fn eliminate(
     sizes: &[usize],
     blocks: Vec<Block>,
     abs_tol: f64,
     budget: &Budget,
     bodies: u64,
+    meter: &mut Meter,
 ) -> Result<Elimination, BudgetExceeded> {
     let cap = budget.max_memory_bytes / 2;
-    Elimination::run_within(sizes, blocks, abs_tol, cap).map_err(|held| {
-        BudgetExceeded {
+    Elimination::run_metered(sizes, blocks, abs_tol, cap, meter).map_err(|stop| match stop {
+        Stop::Work(e) => e,
+        Stop::Memory(held) => BudgetExceeded {
             limit: Limit::Memory,
             what: format!(
                 "the geometric rigidity analysis (the elimination of one rigid block of {bodies} \
@@ -2118,7 +2122,7 @@ fn eliminate(
             needed: held.saturating_mul(2),
             at_least: true,
             allowed: budget.max_memory_bytes,
-        }
+        },
     })
 }
 

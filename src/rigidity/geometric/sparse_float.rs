@@ -272,13 +272,13 @@ impl SparsePart<'_> {
         let mut ntol = self.ntol.min(SPARSE_COLUMNS);
         let (_, mut abs_tol) = threshold(self.m, self.used, smax_l, ntol);
         let nv = nl as u64;
-        let mut elim = eliminate(self.sizes, blocks.clone(), abs_tol, budget, nv)?;
+        let mut elim = eliminate(self.sizes, blocks.clone(), abs_tol, budget, nv, meter)?;
         meter.charge(elim.work())?;
         let front = elim.max_front();
         if front > ntol && ntol < self.ntol {
             ntol = front.min(self.ntol);
             abs_tol = threshold(self.m, self.used, smax_l, ntol).1;
-            elim = eliminate(self.sizes, blocks, abs_tol, budget, nv)?;
+            elim = eliminate(self.sizes, blocks, abs_tol, budget, nv, meter)?;
             meter.charge(elim.work())?;
         }
         let rank = elim.rank;
@@ -522,7 +522,7 @@ impl SparsePart<'_> {
             tblocks.push(Block { groups: ps, mat });
         }
         let nv = part.bodies.len() as u64;
-        let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv)?;
+        let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv, meter)?;
         meter.charge(telim.work())?;
         let e = prow.saturating_sub(telim.rank);
         let s = e.min(STRESS_SAMPLES);
