@@ -53,6 +53,9 @@ pub(crate) struct Elimination {
     pub rank: usize,
     pub kept_min: f64,
     pub dropped_max: f64,
+    /// The norm of the best column of every front whose pivoting stopped on the threshold
+    /// (one per such front), for [`Elimination::steered_threshold`].
+    pub dropped: Vec<f64>,
 }
 
 impl Elimination {
@@ -185,6 +188,7 @@ impl Elimination {
         let mut rank = 0;
         let mut kept_min = f64::INFINITY;
         let mut dropped_max: f64 = 0.0;
+        let mut dropped = Vec::new();
         // Column offset of each group in the current front.
         let mut col_of = vec![0usize; n];
         loop {
@@ -289,6 +293,7 @@ impl Elimination {
                     .fold((r, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
                 if bn <= abs_tol {
                     dropped_max = dropped_max.max(bn);
+                    dropped.push(bn);
                     break;
                 }
                 kept_min = kept_min.min(bn);
@@ -358,7 +363,49 @@ impl Elimination {
             rank,
             kept_min,
             dropped_max,
+            dropped,
         })
+    }
+
+    /// A threshold under which a new run should reach rank `target`, chosen from this run's
+    /// decisions: with `d` pivots too many, the geometric mean of the `d`-th and `d+1`-th
+    /// smallest pivot norms kept (so the `d` smallest fall under it); with `d` too few, that of
+    /// the `d`-th and `d+1`-th largest norms dropped (one per front that stopped pivoting, the
+    /// only ones recorded). The middle of the gap in magnitude, not its edge: the next run's
+    /// pivots near the threshold differ by rounding once an earlier decision changes. `None`
+    /// when the rank is already `target` or this run has too few decisions to choose from.
+    pub(crate) fn steered_threshold(&self, target: usize) -> Option<f64> {
+        let between = |lo: f64, hi: Option<f64>| match hi {
+            Some(hi) if hi > lo && lo > 0.0 => Some((lo * hi).sqrt()),
+            _ => None,
+        };
+        if self.rank > target {
+            let d = self.rank - target;
+            let mut kept: Vec<f64> = self
+                .records
+                .iter()
+                .flat_map(|rec| (0..rec.rank).map(move |i| rec.r[(i, i)].abs()))
+                .collect();
+            if kept.len() < d {
+                return None;
+            }
+            kept.sort_unstable_by(f64::total_cmp);
+            // No larger pivot left: just above the largest.
+            between(kept[d - 1], kept.get(d).copied()).or(Some(kept[d - 1] * (1.0 + 1e-9)))
+        } else if self.rank < target {
+            let d = target - self.rank;
+            let mut dropped = self.dropped.clone();
+            if dropped.len() < d {
+                return None;
+            }
+            dropped.sort_unstable_by(|a, b| b.total_cmp(a));
+            match dropped.get(d) {
+                Some(&lo) => between(lo, Some(dropped[d - 1])),
+                None => Some(dropped[d - 1] * (1.0 - 1e-9)),
+            }
+        } else {
+            None
+        }
     }
 
     /// Work units of the elimination done (entries of the fronts' triangular factors times
@@ -1047,6 +1094,43 @@ mod tests {
             let expected = sv.iter().filter(|&&s| s > 1e-9 * sv.max().max(1.0)).count();
             assert_eq!(e.rank, expected, "case {case}");
         }
+    }
+
+    /// The steered threshold moves a run's rank to the target in one more run: with pivots
+    /// too many it falls in the gap above the `d` smallest kept pivot norms, with too few in
+    /// the gap below the `d` largest dropped ones (one group per unknown, so every column's
+    /// decision is recorded); with fewer decisions than asked, or at the target, none.
+    #[test]
+    fn steered_threshold_reaches_the_target_rank() {
+        let norms = [1.0, 0.1, 1e-6, 1e-7, 3e-9];
+        let sizes = vec![1usize; norms.len()];
+        let blocks: Vec<Block> = norms
+            .iter()
+            .enumerate()
+            .map(|(g, &v)| Block {
+                groups: vec![g],
+                mat: DMatrix::from_element(1, 1, v),
+            })
+            .collect();
+        let at = |t: f64| Elimination::run(&sizes, blocks.clone(), t);
+        let low = at(1e-12);
+        assert_eq!(low.rank, 5);
+        for target in 1..5 {
+            let t = low.steered_threshold(target).expect("steers down");
+            assert_eq!(at(t).rank, target, "down to {target}: {t:e}");
+        }
+        assert!(low.steered_threshold(5).is_none());
+        let high = at(2.0);
+        assert_eq!(high.rank, 0);
+        assert_eq!(high.dropped.len(), 5);
+        for target in 1..=5 {
+            let t = high.steered_threshold(target).expect("steers up");
+            assert_eq!(at(t).rank, target, "up to {target}: {t:e}");
+        }
+        assert!(high.steered_threshold(6).is_none());
+        // Down by one from rank 4: between 1e-7 and 1e-6, not at the edge of either.
+        let t = at(1e-8).steered_threshold(3).expect("steers");
+        assert!(t > 2e-7 && t < 5e-7, "{t:e}");
     }
 
     /// The metered elimination charges its fronts' real work, which on an over-determined

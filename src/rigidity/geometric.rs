@@ -2067,11 +2067,15 @@ fn self_stresses(
         let mut tries = 0;
         while telim.rank != target && tries < 16 {
             tries += 1;
-            let t = if telim.rank > target {
-                telim.kept_min * (1.0 + 1e-9)
-            } else {
-                telim.dropped_max * (1.0 - 1e-9)
-            };
+            // Steered by this run's pivot norms to the exact rank (one run usually reaches
+            // it); else one decision at a time, as before.
+            let t = telim
+                .steered_threshold(target)
+                .unwrap_or(if telim.rank > target {
+                    telim.kept_min * (1.0 + 1e-9)
+                } else {
+                    telim.dropped_max * (1.0 - 1e-9)
+                });
             telim = eliminate(&psizes, tblocks.clone(), t, budget, nv, meter)?;
             meter.charge(elim_work(&telim))?;
         }
