@@ -773,6 +773,26 @@ mod tests {
             .collect()
     }
 
+    /// Fewer than `count` random warm-start paths `(left, right, units)` on nodes below `n`,
+    /// each of fewer than `units` units (the draws in that order, so the tests' networks stay
+    /// the ones they were written with).
+    fn random_paths(
+        rng: &mut crate::rng::SplitMix64,
+        n: usize,
+        count: u64,
+        units: u64,
+    ) -> Vec<(usize, usize, u32)> {
+        (0..rng.below(count))
+            .map(|_| {
+                (
+                    rng.below(n as u64) as usize,
+                    rng.below(n as u64) as usize,
+                    rng.below(units) as u32,
+                )
+            })
+            .collect()
+    }
+
     /// A random three-layer network as the count builds it: left capacities, each left
     /// node's two right ends (`u32::MAX`: none), right capacities (`u32::MAX`: no edge to
     /// t), and the same network from its edge list.
@@ -827,15 +847,7 @@ mod tests {
             let mut got = Network::three_layer(&left, |i| ends[i], &right);
             let n = want.nodes();
             if round % 3 == 0 {
-                let paths: Vec<(usize, usize, u32)> = (0..rng.below(8))
-                    .map(|_| {
-                        (
-                            rng.below(n as u64) as usize,
-                            rng.below(n as u64) as usize,
-                            rng.below(5) as u32,
-                        )
-                    })
-                    .collect();
+                let paths = random_paths(&mut rng, n, 8, 5);
                 got.warm(0, 1, &paths);
                 want.warm(0, 1, &paths);
             }
@@ -1035,15 +1047,7 @@ mod tests {
             let (n, edges) = random_network(&mut rng, round % 2 == 1);
             let mut net = Network::new(n, &edges);
             if round % 5 == 0 {
-                let paths: Vec<(usize, usize, u32)> = (0..rng.below(6))
-                    .map(|_| {
-                        (
-                            rng.below(n as u64) as usize,
-                            rng.below(n as u64) as usize,
-                            rng.below(4) as u32,
-                        )
-                    })
-                    .collect();
+                let paths = random_paths(&mut rng, n, 6, 4);
                 net.warm(0, 1, &paths);
             }
             let (s, t) = if round % 7 == 0 { (0, 0) } else { (0, 1) };
