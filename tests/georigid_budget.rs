@@ -10,7 +10,20 @@
 
 use mbsa::budget::{Budget, Limit};
 use mbsa::generate;
-use mbsa::rigidity::geometric::{GeometricError, GeometricOptions, analyze_within};
+use mbsa::mechanism::Mechanism;
+use mbsa::rigidity::geometric::{
+    GeometricError, GeometricOptions, GeometricReport, analyze_within,
+};
+
+/// The geometric analysis of `m` (default options) under the default budget with its work
+/// limit set to `max_work`.
+fn under_work_limit(m: &Mechanism, max_work: u64) -> Result<GeometricReport, GeometricError> {
+    let budget = Budget {
+        max_work,
+        ..Budget::DEFAULT
+    };
+    analyze_within(m, &GeometricOptions::default(), &budget)
+}
 
 /// A random spatial mechanism of 10^3 bodies: its one large block is analysed exactly. The
 /// checks made before the factorization (its sampled motions: about 0.6 MB) fit in 700 KB;
@@ -43,15 +56,8 @@ fn the_factorization_stops_on_the_memory_limit() {
 #[test]
 fn the_factorization_charges_its_work() {
     let (m, _) = generate::random(1000, false, 1).expect("generates");
-    let used = |max_work: u64| {
-        let budget = Budget {
-            max_work,
-            ..Budget::DEFAULT
-        };
-        analyze_within(&m, &GeometricOptions::default(), &budget)
-    };
-    assert!(used(Budget::DEFAULT.max_work).is_ok());
-    match used(100_000) {
+    assert!(under_work_limit(&m, Budget::DEFAULT.max_work).is_ok());
+    match under_work_limit(&m, 100_000) {
         Err(GeometricError::Budget(e)) => assert_eq!(e.limit, Limit::Work, "{e}"),
         Err(e) => panic!("{e}"),
         Ok(_) => panic!("answered within 10^5 work units"),
@@ -71,11 +77,7 @@ fn the_factorization_charges_its_work() {
 fn with_inputs_the_float_self_stresses_charge_their_elimination() {
     let (m, _) = generate::random(1000, false, 1).expect("generates");
     assert!(m.joints.iter().any(|j| j.driven > 0), "inputs kept");
-    let budget = Budget {
-        max_work: 1_000_000_000,
-        ..Budget::DEFAULT
-    };
-    match analyze_within(&m, &GeometricOptions::default(), &budget) {
+    match under_work_limit(&m, 1_000_000_000) {
         Err(GeometricError::Budget(e)) => {
             assert_eq!(e.limit, Limit::Work, "{e}");
             assert!(e.help().contains("--max-work"), "{e}");
@@ -96,11 +98,7 @@ fn with_inputs_the_float_self_stresses_charge_their_elimination() {
 fn steered_self_stress_retries_answer_within_fewer_runs() {
     let (m, _) = generate::random(2000, false, 1).expect("generates");
     assert!(m.joints.iter().any(|j| j.driven > 0), "inputs kept");
-    let budget = Budget {
-        max_work: 6_000_000_000,
-        ..Budget::DEFAULT
-    };
-    let r = analyze_within(&m, &GeometricOptions::default(), &budget).expect("answers");
+    let r = under_work_limit(&m, 6_000_000_000).expect("answers");
     assert!(r.redundant > 0, "self-stresses to weigh");
     assert!(!r.redundant_joints.is_empty());
 }
