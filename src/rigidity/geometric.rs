@@ -590,10 +590,6 @@ fn walk(cycle: &[usize], edges: &[(usize, usize)]) -> Vec<usize> {
 /// larger ones block by block ([`biconnected_parts`]).
 const ONE_PART_COLUMNS: usize = 1200;
 
-fn elim_work(e: &Elimination) -> u64 {
-    e.work()
-}
-
 /// The rank of `d` with the columns of some more matrices beside it (over GF(p)).
 fn rank_with(d: DMatrix<Fp>, more: [Option<&DMatrix<Fp>>; 2]) -> usize {
     let extra: usize = more.iter().flatten().map(|m| m.ncols()).sum();
@@ -1463,7 +1459,6 @@ fn analyze_models(
         )?;
         let mut abs_tol = base_abs;
         let mut elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv, meter)?;
-        meter.charge(elim_work(&elim))?;
         // At a random realization the rank is decided exactly, over GF(2^61 − 1): floating
         // point cannot tell a large, badly conditioned full-rank system from a deficient one
         // at every size and seed. The pivoted elimination (which gives the motions and
@@ -1503,7 +1498,6 @@ fn analyze_models(
                     elim.dropped_max * (1.0 - 1e-9)
                 };
                 elim = eliminate(&lsizes, blocks.clone(), abs_tol, budget, nv, meter)?;
-                meter.charge(elim_work(&elim))?;
             }
             if one_part {
                 tol = abs_tol / smax.max(f64::MIN_POSITIVE);
@@ -2062,7 +2056,6 @@ fn self_stresses(
     }
     let nv = part.bodies.len() as u64;
     let mut telim = eliminate(&psizes, tblocks.clone(), abs_tol, budget, nv, meter)?;
-    meter.charge(elim_work(&telim))?;
     if let Some(target) = retry {
         let mut tries = 0;
         while telim.rank != target && tries < 16 {
@@ -2077,7 +2070,6 @@ fn self_stresses(
                     telim.dropped_max * (1.0 - 1e-9)
                 });
             telim = eliminate(&psizes, tblocks.clone(), t, budget, nv, meter)?;
-            meter.charge(elim_work(&telim))?;
         }
     }
     let e = prow.saturating_sub(telim.rank) as u64;
@@ -2103,7 +2095,8 @@ fn self_stresses(
 /// hold half the memory limit: the blocks it eliminates (and their copy kept for a retry at
 /// another threshold) and the joint models stay alive beside it. Its real work (fronts built,
 /// Householder steps, compressions) is charged to `meter` as it goes
-/// ([`Elimination::run_metered`]), so the work limit stops it too.
+/// ([`Elimination::run_metered`]), so the work limit stops it too; then its triangular
+/// factors ([`Elimination::work`]) as before, so no charge went down.
 fn eliminate(
     sizes: &[usize],
     blocks: Vec<Block>,
@@ -2113,7 +2106,7 @@ fn eliminate(
     meter: &mut Meter,
 ) -> Result<Elimination, BudgetExceeded> {
     let cap = budget.max_memory_bytes / 2;
-    Elimination::run_metered(sizes, blocks, abs_tol, cap, meter).map_err(|stop| match stop {
+    let elim = Elimination::run_metered(sizes, blocks, abs_tol, cap, meter).map_err(|stop| match stop {
         Stop::Work(e) => e,
         Stop::Memory(held) => BudgetExceeded {
             limit: Limit::Memory,
@@ -2127,7 +2120,9 @@ fn eliminate(
             at_least: true,
             allowed: budget.max_memory_bytes,
         },
-    })
+    })?;
+    meter.charge(elim.work())?;
+    Ok(elim)
 }
 
 #[cfg(test)]

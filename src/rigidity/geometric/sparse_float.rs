@@ -273,13 +273,11 @@ impl SparsePart<'_> {
         let (_, mut abs_tol) = threshold(self.m, self.used, smax_l, ntol);
         let nv = nl as u64;
         let mut elim = eliminate(self.sizes, blocks.clone(), abs_tol, budget, nv, meter)?;
-        meter.charge(elim.work())?;
         let front = elim.max_front();
         if front > ntol && ntol < self.ntol {
             ntol = front.min(self.ntol);
             abs_tol = threshold(self.m, self.used, smax_l, ntol).1;
             elim = eliminate(self.sizes, blocks, abs_tol, budget, nv, meter)?;
-            meter.charge(elim.work())?;
         }
         let rank = elim.rank;
         let (kept, dropped) = (elim.kept_min, elim.dropped_max);
@@ -523,7 +521,6 @@ impl SparsePart<'_> {
         }
         let nv = part.bodies.len() as u64;
         let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv, meter)?;
-        meter.charge(telim.work())?;
         let e = prow.saturating_sub(telim.rank);
         let s = e.min(STRESS_SAMPLES);
         if s == 0 {
