@@ -939,6 +939,25 @@ pub enum InputSpecError {
 impl InputSpec {
     /// Parse `ref[:n],ref[:n],...`. An empty string is the empty placement.
     pub fn parse(text: &str) -> Result<InputSpec, InputSpecError> {
+        Self::parse_with(text, |_| false)
+    }
+
+    /// [`InputSpec::parse`] against the mechanism the spec is for: an entry whose text after
+    /// its last `:` is not a number but which as a whole names a joint (an id or a body pair)
+    /// is that joint with 1 DOF. Imported models have such ids (`connect:a-b`, `point:a-b`,
+    /// `base:free`), and the reports print them as they are; `connect:a-b:2` still reads as
+    /// 2 DOF.
+    pub fn parse_in(text: &str, m: &Mechanism) -> Result<InputSpec, InputSpecError> {
+        Self::parse_with(text, |whole| {
+            !matches!(resolve_ref(m, whole), Err(InputSpecError::NoMatch { .. }))
+        })
+    }
+
+    /// The parser; `names_joint(entry)` says whether a whole entry names a joint.
+    fn parse_with(
+        text: &str,
+        names_joint: impl Fn(&str) -> bool,
+    ) -> Result<InputSpec, InputSpecError> {
         let mut refs = Vec::new();
         for part in text.split(',').map(str::trim) {
             if part.is_empty() {
@@ -951,16 +970,16 @@ impl InputSpec {
                 });
             }
             let (name, count) = match part.rsplit_once(':') {
-                Some((name, n)) => {
-                    let count = n
-                        .trim()
-                        .parse::<u32>()
-                        .map_err(|_| InputSpecError::Syntax {
+                Some((name, n)) => match n.trim().parse::<u32>() {
+                    Ok(count) => (name.trim(), count),
+                    Err(_) if names_joint(part) => (part, 1),
+                    Err(_) => {
+                        return Err(InputSpecError::Syntax {
                             text: part.to_string(),
                             reason: format!("`{n}` is not a non-negative whole number of DOF"),
-                        })?;
-                    (name.trim(), count)
-                }
+                        });
+                    }
+                },
                 None => (part, 1),
             };
             if name.is_empty() {
@@ -1168,6 +1187,61 @@ mod tests {
         assert!(InputSpec::parse("A,,B").is_err());
         assert!(InputSpec::parse("A:x").is_err());
         assert!(InputSpec::parse(":2").is_err());
+    }
+
+    #[test]
+    fn input_specs_take_imported_ids_with_colons() {
+        // Ids as the importers write them: an MJCF `connect` closing a loop, a free base.
+        let joint = |id: &str, kind, a: &str, b: &str| JointSpec {
+            id: Some(id.into()),
+            kind,
+            bodies: vec![BodyId::from_text(a), BodyId::from_text(b)],
+            driven: 0,
+            geometry: Geometry::default(),
+        };
+        let m = Mechanism::from_parts(
+            "ids",
+            Space::Spatial,
+            BodyId::from_text("world"),
+            vec![],
+            vec![
+                joint("drive", JointType::R, "world", "crank"),
+                joint("connect:crank-rod", JointType::S, "crank", "rod"),
+                joint("rod:free", JointType::F, "world", "rod"),
+            ],
+        );
+        // (joint id, driven DOF) of each entry.
+        let resolved = |text: &str| {
+            InputSpec::parse_in(text, &m)
+                .and_then(|s| s.resolve(&m))
+                .map(|r| {
+                    r.into_iter()
+                        .map(|(j, n)| (m.joints[j].id.clone(), n))
+                        .collect::<Vec<_>>()
+                })
+                .map_err(|e| e.to_string())
+        };
+        let ids = |pairs: &[(&str, u32)]| -> Result<Vec<(String, u32)>, String> {
+            Ok(pairs.iter().map(|&(id, n)| (id.to_string(), n)).collect())
+        };
+        assert_eq!(
+            resolved("connect:crank-rod,rod:free,drive"),
+            ids(&[("connect:crank-rod", 1), ("rod:free", 1), ("drive", 1)])
+        );
+        // `:n` after such an id still counts DOF.
+        assert_eq!(
+            resolved("connect:crank-rod:2,rod:free:6"),
+            ids(&[("connect:crank-rod", 2), ("rod:free", 6)])
+        );
+        // Without the mechanism the same text is a syntax error, and so is a typo with it.
+        assert!(InputSpec::parse("connect:crank-rod").is_err());
+        assert_eq!(
+            resolved("drive:x"),
+            Err(
+                "invalid input spec `drive:x`: `x` is not a non-negative whole number of DOF"
+                    .into()
+            )
+        );
     }
 
     #[test]

@@ -410,7 +410,7 @@ pub fn load_with_inputs(file: &FileArg, inputs: Option<&str>) -> Result<mbsa::Me
 
 /// Apply an `--inputs` spec, rendering its errors.
 pub fn apply_inputs(m: &mut mbsa::Mechanism, spec: &str) -> Result<(), Failure> {
-    mbsa::InputSpec::parse(spec)
+    mbsa::InputSpec::parse_in(spec, m)
         .and_then(|s| m.apply_inputs(&s))
         .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain("--inputs", &e)))
 }

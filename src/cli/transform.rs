@@ -55,9 +55,13 @@ pub enum TransformFormat {
     Jsonl,
 }
 
-fn spec(text: &Option<String>, flag: &str) -> Result<Option<mbsa::InputSpec>, Failure> {
+fn spec(
+    text: &Option<String>,
+    flag: &str,
+    m: &mbsa::Mechanism,
+) -> Result<Option<mbsa::InputSpec>, Failure> {
     text.as_deref()
-        .map(mbsa::InputSpec::parse)
+        .map(|t| mbsa::InputSpec::parse_in(t, m))
         .transpose()
         .map_err(|e| Failure::Input(mbsa::diagnostic::render_plain(flag, &e)))
 }
@@ -85,9 +89,9 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
             .transpose()
             .map_err(|e| bad("--on", &e))?,
         grounded: args.grounded,
-        keep: spec(&args.keep, "--keep")?,
-        exclude: spec(&args.exclude, "--exclude")?,
-        inputs: spec(&structure.inputs, "--inputs")?,
+        keep: spec(&args.keep, "--keep", &m)?,
+        exclude: spec(&args.exclude, "--exclude", &m)?,
+        inputs: spec(&structure.inputs, "--inputs", &m)?,
         max_expansions: args.max_expansions,
         limit: args.limit,
         budget: super::budget(),
