@@ -124,6 +124,69 @@ fn cassie_home_keyframe_says_the_loops_do_not_close() {
 }
 
 #[test]
+fn robotiq_2f85_two_planar_five_bars_closed_by_connect() {
+    // Each finger: driver, coupler, spring link and follower on parallel x axes, the loop
+    // closed by a `connect` (S) whose x equation the planar loop already satisfies. Per
+    // finger count 6·4 − 4·5 − 3 = 1, true mobility 2 (a planar five-bar: the adaptive
+    // finger), 1 redundant. MuJoCo 4.0.1 at qpos0: 6 connect rows on 8 DOF, rank 4 (the x
+    // rows vanish); the drivers' joint equality (not representable) would leave 3.
+    let file = fixture("robotiq_2f85.xml");
+    assert_eq!(numbers(&file, &[]), (2, 4, 2));
+    let (code, _, err) = mbsa(&["import", &file]);
+    assert_eq!(code, 0, "{err}");
+    // The driver coupling and the tendon actuator are reported, never dropped silently.
+    assert!(
+        err.contains("<joint> equality coupling: not representable"),
+        "{err}"
+    );
+    assert!(err.contains("acts through tendon"), "{err}");
+    assert!(err.contains("0 driven DOF"), "{err}");
+    let analyze = |inputs: &str| {
+        let (code, out, err) = mbsa(&["analyze", &file, "--inputs", inputs, "--format", "json"]);
+        assert_eq!(code, 0, "{inputs}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+        (
+            v["status"].as_str().expect("status").to_string(),
+            v["uncontrolled"].as_i64().expect("uncontrolled"),
+            v["groups"].as_array().expect("groups").len(),
+        )
+    };
+    // The two drivers leave each finger's adaptive DOF free.
+    assert_eq!(
+        analyze("right_driver_joint,left_driver_joint"),
+        ("mixed".into(), 2, 2)
+    );
+    let grounded =
+        "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";
+    assert_eq!(analyze(grounded), ("determined".into(), 0, 6));
+    // The loop-closing joint is named by its imported id, `:` and all.
+    assert_eq!(
+        analyze(
+            "connect:right_follower-right_coupler,right_driver_joint,left_driver_joint,left_spring_link_joint"
+        ),
+        ("determined".into(), 0, 5)
+    );
+    let (code, out, err) = mbsa(&["transform", &file, "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let s = &v["summary"];
+    // Per finger 11 placements of 2 DOF on 4 R and 1 S (driven about world x, then y); the
+    // S driven twice is excluded: its turn about y is locked, so a freedom stays free.
+    assert_eq!(
+        (
+            &s["f"],
+            &s["count_valid"],
+            &s["excluded_by_rank"],
+            &s["determined"]
+        ),
+        (&4.into(), &121.into(), &21.into(), &100.into()),
+        "{s}"
+    );
+    let toml = round_trip(&file, &[]);
+    snapshot("import_robotiq_2f85", &toml);
+}
+
+#[test]
 fn mjcf_includes_resolve_relative_to_the_model() {
     let (code, out, err) = mbsa(&["import", &fixture("include_main.xml")]);
     assert_eq!(code, 0, "{err}");
