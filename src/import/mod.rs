@@ -142,8 +142,9 @@ impl Import {
             return String::new();
         }
         let mut out = format!(
-            "warning: {} {} import warning(s): elements left out or not representable, loops \
-             not closed at the configuration:\n",
+            // Each line says what happened to its element (left out, not representable,
+            // not closed at the configuration), so the header does not guess.
+            "warning: {} {} import warning(s):\n",
             self.warnings.len(),
             self.format.name()
         );
