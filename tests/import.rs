@@ -154,7 +154,7 @@ fn robotiq_2f85_two_planar_five_bars_closed_by_connect() {
     // The two drivers leave each finger's adaptive DOF free.
     assert_eq!(
         analyze("right_driver_joint,left_driver_joint"),
-        ("mixed".into(), 2, 2)
+        ("underdetermined".into(), 2, 2)
     );
     let grounded =
         "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";

@@ -61,7 +61,8 @@ pub enum Status {
     Determined,
     /// Some equations are too many (inputs or constraints fight), nothing is missing.
     Overdetermined,
-    /// Some body DOF are not fixed by any input, nothing is too many.
+    /// Some body DOF are not fixed by any input, no equation fights (redundant constraints
+    /// consistent at the configuration, or with no input driven, may be set aside).
     Underdetermined,
     /// Both: as in inputs that add up to the count but are badly placed.
     Mixed,
@@ -869,9 +870,14 @@ fn build(
     let mut diag = diagnose(m, eqs, dec, unsolved, &redundant);
     let over = diag.overdetermined.is_some();
     let under = diag.underdetermined.is_some();
-    // Mixed whenever redundant equations (by count or found by the rank check, wherever the
-    // listing puts them) and uncontrolled DOF coexist.
-    let redundant_eqs = over || !redundant.is_empty();
+    // Mixed whenever equations that can fight (too many by count, or a group's deficit the
+    // rank check found, whose right-hand side the inputs move) and uncontrolled DOF coexist.
+    // Constraints dependent at the file's configuration are consistent there and set aside
+    // before the decomposition, and with no input driven every right-hand side is zero: such
+    // redundancy fights nothing, so it makes a mechanism neither over-determined nor mixed
+    // (as it leaves a determined one determined); the notes list it.
+    let driven = m.joints.iter().any(|j| j.driven > 0);
+    let redundant_eqs = over || (driven && redundant.iter().any(|r| !r.configuration));
     let status = if under && redundant_eqs {
         Status::Mixed
     } else if under {
