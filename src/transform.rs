@@ -4270,170 +4270,138 @@ fn block_null_vectors(
     }
     let mut v: Vec<Vec<Fp>> = vec![vec![Fp::ZERO; ncols]; n];
     let mut rng = crate::rng::SplitMix64::new(seed ^ 0xB10C_5B57_0000_0001);
-    // Tarjan's components of "a row routed to `z` touches `w`", emitted sinks first: each
-    // block's rows touch only its own unknowns and those of blocks already solved.
-    let mut index = vec![NIL; nb];
-    let mut low = vec![0u32; nb];
-    let mut on = vec![false; nb];
-    let mut stack: Vec<u32> = Vec::new();
-    let mut call: Vec<(u32, u32)> = Vec::new();
+    // Tarjan's components of "a row routed to `z` touches `w`" (frame excluded), emitted
+    // sinks first: each block's rows touch only its own unknowns and those of blocks
+    // already solved. The arcs of each body in `touching` order, so the components come out
+    // as a walk of `touching` itself would find them.
+    let mut arc_start = vec![0usize; nb + 1];
+    let mut arcs: Vec<u32> = Vec::with_capacity(nrows);
+    for z in 0..nb {
+        for &q in &touching[start[z] as usize..start[z + 1] as usize] {
+            let q = q as usize;
+            if flow[q][side(q, z)] != 0 {
+                arcs.push(ends[q][1 - side(q, z)]);
+            }
+        }
+        arc_start[z + 1] = arcs.len();
+    }
+    let mut active = vec![true; nb];
+    active[frame] = false;
+    let (members, bounds) = crate::structure::tarjan_flat(&arc_start, &arcs, &active);
+    drop((arc_start, arcs, active));
     let mut done = vec![false; nq];
     let mut loc = vec![NIL; nb];
     let mut unit = 0usize;
-    let mut next = 0u32;
     let mut a: Vec<Fp> = Vec::new();
     let mut comp: Vec<usize> = Vec::new();
-    for root in 0..nb {
-        if root == frame || index[root] != NIL {
-            continue;
+    for span in bounds.windows(2) {
+        // `tarjan_flat` lists a component from the top of its stack down; the block takes it
+        // bottom up (its root first), the order of its unknowns, rows and random rows.
+        comp.clear();
+        comp.extend(members[span[0]..span[1]].iter().rev().map(|&x| x as usize));
+        let d = b * comp.len();
+        if d > BLOCK_MAX {
+            return None;
         }
-        index[root] = next;
-        low[root] = next;
-        next += 1;
-        stack.push(root as u32);
-        on[root] = true;
-        call.push((root as u32, start[root]));
-        while let Some(&mut (z, ref mut pos)) = call.last_mut() {
-            let z = z as usize;
-            if *pos < start[z + 1] {
-                let q = touching[*pos as usize] as usize;
-                *pos += 1;
-                if flow[q][side(q, z)] == 0 {
+        for (i, &x) in comp.iter().enumerate() {
+            loc[x] = i as u32;
+        }
+        // [A | R] row-major: the block's rows on its unknowns, the right-hand sides.
+        let w_all = d + n;
+        a.clear();
+        a.resize(d * w_all, Fp::ZERO);
+        let mut r = 0usize;
+        for &x in &comp {
+            for &q in &touching[start[x] as usize..start[x + 1] as usize] {
+                let q = q as usize;
+                if done[q] || flow[q][side(q, x)] == 0 {
                     continue;
                 }
-                let w = ends[q][1 - side(q, z)] as usize;
-                if w == frame {
-                    continue;
+                done[q] = true;
+                let rows = models::joint_rows(m, q, seed, 0);
+                if rows.nrows() != rows_of[q] as usize || rows.ncols() != b {
+                    return None;
                 }
-                if index[w] == NIL {
-                    index[w] = next;
-                    low[w] = next;
-                    next += 1;
-                    stack.push(w as u32);
-                    on[w] = true;
-                    call.push((w as u32, start[w]));
-                } else if on[w] {
-                    low[z] = low[z].min(index[w]);
-                }
-                continue;
-            }
-            call.pop();
-            if let Some(&(p, _)) = call.last() {
-                let p = p as usize;
-                low[p] = low[p].min(low[z]);
-            }
-            if low[z] != index[z] {
-                continue;
-            }
-            // The component: the stack down to `z`.
-            let at = stack.iter().rposition(|&x| x as usize == z)?;
-            comp.clear();
-            comp.extend(stack.drain(at..).map(|x| x as usize));
-            let d = b * comp.len();
-            if d > BLOCK_MAX {
-                return None;
-            }
-            for (i, &x) in comp.iter().enumerate() {
-                on[x] = false;
-                loc[x] = i as u32;
-            }
-            // [A | R] row-major: the block's rows on its unknowns, the right-hand sides.
-            let w_all = d + n;
-            a.clear();
-            a.resize(d * w_all, Fp::ZERO);
-            let mut r = 0usize;
-            for &x in &comp {
-                for &q in &touching[start[x] as usize..start[x + 1] as usize] {
-                    let q = q as usize;
-                    if done[q] || flow[q][side(q, x)] == 0 {
-                        continue;
-                    }
-                    done[q] = true;
-                    let rows = models::joint_rows(m, q, seed, 0);
-                    if rows.nrows() != rows_of[q] as usize || rows.ncols() != b {
-                        return None;
-                    }
-                    for i in 0..rows.nrows() {
-                        if r >= d {
-                            return None;
-                        }
-                        let line = &mut a[r * w_all..(r + 1) * w_all];
-                        for (s, &u) in ends[q].iter().enumerate() {
-                            let u = u as usize;
-                            if u == frame {
-                                continue;
-                            }
-                            for k in 0..b {
-                                let e = if s == 0 { -rows[(i, k)] } else { rows[(i, k)] };
-                                if loc[u] != NIL {
-                                    line[loc[u] as usize * b + k] += e;
-                                } else {
-                                    // A body of a block solved before.
-                                    for (l, vl) in v.iter().enumerate() {
-                                        line[d + l] -= e * vl[col[u] + k];
-                                    }
-                                }
-                            }
-                        }
-                        r += 1;
-                    }
-                }
-            }
-            for &x in &comp {
-                for _ in used[x] as usize..b {
-                    if r >= d || unit >= n {
+                for i in 0..rows.nrows() {
+                    if r >= d {
                         return None;
                     }
                     let line = &mut a[r * w_all..(r + 1) * w_all];
-                    for k in 0..b {
-                        line[loc[x] as usize * b + k] = Fp::random_nonzero(&mut rng);
+                    for (s, &u) in ends[q].iter().enumerate() {
+                        let u = u as usize;
+                        if u == frame {
+                            continue;
+                        }
+                        for k in 0..b {
+                            let e = if s == 0 { -rows[(i, k)] } else { rows[(i, k)] };
+                            if loc[u] != NIL {
+                                line[loc[u] as usize * b + k] += e;
+                            } else {
+                                // A body of a block solved before.
+                                for (l, vl) in v.iter().enumerate() {
+                                    line[d + l] -= e * vl[col[u] + k];
+                                }
+                            }
+                        }
                     }
-                    line[d + unit] = Fp::ONE;
-                    unit += 1;
                     r += 1;
                 }
             }
-            if r != d {
-                return None;
-            }
-            // Gauss-Jordan: a singular block gives up.
-            for cc in 0..d {
-                let p = (cc..d).find(|&i| !a[i * w_all + cc].is_zero())?;
-                if p != cc {
-                    for t in 0..w_all {
-                        a.swap(p * w_all + t, cc * w_all + t);
-                    }
+        }
+        for &x in &comp {
+            for _ in used[x] as usize..b {
+                if r >= d || unit >= n {
+                    return None;
                 }
-                let inv = a[cc * w_all + cc].inv();
-                for t in cc..w_all {
-                    a[cc * w_all + t] *= inv;
-                }
-                for i in 0..d {
-                    if i == cc {
-                        continue;
-                    }
-                    let f = a[i * w_all + cc];
-                    if f.is_zero() {
-                        continue;
-                    }
-                    let (lo, hi) = a.split_at_mut(i.max(cc) * w_all);
-                    let (dst, src) = if i < cc {
-                        (&mut lo[i * w_all..(i + 1) * w_all], &hi[..w_all])
-                    } else {
-                        (&mut hi[..w_all], &lo[cc * w_all..(cc + 1) * w_all])
-                    };
-                    axpy_sub(&mut dst[cc..], f, &src[cc..]);
-                }
-            }
-            for &x in &comp {
-                let i0 = loc[x] as usize * b;
+                let line = &mut a[r * w_all..(r + 1) * w_all];
                 for k in 0..b {
-                    for (l, vl) in v.iter_mut().enumerate() {
-                        vl[col[x] + k] = a[(i0 + k) * w_all + d + l];
-                    }
+                    line[loc[x] as usize * b + k] = Fp::random_nonzero(&mut rng);
                 }
-                loc[x] = NIL;
+                line[d + unit] = Fp::ONE;
+                unit += 1;
+                r += 1;
             }
+        }
+        if r != d {
+            return None;
+        }
+        // Gauss-Jordan: a singular block gives up.
+        for cc in 0..d {
+            let p = (cc..d).find(|&i| !a[i * w_all + cc].is_zero())?;
+            if p != cc {
+                for t in 0..w_all {
+                    a.swap(p * w_all + t, cc * w_all + t);
+                }
+            }
+            let inv = a[cc * w_all + cc].inv();
+            for t in cc..w_all {
+                a[cc * w_all + t] *= inv;
+            }
+            for i in 0..d {
+                if i == cc {
+                    continue;
+                }
+                let f = a[i * w_all + cc];
+                if f.is_zero() {
+                    continue;
+                }
+                let (lo, hi) = a.split_at_mut(i.max(cc) * w_all);
+                let (dst, src) = if i < cc {
+                    (&mut lo[i * w_all..(i + 1) * w_all], &hi[..w_all])
+                } else {
+                    (&mut hi[..w_all], &lo[cc * w_all..(cc + 1) * w_all])
+                };
+                axpy_sub(&mut dst[cc..], f, &src[cc..]);
+            }
+        }
+        for &x in &comp {
+            let i0 = loc[x] as usize * b;
+            for k in 0..b {
+                for (l, vl) in v.iter_mut().enumerate() {
+                    vl[col[x] + k] = a[(i0 + k) * w_all + d + l];
+                }
+            }
+            loc[x] = NIL;
         }
     }
     (unit == n).then_some((col, v))

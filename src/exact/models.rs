@@ -653,6 +653,19 @@ mod tests {
         (m, rows, pairs, local, ng)
     }
 
+    /// [`pairs_factor`] of `pairs` with `track` (what both the stress support and the
+    /// comparison with [`pairs_matrix`] need), within `limits`, which the tests size to fit.
+    fn tracked_factor(
+        b: usize,
+        ng: usize,
+        rows: &[DMatrix<Fp>],
+        pairs: &[(usize, usize, usize)],
+        group: impl Fn(usize) -> Option<usize>,
+        limits: &mut Limits<'_>,
+    ) -> Option<Factor> {
+        pairs_factor(b, ng, rows, pairs.iter().copied(), group, true, limits).expect("fits")
+    }
+
     /// The rows [`PairRows`] makes one at a time are those [`pairs_matrix`] stores, row for
     /// row, and the factorization from them is the one from the matrix (rank, random null
     /// vectors drawn alike, which solve the matrix): on random mechanisms with a body held
@@ -687,17 +700,7 @@ mod tests {
                     meter: &mut meter,
                     what: &what,
                 };
-                let f = pairs_factor(
-                    b,
-                    ng,
-                    &rows,
-                    pairs.iter().copied(),
-                    group,
-                    true,
-                    &mut limits,
-                )
-                .expect("fits")
-                .expect("rows");
+                let f = tracked_factor(b, ng, &rows, &pairs, group, &mut limits).expect("rows");
                 let g = Factor::from_matrix_within(a.clone(), true, &mut limits).expect("fits");
                 assert_eq!((f.rank(), f.nullity()), (g.rank(), g.nullity()));
                 let mut r1 = SplitMix64::new(seed);
@@ -736,16 +739,7 @@ mod tests {
             };
             let reference =
                 pairs_stress_support(b, &rows, &pairs, group, ng, 5, &mut limits).expect("fits");
-            let f = pairs_factor(
-                b,
-                ng,
-                &rows,
-                pairs.iter().copied(),
-                group,
-                true,
-                &mut limits,
-            )
-            .expect("fits");
+            let f = tracked_factor(b, ng, &rows, &pairs, group, &mut limits);
             let got = pairs_stress_support_from(f.as_ref(), &rows, &pairs, group, 6, &mut meter)
                 .expect("fits")
                 .expect("tracked");

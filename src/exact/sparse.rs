@@ -1885,59 +1885,17 @@ fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
     }
     work += adj.len() as u64 * 4;
     drop(owners_of);
-    // Tarjan's strongly connected components, iterative; a component is completed only
-    // after every component it reaches, so completion order is reverse topological.
-    const NONE: usize = usize::MAX;
-    let mut index = vec![NONE; n];
-    let mut low = vec![0usize; n];
-    let mut on_stack = vec![false; n];
+    // Tarjan's strongly connected components; a component is completed only after every
+    // component it reaches, so completion order is reverse topological.
+    let (members, bounds) = crate::structure::tarjan_flat(&adj_start, &adj, &vec![true; n]);
+    let ncomp = (bounds.len() - 1) as u32;
     let mut comp = vec![0u32; n];
-    let mut stack: Vec<usize> = Vec::new();
-    let mut calls: Vec<(usize, usize)> = Vec::new();
-    let mut next_index = 0usize;
-    let mut ncomp = 0u32;
-    for root in 0..n {
-        if index[root] != NONE {
-            continue;
-        }
-        calls.push((root, adj_start[root]));
-        index[root] = next_index;
-        low[root] = next_index;
-        next_index += 1;
-        stack.push(root);
-        on_stack[root] = true;
-        while let Some(&mut (v, ref mut pos)) = calls.last_mut() {
-            if *pos < adj_start[v + 1] {
-                let w = adj[*pos] as usize;
-                *pos += 1;
-                if index[w] == NONE {
-                    index[w] = next_index;
-                    low[w] = next_index;
-                    next_index += 1;
-                    stack.push(w);
-                    on_stack[w] = true;
-                    calls.push((w, adj_start[w]));
-                } else if on_stack[w] {
-                    low[v] = low[v].min(index[w]);
-                }
-                continue;
-            }
-            calls.pop();
-            if let Some(&(u, _)) = calls.last() {
-                low[u] = low[u].min(low[v]);
-            }
-            if low[v] == index[v] {
-                while let Some(w) = stack.pop() {
-                    on_stack[w] = false;
-                    comp[w] = ncomp;
-                    if w == v {
-                        break;
-                    }
-                }
-                ncomp += 1;
-            }
+    for (c, span) in bounds.windows(2).enumerate() {
+        for &w in &members[span[0]..span[1]] {
+            comp[w as usize] = c as u32;
         }
     }
+    drop(members);
     // The over-determined part: groups reachable from rows the matching left over (in the
     // residual network: a row to any group it touches, a group to the rows matched to it).
     // Left-over rows join every front they touch whatever the order, so there the order

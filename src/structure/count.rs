@@ -478,8 +478,9 @@ pub(crate) fn tarjan(start: &[usize], adj: &[u32], active: &[bool]) -> Vec<Vec<u
 
 /// [`tarjan`] with the components in one array: component `c` is
 /// `members[bounds[c]..bounds[c + 1]]` (same order, same members in the same order; one
-/// allocation instead of one per component, 10^6 of them at 10^6 bodies).
-fn tarjan_flat(start: &[usize], adj: &[u32], active: &[bool]) -> (Vec<u32>, Vec<usize>) {
+/// allocation instead of one per component, 10^6 of them at 10^6 bodies). A component is
+/// listed as it comes off the stack: its root (the first of it reached) last.
+pub(crate) fn tarjan_flat(start: &[usize], adj: &[u32], active: &[bool]) -> (Vec<u32>, Vec<usize>) {
     let n = active.len();
     const UNSEEN: usize = usize::MAX;
     let mut index = vec![UNSEEN; n];
@@ -639,6 +640,20 @@ mod tests {
         assert_eq!(sorted[1], vec![0]);
         sorted.sort();
         assert_eq!(sorted, vec![vec![0], vec![1, 2], vec![3]]);
+    }
+
+    /// The order the callers rely on: components completed sinks first, each listed from the
+    /// top of the stack down to its root; an inactive node is neither a root nor reached.
+    #[test]
+    fn tarjan_flat_lists_each_component_root_last() {
+        // 0 -> 1 -> 2 -> 0, 2 -> 3 -> 4 -> 3, 4 -> 5 (inactive) -> 0.
+        let start = [0, 1, 2, 4, 5, 7, 8];
+        let adj = [1u32, 2, 0, 3, 4, 3, 5, 0];
+        let mut active = [true; 6];
+        active[5] = false;
+        let (members, bounds) = tarjan_flat(&start, &adj, &active);
+        assert_eq!(bounds, vec![0, 2, 5]);
+        assert_eq!(members, vec![4, 3, 2, 1, 0]);
     }
 
     /// Work regression: the searches of one decomposition examine each edge of the flow

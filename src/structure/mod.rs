@@ -17,7 +17,7 @@ mod rank;
 
 /// The count decomposition's components and canonical order, for `mbsa transform`'s analysis
 /// of certified placements from its search's flow.
-pub(crate) use count::{canonical, tarjan};
+pub(crate) use count::{canonical, tarjan, tarjan_flat};
 pub use library::{Library, LibraryError};
 
 use crate::joint::JointType;
