@@ -1916,7 +1916,10 @@ mod tests {
             for i in (1..cases.len()).rev() {
                 cases.swap(i, rng.below(i as u64 + 1) as usize);
             }
-            let requests = cases.iter().map(|(k, g, d, s, _, _)| (*k, g, *d, *s));
+            let requests = |i: usize| {
+                let (k, g, d, s, _, _) = &cases[i];
+                (*k, g, *d, *s)
+            };
             let mut scratch = batch::Scratch::default();
             let rows = match space {
                 Space::Spatial => {

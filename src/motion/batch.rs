@@ -399,10 +399,10 @@ pub(crate) fn pair_rows_many<'s, G: Borrow<Geometry>>(
     geometry: impl Fn(usize) -> G,
     scratch: &'s mut Scratch,
 ) -> &'s Slots {
-    let requests = jobs.iter().map(|&(ji, driven)| {
-        let g = geometry(ji);
-        (m.joints[ji].kind, g, driven, joint_seed(0, ji))
-    });
+    let requests = |i: usize| {
+        let (ji, driven) = jobs[i];
+        (m.joints[ji].kind, geometry(ji), driven, joint_seed(0, ji))
+    };
     match m.space {
         Space::Spatial => rows_many::<6, G>(m.space, jobs.len(), requests, scratch),
         Space::Planar | Space::Spherical => {
@@ -411,11 +411,13 @@ pub(crate) fn pair_rows_many<'s, G: Borrow<Geometry>>(
     }
 }
 
-/// [`pair_rows_many`] on `(kind, geometry, driven, fallback seed)` requests (`total` of them).
+/// [`pair_rows_many`] on `(kind, geometry, driven, fallback seed)` requests: `request(i)` for
+/// `i` in `0..total`, asked for one at a time where it is used (through an iterator chain
+/// each request, with its geometry of nearly 200 bytes, was copied three times more).
 pub(super) fn rows_many<const N: usize, G: Borrow<Geometry>>(
     space: Space,
     total: usize,
-    requests: impl Iterator<Item = (JointType, G, u32, u64)>,
+    request: impl Fn(usize) -> (JointType, G, u32, u64),
     scratch: &mut Scratch,
 ) -> &Slots {
     let Scratch {
@@ -430,11 +432,10 @@ pub(super) fn rows_many<const N: usize, G: Borrow<Geometry>>(
     for s in [&mut *work, &mut *basis, &mut *full, &mut *done] {
         s.reserve(BATCH);
     }
-    let mut requests = requests.enumerate().peekable();
-    while requests.peek().is_some() {
+    for base in (0..total).step_by(BATCH) {
         jobs.clear();
-        let base = requests.peek().map_or(0, |(i, _)| *i);
-        for (i, (kind, g, driven, fallback)) in requests.by_ref().take(BATCH) {
+        for i in base..total.min(base + BATCH) {
+            let (kind, g, driven, fallback) = request(i);
             let g = g.borrow();
             let j = i - base;
             let step = first_step::<N>(kind, g, space, driven, fallback, j, done, work, full);

@@ -279,6 +279,7 @@ impl Network {
     }
 
     /// Push `d` units along edge `e` (residual `d` or more).
+    #[inline]
     fn push(&mut self, e: usize, d: u32) {
         #[cfg(test)]
         PUSHES.with(|p| p.set(p.get() + 1));
@@ -332,19 +333,36 @@ impl Network {
     /// bodies. The same pushes in the same order, so the same flow: no other edge the greedy
     /// start reads or pushes is an edge v → t or its pair unless s and t are one node or
     /// joined by an edge, or t has an edge to itself; then the edges are used directly.
+    ///
+    /// In a network [`Network::three_layer`] built, from node 0 to node 1, the pair of each
+    /// middle edge (left → right, at the right node) is written after the loop too: it is
+    /// never read by the loop (no right node is a head of a source edge), and an edge and its
+    /// pair hold [`INF`] together (it starts at `INF`, its pair at 0, and a push moves units
+    /// from one to the other), so the pair of every middle edge that carries flow is `INF`
+    /// less the edge's residual. Written in edge order: the edges are read front to back and
+    /// their pairs are only stored to, where each path read and wrote its pair at the body (a
+    /// scattered read and write in the 140 MB edge array at 10^6 bodies).
     fn greedy(&mut self, s: usize, t: usize) -> u64 {
         const NONE: u32 = u32::MAX;
-        let n = self.nodes();
         let deferred = s != t
             && self.all_edges(s).all(|e| self.head(e) != t)
             && self.all_edges(t).all(|e| self.head(e) != t);
-        // Per node: the edge v -> t, and its residual capacity while deferred.
-        let mut to_sink = vec![[NONE, 0]; n];
+        let middle_deferred = deferred && self.nl > 0 && s == 0 && t == 1;
+        // Per node from the first with an edge to t (for a three-layer network the right
+        // nodes, the last ones: 8 bytes a body, not a node): the edge v -> t, and its
+        // residual capacity while deferred.
+        let lo = self.all_edges(t).map(|e| self.head(e)).min().unwrap_or(0);
+        let hi = self
+            .all_edges(t)
+            .map(|e| self.head(e) + 1)
+            .max()
+            .unwrap_or(0);
+        let mut to_sink = vec![[NONE, 0]; hi.saturating_sub(lo)];
         for e in self.all_edges(t) {
             // e goes t -> v; its pair is the edge v -> t. (An implicit edge's index past
             // `u32` cannot occur: the network it was counted in had as many slots.)
             let e2 = self.rev(e);
-            to_sink[self.head(e)] = [u32::try_from(e2).unwrap_or(NONE), self.residual(e2)];
+            to_sink[self.head(e) - lo] = [u32::try_from(e2).unwrap_or(NONE), self.residual(e2)];
         }
         let mut total = 0u64;
         for e0 in self.all_edges(s) {
@@ -354,7 +372,9 @@ impl Network {
                     break;
                 }
                 let (v, c1) = (self.head(e1), self.residual(e1));
-                let [e2, room] = to_sink[v];
+                let Some(&[e2, room]) = v.checked_sub(lo).and_then(|i| to_sink.get(i)) else {
+                    continue;
+                };
                 if v == s || e2 == NONE || c1 == 0 {
                     continue;
                 }
@@ -365,13 +385,29 @@ impl Network {
                     continue;
                 }
                 self.push(e0, d);
-                self.push(e1, d);
+                if middle_deferred {
+                    // A middle edge is explicit; its pair is written after the loop.
+                    *self.residual_mut(e1) -= d;
+                } else {
+                    self.push(e1, d);
+                }
                 if deferred {
-                    to_sink[v][1] -= d;
+                    to_sink[v - lo][1] -= d;
                 } else {
                     self.push(e2, d);
                 }
                 total += d as u64;
+            }
+        }
+        if middle_deferred {
+            for x in 2..2 + self.nl {
+                for e in self.edges(x) {
+                    let c = self.arc[e].cap;
+                    if c < INF {
+                        let r = self.rev[e] as usize;
+                        self.arc[r].cap = INF - c;
+                    }
+                }
             }
         }
         if deferred {
@@ -1150,9 +1186,11 @@ mod tests {
     }
 
     /// Work regression: the greedy start updates each edge to t once, not at every push
-    /// through it (a three-layer network of 3,000 left and 1,000 right nodes, several left
-    /// nodes feeding each right one): 2 edge updates a path plus one per edge to t used,
-    /// where each path updated its edge to t too (3 a path), a scattered read and write more.
+    /// through it, and the pairs of the middle edges after its loop (a three-layer network of
+    /// 3,000 left and 1,000 right nodes, several left nodes feeding each right one, with and
+    /// without a warm start): one push a path plus one per edge to t used, where each path
+    /// pushed along its middle edge too (session 16: 2 a path; before it, 3 with the edge to
+    /// t); the flow is the three-edge pushes', edge for edge.
     #[test]
     fn greedy_updates_each_sink_edge_once() {
         let mut rng = crate::rng::SplitMix64::new(19);
@@ -1162,46 +1200,62 @@ mod tests {
             .map(|_| [rng.below(r as u64) as u32, rng.below(r as u64) as u32])
             .collect();
         let right = vec![6u32; r];
-        let mut net = Network::three_layer(&left, |i| ends[i], &right);
-        let mut want = net.clone();
-        let before = PUSHES.with(|p| p.get());
-        let total = net.greedy(0, 1);
-        let pushes = PUSHES.with(|p| p.get()) - before;
-        // Paths: middle edges with flow (the greedy start pushes each at most once).
-        let paths = (2..2 + l)
-            .flat_map(|x| net.edges(x))
-            .filter(|&e| net.head(e) >= 2 + l && net.residual(e) < INF)
-            .count() as u64;
-        let used = net.edges(1).filter(|&e| net.residual(e) > 0).count() as u64;
-        assert!(paths > 2 * used, "{paths} paths through {used} edges to t");
-        assert_eq!(pushes, 2 * paths + used, "{paths} paths, {used} edges to t");
-        // The same flow as pushing along all three edges at once.
-        let mut refer = 0;
-        let mut to_sink = vec![u32::MAX; want.nodes()];
-        for e in want.all_edges(1) {
-            to_sink[want.head(e)] = want.rev(e) as u32;
-        }
-        for e0 in want.all_edges(0) {
-            let u = want.head(e0);
-            for e1 in want.all_edges(u) {
-                let v = want.head(e1);
-                let e2 = to_sink[v];
-                if v == 0 || e2 == u32::MAX {
-                    continue;
-                }
-                let d = want
-                    .residual(e0)
-                    .min(want.residual(e1))
-                    .min(want.residual(e2 as usize));
-                if d > 0 {
-                    for e in [e0, e1, e2 as usize] {
-                        want.push(e, d);
+        for warm in [false, true] {
+            let mut net = Network::three_layer(&left, |i| ends[i], &right);
+            if warm {
+                // Some flow already on the middle edges (and on their pairs).
+                let paths: Vec<(usize, usize, u32)> = (0..l / 3)
+                    .map(|i| (2 + i, 2 + l + ends[i][0] as usize, 1))
+                    .collect();
+                net.warm(0, 1, &paths);
+            }
+            let mut want = net.clone();
+            let before = PUSHES.with(|p| p.get());
+            let total = net.greedy(0, 1);
+            let pushes = PUSHES.with(|p| p.get()) - before;
+            // Paths: middle edges given flow by the greedy start (each at most once).
+            let paths = (2..2 + l)
+                .flat_map(|x| net.edges(x))
+                .filter(|&e| net.residual(e) < want.residual(e))
+                .count() as u64;
+            let used = net
+                .edges(1)
+                .filter(|&e| net.residual(e) > want.residual(e))
+                .count() as u64;
+            // Several paths through most edges to t (fewer after the warm start's).
+            let shared = if warm { used } else { 2 * used };
+            assert!(paths > shared, "{paths} paths through {used} edges to t");
+            // One push a path (its source edge) and one a sink edge: the middle edges'
+            // pairs are written after the loop, the sink edges' at its end.
+            assert_eq!(pushes, paths + used, "{paths} paths, {used} edges to t");
+            // The same flow as pushing along all three edges at once.
+            let mut refer = 0;
+            let mut to_sink = vec![u32::MAX; want.nodes()];
+            for e in want.all_edges(1) {
+                to_sink[want.head(e)] = want.rev(e) as u32;
+            }
+            for e0 in want.all_edges(0) {
+                let u = want.head(e0);
+                for e1 in want.all_edges(u) {
+                    let v = want.head(e1);
+                    let e2 = to_sink[v];
+                    if v == 0 || e2 == u32::MAX {
+                        continue;
                     }
-                    refer += u64::from(d);
+                    let d = want
+                        .residual(e0)
+                        .min(want.residual(e1))
+                        .min(want.residual(e2 as usize));
+                    if d > 0 {
+                        for e in [e0, e1, e2 as usize] {
+                            want.push(e, d);
+                        }
+                        refer += u64::from(d);
+                    }
                 }
             }
+            assert_eq!(total, refer, "warm {warm}");
+            assert_eq!(listing(&net), listing(&want), "warm {warm}");
         }
-        assert_eq!(total, refer);
-        assert_eq!(listing(&net), listing(&want));
     }
 }

@@ -2639,8 +2639,14 @@ impl Chunk {
     }
 
     fn push_rows(&mut self, rows: &[[f64; 6]], b: usize) {
-        for r in rows {
-            self.values.extend_from_slice(&r[..b]);
+        if b == 6 {
+            // Full rows lie back to back: one copy for all of them (a copy call a row was
+            // the larger part of the copies of the rank check's rows at 10^6 bodies).
+            self.values.extend_from_slice(rows.as_flattened());
+        } else {
+            for r in rows {
+                self.values.extend_from_slice(&r[..b]);
+            }
         }
         self.counts.push(rows.len() as u32);
     }
@@ -3873,6 +3879,29 @@ mod tests {
 
     fn view(a: &DMatrix<f64>) -> RowsView<'_> {
         RowsView::from_slice_with_strides(a.as_slice(), a.nrows(), a.ncols(), 1, a.nrows())
+    }
+
+    /// A chunk holds each pair's rows row by row, the first `b` values of each (full rows
+    /// copied at once, narrower ones a row at a time), and reads them back as they were.
+    #[test]
+    fn chunk_rows_are_row_major() {
+        let r = |k: f64| [k, k + 0.5, k + 1.0, k + 1.5, k + 2.0, k + 2.5];
+        for b in [6, 3, 5] {
+            let mut c = Chunk::default();
+            c.push_rows(&[r(1.0), r(10.0)], b);
+            c.push_rows(&[], b);
+            c.push_rows(&[r(20.0)], b);
+            let want: Vec<f64> = [r(1.0), r(10.0), r(20.0)]
+                .iter()
+                .flat_map(|x| x[..b].to_vec())
+                .collect();
+            assert_eq!(c.values, want, "b = {b}");
+            assert_eq!(c.counts, [2, 0, 1]);
+            let rows = PairRows::from_chunks(b, vec![c]);
+            assert_eq!(rows.get(0).nrows(), 2);
+            assert_eq!(rows.get(0)[(1, b - 1)], r(10.0)[b - 1]);
+            assert_eq!(rows.get(2)[(0, 0)], 20.0);
+        }
     }
 
     /// Rows replaced by more than their room, and rows removed, read back as a matrix would.
