@@ -89,6 +89,9 @@ pub fn table(r: &GeometricReport) -> String {
             .collect();
         let _ = writeln!(s, "  joints involved, by weight: {}", list.join(", "));
     }
+    if let Some(n) = &r.weights_note {
+        let _ = writeln!(s, "  Note: {n}.");
+    }
     if r.mobility as i64 != r.count && r.redundant > 0 {
         let _ = writeln!(
             s,
