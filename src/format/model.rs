@@ -391,7 +391,7 @@ fn parse_precision(node: &Node) -> Result<f64, LoadError> {
             Some(help.into()),
         ));
     }
-    if x < 0.0 || x > MAX_GEOMETRY_NUMBER {
+    if !(0.0..=MAX_GEOMETRY_NUMBER).contains(&x) {
         return Err(err(
             ErrorKind::NumberOutOfRange,
             format!("{what} must be a number from 0 to 1e100, not {x:e}"),

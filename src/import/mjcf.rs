@@ -51,6 +51,9 @@ struct MBody<'d> {
     joints: Vec<MJoint<'d>>,
 }
 
+/// A named site: its body, its position in the body's frame, its `pos` numbers as written.
+type Site = (usize, Vector3<f64>, [f64; 3]);
+
 struct Ctx<'d> {
     srcs: &'d [Src<'d>],
     inc: HashMap<(usize, usize), usize>,
@@ -60,7 +63,7 @@ struct Ctx<'d> {
     classes: HashMap<String, (Option<String>, Vec<E<'d>>)>,
     bodies: Vec<MBody<'d>>,
     /// Named sites: body, position in its frame, the `pos` numbers as written.
-    sites: HashMap<String, (usize, Vector3<f64>, [f64; 3])>,
+    sites: HashMap<String, Site>,
     nq: usize,
     unsupported: Vec<String>,
 }
@@ -995,7 +998,7 @@ impl<'d> Ctx<'d> {
                 None => Ok(default_world.then_some(0)),
             }
         };
-        let site = |attr: &str| -> Result<Option<(usize, Vector3<f64>, [f64; 3])>, ImportError> {
+        let site = |attr: &str| -> Result<Option<Site>, ImportError> {
             match e.n.attribute(attr) {
                 Some(n) => match self.sites.get(n) {
                     Some(&v) => Ok(Some(v)),
