@@ -572,6 +572,10 @@ pub fn to_toml(m: &Mechanism) -> String {
     }
     let _ = writeln!(out, "space = \"{}\"", m.space.name());
     let _ = writeln!(out, "frame = {}", toml_body(m.body_id(m.frame)));
+    if let Some(p) = m.precision {
+        // Moved numbers are as precise as the file's were (`mbsa assemble` of an import).
+        let _ = writeln!(out, "precision = {p:?}");
+    }
     if m.bodies.iter().any(|b| b.label.is_some()) {
         for body in &m.bodies {
             let _ = write!(out, "\n[[body]]\nid = {}\n", toml_body(&body.id));

@@ -523,6 +523,11 @@ pub struct Mechanism {
     pub joints: Vec<Joint>,
     /// Expectations for `mbsa check`.
     pub expect: Expect,
+    /// How precisely every geometry number of the file is known (±, file units): the file's
+    /// `precision` key, which `mbsa import` writes from the source's digits. `None`: each
+    /// number is judged by its written digits ([`crate::motion::written_precision`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub precision: Option<f64>,
 }
 
 impl Mechanism {
@@ -729,6 +734,7 @@ impl Mechanism {
             bodies,
             joints,
             expect: Expect::default(),
+            precision: None,
         }
     }
 }
@@ -754,6 +760,7 @@ impl Mechanism {
             bodies,
             joints,
             expect: Expect::default(),
+            precision: None,
         }
     }
 }

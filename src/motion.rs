@@ -1199,8 +1199,8 @@ pub struct GeometryUsed {
     /// Why this geometry, and which joints lack theirs.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub note: Option<String>,
-    /// File geometry: how precisely its numbers are known (±, from the digits written or
-    /// `--tolerance`); 0 when every number is exact.
+    /// File geometry: how precisely its numbers are known (±, from `--tolerance`, the file's
+    /// `precision` key or the digits written, in that order); 0 when every number is exact.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub precision: Option<f64>,
     /// File geometry: the precision of the direction numbers (axes, normals) alone, which the
@@ -1593,19 +1593,21 @@ pub fn has_geometry(m: &Mechanism) -> bool {
     !m.joints.iter().any(|j| lacks(m, j))
 }
 
-/// How precisely the file's geometry numbers are known: the largest rounding uncertainty of a
+/// How precisely the file's geometry numbers are known: its `precision` key
+/// ([`Mechanism::precision`]) when it has one, else the largest rounding uncertainty of a
 /// written number. A number shown with 4 or more significant digits and d decimals is known
 /// to ±0.5·10^−d (CAD exports round so); a shorter one (`2.5`, `0`, `1`) is taken as exact.
-/// Numbers are judged by their shortest round-trip decimal form.
+/// Numbers are judged by their shortest round-trip decimal form ([`rounding_of`]).
 pub fn written_precision(m: &Mechanism) -> f64 {
-    written(m, false)
+    m.precision.unwrap_or_else(|| written(m, false))
 }
 
 /// [`written_precision`] of the direction numbers alone (axes, normals): a rounded direction
 /// moves a joint's constraint rows by its error times the lever arm, a rounded point only by
-/// its error, so the threshold weighs the two apart ([`file_threshold`]).
+/// its error, so the threshold weighs the two apart ([`file_threshold`]). The `precision`
+/// key, like `--tolerance`, sets both.
 pub fn written_direction_precision(m: &Mechanism) -> f64 {
-    written(m, true)
+    m.precision.unwrap_or_else(|| written(m, true))
 }
 
 fn written(m: &Mechanism, directions_only: bool) -> f64 {

@@ -1774,6 +1774,8 @@ fn part_mechanism_of(
             })
             .collect(),
         expect: Default::default(),
+        // A part's numbers are the file's: known as precisely.
+        precision: m.precision,
     };
     for &b in bodies {
         local[b] = usize::MAX;

@@ -182,8 +182,58 @@ fn robotiq_2f85_two_planar_five_bars_closed_by_connect() {
         (&4.into(), &121.into(), &21.into(), &100.into()),
         "{s}"
     );
+    // The source's numbers are known to ±5e-6 (pad pos 0.01352); the composed world
+    // coordinates (0.1092 and the like) must not be judged by their own digits (±5e-5, which
+    // made the grounded fingers look near-singular).
+    let (code, out, err) = mbsa(&["import", &file]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("\nprecision = 5e-6\n"), "{out}");
+    let (code, out, err) = mbsa(&[
+        "rigid",
+        &file,
+        "--inputs",
+        grounded,
+        "--with-inputs",
+        "--method",
+        "geometric",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("true mobility 0"), "{out}");
+    assert!(!out.contains("ill-conditioned"), "{out}");
     let toml = round_trip(&file, &[]);
     snapshot("import_robotiq_2f85", &toml);
+}
+
+#[test]
+fn tilted_four_bar_is_judged_by_its_source_precision() {
+    // A planar four-bar written tilted in space with CAD-style 6-decimal quaternions, its
+    // loop closed by a `connect`: the composed hinge axes differ by about 1e-6. Judged by the
+    // importer's 10-decimal output (±5e-10) the loop looked spatial and rigid; the source's
+    // own rounding (the `precision` the import writes) keeps it a planar 1-DOF loop.
+    let file = fixture("tilted_fourbar.xml");
+    let (code, out, err) = mbsa(&["import", &file]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("\nprecision = 5e-6\n"), "{out}");
+    assert_eq!(numbers(&file, &["--geometry", "file"]), (0, 1, 1));
+    let (code, out, err) = mbsa(&[
+        "analyze",
+        &file,
+        "--inputs",
+        "A",
+        "--geometry",
+        "file",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(v["status"], "determined", "{out}");
+    // `--tolerance` still overrides the file's precision.
+    assert_eq!(
+        numbers(&file, &["--geometry", "file", "--tolerance", "5e-10"]),
+        (0, 0, 0)
+    );
+    round_trip(&file, &[]);
 }
 
 #[test]

@@ -36,8 +36,9 @@ pub struct GeometryArgs {
     /// Seed of the random realization (used when the geometry is random).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// File geometry: how precisely its numbers are known, e.g. 1e-4 for ±1e-4 (default: from
-    /// the digits written: 0.7071 is known to ±5e-5; short numbers such as 2.5 are exact).
+    /// File geometry: how precisely its numbers are known, e.g. 1e-4 for ±1e-4 (default: the
+    /// file's `precision` key, else from the digits written: 0.7071 is known to ±5e-5; short
+    /// numbers such as 2.5 are exact).
     #[arg(long, value_name = "DELTA")]
     pub tolerance: Option<f64>,
 }

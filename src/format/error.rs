@@ -35,7 +35,7 @@ pub enum ErrorKind {
     /// A value of the wrong type (a string where a number is expected, ...).
     WrongType,
     /// A number too large for the reader (an integer beyond 64 bits, a geometry number beyond
-    /// 1e100 in magnitude).
+    /// 1e100 in magnitude), or a `precision` below 0.
     NumberOutOfRange,
     /// An empty string used as an id.
     EmptyId,
@@ -65,7 +65,7 @@ pub enum ErrorKind {
     GeometryLength,
     /// An axis or normal of zero length.
     ZeroAxis,
-    /// NaN or infinity in geometry.
+    /// NaN or infinity in geometry (or in `precision`).
     NonFinite,
     /// Joints and a bar-joint framework in the same file.
     MixedFramework,

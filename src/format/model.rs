@@ -28,6 +28,7 @@ const TOP_KEYS: &[&str] = &[
     "bar",
     "bars",
     "expect",
+    "precision",
     "$schema",
 ];
 const JOINT_KEYS: &[&str] = &[
@@ -363,7 +364,43 @@ pub(crate) fn build<'a>(
     if let Some(e) = get(top, "expect") {
         m.expect = parse_expect(&e.value)?;
     }
+    if let Some(e) = get(top, "precision") {
+        m.precision = Some(parse_precision(&e.value)?);
+    }
     Ok(m)
+}
+
+/// The `precision` key: how precisely every geometry number is known (±, file units), a
+/// finite number >= 0 (at most [`MAX_GEOMETRY_NUMBER`], as the numbers it qualifies).
+fn parse_precision(node: &Node) -> Result<f64, LoadError> {
+    let what = "`precision`";
+    let help = "`precision` is how precisely the geometry numbers are known (±, in file units), \
+                e.g. precision = 5e-7; leave it out to judge the numbers by their written digits";
+    let x = match &node.value {
+        Value::Int(i) => *i as f64,
+        Value::Float(f) => *f,
+        Value::BigInt(_) => return Err(out_of_range(node, what)),
+        _ => return Err(wrong_type(node, "a number", what)),
+    };
+    if !x.is_finite() {
+        return Err(err(
+            ErrorKind::NonFinite,
+            format!("{what} must be a finite number >= 0, not {x}"),
+            &node.span,
+            "not finite",
+            Some(help.into()),
+        ));
+    }
+    if !(0.0..=MAX_GEOMETRY_NUMBER).contains(&x) {
+        return Err(err(
+            ErrorKind::NumberOutOfRange,
+            format!("{what} must be a number from 0 to 1e100, not {x:e}"),
+            &node.span,
+            if x < 0.0 { "negative" } else { "too large" },
+            Some(help.into()),
+        ));
+    }
+    Ok(x)
 }
 
 fn empty(root: &Node) -> LoadError {

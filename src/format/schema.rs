@@ -44,6 +44,11 @@ struct Document {
     bars: Option<Vec<BarDoc>>,
     /// Expectations compared by `mbsa check`.
     expect: Option<Expect>,
+    /// How precisely every geometry number is known (±, in file units; default: judged from
+    /// the digits written). `mbsa import` writes it from the source file; `--tolerance`
+    /// overrides it.
+    #[schemars(range(min = 0.0, max = 1e100))]
+    precision: Option<f64>,
 }
 
 /// The motion space.

@@ -291,7 +291,16 @@ fn schema_lists_the_keys() {
     let s = schema();
     let props = s["properties"].as_object().unwrap();
     for k in [
-        "name", "frame", "joint", "joints", "body", "expect", "point", "bar", "space",
+        "name",
+        "frame",
+        "joint",
+        "joints",
+        "body",
+        "expect",
+        "point",
+        "bar",
+        "space",
+        "precision",
     ] {
         assert!(props.contains_key(k), "{k}");
     }
@@ -506,4 +515,63 @@ fn explicit_ids_merge_into_the_natural_order() {
             Mechanism::from_indexed(m.name.clone(), m.space, m.frame, m.bodies.clone(), joints);
         assert_eq!(m, sorted, "case {case}\n{toml}");
     }
+}
+
+/// The top-level `precision` key: read in all three formats into [`Mechanism::precision`]
+/// (absent: `None`, the digits decide), rejected with its location when negative, NaN,
+/// infinite or not a number.
+#[test]
+fn precision_key_is_read_and_checked() {
+    let toml = "frame = 1\nprecision = 5e-7\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n";
+    let m = load("p.toml", toml, Format::Toml).unwrap();
+    assert_eq!(m.precision, Some(5e-7));
+    let yaml = "frame: 1\nprecision: 0\njoints: [{type: R, bodies: [1, 2]}]\n";
+    assert_eq!(
+        load("p.yaml", yaml, Format::Yaml).unwrap().precision,
+        Some(0.0)
+    );
+    let json = r#"{"frame": 1, "precision": 2.5e-5, "joints": [{"type": "R", "bodies": [1, 2]}]}"#;
+    assert_eq!(
+        load("p.json", json, Format::Json).unwrap().precision,
+        Some(2.5e-5)
+    );
+    let none = toml.replace("precision = 5e-7\n", "");
+    assert_eq!(load("p.toml", &none, Format::Toml).unwrap().precision, None);
+    // The key is what the precision functions use, whatever the digits say.
+    let digits = "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\norigin = [0.1234, 0, 0]\n";
+    let m = load("p.toml", digits, Format::Toml).unwrap();
+    assert_eq!(crate::motion::written_precision(&m), 5e-5);
+    let keyed = digits.replace("frame = 1\n", "frame = 1\nprecision = 1e-9\n");
+    let m = load("p.toml", &keyed, Format::Toml).unwrap();
+    assert_eq!(crate::motion::written_precision(&m), 1e-9);
+    assert_eq!(crate::motion::written_direction_precision(&m), 1e-9);
+    // Written back (`mbsa assemble`, `generate`) as read.
+    let again = load("q.toml", &crate::generate::to_toml(&m), Format::Toml).unwrap();
+    assert_eq!(again.precision, Some(1e-9));
+    for (value, kind) in [
+        ("-1e-6", ErrorKind::NumberOutOfRange),
+        ("nan", ErrorKind::NonFinite),
+        ("inf", ErrorKind::NonFinite),
+        ("1e300", ErrorKind::NumberOutOfRange),
+        ("\"tight\"", ErrorKind::WrongType),
+    ] {
+        let bad = toml.replace("5e-7", value);
+        let e = load("p.toml", &bad, Format::Toml).unwrap_err();
+        assert_eq!(e.kind(), kind, "{value}: {e}");
+        assert_eq!(e.line_col(), Some((2, 13)), "{value}");
+    }
+    let e = load(
+        "p.yaml",
+        &yaml.replace("precision: 0", "precision: .nan"),
+        Format::Yaml,
+    )
+    .unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::NonFinite);
+    assert_eq!(e.line_col(), Some((2, 12)));
+    let e = load("p.json", &json.replace("2.5e-5", "-1"), Format::Json).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::NumberOutOfRange);
+    // Unknown top-level keys stay errors (a typo of the new key included).
+    let typo = toml.replace("precision", "precison");
+    let e = load("p.toml", &typo, Format::Toml).unwrap_err();
+    assert_eq!(e.kind(), ErrorKind::UnknownKey);
 }

@@ -51,6 +51,9 @@ struct MBody<'d> {
     joints: Vec<MJoint<'d>>,
 }
 
+/// A named site: its body, its position in the body's frame, its `pos` numbers as written.
+type Site = (usize, Vector3<f64>, [f64; 3]);
+
 struct Ctx<'d> {
     srcs: &'d [Src<'d>],
     inc: HashMap<(usize, usize), usize>,
@@ -59,7 +62,8 @@ struct Ctx<'d> {
     /// class -> (parent class, `<joint>` default elements of that class).
     classes: HashMap<String, (Option<String>, Vec<E<'d>>)>,
     bodies: Vec<MBody<'d>>,
-    sites: HashMap<String, (usize, Vector3<f64>)>,
+    /// Named sites: body, position in its frame, the `pos` numbers as written.
+    sites: HashMap<String, Site>,
     nq: usize,
     unsupported: Vec<String>,
 }
@@ -403,6 +407,9 @@ pub(super) fn read(
     for u in std::mem::take(&mut cx.unsupported) {
         b.warn(u);
     }
+    for s in &srcs {
+        b.note_rounding(s.rounding());
+    }
     Ok(b)
 }
 
@@ -544,7 +551,9 @@ impl<'d> Ctx<'d> {
             }
             return Ok(UnitQuaternion::from_quaternion(v));
         }
-        if let Some(a) = s.nums_attr(n, "axisangle", 4)? {
+        if let Some(a) = s.nums_attr_unnoted(n, "axisangle", 4)? {
+            s.note(&a[..3], 1.0);
+            s.note(&a[3..], self.angle(1.0));
             let Some(axis) = unit(&a[..3]) else {
                 return Err(s
                     .err_attr(n, "axisangle", "zero axis", "axisangle with a zero axis")
@@ -555,7 +564,8 @@ impl<'d> Ctx<'d> {
                 self.angle(a[3]),
             ));
         }
-        if let Some(a) = s.nums_attr(n, "euler", 3)? {
+        if let Some(a) = s.nums_attr_unnoted(n, "euler", 3)? {
+            s.note(&a, self.angle(1.0));
             let mut q = UnitQuaternion::identity();
             for (i, &c) in self.eulerseq.iter().enumerate() {
                 let axis = match c.to_ascii_lowercase() {
@@ -765,7 +775,16 @@ impl<'d> Ctx<'d> {
                     };
                     let reference = match self.joint_attr(k, &class, "ref") {
                         Some((_, at)) if !free => {
-                            self.src(at).num_attr(at.n, "ref")?.unwrap_or(0.0)
+                            let src = self.src(at);
+                            let r = src.nums_attr_unnoted(at.n, "ref", 1)?;
+                            let r = r.map_or(0.0, |r| r[0]);
+                            let unit = if kind == Kind::Hinge {
+                                self.angle(1.0)
+                            } else {
+                                1.0
+                            };
+                            src.note(&[r], unit);
+                            r
                         }
                         _ => 0.0,
                     };
@@ -796,9 +815,14 @@ impl<'d> Ctx<'d> {
                 }
                 "site" => {
                     if let Some(name) = k.n.attribute("name") {
-                        let p = s.nums_attr(k.n, "pos", 3)?.unwrap_or_else(|| vec![0.0; 3]);
-                        let p = rel * nalgebra::Point3::new(p[0], p[1], p[2]);
-                        self.sites.insert(name.to_string(), (body, p.coords));
+                        // Noted only when a loop closure uses the site (sensor sites abound).
+                        let p = s
+                            .nums_attr_unnoted(k.n, "pos", 3)?
+                            .unwrap_or_else(|| vec![0.0; 3]);
+                        let written = [p[0], p[1], p[2]];
+                        let p = rel * nalgebra::Point3::from(written);
+                        self.sites
+                            .insert(name.to_string(), (body, p.coords, written));
                     }
                 }
                 t @ ("composite" | "flexcomp" | "replicate" | "attach" | "plugin") => {
@@ -974,7 +998,7 @@ impl<'d> Ctx<'d> {
                 None => Ok(default_world.then_some(0)),
             }
         };
-        let site = |attr: &str| -> Result<Option<(usize, Vector3<f64>)>, ImportError> {
+        let site = |attr: &str| -> Result<Option<Site>, ImportError> {
             match e.n.attribute(attr) {
                 Some(n) => match self.sites.get(n) {
                     Some(&v) => Ok(Some(v)),
@@ -995,6 +1019,8 @@ impl<'d> Ctx<'d> {
                 // (body1, point on it in its frame, body2, the same point in body2's frame).
                 let (b1, b2, p1, p2) =
                     if let (Some(s1), Some(s2)) = (site("site1")?, site("site2")?) {
+                        s.note(&s1.2, 1.0);
+                        s.note(&s2.2, 1.0);
                         (s1.0, s2.0, s1.1, s2.1)
                     } else {
                         let Some(b1) = body("body1", false)? else {

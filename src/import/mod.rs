@@ -19,6 +19,7 @@ pub use error::ImportError;
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use std::cell::Cell;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::ops::Range;
@@ -239,12 +240,14 @@ pub fn import_str(
                  URDF, <OpenSimDocument> OpenSim; --from forces one",
             ));
     }
-    let builder = match format {
+    let mut builder = match format {
         SourceFormat::Mjcf => mjcf::read(&src, &doc, base_dir, options)?,
         SourceFormat::Urdf => urdf::read(&src, &doc)?,
         SourceFormat::Sdf => sdf::read(&src, &doc)?,
         SourceFormat::Osim => osim::read(&src, &doc)?,
     };
+    // MJCF reads its files (includes too) itself and notes their rounding in the builder.
+    builder.note_rounding(src.rounding());
     builder.finish(name, format, options)
 }
 
@@ -257,6 +260,10 @@ pub(crate) struct Src<'a> {
     pub text: &'a str,
     /// Byte offsets of the line starts (for `file:line:col` in warnings and comments).
     lines: Vec<usize>,
+    /// The coarsest rounding ([`crate::motion::rounding_of`]) of the numbers read so far that
+    /// enter the geometry: what the imported file's `precision` key says
+    /// ([`Builder::source_rounding`]).
+    rounding: Cell<f64>,
 }
 
 pub(crate) type Node<'a> = roxmltree::Node<'a, 'a>;
@@ -267,7 +274,27 @@ impl<'a> Src<'a> {
         let lines = std::iter::once(0)
             .chain(text.match_indices('\n').map(|(i, _)| i + 1))
             .collect();
-        Src { name, text, lines }
+        Src {
+            name,
+            text,
+            lines,
+            rounding: Cell::new(0.0),
+        }
+    }
+
+    /// Note numbers that enter the geometry, each known to ±its rounding times `unit` (π/180
+    /// for an angle in degrees: the geometry sees radians).
+    pub fn note(&self, xs: &[f64], unit: f64) {
+        let r = xs
+            .iter()
+            .map(|&x| crate::motion::rounding_of(x) * unit)
+            .fold(self.rounding.get(), f64::max);
+        self.rounding.set(r);
+    }
+
+    /// The coarsest rounding noted ([`Src::note`]); 0 when every number read is exact.
+    pub fn rounding(&self) -> f64 {
+        self.rounding.get()
     }
 
     /// Parse the text (DTDs allowed, entities expanded by roxmltree's limits).
@@ -355,8 +382,24 @@ impl<'a> Src<'a> {
         ImportError::at(self.name, self.text, span, label, message)
     }
 
-    /// An attribute parsed as `len` numbers (`None` if absent; `len` 0 = any count).
+    /// An attribute parsed as `len` numbers (`None` if absent; `len` 0 = any count), noted as
+    /// geometry numbers ([`Src::note`]): the importers read no others.
     pub fn nums_attr(
+        &self,
+        n: Node,
+        attr: &str,
+        len: usize,
+    ) -> Result<Option<Vec<f64>>, ImportError> {
+        let v = self.nums_attr_unnoted(n, attr, len)?;
+        if let Some(v) = &v {
+            self.note(v, 1.0);
+        }
+        Ok(v)
+    }
+
+    /// [`Src::nums_attr`] without noting the numbers: for angles in degrees and for numbers
+    /// that enter the geometry only when used (the caller notes them then).
+    pub fn nums_attr_unnoted(
         &self,
         n: Node,
         attr: &str,
@@ -380,13 +423,16 @@ impl<'a> Src<'a> {
         })
     }
 
-    /// An attribute parsed as one number.
-    pub fn num_attr(&self, n: Node, attr: &str) -> Result<Option<f64>, ImportError> {
-        Ok(self.nums_attr(n, attr, 1)?.map(|v| v[0]))
+    /// An element's text parsed as `len` numbers (`len` 0 = any count), noted as geometry
+    /// numbers ([`Src::nums_attr`]).
+    pub fn nums_text(&self, n: Node, len: usize) -> Result<Vec<f64>, ImportError> {
+        let v = self.nums_text_unnoted(n, len)?;
+        self.note(&v, 1.0);
+        Ok(v)
     }
 
-    /// An element's text parsed as `len` numbers (`len` 0 = any count).
-    pub fn nums_text(&self, n: Node, len: usize) -> Result<Vec<f64>, ImportError> {
+    /// [`Src::nums_text`] without noting the numbers ([`Src::nums_attr_unnoted`]).
+    pub fn nums_text_unnoted(&self, n: Node, len: usize) -> Result<Vec<f64>, ImportError> {
         let text = n.text().unwrap_or("");
         parse_nums(text, len).map_err(|what| {
             self.err_text(
@@ -519,6 +565,9 @@ pub(crate) struct Builder {
     pub joints: Vec<JointRec>,
     pub warnings: Vec<String>,
     pub notes: Vec<String>,
+    /// The coarsest rounding of the source numbers that enter the geometry ([`Src::note`]):
+    /// the written model's `precision` (with at least the importer's own rounding).
+    source_rounding: f64,
 }
 
 impl Builder {
@@ -535,6 +584,7 @@ impl Builder {
             joints: Vec::new(),
             warnings: Vec::new(),
             notes: Vec::new(),
+            source_rounding: 0.0,
         };
         b.frame = b.body(frame, frame_comment);
         b
@@ -601,6 +651,11 @@ impl Builder {
     pub fn joint(&mut self, j: JointRec) -> usize {
         self.joints.push(j);
         self.joints.len() - 1
+    }
+
+    /// Note the rounding of source numbers that enter the geometry (a [`Src::rounding`]).
+    pub fn note_rounding(&mut self, rounding: f64) {
+        self.source_rounding = self.source_rounding.max(rounding);
     }
 
     /// Record a warning (an element not imported or not representable).
@@ -754,6 +809,16 @@ impl Builder {
         let _ = writeln!(t, "name = {}", toml_str(&self.model_name));
         let _ = writeln!(t, "space = \"spatial\"");
         let _ = writeln!(t, "frame = {}", toml_str(&self.names[frame]));
+        let _ = writeln!(
+            t,
+            "# How precisely the numbers are known (±): the coarsest rounding of the source's \
+             numbers."
+        );
+        let _ = writeln!(
+            t,
+            "precision = {}",
+            precision_text(self.source_rounding.max(written_rounding(joints)))
+        );
         for j in joints {
             t.push('\n');
             let _ = writeln!(t, "[[joint]]");
@@ -806,6 +871,43 @@ pub(crate) fn num(x: f64) -> String {
         s
     };
     if s == "-0" { "0".into() } else { s }
+}
+
+/// The rounding [`num`] adds to the numbers written: ±0.5·10^−10 when it rounds one, 0 when
+/// every number is written exactly. Float noise of the composition (cos 90° = 6e-17 written
+/// 0; below 1e-14 of the number) is not a rounding: what is written is the exact value.
+fn written_rounding(joints: &[JointRec]) -> f64 {
+    let exact = |x: &f64| {
+        num(*x)
+            .parse::<f64>()
+            .is_ok_and(|w| (w - x).abs() <= 1e-14 * x.abs().max(1.0))
+    };
+    let all_exact = joints.iter().all(|j| {
+        let g = &j.geometry;
+        let second = g.second.as_ref().map(|s| s.vectors()).unwrap_or_default();
+        [g.origin, g.origin2, g.axis, g.axis2, g.normal]
+            .into_iter()
+            .chain(second.into_iter().map(|(_, v)| v))
+            .flatten()
+            .all(|v| v.iter().all(exact))
+            && g.pitch.as_ref().is_none_or(exact)
+    });
+    if all_exact { 0.0 } else { 0.5e-10 }
+}
+
+/// A precision as written in the output: 3 significant digits at most (`5e-7`, `8.73e-5`).
+fn precision_text(p: f64) -> String {
+    if p <= 0.0 || !p.is_finite() {
+        return "0".into();
+    }
+    let s = format!("{p:.2e}");
+    match s.split_once('e') {
+        Some((mantissa, exp)) if mantissa.contains('.') => {
+            let mantissa = mantissa.trim_end_matches('0').trim_end_matches('.');
+            format!("{mantissa}e{exp}")
+        }
+        _ => s,
+    }
 }
 
 /// A TOML basic string.

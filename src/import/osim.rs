@@ -43,12 +43,13 @@ fn vec3(src: &Src, n: Node, tag: &str) -> Result<[f64; 3], ImportError> {
 fn eval(src: &Src, f: Node, x: f64) -> Result<Option<(f64, bool)>, ImportError> {
     // (value, linear in x)
     Ok(match f.tag_name().name() {
-        "Constant" => Some((
-            text_of(f, "value")
+        "Constant" => {
+            let v = text_of(f, "value")
                 .and_then(|v| v.parse().ok())
-                .unwrap_or(0.0),
-            true,
-        )),
+                .unwrap_or(0.0);
+            src.note(&[v], 1.0);
+            Some((v, true))
+        }
         "LinearFunction" => {
             let c = match child(f, "coefficients") {
                 Some(c) => src.nums_text(c, 2)?,
@@ -92,6 +93,7 @@ fn eval(src: &Src, f: Node, x: f64) -> Result<Option<(f64, bool)>, ImportError> 
             let scale = text_of(f, "scale")
                 .and_then(|v| v.parse().ok())
                 .unwrap_or(1.0);
+            src.note(&[scale], 1.0);
             let inner = child(f, "function").and_then(|g| g.children().find(|c| c.is_element()));
             match inner {
                 Some(g) => eval(src, g, x)?.map(|(v, l)| (scale * v, l)),
@@ -254,6 +256,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                     .and_then(|v| v.parse::<f64>().ok())
                     .filter(|v| v.is_finite())
                     .unwrap_or(0.0);
+                src.note(&[v], 1.0);
                 coords.push((c.attribute("name").unwrap_or("").to_string(), v));
                 if text_of(c, "locked") == Some("true") {
                     let loc = src.loc(c);

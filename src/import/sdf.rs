@@ -108,12 +108,14 @@ fn parse_pose(src: &Src, p: Node) -> Result<Pose, ImportError> {
         }
         return Ok(pose([v[0], v[1], v[2]], UnitQuaternion::from_quaternion(q)));
     }
-    let v = src.nums_text(p, 6)?;
+    let v = src.nums_text_unnoted(p, 6)?;
     let k = if p.attribute("degrees") == Some("true") {
         std::f64::consts::PI / 180.0
     } else {
         1.0
     };
+    src.note(&v[..3], 1.0);
+    src.note(&v[3..], k);
     Ok(pose([v[0], v[1], v[2]], rpy(v[3] * k, v[4] * k, v[5] * k)))
 }
 

@@ -531,3 +531,65 @@ fn osim_coupled_custom_joint_is_reported_and_mapped_to_its_independent_coordinat
     );
     assert_eq!(m.inputs(), 2);
 }
+
+/// The imported file's `precision`: the coarsest rounding of the source numbers read for the
+/// geometry (angles in degrees converted to radians; a site only when a closure uses it),
+/// at least the ±5e-11 of the importer's own 10 decimals; never the digits of the sums it
+/// writes (0.1 + 0.0092 = 0.1092 is exact here).
+#[test]
+fn precision_comes_from_the_source_numbers() {
+    let p = |i: &Import| i.mechanism.precision.expect("the import writes precision");
+    let exact = mjcf(
+        "<mujoco><worldbody><body pos=\"0.1 0 0\"><joint type=\"hinge\"/>\
+         <body pos=\"0.0092 0 0\"><joint type=\"hinge\"/></body></body></worldbody></mujoco>",
+    );
+    assert!(
+        exact.toml.contains("origin = [0.1092, 0, 0]"),
+        "{}",
+        exact.toml
+    );
+    assert_eq!(p(&exact), 0.0, "{}", exact.toml);
+    // 6 decimals of a quaternion; the composed axes are rounded to 10 decimals.
+    let cad = mjcf(
+        "<mujoco><worldbody><body quat=\"0.965926 0 0 -0.258819\"><joint type=\"hinge\" \
+         axis=\"1 0 0\"/></body></worldbody></mujoco>",
+    );
+    assert_eq!(p(&cad), 5e-7, "{}", cad.toml);
+    let rotated = mjcf(
+        "<mujoco><worldbody><body euler=\"0 0 30\"><joint type=\"hinge\" axis=\"1 0 0\"/>\
+         </body></worldbody></mujoco>",
+    );
+    assert_eq!(p(&rotated), 5e-11, "{}", rotated.toml);
+    // 30.25 degrees: ±0.005° = ±8.73e-5 rad.
+    let degrees = mjcf(
+        "<mujoco><worldbody><body euler=\"0 0 30.25\"><joint type=\"hinge\"/>\
+         </body></worldbody></mujoco>",
+    );
+    assert_eq!(p(&degrees), 8.73e-5, "{}", degrees.toml);
+    // A sensor site with 4-digit numbers counts only when a connect uses it.
+    let site = |connect: &str| {
+        mjcf(&format!(
+            "<mujoco><worldbody><body name=\"a\"><joint type=\"hinge\"/>\
+             <site name=\"s\" pos=\"0.1234 0 0\"/></body>\
+             <body name=\"b\"><joint type=\"hinge\"/><site name=\"t\" pos=\"0.1234 0 0\"/>\
+             </body></worldbody>{connect}</mujoco>"
+        ))
+    };
+    assert_eq!(p(&site("")), 0.0);
+    let used = site("<equality><connect site1=\"s\" site2=\"t\"/></equality>");
+    assert_eq!(p(&used), 5e-5, "{}", used.toml);
+    // URDF and SDFormat (degrees too).
+    let urdf = import_str(
+        "t.urdf",
+        "<robot name=\"r\"><link name=\"a\"/><link name=\"b\"/><joint name=\"j\" \
+         type=\"revolute\"><parent link=\"a\"/><child link=\"b\"/>\
+         <origin xyz=\"0.05 0 0.1225\" rpy=\"0 0 0\"/><axis xyz=\"0 0 1\"/></joint></robot>",
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(p(&urdf), 5e-5, "{}", urdf.toml);
+    assert_eq!(precision_text(0.5 * 10f64.powi(-6)), "5e-7");
+    assert_eq!(precision_text(0.005f64.to_radians()), "8.73e-5");
+    assert_eq!(precision_text(0.0), "0");
+}
