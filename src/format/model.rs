@@ -371,33 +371,20 @@ pub(crate) fn build<'a>(
 }
 
 /// The `precision` key: how precisely every geometry number is known (±, file units), a
-/// finite number >= 0 (at most [`MAX_GEOMETRY_NUMBER`], as the numbers it qualifies).
+/// geometry number ([`as_number`]: finite, at most [`MAX_GEOMETRY_NUMBER`]) that is >= 0.
 fn parse_precision(node: &Node) -> Result<f64, LoadError> {
-    let what = "`precision`";
-    let help = "`precision` is how precisely the geometry numbers are known (±, in file units), \
-                e.g. precision = 5e-7; leave it out to judge the numbers by their written digits";
-    let x = match &node.value {
-        Value::Int(i) => *i as f64,
-        Value::Float(f) => *f,
-        Value::BigInt(_) => return Err(out_of_range(node, what)),
-        _ => return Err(wrong_type(node, "a number", what)),
-    };
-    if !x.is_finite() {
-        return Err(err(
-            ErrorKind::NonFinite,
-            format!("{what} must be a finite number >= 0, not {x}"),
-            &node.span,
-            "not finite",
-            Some(help.into()),
-        ));
-    }
-    if !(0.0..=MAX_GEOMETRY_NUMBER).contains(&x) {
+    let x = as_number(node, "`precision`")?;
+    if x < 0.0 {
         return Err(err(
             ErrorKind::NumberOutOfRange,
-            format!("{what} must be a number from 0 to 1e100, not {x:e}"),
+            format!("`precision` must be a number >= 0, not {x:e}"),
             &node.span,
-            if x < 0.0 { "negative" } else { "too large" },
-            Some(help.into()),
+            "negative",
+            Some(
+                "`precision` is how precisely the geometry numbers are known (±, in file units), \
+                 e.g. precision = 5e-7; leave it out to judge the numbers by their written digits"
+                    .into(),
+            ),
         ));
     }
     Ok(x)
