@@ -1452,6 +1452,7 @@ fn analyze_models(
             float_rank += out.rank;
             kept_min = kept_min.min(out.kept_min);
             dropped_max = dropped_max.max(out.dropped_max);
+            stress_residual = stress_residual.max(out.stress_residual);
             continue;
         }
         budget.check_memory(

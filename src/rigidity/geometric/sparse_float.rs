@@ -158,6 +158,9 @@ pub(super) struct SparseOut {
     /// Smallest pivot kept and largest dropped, on the report's scale (× σ_max / σ_max,local).
     pub kept_min: f64,
     pub dropped_max: f64,
+    /// Largest ‖yᵀA‖ of the unit self-stresses y the weights come from, on the report's scale
+    /// (as the pivots): 0 without self-stresses.
+    pub stress_residual: f64,
 }
 
 impl SparsePart<'_> {
@@ -337,7 +340,7 @@ impl SparsePart<'_> {
             blk
         };
         let unscale = |pi: usize, i: usize| rownorm.get(&pi).map_or(1.0, |v| v[i]);
-        self.stresses(
+        let stress_residual = self.stresses(
             &lgroup,
             &scaled_block,
             &unscale,
@@ -459,6 +462,7 @@ impl SparsePart<'_> {
             rank,
             kept_min: kept * scale,
             dropped_max: dropped * scale,
+            stress_residual: stress_residual * scale,
         })
     }
 
@@ -466,6 +470,11 @@ impl SparsePart<'_> {
     /// unknowns), each joint's share added to `w`: the sum over `s` unit random stresses,
     /// times `e / s` (`e` stresses in all) so that it estimates the dense path's share over an
     /// orthonormal basis (exact when `s = e` and the stresses are orthogonal).
+    ///
+    /// Returns the largest residual ‖y'ᵀA'‖ of the sampled stresses y' of the scaled rows A'
+    /// (each y' of unit norm; 0 when there are none), on the part's own scale: a stress of the
+    /// scaled rows is one of the original rows (y = D·y' gives yᵀA = y'ᵀA'), and the caller
+    /// puts the residual on the report's scale, as it does the pivots.
     #[allow(clippy::too_many_arguments)]
     fn stresses(
         &self,
@@ -477,7 +486,7 @@ impl SparsePart<'_> {
         budget: &Budget,
         meter: &mut Meter,
         w: &mut BTreeMap<usize, f64>,
-    ) -> Result<(), BudgetExceeded> {
+    ) -> Result<f64, BudgetExceeded> {
         let (part, pairs) = (self.part, self.pairs);
         let psizes: Vec<usize> = part
             .pairs
@@ -486,7 +495,7 @@ impl SparsePart<'_> {
             .collect();
         let prow: usize = psizes.iter().sum();
         if prow <= rank {
-            return Ok(());
+            return Ok(0.0);
         }
         let mut poff = Vec::with_capacity(psizes.len());
         let mut acc = 0;
@@ -506,10 +515,13 @@ impl SparsePart<'_> {
             }
         }
         let mut tblocks = Vec::with_capacity(ngroups);
+        let mut tentries = 0u64;
         for (g, &body) in self.groups.iter().enumerate() {
             let s = self.sizes[g];
-            let ps = std::mem::take(&mut linc[g]);
+            // Kept for the residual check below.
+            let ps = linc[g].clone();
             let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+            tentries = tentries.saturating_add((s * width) as u64);
             let mut mat = DMatrix::zeros(s, width);
             let mut c = 0;
             for &lp in &ps {
@@ -524,7 +536,7 @@ impl SparsePart<'_> {
         let e = prow.saturating_sub(telim.rank);
         let s = e.min(STRESS_SAMPLES);
         if s == 0 {
-            return Ok(());
+            return Ok(0.0);
         }
         budget.check_memory((prow as u64).saturating_mul(s as u64 * 8), || {
             format!(
@@ -535,6 +547,30 @@ impl SparsePart<'_> {
         meter.charge(telim.factor_entries().saturating_mul(s as u64 + 1))?;
         let seed = part.pairs.first().copied().unwrap_or(0) as u64;
         let mut y = telim.random_null_vectors(s, 0x7374_7265_7373 ^ seed);
+        drop(telim);
+        // Each stress's residual, group by group: the blocks again, transposed, times y'
+        // (the elimination's own blocks are gone; rebuilding them costs what building did).
+        meter.charge(tentries.saturating_mul(s as u64 + 1))?;
+        let mut res2 = vec![0.0f64; s];
+        for (g, &body) in self.groups.iter().enumerate() {
+            let mut acc = DMatrix::<f64>::zeros(self.sizes[g], s);
+            for &lp in &linc[g] {
+                let blk = local_block(part.pairs[lp], body);
+                let yl = y.rows(poff[lp], psizes[lp]);
+                acc += blk.transpose() * yl;
+            }
+            for (j, r) in res2.iter_mut().enumerate() {
+                *r += acc.column(j).norm_squared();
+            }
+        }
+        let residual = res2
+            .iter()
+            .enumerate()
+            .map(|(j, &r)| {
+                let n = y.column(j).norm();
+                if n > 0.0 { r.sqrt() / n } else { 0.0 }
+            })
+            .fold(0.0, f64::max);
         // Back to the original rows' stresses: y = D·y', D = 1 / row norms.
         for (lp, &pi) in part.pairs.iter().enumerate() {
             for i in 0..psizes[lp] {
@@ -553,6 +589,6 @@ impl SparsePart<'_> {
                 *w.entry(pairs[pi].joint).or_insert(0.0) += v * factor;
             }
         }
-        Ok(())
+        Ok(residual)
     }
 }
