@@ -142,16 +142,21 @@ pub(crate) struct JointReader<'a> {
     pool: Vec<Vec<Node<'a>>>,
 }
 
+/// An empty table node (its entries' vector sized for a joint's few keys).
+fn table_node<'a>() -> Node<'a> {
+    Node {
+        span: 0..0,
+        value: Value::Map(Vec::with_capacity(4)),
+    }
+}
+
 impl<'a> JointReader<'a> {
     /// A reader of the tables `joints` of `text` (as [`parse`] found them).
     pub(crate) fn new(text: &'a str, joints: JointTables) -> JointReader<'a> {
         JointReader {
             text,
             next: (joints.count > 0).then_some(joints.first),
-            node: Node {
-                span: 0..0,
-                value: Value::Map(Vec::with_capacity(8)),
-            },
+            node: table_node(),
             pool: Vec::new(),
         }
     }
@@ -159,7 +164,26 @@ impl<'a> JointReader<'a> {
     /// The next joint table (`Some(None)` after the last); `None` at a line the fast path
     /// does not read, or a key given twice.
     pub(crate) fn next_table(&mut self) -> Option<Option<&Node<'a>>> {
-        let Value::Map(entries) = &mut self.node.value else {
+        let mut node = std::mem::replace(
+            &mut self.node,
+            Node {
+                span: 0..0,
+                value: Value::Null,
+            },
+        );
+        let read = self.read_into(&mut node);
+        self.node = node;
+        match read? {
+            true => Some(Some(&self.node)),
+            false => Some(None),
+        }
+    }
+
+    /// The next joint table read into `node` (a table node from [`table_node`], maybe holding
+    /// an earlier table: its arrays go to the pool): `Some(true)`, or `Some(false)` after the
+    /// last table; `None` as in [`JointReader::next_table`].
+    fn read_into(&mut self, node: &mut Node<'a>) -> Option<bool> {
+        let Value::Map(entries) = &mut node.value else {
             return None;
         };
         for e in entries.drain(..) {
@@ -169,11 +193,11 @@ impl<'a> JointReader<'a> {
             }
         }
         let Some(header) = self.next else {
-            return Some(None);
+            return Some(false);
         };
         let text = self.text;
         let bytes = text.as_bytes();
-        self.node.span = header..header + JOINT.len();
+        node.span = header..header + JOINT.len();
         let mut pos = line_break(bytes, header) + 1;
         self.next = loop {
             if pos >= bytes.len() {
@@ -200,7 +224,175 @@ impl<'a> JointReader<'a> {
             }
             pos = end + 1;
         };
-        Some(Some(&self.node))
+        Some(true)
+    }
+}
+
+/// Files with at least this many joint tables are read on two threads ([`for_each_table`]):
+/// below it the thread and its batches (about 0.7 MB of nodes) cost more than they save.
+const PIPELINE_MIN: usize = 1 << 16;
+
+/// Tables handed from the reading thread to the model at a time (larger batches wake the
+/// other thread less often, but their nodes leave the cache before they are read).
+const BATCH: usize = 512;
+
+/// Batches in flight (filled or being filled, handed back empty).
+const BATCHES: usize = 3;
+
+/// How a batch ends.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum BatchEnd {
+    /// More tables follow in the next batch.
+    More,
+    /// The last table is in this batch.
+    Last,
+    /// The reader declined after the tables of this batch.
+    Declined,
+}
+
+/// Tables read by the reading thread: `nodes[..len]`, in file order.
+struct Batch<'a> {
+    nodes: Vec<Node<'a>>,
+    len: usize,
+    end: BatchEnd,
+}
+
+/// Why [`for_each_table`] stopped early.
+pub(crate) enum Stopped<E> {
+    /// The reader declined a table (the caller reads the text again).
+    Declined,
+    /// `f` gave an error.
+    Failed(E),
+}
+
+/// `f` on every `[[joint]]` table of `text` (as [`parse`] found them), in order; stops at
+/// `f`'s first error or where the reader declines. With many tables and two cores the tables
+/// are read (the line reader: about half of the read) on a second thread while `f` runs on
+/// this one, in batches of [`BATCH`] nodes that go back and forth, so that no node or array
+/// is allocated per table. The outcome is the serial one: the same tables in the same order,
+/// and a decline anywhere before `f`'s first error declines (`f` is never called past the
+/// declined table, nor past its own error).
+pub(crate) fn for_each_table<'a, E>(
+    text: &'a str,
+    joints: JointTables,
+    f: &mut dyn FnMut(&Node<'a>) -> Result<(), E>,
+) -> Result<(), Stopped<E>> {
+    for_each_table_from(text, joints, PIPELINE_MIN, f)
+}
+
+/// [`for_each_table`], on two threads from `min_tables` tables on.
+fn for_each_table_from<'a, E>(
+    text: &'a str,
+    joints: JointTables,
+    min_tables: usize,
+    f: &mut dyn FnMut(&Node<'a>) -> Result<(), E>,
+) -> Result<(), Stopped<E>> {
+    let parallel = joints.count >= min_tables
+        && std::thread::available_parallelism().is_ok_and(|n| n.get() > 1);
+    if !parallel {
+        return for_each_serial(text, joints, f);
+    }
+    use std::sync::mpsc::sync_channel;
+    let (full_tx, full_rx) = sync_channel::<Batch<'a>>(BATCHES);
+    let (empty_tx, empty_rx) = sync_channel::<Batch<'a>>(BATCHES);
+    for _ in 0..BATCHES {
+        let batch = Batch {
+            nodes: Vec::with_capacity(BATCH),
+            len: 0,
+            end: BatchEnd::More,
+        };
+        if empty_tx.send(batch).is_err() {
+            return for_each_serial(text, joints, f);
+        }
+    }
+    std::thread::scope(|s| {
+        let reading = std::thread::Builder::new()
+            .name("mbsa-toml".into())
+            .spawn_scoped(s, move || read_batches(text, joints, &empty_rx, &full_tx));
+        if reading.is_err() {
+            // No thread (resources): read here.
+            return for_each_serial(text, joints, f);
+        }
+        // Both channel ends owned here: dropped when the model stops, which ends the reading
+        // thread wherever it waits (a send or a receive then fails).
+        consume_batches(full_rx, empty_tx, f)
+    })
+}
+
+/// The tables read on this thread.
+fn for_each_serial<'a, E>(
+    text: &'a str,
+    joints: JointTables,
+    f: &mut dyn FnMut(&Node<'a>) -> Result<(), E>,
+) -> Result<(), Stopped<E>> {
+    let mut reader = JointReader::new(text, joints);
+    loop {
+        match reader.next_table() {
+            Some(Some(table)) => f(table).map_err(Stopped::Failed)?,
+            Some(None) => return Ok(()),
+            None => return Err(Stopped::Declined),
+        }
+    }
+}
+
+/// The reading thread of [`for_each_table`]: empty batches in, filled batches out, until the
+/// last table, a decline, or the model's side hangs up.
+fn read_batches<'a>(
+    text: &'a str,
+    joints: JointTables,
+    empty: &std::sync::mpsc::Receiver<Batch<'a>>,
+    full: &std::sync::mpsc::SyncSender<Batch<'a>>,
+) {
+    let mut reader = JointReader::new(text, joints);
+    while let Ok(mut batch) = empty.recv() {
+        batch.len = 0;
+        batch.end = BatchEnd::More;
+        while batch.len < BATCH {
+            if batch.len == batch.nodes.len() {
+                batch.nodes.push(table_node());
+            }
+            match reader.read_into(&mut batch.nodes[batch.len]) {
+                Some(true) => batch.len += 1,
+                Some(false) => {
+                    batch.end = BatchEnd::Last;
+                    break;
+                }
+                None => {
+                    batch.end = BatchEnd::Declined;
+                    break;
+                }
+            }
+        }
+        let end = batch.end;
+        if full.send(batch).is_err() || end != BatchEnd::More {
+            return;
+        }
+    }
+}
+
+/// The model's side of [`for_each_table`]: `f` on the tables of each filled batch, the batch
+/// handed back to be filled again.
+fn consume_batches<'a, E>(
+    full: std::sync::mpsc::Receiver<Batch<'a>>,
+    empty: std::sync::mpsc::SyncSender<Batch<'a>>,
+    f: &mut dyn FnMut(&Node<'a>) -> Result<(), E>,
+) -> Result<(), Stopped<E>> {
+    loop {
+        // The reading thread gone without its last batch: cannot happen short of a panic
+        // there; read again by the caller's other readers.
+        let Ok(batch) = full.recv() else {
+            return Err(Stopped::Declined);
+        };
+        for table in &batch.nodes[..batch.len] {
+            f(table).map_err(Stopped::Failed)?;
+        }
+        match batch.end {
+            BatchEnd::More => {}
+            BatchEnd::Last => return Ok(()),
+            BatchEnd::Declined => return Err(Stopped::Declined),
+        }
+        // The reading thread may have stopped already (it never does before `Last`).
+        let _ = empty.send(batch);
     }
 }
 
@@ -247,8 +439,44 @@ fn next_joint_header(bytes: &[u8], mut at: usize) -> Option<usize> {
     }
 }
 
+/// Byte classes for the scans below: one table lookup a byte instead of a chain of
+/// comparisons (the key and token scans were a fifth of the line reader's instructions).
+const KEY: u8 = 1;
+/// Ends a bare scalar token: blank, `,`, `]`, `#`, `\r`, `\n`.
+const TOKEN_END: u8 = 2;
+/// A blank: space or tab.
+const BLANK: u8 = 4;
+
+static CLASS: [u8; 256] = {
+    let mut t = [0u8; 256];
+    let mut b = 0;
+    while b < 256 {
+        let c = b as u8;
+        if c.is_ascii_alphanumeric() || c == b'_' || c == b'-' {
+            t[b] |= KEY;
+        }
+        if matches!(c, b' ' | b'\t' | b',' | b']' | b'#' | b'\r' | b'\n') {
+            t[b] |= TOKEN_END;
+        }
+        if matches!(c, b' ' | b'\t') {
+            t[b] |= BLANK;
+        }
+        b += 1;
+    }
+    t
+};
+
+/// Whether byte `i` (below `end`) is of class `class`; `false` at or past `end`.
+#[inline]
+fn is(bytes: &[u8], i: usize, end: usize, class: u8) -> bool {
+    i < end
+        && bytes
+            .get(i)
+            .is_some_and(|&b| CLASS[usize::from(b)] & class != 0)
+}
+
 fn skip_ws(bytes: &[u8], mut i: usize, end: usize) -> usize {
-    while i < end && matches!(bytes[i], b' ' | b'\t') {
+    while is(bytes, i, end, BLANK) {
         i += 1;
     }
     i
@@ -283,7 +511,7 @@ fn line_end(bytes: &[u8], from: usize, end: usize) -> Option<usize> {
 /// A bare key at `from`: its span and where it ends.
 fn bare_key(bytes: &[u8], from: usize, end: usize) -> Option<(Range<usize>, usize)> {
     let mut i = from;
-    while i < end && matches!(bytes[i], b'A'..=b'Z' | b'a'..=b'z' | b'0'..=b'9' | b'_' | b'-') {
+    while is(bytes, i, end, KEY) {
         i += 1;
     }
     (i > from).then_some((from..i, i))
@@ -407,7 +635,7 @@ fn scalar(text: &str, at: usize, end: usize) -> Option<(Node<'_>, usize)> {
         ));
     }
     let mut i = at;
-    while i < end && !matches!(bytes[i], b' ' | b'\t' | b',' | b']' | b'#' | b'\r' | b'\n') {
+    while i < end && !is(bytes, i, end, TOKEN_END) {
         i += 1;
     }
     let token = &text[at..i];
@@ -577,6 +805,77 @@ mod tests {
         ];
         for text in cases {
             assert!(whole(text).is_none(), "{text:?}");
+        }
+    }
+
+    /// Every table [`for_each_table`] hands over, cloned, and how it stopped (`Err(None)`: a
+    /// decline; `Err(Some(k))`: `f` failed at table `k`, when `fail_at` is `Some(k)`).
+    fn tables(text: &str, fail_at: Option<usize>) -> (Vec<Node<'_>>, Result<(), Option<usize>>) {
+        let (_, joints) = parse(text).expect("the fast path reads the head");
+        let mut seen = Vec::new();
+        // A low threshold: the test's file need not have 65,536 joints.
+        let stopped = for_each_table_from(text, joints, 2 * BATCH, &mut |t: &Node<'_>| {
+            if fail_at == Some(seen.len()) {
+                return Err(seen.len());
+            }
+            seen.push(t.clone());
+            Ok(())
+        });
+        let stopped = stopped.map_err(|s| match s {
+            Stopped::Declined => None,
+            Stopped::Failed(k) => Some(k),
+        });
+        (seen, stopped)
+    }
+
+    /// The serial reader's tables, and where it declines (its table count then).
+    fn serial_tables(text: &str) -> (Vec<Node<'_>>, bool) {
+        let (_, joints) = parse(text).expect("the fast path reads the head");
+        let mut reader = JointReader::new(text, joints);
+        let mut out = Vec::new();
+        loop {
+            match reader.next_table() {
+                Some(Some(t)) => out.push(t.clone()),
+                Some(None) => return (out, false),
+                None => return (out, true),
+            }
+        }
+    }
+
+    /// Many tables are read on a second thread: the same tables in the same order as the
+    /// serial reader, the same decline at the same table, and a stop at the model's error
+    /// (without waiting on the reading thread, which may be ahead).
+    #[test]
+    fn two_threads_read_what_one_reads() {
+        let m = crate::generate::random(2500, false, 11).unwrap().0;
+        let text = crate::generate::to_toml(&m);
+        let (_, joints) = parse(&text).unwrap();
+        assert!(joints.count >= 8 * BATCH, "{} joints", joints.count);
+        let (serial, declined) = serial_tables(&text);
+        assert!(!declined);
+        assert_eq!(tables(&text, None), (serial.clone(), Ok(())));
+        // The model's error at the first table, inside a batch, at a batch's end, the last.
+        for k in [0, 7, BATCH - 1, BATCH, joints.count - 1] {
+            let (seen, stopped) = tables(&text, Some(k));
+            assert_eq!(stopped, Err(Some(k)));
+            assert_eq!(seen[..], serial[..k]);
+        }
+        // A line the fast path does not read, in the first, a middle and the last table.
+        let starts: Vec<usize> = text.match_indices("[[joint]]\n").map(|(i, _)| i).collect();
+        for k in [0, BATCH, BATCH + 1, 3 * BATCH - 1, starts.len() - 1] {
+            let at = starts[k] + "[[joint]]\n".len();
+            let bad = format!("{}x = 'literal'\n{}", &text[..at], &text[at..]);
+            let (serial_bad, declined) = serial_tables(&bad);
+            assert!(declined);
+            assert_eq!(serial_bad.len(), k);
+            let (seen, stopped) = tables(&bad, None);
+            assert_eq!(stopped, Err(None));
+            assert_eq!(seen, serial_bad);
+            // The model's error before the decline comes first; after it, the decline.
+            if k > 0 {
+                assert_eq!(tables(&bad, Some(k - 1)).1, Err(Some(k - 1)));
+            }
+            assert_eq!(tables(&bad, Some(k + 1)).1, Err(None));
         }
     }
 

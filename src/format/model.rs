@@ -1236,18 +1236,34 @@ fn push_id(out: &mut String, i: usize, b: &BodyId) {
     }
 }
 
+/// `00` to `99`, two bytes each.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
 /// Append the decimal digits of `n` (as `n.to_string()`).
 fn push_int(out: &mut String, n: i64) {
     let mut digits = [0u8; 20];
     let mut at = digits.len();
     let mut m = n.unsigned_abs();
-    loop {
+    // Two digits a step (half the divisions; body ids have about six digits).
+    while m >= 100 {
+        let pair = usize::try_from(m % 100).unwrap_or_default();
+        m /= 100;
+        at -= 2;
+        digits[at] = PAIRS[2 * pair];
+        digits[at + 1] = PAIRS[2 * pair + 1];
+    }
+    if m >= 10 {
+        let pair = usize::try_from(m).unwrap_or_default();
+        at -= 2;
+        digits[at] = PAIRS[2 * pair];
+        digits[at + 1] = PAIRS[2 * pair + 1];
+    } else {
         at -= 1;
-        digits[at] = b'0' + (m % 10) as u8;
-        m /= 10;
-        if m == 0 {
-            break;
-        }
+        digits[at] = b'0' + m as u8;
     }
     if n < 0 {
         out.push('-');
@@ -1889,7 +1905,12 @@ mod fast_tests {
 
     #[test]
     fn push_int_is_to_string() {
-        for n in [0, 1, -1, 9, 10, -10, 12345, i64::MAX, i64::MIN, 1_000_000] {
+        let around_powers = (0..19).flat_map(|e| {
+            let p = 10i64.pow(e);
+            [p - 1, p, p + 1, -p, p.saturating_mul(11)]
+        });
+        let values = [0, 1, -1, 9, 10, -10, 12345, i64::MAX, i64::MIN, 1_000_000];
+        for n in values.into_iter().chain(around_powers).chain(-1000..1000) {
             let mut s = String::from("x");
             push_int(&mut s, n);
             assert_eq!(s, format!("x{n}"));

@@ -269,14 +269,11 @@ impl<'a> Lazy<'a> {
                 failed.map_or(Ok(()), Err)
             }
             (Value::Deferred, Lazy::TomlLines { text, joints }) => {
-                let mut reader = super::fast_toml::JointReader::new(text, joints);
-                loop {
-                    match reader.next_table() {
-                        Some(Some(item)) => f(item)?,
-                        Some(None) => return Ok(()),
-                        None => return Err(syntax("TOML", "read again", 0..0, "here")),
-                    }
-                }
+                use super::fast_toml::{Stopped, for_each_table};
+                for_each_table(text, joints, f).map_err(|stopped| match stopped {
+                    Stopped::Failed(e) => e,
+                    Stopped::Declined => syntax("TOML", "read again", 0..0, "here"),
+                })
             }
             (Value::Deferred, Lazy::Yaml { text }) => yaml_joint_items(text, f),
             (Value::Deferred, Lazy::YamlLines { mut items, .. }) => loop {
