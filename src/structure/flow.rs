@@ -701,12 +701,26 @@ impl Network {
         let mut seen = vec![false; self.nodes()];
         let mut stack = vec![t];
         seen[t] = true;
+        // In a network `three_layer` built, an edge between two left or right nodes (a
+        // middle edge or its pair) and its pair hold [`INF`] together (see `greedy`): the
+        // pair's residual is read off the edge itself, not where the pair lies in the edge
+        // array (a scattered read an edge, at every body the search visits).
+        let three_layer = self.nl > 0;
         while let Some(v) = stack.pop() {
             self.scan(self.degree(v));
             for e in self.all_edges(v) {
                 // Edge e goes v -> u; its pair goes u -> v.
                 let u = self.head(e);
-                if !seen[u] && self.reverse_residual(e) > 0 {
+                if seen[u] {
+                    continue;
+                }
+                let back = if three_layer && v >= 2 && u >= 2 {
+                    INF - self.residual(e)
+                } else {
+                    self.reverse_residual(e)
+                };
+                debug_assert_eq!(back, self.reverse_residual(e), "edge {e}");
+                if back > 0 {
                     seen[u] = true;
                     stack.push(u);
                 }
