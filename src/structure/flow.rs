@@ -112,6 +112,32 @@ impl Network {
         ends: impl Fn(usize) -> [u32; 2],
         right: &[u32],
     ) -> Network {
+        Network::build_three_layer(left, ends, right, false).0
+    }
+
+    /// [`Network::three_layer`] with the greedy start of [`Network::max_flow_cut`] (from
+    /// node 0 to node 1) pushed while it is built, and its value: the network in the state
+    /// `three_layer` then the greedy start leave, every residual capacity equal. The greedy
+    /// start visits the left nodes in order and each one's edges in order, the order the
+    /// build writes them in, so each middle edge is written once with its flow (the greedy
+    /// start read the edges again and wrote every middle edge's pair, at the body, a second
+    /// time: a scattered write in the edge array each). Finish with
+    /// [`Network::max_flow_after_greedy`].
+    pub(crate) fn three_layer_greedy(
+        left: &[u32],
+        ends: impl Fn(usize) -> [u32; 2],
+        right: &[u32],
+    ) -> (Network, u64) {
+        Network::build_three_layer(left, ends, right, true)
+    }
+
+    /// [`Network::three_layer`], and with `greedy` [`Network::three_layer_greedy`].
+    fn build_three_layer(
+        left: &[u32],
+        ends: impl Fn(usize) -> [u32; 2],
+        right: &[u32],
+        greedy: bool,
+    ) -> (Network, u64) {
         const NONE: u32 = u32::MAX;
         let (nl, nr) = (left.len(), right.len());
         let n = 2 + nl + nr;
@@ -144,45 +170,77 @@ impl Network {
         }
         let m = start[n] as usize;
         let mut arc = vec![Arc::default(); m + nl];
-        for (a, &c) in arc[m..].iter_mut().zip(left) {
-            *a = Arc { to: c, cap: 0 };
-        }
         let mut rev = vec![0u32; m];
-        // Next free slot of each right node (the left nodes' slots are written in order).
-        let mut fill: Vec<u32> = start[2 + nl..2 + nl + nr].to_vec();
-        let pair = |arc: &mut [Arc], rev: &mut [u32], a: u32, b: u32, to: u32, from: u32, c| {
-            arc[a as usize] = Arc { to, cap: c };
-            rev[a as usize] = b;
-            arc[b as usize] = Arc { to: from, cap: 0 };
-            rev[b as usize] = a;
-        };
-        for i in 0..nl {
+        // Per right node: its next free slot (the left nodes' slots are written in order)
+        // and, for the greedy start, the residual capacity of its edge to t (0: none), side
+        // by side (one scattered read for both).
+        let mut fill: Vec<[u32; 2]> = start[2 + nl..2 + nl + nr]
+            .iter()
+            .zip(right)
+            .map(|(&f, &c)| [f, if greedy && c != NONE { c } else { 0 }])
+            .collect();
+        // An edge with residual `c` and its pair with residual `back`.
+        let pair =
+            |arc: &mut [Arc], rev: &mut [u32], a: u32, b: u32, to: u32, from: u32, c, back| {
+                arc[a as usize] = Arc { to, cap: c };
+                rev[a as usize] = b;
+                arc[b as usize] = Arc {
+                    to: from,
+                    cap: back,
+                };
+                rev[b as usize] = a;
+            };
+        let mut total = 0u64;
+        for (i, &c) in left.iter().enumerate() {
             let x = (2 + i) as u32;
             let mut a = start[2 + i];
+            // The greedy start's pushes from this left node: as much as its source edge
+            // still carries and the right node's edge to t takes, edge by edge.
+            let mut rest = c;
             for j in ends(i) {
                 if j != NONE {
-                    let b = fill[j as usize];
-                    fill[j as usize] += 1;
-                    pair(&mut arc, &mut rev, a, b, rnode(j) as u32, x, INF);
+                    let [b, room] = &mut fill[j as usize];
+                    let d = rest.min(INF).min(*room);
+                    *room -= d;
+                    rest -= d;
+                    pair(&mut arc, &mut rev, a, *b, rnode(j) as u32, x, INF - d, d);
+                    *b += 1;
                     a += 1;
                 }
             }
+            total += u64::from(c - rest);
+            // Node 0's edge to `x` and back: residual `rest`, flow `c - rest`.
+            arc[m + i] = Arc {
+                to: rest,
+                cap: c - rest,
+            };
         }
         let mut b = start[1];
         for (j, &c) in right.iter().enumerate() {
             if c != NONE {
-                let a = fill[j];
-                pair(&mut arc, &mut rev, a, b, 1, rnode(j as u32) as u32, c);
+                let [a, room] = fill[j];
+                let room = if greedy { room } else { c };
+                pair(
+                    &mut arc,
+                    &mut rev,
+                    a,
+                    b,
+                    1,
+                    rnode(j as u32) as u32,
+                    room,
+                    c - room,
+                );
                 b += 1;
             }
         }
-        Network {
+        let net = Network {
             start,
             arc,
             rev,
             nl,
             scanned: std::cell::Cell::new(0),
-        }
+        };
+        (net, total)
     }
 
     /// Edges examined by the searches that answer a set of nodes so far.
@@ -342,7 +400,9 @@ impl Network {
     /// less the edge's residual. Written in edge order: the edges are read front to back and
     /// their pairs are only stored to, where each path read and wrote its pair at the body (a
     /// scattered read and write in the 140 MB edge array at 10^6 bodies).
-    fn greedy(&mut self, s: usize, t: usize) -> u64 {
+    ///
+    /// Returns the units it pushed.
+    pub(crate) fn greedy(&mut self, s: usize, t: usize) -> u64 {
         const NONE: u32 = u32::MAX;
         let deferred = s != t
             && self.all_edges(s).all(|e| self.head(e) != t)
@@ -441,9 +501,21 @@ impl Network {
     /// augmenting path, so a few phases finish the flow the greedy start leaves (the previous
     /// method ran one search per missing unit of flow).
     pub(crate) fn max_flow_cut(&mut self, s: usize, t: usize) -> (u64, Vec<bool>) {
+        let total = self.greedy(s, t);
+        self.max_flow_after_greedy(s, t, total)
+    }
+
+    /// [`Network::max_flow_cut`] after its greedy start has been pushed (by
+    /// [`Network::greedy`], or while [`Network::three_layer_greedy`] built the
+    /// network) and gave `total` units: Dinic's phases, and the nodes reachable from `s`.
+    pub(crate) fn max_flow_after_greedy(
+        &mut self,
+        s: usize,
+        t: usize,
+        mut total: u64,
+    ) -> (u64, Vec<bool>) {
         const UNSEEN: u32 = u32::MAX;
         let n = self.nodes();
-        let mut total = self.greedy(s, t);
         if s == t {
             return (total, self.reachable_from(s));
         }
@@ -591,6 +663,13 @@ impl Network {
         }
     }
 
+    /// The flow's value from node 0 of a network [`Network::three_layer`] built: what its
+    /// implicit source edges carry (0 for any other network).
+    pub(crate) fn source_outflow(&self) -> u64 {
+        let m = self.arc.len() - self.nl;
+        self.arc[m..].iter().map(|a| u64::from(a.cap)).sum()
+    }
+
     /// Nodes reachable from `s` through edges with residual capacity.
     pub(crate) fn reachable_from(&self, s: usize) -> Vec<bool> {
         let mut seen = vec![false; self.nodes()];
@@ -622,12 +701,26 @@ impl Network {
         let mut seen = vec![false; self.nodes()];
         let mut stack = vec![t];
         seen[t] = true;
+        // In a network `three_layer` built, an edge between two left or right nodes (a
+        // middle edge or its pair) and its pair hold [`INF`] together (see `greedy`): the
+        // pair's residual is read off the edge itself, not where the pair lies in the edge
+        // array (a scattered read an edge, at every body the search visits).
+        let three_layer = self.nl > 0;
         while let Some(v) = stack.pop() {
             self.scan(self.degree(v));
             for e in self.all_edges(v) {
                 // Edge e goes v -> u; its pair goes u -> v.
                 let u = self.head(e);
-                if !seen[u] && self.reverse_residual(e) > 0 {
+                if seen[u] {
+                    continue;
+                }
+                let back = if three_layer && v >= 2 && u >= 2 {
+                    INF - self.residual(e)
+                } else {
+                    self.reverse_residual(e)
+                };
+                debug_assert_eq!(back, self.reverse_residual(e), "edge {e}");
+                if back > 0 {
                     seen[u] = true;
                     stack.push(u);
                 }
@@ -1257,5 +1350,49 @@ mod tests {
             assert_eq!(total, refer, "warm {warm}");
             assert_eq!(listing(&net), listing(&want), "warm {warm}");
         }
+    }
+
+    /// The greedy start pushed while the network is built leaves the network `three_layer`
+    /// then the greedy start leave, residual for residual, with the same value; the rest of
+    /// the flow then finds the same flow, source side and searches (random three-layer
+    /// networks, some needing Dinic's phases after the greedy start, and the 3,000-node one
+    /// above, several left nodes to a right one).
+    #[test]
+    fn greedy_while_built_is_the_greedy_start() {
+        let mut rng = crate::rng::SplitMix64::new(23);
+        let mut phases = 0;
+        for round in 0..3000 {
+            let (left, ends, right, _) = random_three_layer(&mut rng);
+            let (mut got, total) = Network::three_layer_greedy(&left, |i| ends[i], &right);
+            let mut want = Network::three_layer(&left, |i| ends[i], &right);
+            assert_eq!(total, want.greedy(0, 1), "round {round}");
+            assert_eq!(listing(&got), listing(&want), "round {round}");
+            assert_eq!(got.source_outflow(), total, "round {round}");
+            let cut = got.max_flow_after_greedy(0, 1, total);
+            assert_eq!(
+                cut,
+                want.max_flow_after_greedy(0, 1, total),
+                "round {round}"
+            );
+            assert_eq!(listing(&got), listing(&want), "round {round}");
+            assert_eq!(got.scanned(), want.scanned(), "round {round}");
+            assert_eq!(got.source_outflow(), cut.0, "round {round}");
+            phases += usize::from(cut.0 > total);
+        }
+        assert!(
+            phases > 100,
+            "{phases} networks needed more than the greedy start"
+        );
+        let mut rng = crate::rng::SplitMix64::new(19);
+        let (l, r) = (3_000usize, 1_000usize);
+        let left: Vec<u32> = (0..l).map(|_| 1 + rng.below(6) as u32).collect();
+        let ends: Vec<[u32; 2]> = (0..l)
+            .map(|_| [rng.below(r as u64) as u32, rng.below(r as u64) as u32])
+            .collect();
+        let right = vec![6u32; r];
+        let (got, total) = Network::three_layer_greedy(&left, |i| ends[i], &right);
+        let mut want = Network::three_layer(&left, |i| ends[i], &right);
+        assert_eq!(total, want.greedy(0, 1));
+        assert_eq!(listing(&got), listing(&want));
     }
 }

@@ -18,7 +18,7 @@
 //! and the under block has full row rank, its rank is exactly `rows − surplus` =
 //! `unknowns − missing`: the per-block checks decide the whole mechanism.
 
-use super::count::{Decomposition, Equations, Part, decompose};
+use super::count::{Decomposition, Equations, FlowRound, Part, decompose_next};
 use super::{Isolated, Redundancy, Unchecked};
 use crate::elimination::{Block, Elimination};
 use crate::joint::JointType;
@@ -1839,9 +1839,15 @@ fn check_at(
     let mut work = 0u64;
     // Joints of deficits a second realization did not confirm (see [`check`]).
     let mut suspects: Vec<(usize, u64)> = Vec::new();
+    // The previous round's decomposition, and the pairs lowered since with their counts
+    // then: a later round's decomposition starts from what it found.
+    let mut prior: Option<FlowRound> = None;
+    let mut lowerings: Vec<(usize, u32)> = Vec::new();
     loop {
         rounds += 1;
-        let dec = decompose(m, eqs, u);
+        let (dec, round) = decompose_next(m, eqs, u, prior.as_ref().map(|r| (r, &lowerings[..])));
+        prior = round;
+        lowerings.clear();
         // Blocks in triangular order: over-determined part, groups, under-determined part.
         let over: Vec<usize> = (0..nb)
             .filter(|&x| dec.body_part[x] == Part::Over)
@@ -2263,6 +2269,7 @@ fn check_at(
                 continue;
             }
             let named: Vec<usize> = named.iter().map(|&(e, _)| e).collect();
+            lowerings.push((lowered, eqs.cap[lowered]));
             eqs.cap[lowered] = rows.nrows(lowered) as u32;
             if let Some(d) = rd.get_mut(lowered) {
                 *d = matrix_digest(&rows.get(lowered));
