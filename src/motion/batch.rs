@@ -1,7 +1,9 @@
 //! Many joints' constraint rows at once: the Gram-Schmidt steps of [`super::stack_model`] run
-//! for [`LANES`] joints in lockstep. Each step is one dependent chain of dot products per
-//! joint (its latency, not its arithmetic, was the cost); the lanes are independent chains,
-//! laid out lane-innermost so that one instruction serves several joints. Every lane does
+//! for [`LANES`] joints in lockstep ([`HALF`] for the jobs left over). Each step is one
+//! dependent chain of dot products per joint (its latency, not its arithmetic, was the cost);
+//! the lanes are independent chains, laid out lane-innermost so that one instruction serves
+//! several joints (eight lanes are four two-wide chains at once: four left the core waiting on
+//! the sums' latency more often). Every lane does
 //! the same operations in the same order as the one-joint code, so the rows are bit for bit
 //! those of [`super::pair_stack_model`] (tested against it and against `reference.rs`); a
 //! lane that leaves the common path (a vector dropped, a non-finite value) is computed again
@@ -15,16 +17,22 @@ use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
 use std::borrow::Borrow;
 
-/// Joints per lockstep step.
-const LANES: usize = 4;
+/// Joints per lockstep step where enough jobs share a length.
+const LANES: usize = 8;
 
-/// One coordinate of [`LANES`] vectors.
-type Lane = [f64; LANES];
+/// Joints per lockstep step for the jobs left over from groups of [`LANES`].
+const HALF: usize = 4;
 
-/// [`LANES`] vectors of the motion space, coordinate by coordinate (`v[x][lane]`).
-type Wide = [Lane; MAX_B];
+/// One coordinate of `L` vectors.
+type Lane<const L: usize> = [f64; L];
 
-const WIDE_ZERO: Wide = [[0.0; LANES]; MAX_B];
+/// `L` vectors of the motion space, coordinate by coordinate (`v[x][lane]`).
+type Wide<const L: usize> = [Lane<L>; MAX_B];
+
+/// `L` zero vectors.
+const fn wide_zero<const L: usize>() -> Wide<L> {
+    [[0.0; L]; MAX_B]
+}
 
 #[cfg(test)]
 thread_local! {
@@ -34,21 +42,30 @@ thread_local! {
 }
 
 #[cfg(test)]
+thread_local! {
+    /// Lockstep steps of [`LANES`] joints on this thread.
+    pub(super) static WIDE_STEPS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+#[cfg(test)]
 fn count(in_lanes: usize, single: usize) {
     RUNS.with(|c| {
         let [a, b] = c.get();
         c.set([a + in_lanes, b + single]);
     });
+    if in_lanes == LANES {
+        WIDE_STEPS.with(|c| c.set(c.get() + 1));
+    }
 }
 
 #[cfg(not(test))]
 fn count(_: usize, _: usize) {}
 
-fn wide_dot<const N: usize>(a: &Wide, b: &Wide) -> Lane {
+fn wide_dot<const N: usize, const L: usize>(a: &Wide<L>, b: &Wide<L>) -> Lane<L> {
     // The sum of each lane in index order from 0, as [`dot`].
-    let mut r = [0.0; LANES];
+    let mut r = [0.0; L];
     for (x, y) in a.iter().zip(b).take(N) {
-        for l in 0..LANES {
+        for l in 0..L {
             r[l] += x[l] * y[l];
         }
     }
@@ -56,31 +73,31 @@ fn wide_dot<const N: usize>(a: &Wide, b: &Wide) -> Lane {
 }
 
 /// `v -= q d` lane by lane (as the loops of [`super::project_out`]).
-fn wide_sub<const N: usize>(v: &mut Wide, q: &Wide, d: &Lane) {
+fn wide_sub<const N: usize, const L: usize>(v: &mut Wide<L>, q: &Wide<L>, d: &Lane<L>) {
     for (x, y) in v.iter_mut().zip(q).take(N) {
-        for l in 0..LANES {
+        for l in 0..L {
             x[l] -= y[l] * d[l];
         }
     }
 }
 
 /// [`super::project_out`] in lanes.
-fn wide_project_out<const N: usize>(v: &mut Wide, basis: &[Wide]) {
+fn wide_project_out<const N: usize, const L: usize>(v: &mut Wide<L>, basis: &[Wide<L>]) {
     for _ in 0..2 {
         for q in basis {
-            let d = wide_dot::<N>(q, v);
-            wide_sub::<N>(v, q, &d);
+            let d = wide_dot::<N, L>(q, v);
+            wide_sub::<N, L>(v, q, &d);
         }
     }
 }
 
-fn wide_sqrt(a: Lane) -> Lane {
+fn wide_sqrt<const L: usize>(a: Lane<L>) -> Lane<L> {
     a.map(f64::sqrt)
 }
 
 /// The vectors of lane `l` (the coordinates past `N` zero, as [`super::normalized`] leaves
 /// them).
-fn lane_of<const N: usize>(vs: &[Wide], l: usize) -> Vecs {
+fn lane_of<const N: usize, const L: usize>(vs: &[Wide<L>], l: usize) -> Vecs {
     let mut out = Vecs::EMPTY;
     for w in vs {
         let mut v = [0.0; MAX_B];
@@ -93,11 +110,11 @@ fn lane_of<const N: usize>(vs: &[Wide], l: usize) -> Vecs {
 }
 
 /// Lane vectors from one list of vectors per lane (all of the same length `k`).
-fn widen(lists: [&[Vb]; LANES], out: &mut [Wide; MAX_B]) -> usize {
+fn widen<const L: usize>(lists: [&[Vb]; L], out: &mut [Wide<L>; MAX_B]) -> usize {
     let k = lists[0].len();
     for (i, w) in out.iter_mut().enumerate().take(k) {
         for (x, coord) in w.iter_mut().enumerate() {
-            for l in 0..LANES {
+            for l in 0..L {
                 coord[l] = lists[l][i][x];
             }
         }
@@ -107,32 +124,32 @@ fn widen(lists: [&[Vb]; LANES], out: &mut [Wide; MAX_B]) -> usize {
 
 /// [`orthonormal`] of the `k` lane vectors `cols` into `out`: per lane, whether it kept every
 /// vector (a lane that drops one has a shorter basis than the others: not this result).
-fn orthonormal_wide<const N: usize>(
-    cols: &[Wide; MAX_B],
+fn orthonormal_wide<const N: usize, const L: usize>(
+    cols: &[Wide<L>; MAX_B],
     k: usize,
-    out: &mut [Wide; MAX_B],
-) -> [bool; LANES] {
-    let mut sq = [0.0; LANES];
+    out: &mut [Wide<L>; MAX_B],
+) -> [bool; L] {
+    let mut sq = [0.0; L];
     for c in &cols[..k] {
-        let d = wide_dot::<N>(c, c);
-        for l in 0..LANES {
+        let d = wide_dot::<N, L>(c, c);
+        for l in 0..L {
             sq[l] += d[l];
         }
     }
     let scale = wide_sqrt(sq).map(|s| s.max(1e-300));
-    let mut kept = [true; LANES];
+    let mut kept = [true; L];
     for i in 0..k {
         let mut v = cols[i];
-        wide_project_out::<N>(&mut v, &out[..i]);
-        let n = wide_sqrt(wide_dot::<N>(&v, &v));
+        wide_project_out::<N, L>(&mut v, &out[..i]);
+        let n = wide_sqrt(wide_dot::<N, L>(&v, &v));
         let q = &mut out[i];
-        *q = WIDE_ZERO;
+        *q = wide_zero();
         for (o, x) in q.iter_mut().zip(&v).take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 o[l] = x[l] / n[l];
             }
         }
-        for l in 0..LANES {
+        for l in 0..L {
             kept[l] &= n[l] > 1e-10 * scale[l];
         }
     }
@@ -144,41 +161,44 @@ fn orthonormal_wide<const N: usize>(
 /// (else the one-joint code projects every unit vector: not this result). The first
 /// candidate unit vector of every lane is projected in lockstep, the others (ties, rare at
 /// generic geometry) one at a time, each exactly as [`project_unit`].
-fn complement_wide<const N: usize>(basis: &mut [Wide; MAX_B], k: usize) -> [bool; LANES] {
-    let mut sq = WIDE_ZERO;
+fn complement_wide<const N: usize, const L: usize>(
+    basis: &mut [Wide<L>; MAX_B],
+    k: usize,
+) -> [bool; L] {
+    let mut sq = wide_zero::<L>();
     for q in &basis[..k] {
         for (s, x) in sq.iter_mut().zip(q).take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 s[l] += x[l] * x[l];
             }
         }
     }
-    let mut regular = [true; LANES];
+    let mut regular = [true; L];
     for n in k..N {
         // The candidates of each lane, as [`complement_of`] chooses them, without a branch
         // per unit vector (which one is first is as random as the geometry: the branches
         // were mispredicted). The candidates' bits: the lowest is the first one, the others
         // are the ties. With finite sums, the largest `1 − s` is a candidate (no set is
         // empty); otherwise all are.
-        let mut top = [f64::NEG_INFINITY; LANES];
-        let mut finite = [true; LANES];
+        let mut top = [f64::NEG_INFINITY; L];
+        let mut finite = [true; L];
         for s in sq.iter().take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 finite[l] &= s[l].is_finite();
                 top[l] = top[l].max(1.0 - s[l]);
             }
         }
         let cut = top.map(|t| t - CANDIDATE_GAP);
-        let mut set = [0u8; LANES];
+        let mut set = [0u8; L];
         for (i, s) in sq.iter().enumerate().take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 let skip = finite[l] & (1.0 - s[l] < cut[l]);
                 set[l] |= u8::from(!skip) << i;
             }
         }
-        let mut first = [0usize; LANES];
-        let mut more = [0u8; LANES];
-        for l in 0..LANES {
+        let mut first = [0usize; L];
+        let mut more = [0u8; L];
+        for l in 0..L {
             regular[l] &= finite[l];
             let c = set[l];
             first[l] = if c == 0 {
@@ -190,28 +210,28 @@ fn complement_wide<const N: usize>(basis: &mut [Wide; MAX_B], k: usize) -> [bool
         }
         // [`project_unit`] of each lane's first candidate (the first basis vector is finite:
         // its squares are terms of finite sums).
-        let mut v = WIDE_ZERO;
-        let mut d = [0.0; LANES];
-        for l in 0..LANES {
+        let mut v = wide_zero::<L>();
+        let mut d = [0.0; L];
+        for l in 0..L {
             v[first[l]][l] = 1.0;
             d[l] = basis[0][first[l]][l] + 0.0;
         }
-        wide_sub::<N>(&mut v, &basis[0], &d);
+        wide_sub::<N, L>(&mut v, &basis[0], &d);
         for q in &basis[1..n] {
-            let d = wide_dot::<N>(q, &v);
-            wide_sub::<N>(&mut v, q, &d);
+            let d = wide_dot::<N, L>(q, &v);
+            wide_sub::<N, L>(&mut v, q, &d);
         }
         for q in &basis[..n] {
-            let d = wide_dot::<N>(q, &v);
-            wide_sub::<N>(&mut v, q, &d);
+            let d = wide_dot::<N, L>(q, &v);
+            wide_sub::<N, L>(&mut v, q, &d);
         }
-        let mut len = wide_sqrt(wide_dot::<N>(&v, &v));
+        let mut len = wide_sqrt(wide_dot::<N, L>(&v, &v));
         // The other candidates, one lane at a time; the first largest is kept.
-        for l in 0..LANES {
+        for l in 0..L {
             if more[l] == 0 || !regular[l] {
                 continue;
             }
-            let mine = lane_of::<N>(&basis[..n], l);
+            let mine = lane_of::<N, L>(&basis[..n], l);
             for i in (0..N).filter(|&i| more[l] & (1 << i) != 0) {
                 let w = project_unit::<N>(i, mine.as_slice());
                 let wn = norm::<N>(&w);
@@ -224,14 +244,14 @@ fn complement_wide<const N: usize>(basis: &mut [Wide; MAX_B], k: usize) -> [bool
             }
         }
         let q = &mut basis[n];
-        *q = WIDE_ZERO;
+        *q = wide_zero();
         for (o, x) in q.iter_mut().zip(&v).take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 o[l] = x[l] / len[l];
             }
         }
         for (s, x) in sq.iter_mut().zip(q.iter()).take(N) {
-            for l in 0..LANES {
+            for l in 0..L {
                 s[l] += x[l] * x[l];
             }
         }
@@ -268,7 +288,7 @@ impl Slots {
     }
 
     /// Lane `l` of `vs` as job `j`'s vectors.
-    fn set_lane<const N: usize>(&mut self, j: usize, vs: &[Wide], l: usize) {
+    fn set_lane<const N: usize, const L: usize>(&mut self, j: usize, vs: &[Wide<L>], l: usize) {
         let slot = &mut self.v[j * MAX_B..j * MAX_B + vs.len()];
         for (o, w) in slot.iter_mut().zip(vs) {
             *o = [0.0; MAX_B];
@@ -280,13 +300,17 @@ impl Slots {
     }
 }
 
-/// The items in groups of [`LANES`] of the same `len` where `takes` that length, and the
-/// rest (fewer than [`LANES`] of a length, or of a length not taken) one by one.
-fn grouped(
-    items: &[usize],
-    len: impl Fn(usize) -> usize,
-    takes: impl Fn(usize) -> bool,
-) -> (Vec<[usize; LANES]>, Vec<usize>) {
+/// Jobs grouped for the lanes: by [`LANES`], by [`HALF`], and one by one.
+struct Groups {
+    wide: Vec<[usize; LANES]>,
+    half: Vec<[usize; HALF]>,
+    single: Vec<usize>,
+}
+
+/// The items in groups of [`LANES`] of the same `len` where `takes` that length, the rest of
+/// a length in groups of [`HALF`], and what is left (fewer than [`HALF`] of a length, or of
+/// a length not taken) one by one.
+fn grouped(items: &[usize], len: impl Fn(usize) -> usize, takes: impl Fn(usize) -> bool) -> Groups {
     let mut by_len: [Vec<usize>; MAX_B + 1] = Default::default();
     let mut single = Vec::new();
     for &i in items {
@@ -295,62 +319,84 @@ fn grouped(
             None => single.push(i),
         }
     }
-    let mut lanes = Vec::with_capacity(items.len() / LANES);
+    let mut wide = Vec::with_capacity(items.len() / LANES);
+    let mut half = Vec::new();
     for (k, group) in by_len.iter().enumerate() {
         if !takes(k) {
             single.extend_from_slice(group);
             continue;
         }
         let mut it = group.chunks_exact(LANES);
-        lanes.extend((&mut it).map(|c| std::array::from_fn(|l| c[l])));
+        wide.extend((&mut it).map(|c| std::array::from_fn(|l| c[l])));
+        let mut it = it.remainder().chunks_exact(HALF);
+        half.extend((&mut it).map(|c| std::array::from_fn(|l| c[l])));
         single.extend_from_slice(it.remainder());
     }
-    (lanes, single)
+    Groups { wide, half, single }
 }
 
 /// [`orthonormal`] of `src`'s vectors into `dst` for the jobs `items`, in lanes where it can.
 fn orthonormal_many<const N: usize>(src: &Slots, dst: &mut Slots, items: &[usize]) {
-    let (lanes, single) = grouped(items, |j| src.get(j).len(), |k| k >= 1);
-    let (mut cols, mut out) = ([WIDE_ZERO; MAX_B], [WIDE_ZERO; MAX_B]);
-    for js in lanes {
+    let g = grouped(items, |j| src.get(j).len(), |k| k >= 1);
+    orthonormal_lanes::<N, LANES>(src, dst, &g.wide);
+    orthonormal_lanes::<N, HALF>(src, dst, &g.half);
+    for j in g.single {
+        count(0, 1);
+        dst.set(j, orthonormal::<N>(src.get(j)).as_slice());
+    }
+}
+
+/// [`orthonormal_many`] of the groups of `L` jobs `groups`.
+fn orthonormal_lanes<const N: usize, const L: usize>(
+    src: &Slots,
+    dst: &mut Slots,
+    groups: &[[usize; L]],
+) {
+    let (mut cols, mut out) = ([wide_zero::<L>(); MAX_B], [wide_zero::<L>(); MAX_B]);
+    for js in groups {
         let k = widen(js.map(|j| src.get(j)), &mut cols);
-        let kept = orthonormal_wide::<N>(&cols, k, &mut out);
-        count(LANES, 0);
+        let kept = orthonormal_wide::<N, L>(&cols, k, &mut out);
+        count(L, 0);
         for (l, &j) in js.iter().enumerate() {
             if kept[l] {
-                dst.set_lane::<N>(j, &out[..k], l);
+                dst.set_lane::<N, L>(j, &out[..k], l);
             } else {
                 dst.set(j, orthonormal::<N>(src.get(j)).as_slice());
             }
         }
-    }
-    for j in single {
-        count(0, 1);
-        dst.set(j, orthonormal::<N>(src.get(j)).as_slice());
     }
 }
 
 /// [`complement_of`] of `src`'s orthonormal bases into `dst` for the jobs `items`, in lanes
 /// where it can.
 fn complement_many<const N: usize>(src: &Slots, dst: &mut Slots, items: &[usize]) {
-    let (lanes, single) = grouped(items, |j| src.get(j).len(), |k| (1..N).contains(&k));
-    let mut basis = [WIDE_ZERO; MAX_B];
-    let one = |vs: &[Vb]| complement_of::<N>(Vecs::of(vs));
-    for js in lanes {
+    let g = grouped(items, |j| src.get(j).len(), |k| (1..N).contains(&k));
+    complement_lanes::<N, LANES>(src, dst, &g.wide);
+    complement_lanes::<N, HALF>(src, dst, &g.half);
+    for j in g.single {
+        count(0, 1);
+        dst.set(j, complement_of::<N>(Vecs::of(src.get(j))).as_slice());
+    }
+}
+
+/// [`complement_many`] of the groups of `L` jobs `groups`.
+fn complement_lanes<const N: usize, const L: usize>(
+    src: &Slots,
+    dst: &mut Slots,
+    groups: &[[usize; L]],
+) {
+    let mut basis = [wide_zero::<L>(); MAX_B];
+    for js in groups {
         let k = widen(js.map(|j| src.get(j)), &mut basis);
-        let regular = complement_wide::<N>(&mut basis, k);
-        count(LANES, 0);
+        let regular = complement_wide::<N, L>(&mut basis, k);
+        count(L, 0);
         for (l, &j) in js.iter().enumerate() {
             if regular[l] {
-                dst.set_lane::<N>(j, &basis[k..N], l);
+                dst.set_lane::<N, L>(j, &basis[k..N], l);
             } else {
-                dst.set(j, one(src.get(j)).as_slice());
+                dst.set(j, complement_of::<N>(Vecs::of(src.get(j))).as_slice());
             }
         }
-    }
-    for j in single {
-        count(0, 1);
-        dst.set(j, one(src.get(j)).as_slice());
     }
 }
 
@@ -558,6 +604,7 @@ mod tests {
                 .map(|i| (i, m.joints[i].driven))
                 .collect();
             RUNS.with(|c| c.set([0; 2]));
+            WIDE_STEPS.with(|c| c.set(0));
             let mut scratch = Scratch::default();
             let geometry = |i| super::super::random_pair_geometry(&m, 9, i);
             let rows = pair_rows_many(&m, &jobs, geometry, &mut scratch);
@@ -569,6 +616,9 @@ mod tests {
                 lanes > ratio * single && lanes > 1000,
                 "{lanes} in lanes, {single} alone"
             );
+            // Most of them eight at a time (before: four).
+            let wide = WIDE_STEPS.with(|c| c.get()) * LANES;
+            assert!(2 * wide > lanes, "{wide} of {lanes} eight at a time");
             for (j, &(i, driven)) in jobs.iter().enumerate() {
                 let want = super::super::pair_stack_model(&m, i, &geometry(i), driven).rows;
                 let bits = |v: &[Vb]| v.iter().map(|x| x.map(f64::to_bits)).collect::<Vec<_>>();
@@ -584,12 +634,12 @@ mod tests {
     /// to the one-joint code); every lane's complement bit for bit.
     #[test]
     fn lane_candidates_are_the_one_joint_choice() {
-        fn case<const N: usize>(rng: &mut SplitMix64, seen: &mut [usize; 3]) {
+        fn case<const N: usize, const L: usize>(rng: &mut SplitMix64, seen: &mut [usize; 3]) {
             let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
                 v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
             };
             let k = 1 + rng.below(N as u64 - 1) as usize;
-            let bases: Vec<Vecs> = (0..LANES)
+            let bases: Vec<Vecs> = (0..L)
                 .map(|_| {
                     // Unit vectors along distinct axes, signed.
                     let mut axes: Vec<usize> = (0..N).collect();
@@ -625,13 +675,13 @@ mod tests {
                     Vecs::of(&vs)
                 })
                 .collect();
-            let refs: [&[Vb]; LANES] = std::array::from_fn(|l| bases[l].as_slice());
-            let mut wide = [WIDE_ZERO; MAX_B];
+            let refs: [&[Vb]; L] = std::array::from_fn(|l| bases[l].as_slice());
+            let mut wide = [wide_zero::<L>(); MAX_B];
             widen(refs, &mut wide);
-            let regular = complement_wide::<N>(&mut wide, k);
-            for l in 0..LANES {
+            let regular = complement_wide::<N, L>(&mut wide, k);
+            for l in 0..L {
                 if regular[l] {
-                    let got = lane_of::<N>(&wide[k..N], l);
+                    let got = lane_of::<N, L>(&wide[k..N], l);
                     assert_eq!(bits(&got), bits(&complement_of::<N>(bases[l])));
                     let tied = bases[l]
                         .as_slice()
@@ -646,10 +696,11 @@ mod tests {
         let mut rng = SplitMix64::new(5);
         let mut seen = [0; 3];
         for t in 0..20_000 {
-            if t % 2 == 0 {
-                case::<6>(&mut rng, &mut seen);
-            } else {
-                case::<3>(&mut rng, &mut seen);
+            match t % 4 {
+                0 => case::<6, HALF>(&mut rng, &mut seen),
+                1 => case::<3, HALF>(&mut rng, &mut seen),
+                2 => case::<6, LANES>(&mut rng, &mut seen),
+                _ => case::<3, LANES>(&mut rng, &mut seen),
             }
         }
         assert!(seen.iter().all(|&c| c > 100), "{seen:?}");
@@ -659,7 +710,12 @@ mod tests {
     /// for bit the one-joint functions.
     #[test]
     fn lanes_are_the_one_joint_code() {
-        let mut rng = SplitMix64::new(99);
+        lanes_case::<HALF>(99);
+        lanes_case::<LANES>(98);
+    }
+
+    fn lanes_case<const L: usize>(seed: u64) {
+        let mut rng = SplitMix64::new(seed);
         let bits = |v: &Vecs| -> Vec<[u64; MAX_B]> {
             v.as_slice().iter().map(|x| x.map(f64::to_bits)).collect()
         };
@@ -667,7 +723,7 @@ mod tests {
         for trial in 0..20_000 {
             let n = [3, 6][trial % 2];
             let k = 1 + (trial / 2) % (n - 1);
-            let lists: Vec<Vec<Vb>> = (0..LANES)
+            let lists: Vec<Vec<Vb>> = (0..L)
                 .map(|_| {
                     (0..k)
                         .map(|_| {
@@ -688,7 +744,7 @@ mod tests {
                         .collect()
                 })
                 .collect();
-            let refs: [&[Vb]; LANES] = std::array::from_fn(|l| lists[l].as_slice());
+            let refs: [&[Vb]; L] = std::array::from_fn(|l| lists[l].as_slice());
             let want_o: Vec<Vecs> = refs
                 .iter()
                 .map(|r| {
@@ -699,19 +755,19 @@ mod tests {
                     }
                 })
                 .collect();
-            let (mut cols, mut out) = ([WIDE_ZERO; MAX_B], [WIDE_ZERO; MAX_B]);
+            let (mut cols, mut out) = ([wide_zero::<L>(); MAX_B], [wide_zero::<L>(); MAX_B]);
             widen(refs, &mut cols);
             let kept = if n == 6 {
-                orthonormal_wide::<6>(&cols, k, &mut out)
+                orthonormal_wide::<6, L>(&cols, k, &mut out)
             } else {
-                orthonormal_wide::<3>(&cols, k, &mut out)
+                orthonormal_wide::<3, L>(&cols, k, &mut out)
             };
-            for l in 0..LANES {
+            for l in 0..L {
                 if kept[l] {
                     let got = if n == 6 {
-                        lane_of::<6>(&out[..k], l)
+                        lane_of::<6, L>(&out[..k], l)
                     } else {
-                        lane_of::<3>(&out[..k], l)
+                        lane_of::<3, L>(&out[..k], l)
                     };
                     assert_eq!(bits(&got), bits(&want_o[l]), "trial {trial}");
                 } else {
@@ -724,15 +780,15 @@ mod tests {
             }
             // Complements of the bases that kept every vector.
             if want_o.iter().all(|b| b.len() == k) {
-                let refs: [&[Vb]; LANES] = std::array::from_fn(|l| want_o[l].as_slice());
-                let mut basis = [WIDE_ZERO; MAX_B];
+                let refs: [&[Vb]; L] = std::array::from_fn(|l| want_o[l].as_slice());
+                let mut basis = [wide_zero::<L>(); MAX_B];
                 widen(refs, &mut basis);
                 let regular = if n == 6 {
-                    complement_wide::<6>(&mut basis, k)
+                    complement_wide::<6, L>(&mut basis, k)
                 } else {
-                    complement_wide::<3>(&mut basis, k)
+                    complement_wide::<3, L>(&mut basis, k)
                 };
-                for l in 0..LANES {
+                for l in 0..L {
                     let want = if n == 6 {
                         complement_of::<6>(want_o[l])
                     } else {
@@ -740,9 +796,9 @@ mod tests {
                     };
                     if regular[l] {
                         let got = if n == 6 {
-                            lane_of::<6>(&basis[k..n], l)
+                            lane_of::<6, L>(&basis[k..n], l)
                         } else {
-                            lane_of::<3>(&basis[k..n], l)
+                            lane_of::<3, L>(&basis[k..n], l)
                         };
                         assert_eq!(bits(&got), bits(&want), "trial {trial}");
                     } else {
