@@ -2228,6 +2228,26 @@ mod tests {
     use super::*;
     use crate::generate::{self, Variant};
 
+    /// [`Complements`] reads as the former vector of complements: the identity
+    /// ([`complement`] of no isolated motion, the same matrix) for every body not set, the
+    /// matrix set for the others, planar and spatial.
+    #[test]
+    fn complements_read_as_a_matrix_per_body() {
+        for b in [3, 6] {
+            let mut c = Complements::new(5, b);
+            let own = DMatrix::from_fn(b, 2, |i, j| (i * 7 + j) as f64 - 0.5);
+            c.set(3, own.clone());
+            c.set(1, DMatrix::zeros(b, 0));
+            assert_eq!(c.len(), 5);
+            for body in [0, 2, 4] {
+                assert_eq!(c[body], complement(&DMatrix::zeros(b, 0), b));
+                assert_eq!(c[body], DMatrix::identity(b, b));
+            }
+            assert_eq!(c[3], own);
+            assert_eq!(c[1].shape(), (b, 0));
+        }
+    }
+
     /// The flat incidence lists each body's pairs as the former `Vec` per body did: in
     /// increasing order, a pair on one body twice (hub = other) listed twice, bodies without
     /// pairs empty.
