@@ -4652,10 +4652,14 @@ mod tests {
             }
         }
         let text = "space = \"spatial\"\nframe = 2\n\n[[joint]]\ntype = \"S\"\nbodies = [1, 2]\n\n\
-                    [[joint]]\ntype = \"R\"\nbodies = [3, 3]\n\n[[joint]]\ntype = \"U\"\n\
+                    [[joint]]\ntype = \"R\"\nbodies = [1, 3]\n\n[[joint]]\ntype = \"U\"\n\
                     bodies = [2, 3]\n\n[[joint]]\ntype = \"P\"\nbodies = [3, 1]\n\n\
                     [[joint]]\ntype = \"S\"\nbodies = [1, 2, 3]\n";
-        mechs.push(crate::format::load("t", text, crate::format::Format::Toml).expect("loads"));
+        let mut m = crate::format::load("t", text, crate::format::Format::Toml).expect("loads");
+        // A joint on one body twice (the reader refuses one; `jacobian` gives it empty rows).
+        let x = m.joints[1].bodies[1];
+        m.joints[1].bodies = vec![x, x].into();
+        mechs.push(m);
         let (mut rows_seen, mut empty) = (0, 0);
         for m in &mechs {
             for seed in [1u64, 0x5EED_0000_1234] {
