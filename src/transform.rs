@@ -3990,9 +3990,19 @@ impl Oracle {
         if meter.charge(units).is_err() {
             return Oracle::Undecided;
         }
-        let (j, col) = jacobian(m, *seed);
-        let nrows = j.nrows();
-        let entries = (nrows * 2 * b + col.len() * b) as u64;
+        // The rows made one at a time as the factorization reads them (the same rows as
+        // `jacobian`'s, so the same factorization), unless their indices outgrow `u32`.
+        let rows = JacobianRows::of(m, *seed);
+        let j = match rows {
+            Some(_) => None,
+            None => Some(jacobian(m, *seed).0),
+        };
+        let nrows = match (&rows, &j) {
+            (Some(r), _) => crate::exact::sparse::Rows::nrows(r),
+            (_, Some(j)) => j.nrows(),
+            _ => 0,
+        };
+        let entries = (nrows * 2 * b + m.bodies.len() * b) as u64;
         let cap = Budget {
             max_work: budget.max_work.min(400 * entries + 1_000_000),
             max_memory_bytes: budget.max_memory_bytes.min(1 << 30),
@@ -4000,19 +4010,22 @@ impl Oracle {
         };
         let mut own = cap.meter("the exact rank of the constraints");
         let what = || "the exact rank of the constraints".to_string();
-        let r = crate::exact::Factor::new_within(
-            &j,
-            &mut crate::exact::sparse::Limits {
-                budget: &cap,
-                meter: &mut own,
-                what: &what,
-            },
-        );
+        let mut limits = crate::exact::sparse::Limits {
+            budget: &cap,
+            meter: &mut own,
+            what: &what,
+        };
+        // Only the rank is read: the factor's records (its null space) are not kept.
+        let r = match (rows, j) {
+            (Some(r), _) => crate::exact::Factor::rank_of_rows_within(r, &mut limits),
+            (_, Some(j)) => crate::exact::Factor::rank_of_rows_within(j, &mut limits),
+            _ => return Oracle::Undecided,
+        };
         if meter.charge(own.used()).is_err() {
             return Oracle::Undecided;
         }
         match r {
-            Ok(f) if f.rank() < nrows => Oracle::Reject,
+            Ok(rank) if rank < nrows => Oracle::Reject,
             _ => Oracle::Undecided,
         }
     }
@@ -4446,6 +4459,125 @@ fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>
     (j, col)
 }
 
+/// The rows of [`jacobian`] made one at a time when the exact factorization reads them:
+/// each row's B values and its joint (8 bytes a value, 4 a row, 8 a joint) instead of a
+/// vector a row (about 230 bytes a spatial row, with its allocation), which were the peak
+/// of `transform` on the random families (rs5: 132 MB of 378).
+struct JacobianRows {
+    b: usize,
+    ngroups: usize,
+    /// Row `i`'s values in `vals[i * b..(i + 1) * b]`: its joint's row as
+    /// `models::joint_rows` gives it.
+    vals: Vec<crate::exact::Fp>,
+    /// The joint (index into `sides`) of each row.
+    owner: Vec<u32>,
+    /// Per binary joint: the column groups of its two bodies (the first one's entries
+    /// negated), [`NO_GROUP`] for the frame; both [`NO_GROUP`] for a joint on one body
+    /// twice, whose rows are empty in [`jacobian`].
+    sides: Vec<[u32; 2]>,
+}
+
+/// A body without columns (the frame) in [`JacobianRows`].
+const NO_GROUP: u32 = u32::MAX;
+
+impl JacobianRows {
+    /// [`jacobian`]'s rows of `m` at `seed`; `None` where its indices (columns, rows,
+    /// joints) do not fit in `u32`, or a joint's rows are narrower than B.
+    fn of(m: &Mechanism, seed: u64) -> Option<JacobianRows> {
+        use crate::exact::models;
+        let b = m.b() as usize;
+        let ngroups = m.bodies.len().saturating_sub(1);
+        let small = |x: usize| u32::try_from(x).ok().filter(|&x| x != NO_GROUP);
+        small(ngroups.checked_mul(b)?)?;
+        // Body `z`'s group: its columns are `col[z]..col[z] + b` in `jacobian`.
+        let group = |z: usize| match z.cmp(&m.frame) {
+            Ordering::Less => small(z),
+            Ordering::Equal => Some(NO_GROUP),
+            Ordering::Greater => small(z - 1),
+        };
+        // Reserved at the count's rows (B − k a binary joint, what `joint_rows` gives), so
+        // that the largest array is not grown by doubling.
+        let binary = m.joints.iter().filter(|j| j.bodies.len() == 2);
+        let nrows: usize = binary
+            .clone()
+            .map(|j| b.saturating_sub(j.grade() as usize))
+            .sum();
+        let mut vals = Vec::with_capacity(nrows.saturating_mul(b));
+        let mut owner = Vec::with_capacity(nrows);
+        let mut sides = Vec::with_capacity(binary.count());
+        for q in 0..m.joints.len() {
+            let [x, y] = m.joints[q].bodies[..] else {
+                continue;
+            };
+            let rows = models::joint_rows(m, q, seed, 0);
+            if rows.nrows() > 0 && rows.ncols() < b {
+                return None;
+            }
+            let k = small(sides.len())?;
+            sides.push(if x == y {
+                [NO_GROUP, NO_GROUP]
+            } else {
+                [group(x)?, group(y)?]
+            });
+            for r in 0..rows.nrows() {
+                owner.push(k);
+                vals.extend((0..b).map(|c| rows[(r, c)]));
+            }
+        }
+        small(owner.len())?;
+        Some(JacobianRows {
+            b,
+            ngroups,
+            vals,
+            owner,
+            sides,
+        })
+    }
+}
+
+impl crate::exact::sparse::Rows for JacobianRows {
+    fn ncols(&self) -> usize {
+        self.ngroups * self.b
+    }
+    fn nrows(&self) -> usize {
+        self.owner.len()
+    }
+    fn group_sizes(&self) -> Vec<usize> {
+        vec![self.b; self.ngroups]
+    }
+    /// As `push_row` leaves the row [`jacobian`] pushes: the first body's entries negated,
+    /// the two groups' columns in increasing order (the bodies' groups differ), zeros
+    /// dropped; empty for a joint on one body twice.
+    fn row<'a>(
+        &'a self,
+        i: usize,
+        buf: &'a mut crate::exact::sparse::SparseRow,
+    ) -> &'a [(u32, crate::exact::Fp)] {
+        buf.clear();
+        let [gx, gy] = self.sides[self.owner[i] as usize];
+        if gx == gy {
+            return buf;
+        }
+        let vals = &self.vals[i * self.b..(i + 1) * self.b];
+        let mut sides = [(gx, true), (gy, false)];
+        if gy < gx {
+            sides.swap(0, 1);
+        }
+        for (g, negate) in sides {
+            if g == NO_GROUP {
+                continue;
+            }
+            for (k, &v) in vals.iter().enumerate() {
+                let v = if negate { -v } else { v };
+                if !v.is_zero() {
+                    buf.push((g * self.b as u32 + k as u32, v));
+                }
+            }
+        }
+        buf
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -4495,6 +4627,59 @@ mod tests {
             }
         }
         out
+    }
+
+    /// [`JacobianRows`] makes [`jacobian`]'s rows, row for row (entries, order, empty
+    /// rows), with its columns and groups: bundled mechanisms with binary joints, random
+    /// linkages planar and spatial, and a file whose frame is not its first body and with
+    /// a joint on one body twice and joints to the frame on either side.
+    #[test]
+    fn jacobian_rows_made_one_at_a_time_are_the_jacobian() {
+        use crate::exact::sparse::Rows;
+        use crate::generate::random;
+        let mut mechs: Vec<Mechanism> = Vec::new();
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/mechanisms");
+        for f in std::fs::read_dir(dir).expect("mechanisms") {
+            let f = f.expect("entry").path();
+            let text = std::fs::read_to_string(&f).expect("reads");
+            if let Ok(m) = crate::format::load("m", &text, crate::format::Format::Toml) {
+                mechs.push(m);
+            }
+        }
+        for seed in 0..4 {
+            for planar in [true, false] {
+                mechs.push(random(15, planar, seed).expect("random").0);
+            }
+        }
+        let text = "space = \"spatial\"\nframe = 2\n\n[[joint]]\ntype = \"S\"\nbodies = [1, 2]\n\n\
+                    [[joint]]\ntype = \"R\"\nbodies = [1, 3]\n\n[[joint]]\ntype = \"U\"\n\
+                    bodies = [2, 3]\n\n[[joint]]\ntype = \"P\"\nbodies = [3, 1]\n\n\
+                    [[joint]]\ntype = \"S\"\nbodies = [1, 2, 3]\n";
+        let mut m = crate::format::load("t", text, crate::format::Format::Toml).expect("loads");
+        // A joint on one body twice (the reader refuses one; `jacobian` gives it empty rows).
+        let x = m.joints[1].bodies[1];
+        m.joints[1].bodies = vec![x, x].into();
+        mechs.push(m);
+        let (mut rows_seen, mut empty) = (0, 0);
+        for m in &mechs {
+            for seed in [1u64, 0x5EED_0000_1234] {
+                let (j, _) = jacobian(m, seed);
+                let r = JacobianRows::of(m, seed).expect("fits");
+                assert_eq!(r.ncols(), j.ncols);
+                assert_eq!(r.group_sizes(), j.groups());
+                assert_eq!(Rows::nrows(&r), j.nrows());
+                let mut buf = Vec::new();
+                for (i, want) in j.rows.iter().enumerate() {
+                    assert_eq!(r.row(i, &mut buf), &want[..], "row {i}");
+                    empty += usize::from(want.is_empty());
+                }
+                rows_seen += j.nrows();
+            }
+        }
+        assert!(
+            rows_seen > 1000 && empty > 0,
+            "{rows_seen} rows, {empty} empty"
+        );
     }
 
     /// The back-substituted null vectors are null vectors of `J`, as many as its nullity,

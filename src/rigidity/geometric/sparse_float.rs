@@ -139,7 +139,7 @@ pub(super) struct SparsePart<'a> {
     pub part: &'a Part,
     pub pairs: &'a [Pair],
     pub models: &'a [JointModel],
-    pub comp: &'a [DMatrix<f64>],
+    pub comp: &'a super::Complements,
     pub iso: &'a [DMatrix<f64>],
     pub b: usize,
     pub used: &'a GeometryUsed,
