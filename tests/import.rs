@@ -382,3 +382,176 @@ fn opensim_four_bar_closed_by_a_point_constraint_has_1_dof() {
     );
     round_trip(&fixture("four_bar_point_constraint.osim"), &[]);
 }
+
+/// `analyze --format json` of `file` with `inputs`: (status, types of the groups in order).
+fn group_types(file: &str, inputs: &str) -> (String, Vec<(String, bool)>) {
+    let (code, out, err) = mbsa(&["analyze", file, "--inputs", inputs, "--format", "json"]);
+    assert_eq!(code, 0, "{inputs}: {err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let types = v["groups"]
+        .as_array()
+        .expect("groups")
+        .iter()
+        .map(|g| {
+            (
+                g["type"].as_str().expect("type").to_string(),
+                g["in_library"].as_bool().expect("in_library"),
+            )
+        })
+        .collect();
+    (v["status"].as_str().expect("status").to_string(), types)
+}
+
+#[test]
+fn robotiq_coupler_follower_group_is_typed_as_the_planar_dyad_it_is() {
+    // The coupler and the follower hang on the driver and the spring link by R joints on
+    // parallel x axes and meet at the `connect` (S). The R joints keep both bodies in the
+    // plane, so the S's turns about y and z are locked and it acts as a pin: the group is a
+    // planar RRR dyad (3R2D, in the built-in library), not a spatial 2R1S3D.
+    let file = fixture("robotiq_2f85.xml");
+    let grounded =
+        "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";
+    let (status, types) = group_types(&file, grounded);
+    assert_eq!(status, "determined");
+    let dyads: Vec<_> = types.iter().filter(|(t, _)| t != "1R3D").collect();
+    assert_eq!(
+        dyads,
+        [&("3R2D".to_string(), true), &("3R2D".to_string(), true)],
+        "{types:?}"
+    );
+}
+
+#[test]
+fn xarm_gripper_fingers_are_parallelograms_closed_by_connect() {
+    // UFACTORY xArm gripper (MuJoCo Menagerie): per finger outer knuckle (driver), finger,
+    // inner knuckle on parallel x axes, the finger and inner knuckle joined by a `connect`.
+    // Its pivots form a parallelogram (knuckles both (0, ±0.035465, 0.042039) long, base and
+    // finger pivots both (0, ±0.015, 0.015) apart): per finger count 6·3 − 3·5 − 3 = 0, true
+    // mobility 1, 1 redundant (the S's x row); the drivers determine it.
+    let file = fixture("xarm7_hand.xml");
+    assert_eq!(numbers(&file, &[]), (0, 2, 2));
+    let (status, types) = group_types(&file, "left_driver_joint,right_driver_joint");
+    assert_eq!(status, "determined");
+    let names: Vec<&str> = types.iter().map(|(t, _)| t.as_str()).collect();
+    assert_eq!(names, ["1R3D", "1R3D", "3R2D", "3R2D"], "{types:?}");
+    // Driving the left outer knuckle 20°: the finger translates (a parallelogram's coupler),
+    // so the inner knuckle turns 20° too and the finger turns back 20° on its knuckle.
+    let (code, out, err) = mbsa(&[
+        "solve",
+        &file,
+        "--inputs",
+        "left_driver_joint,right_driver_joint",
+        "--set",
+        "left_driver_joint=20",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    let value = |joint: &str| {
+        v["joint_values"]
+            .as_array()
+            .expect("joint_values")
+            .iter()
+            .find(|j| j["joint"] == joint)
+            .and_then(|j| j["values"][0].as_f64())
+            .unwrap_or(f64::NAN)
+    };
+    for (joint, deg) in [
+        ("left_inner_knuckle_joint", 20.0),
+        ("left_finger_joint", 20.0),
+        ("right_driver_joint", 0.0),
+        ("right_finger_joint", 0.0),
+    ] {
+        let got = value(joint);
+        assert!((got - deg).abs() < 1e-6, "{joint}: {got} ({out})");
+    }
+}
+
+#[test]
+fn solve_takes_the_inputs_analyze_takes() {
+    // The gripper's file drives nothing (its actuator acts through a tendon): `--inputs`
+    // chooses the inputs for the groups, the undriven ones held at the file's value.
+    let file = fixture("robotiq_2f85.xml");
+    let grounded =
+        "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";
+    let (code, out, err) = mbsa(&[
+        "solve",
+        &file,
+        "--inputs",
+        grounded,
+        "--set",
+        "right_driver_joint=10",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    // Six groups, every step determined (nullity 0), the spring links held.
+    assert!(out.contains("(6 step(s))"), "{out}");
+    assert!(!out.contains(" rest "), "{out}");
+    let held = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("right_spring_link_joint "))
+        .unwrap_or_default();
+    assert!(held.contains(" 0° "), "{held}");
+    // An unknown joint in `--inputs` is an input error, as for analyze.
+    let (code, _, err) = mbsa(&["solve", &file, "--inputs", "no_such_joint"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("no_such_joint"), "{err}");
+}
+
+#[test]
+fn transform_tables_with_long_joint_ids_fit_120_columns() {
+    // Imported ids are long (`connect:right_follower-right_coupler`) and every input is
+    // written `id (pair)`: the ranked table was about 290 columns wide. Its lists are now
+    // broken into lines, every input still written in full.
+    let file = fixture("robotiq_2f85.xml");
+    let (code, out, err) = mbsa(&["transform", &file]);
+    assert_eq!(code, 0, "{err}");
+    let widest = out
+        .lines()
+        .filter(|l| l.starts_with(' ') || l.starts_with('─'))
+        .map(|l| l.trim_end().chars().count())
+        .max()
+        .unwrap_or(0);
+    assert!(widest <= 120, "{widest} columns:\n{out}");
+    for id in [
+        "connect:right_follower-right_coupler",
+        "(right_follower-right_coupler)",
+        "left_spring_link_joint",
+        "(world-left_spring_link)",
+    ] {
+        assert!(out.contains(id), "{id}: {out}");
+    }
+    let grounded =
+        "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";
+    let (code, out, err) = mbsa(&["transform", &file, "--inputs", grounded]);
+    assert_eq!(code, 0, "{err}");
+    let widest = out
+        .lines()
+        .filter(|l| l.starts_with(' ') || l.starts_with('─'))
+        .map(|l| l.trim_end().chars().count())
+        .max()
+        .unwrap_or(0);
+    assert!(widest <= 120, "{widest} columns:\n{out}");
+    assert!(out.contains("(world-right_spring_link)"), "{out}");
+}
+
+#[test]
+fn stewart_upu_platform_has_its_yaw_locked_and_six_pistons_fight() {
+    // daniel-s-ingram/stewart: six legs, each base-R(a)-R(b)-P-R(b)-R(a)-platform with a and
+    // b horizontal: every leg's constraint is a couple about the vertical, the same for all
+    // six. The base is free in the model (6). Fixed base: count 0, true mobility 5 (the
+    // platform cannot turn about z), 5 redundant; an independent first-order computation
+    // from the SDF poses (numpy) gives the same, and that 5 pistons determine it while 6
+    // over-determine it by one equation.
+    let file = fixture("stewart_upu.sdf");
+    assert_eq!(numbers(&file, &[]), (6, 11, 5));
+    let five = "piston1_prismatic_joint,piston2_prismatic_joint,piston3_prismatic_joint,\
+                piston4_prismatic_joint,piston5_prismatic_joint,base_link:free:6";
+    let (status, _) = group_types(&file, five);
+    assert_eq!(status, "determined");
+    let six = format!("{five},piston6_prismatic_joint");
+    let (code, out, err) = mbsa(&["analyze", &file, "--inputs", &six, "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("json");
+    assert_eq!(v["status"], "overdetermined", "{out}");
+}

@@ -170,9 +170,10 @@ enum Command {
     /// group in the level order of the structural analysis (groups of one level in
     /// parallel), each by Gauss-Newton from the file's configuration. `--sweep` traces a
     /// motion and stops at a dead point or branch change; `--format toml` writes the
-    /// mechanism at the solved configuration.
+    /// mechanism at the solved configuration. `--inputs` replaces the file's driven inputs
+    /// (as for `analyze`); a joint given a value with `--set` is driven too.
     #[command(
-        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set A=30\n  mbsa solve @slider-crank-geometry --sweep A=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml"
+        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set A=30\n  mbsa solve @slider-crank-geometry --sweep A=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml\n  mbsa solve gripper.xml --inputs left_driver_joint,right_driver_joint --set left_driver_joint=10"
     )]
     Solve {
         #[command(flatten)]

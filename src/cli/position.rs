@@ -1,6 +1,6 @@
 //! `mbsa solve` and `mbsa assemble`: the position level.
 
-use super::{Failure, FileArg, emit, load};
+use super::{Failure, FileArg, emit, load, load_with_inputs};
 use clap::{Args, ValueEnum};
 use mbsa::Mechanism;
 use mbsa::position::inputs::{self, Value};
@@ -24,6 +24,11 @@ pub enum SolveFormat {
 /// Options of `mbsa solve`.
 #[derive(Args, Debug, Clone)]
 pub struct SolveArgs {
+    /// Replace the file's driven inputs, as `analyze` and `transform` take them: joint ids or
+    /// body pairs, `:n` for n DOF (e.g. `1-2,1-13,A:2`); each starts at value 0 (the file's
+    /// configuration) unless `--set` gives one.
+    #[arg(long)]
+    pub inputs: Option<String>,
     /// Input value `JOINT=VALUE[,VALUE...]` (repeatable): JOINT is a joint id or a body pair;
     /// angles in degrees unless written `0.5rad`, slides in file lengths; measured from the
     /// file's configuration. A joint not driven in the file becomes driven.
@@ -205,7 +210,9 @@ pub fn assemble(file: &FileArg, args: &AssembleArgs) -> Result<(), Failure> {
 
 /// `mbsa solve`.
 pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
-    let original = load(file)?;
+    // With `--inputs` the chosen inputs replace the file's, for the groups and the values
+    // alike (and `--format toml` writes them).
+    let original = load_with_inputs(file, args.inputs.as_deref())?;
     let name = file.file.as_str();
     let mut m = original.clone();
     let mut sets: Vec<(usize, Vec<Value>)> = Vec::new();

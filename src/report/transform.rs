@@ -10,6 +10,65 @@ use std::fmt::Write;
 /// How many member placements a family row lists before `+n more`.
 const MEMBERS_SHOWN: usize = 3;
 
+/// Widest table (in columns) printed as it is; a wider one (long joint ids: every input is
+/// written `id (pair)`) has its lists broken into lines so that it fits a terminal.
+const TABLE_WIDTH: usize = 120;
+
+/// Widest line of a wrapped inputs or types cell.
+const INPUTS_WIDTH: usize = 40;
+
+/// How much of a family table is broken into lines: the lists of types (and a family's size
+/// under its rank) first, then the inputs too (and one type a line).
+#[derive(Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Wrap {
+    None,
+    Types,
+    All,
+}
+
+/// Widest line of a table, in characters.
+fn table_width(rendered: &str) -> usize {
+    rendered
+        .lines()
+        .map(|l| l.trim_end().chars().count())
+        .max()
+        .unwrap_or(0)
+}
+
+/// `labels` joined by `, ` in lines of at most `width` characters (an entry is never split
+/// except one too wide alone, broken before its ` (pair)`); continuation lines are indented
+/// by `indent` spaces (two for inputs, so that the lines of several placements in one cell
+/// stay apart).
+fn wrap_labels(labels: &[String], width: usize, indent: usize) -> String {
+    let mut out = String::new();
+    let mut line = 0;
+    for (k, l) in labels.iter().enumerate() {
+        let sep = if k + 1 < labels.len() { "," } else { "" };
+        let n = l.chars().count() + sep.len();
+        if k > 0 {
+            if line + 1 + n > width {
+                out.push('\n');
+                out.push_str(&" ".repeat(indent));
+                line = indent;
+            } else {
+                out.push(' ');
+                line += 1;
+            }
+        }
+        match l.split_once(" (") {
+            Some((id, pair)) if line + n > width && line + id.chars().count() < width => {
+                let _ = write!(out, "{id}\n{}({pair}{sep}", " ".repeat(indent + 2));
+                line = indent + 3 + pair.chars().count() + sep.len();
+            }
+            _ => {
+                let _ = write!(out, "{l}{sep}");
+                line += n;
+            }
+        }
+    }
+    out
+}
+
 /// `1-13` when the id is the body pair, `A (1-2)` otherwise; `:n` for n driven DOF.
 fn input_label(i: &Input) -> String {
     let base = if i.joint == i.pair {
@@ -140,52 +199,18 @@ fn ranked_table(
         return out;
     }
     let expansions = placements.iter().any(|p| p.expansion.is_some());
-    let mut tbl = super::new_table();
-    let mut header = vec!["rank", "inputs"];
-    if expansions {
-        header.push("expansion");
-    }
-    header.extend([
-        "groups",
-        "largest",
-        "levels",
-        "library",
-        "types (* not in library)",
-    ]);
-    tbl.set_header(header);
-    for fam in families.iter().take(top) {
-        let members: Vec<&Placement> = fam.iter().filter_map(|&r| placements.get(r - 1)).collect();
-        let Some(best) = members.first() else {
-            continue;
-        };
-        let mut lines: Vec<String> = members
-            .iter()
-            .take(MEMBERS_SHOWN)
-            .map(|p| inputs_label(&p.inputs))
-            .collect();
-        if members.len() > MEMBERS_SHOWN {
-            lines.push(format!(
-                "(+{} more with the same groups)",
-                members.len() - MEMBERS_SHOWN
-            ));
+    let mut tbl = String::new();
+    for wrap in [Wrap::None, Wrap::Types, Wrap::All] {
+        tbl = family_table(placements, families, top, expansions, wrap, INPUTS_WIDTH);
+        let width = table_width(&tbl);
+        if wrap == Wrap::All && width < TABLE_WIDTH {
+            // The inputs take the room the other columns leave.
+            let wider = INPUTS_WIDTH + TABLE_WIDTH - width;
+            tbl = family_table(placements, families, top, expansions, wrap, wider);
         }
-        let ranks = if members.len() == 1 {
-            best.rank.unwrap_or(0).to_string()
-        } else {
-            format!("{} ({} placements)", best.rank.unwrap_or(0), members.len())
-        };
-        let mut row = vec![ranks, lines.join("\n")];
-        if expansions {
-            row.push(best.expansion.clone().unwrap_or_default());
+        if width <= TABLE_WIDTH {
+            break;
         }
-        row.extend([
-            best.scores.groups.to_string(),
-            best.scores.largest.to_string(),
-            best.scores.levels.to_string(),
-            coverage(best.scores.covered, best.scores.groups),
-            types_label(&best.types),
-        ]);
-        tbl.add_row(row);
     }
     let _ = writeln!(out, "{tbl}");
     if families.len() > top {
@@ -201,6 +226,98 @@ fn ranked_table(
         );
     }
     out
+}
+
+/// The rows of the top `top` families, their lists broken into lines as `wrap` says.
+fn family_table(
+    placements: &[Placement],
+    families: &[&[usize]],
+    top: usize,
+    expansions: bool,
+    wrap: Wrap,
+    inputs_width: usize,
+) -> String {
+    let mut tbl = super::new_table();
+    let mut header = vec!["rank", "inputs"];
+    if expansions {
+        header.push("expansion");
+    }
+    header.extend([
+        "groups",
+        "largest",
+        "levels",
+        "library",
+        if wrap == Wrap::All {
+            "types\n(* not in library)"
+        } else {
+            "types (* not in library)"
+        },
+    ]);
+    tbl.set_header(header);
+    for fam in families.iter().take(top) {
+        let members: Vec<&Placement> = fam.iter().filter_map(|&r| placements.get(r - 1)).collect();
+        let Some(best) = members.first() else {
+            continue;
+        };
+        let mut lines: Vec<String> = members
+            .iter()
+            .take(MEMBERS_SHOWN)
+            .map(|p| {
+                if wrap == Wrap::All && !p.inputs.is_empty() {
+                    let labels: Vec<String> = p.inputs.iter().map(input_label).collect();
+                    wrap_labels(&labels, inputs_width, 2)
+                } else {
+                    inputs_label(&p.inputs)
+                }
+            })
+            .collect();
+        if members.len() > MEMBERS_SHOWN {
+            let sep = if wrap == Wrap::All { "\n  " } else { " " };
+            lines.push(format!(
+                "(+{} more with{sep}the same groups)",
+                members.len() - MEMBERS_SHOWN
+            ));
+        }
+        let ranks = if members.len() == 1 {
+            best.rank.unwrap_or(0).to_string()
+        } else {
+            let sep = if wrap > Wrap::None { "\n" } else { " " };
+            format!(
+                "{}{sep}({} placements)",
+                best.rank.unwrap_or(0),
+                members.len()
+            )
+        };
+        let mut row = vec![ranks, lines.join("\n")];
+        if expansions {
+            let e = best.expansion.clone().unwrap_or_default();
+            // One multiple joint's pairs a line.
+            row.push(if wrap == Wrap::All {
+                e.replace("; ", ";\n")
+            } else {
+                e
+            });
+        }
+        row.extend([
+            best.scores.groups.to_string(),
+            best.scores.largest.to_string(),
+            best.scores.levels.to_string(),
+            coverage(best.scores.covered, best.scores.groups),
+            match wrap {
+                Wrap::None => types_label(&best.types),
+                Wrap::Types => {
+                    let labels: Vec<String> = types_label(&best.types)
+                        .split(", ")
+                        .map(String::from)
+                        .collect();
+                    wrap_labels(&labels, INPUTS_WIDTH, 0)
+                }
+                Wrap::All => types_label(&best.types).replace(", ", "\n"),
+            },
+        ]);
+        tbl.add_row(row);
+    }
+    tbl.to_string()
 }
 
 fn status_label(s: Status) -> &'static str {
@@ -237,6 +354,68 @@ fn groups_label(e: &Evaluation) -> String {
 pub fn comparison(c: &Comparison) -> String {
     let mut out = String::new();
     let _ = writeln!(out, "{}: the file's inputs against the given ones", c.name);
+    let rendered = comparison_table(c, false);
+    let t = if table_width(&rendered) > TABLE_WIDTH {
+        comparison_table(c, true)
+    } else {
+        rendered
+    };
+    let _ = writeln!(out, "{t}");
+    let crit: Vec<&str> = c.criteria.iter().map(|x| x.name()).collect();
+    let ch = &c.changes;
+    if ch.same_partition {
+        let _ = writeln!(out, "same partition into groups");
+    } else {
+        let list = |gs: &[crate::transform::GroupBrief]| {
+            gs.iter()
+                .map(|g| format!("{{{}}}", g.bodies.join(",")))
+                .collect::<Vec<_>>()
+                .join(" ")
+        };
+        let _ = writeln!(
+            out,
+            "{} group(s) in common; only with the file's inputs: {}; only with the given: {}",
+            ch.common,
+            if ch.only_file.is_empty() {
+                "-".into()
+            } else {
+                list(&ch.only_file)
+            },
+            if ch.only_given.is_empty() {
+                "-".into()
+            } else {
+                list(&ch.only_given)
+            },
+        );
+    }
+    let _ = writeln!(
+        out,
+        "verdict ({}): the given placement is {}",
+        crit.join(", "),
+        ch.verdict
+    );
+    out
+}
+
+/// The table of [`comparison`]; `wrap`: the inputs and the groups broken into lines.
+fn comparison_table(c: &Comparison, wrap: bool) -> String {
+    let inputs_cell = |inputs: &[Input]| {
+        if wrap && !inputs.is_empty() {
+            let labels: Vec<String> = inputs.iter().map(input_label).collect();
+            wrap_labels(&labels, INPUTS_WIDTH, 2)
+        } else {
+            inputs_label(inputs)
+        }
+    };
+    let groups_cell = |e: &Evaluation| {
+        let text = groups_label(e);
+        if wrap {
+            // One group a line, under its level.
+            text.replace(" {", "\n  {")
+        } else {
+            text
+        }
+    };
     let mut t = super::new_table();
     t.set_header(vec!["", "file", "given", "change"]);
     let signed = |d: i64| {
@@ -249,8 +428,8 @@ pub fn comparison(c: &Comparison) -> String {
     let (f, g, ch) = (&c.file, &c.given, &c.changes);
     t.add_row(vec![
         "inputs".to_string(),
-        inputs_label(&f.inputs),
-        inputs_label(&g.inputs),
+        inputs_cell(&f.inputs),
+        inputs_cell(&g.inputs),
         String::new(),
     ]);
     t.add_row(vec![
@@ -291,44 +470,11 @@ pub fn comparison(c: &Comparison) -> String {
     ]);
     t.add_row(vec![
         "groups by level".to_string(),
-        groups_label(f),
-        groups_label(g),
+        groups_cell(f),
+        groups_cell(g),
         String::new(),
     ]);
-    let _ = writeln!(out, "{t}");
-    let crit: Vec<&str> = c.criteria.iter().map(|x| x.name()).collect();
-    if ch.same_partition {
-        let _ = writeln!(out, "same partition into groups");
-    } else {
-        let list = |gs: &[crate::transform::GroupBrief]| {
-            gs.iter()
-                .map(|g| format!("{{{}}}", g.bodies.join(",")))
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let _ = writeln!(
-            out,
-            "{} group(s) in common; only with the file's inputs: {}; only with the given: {}",
-            ch.common,
-            if ch.only_file.is_empty() {
-                "-".into()
-            } else {
-                list(&ch.only_file)
-            },
-            if ch.only_given.is_empty() {
-                "-".into()
-            } else {
-                list(&ch.only_given)
-            },
-        );
-    }
-    let _ = writeln!(
-        out,
-        "verdict ({}): the given placement is {}",
-        crit.join(", "),
-        ch.verdict
-    );
-    out
+    t.to_string()
 }
 
 /// One value as a single JSON line with a trailing newline, for `--format jsonl`.

@@ -653,11 +653,14 @@ fn build(
         let mut kinds: Vec<(JointType, usize)> = Vec::new();
         let mut inputs = 0u32;
         let mut active_joints: Vec<usize> = Vec::new();
+        // (joint, its kind, pairs counted), to retype a joint that acts as a planar one.
+        let mut counted: Vec<(usize, JointType, usize)> = Vec::new();
         let mut add_kind = |ji: usize, jt: JointType, n: usize| {
             if n == 0 {
                 return;
             }
             active_joints.push(ji);
+            counted.push((ji, jt, n));
             match kinds.iter_mut().find(|(k, _)| *k == jt) {
                 Some((_, c)) => *c += n,
                 None => kinds.push((jt, n)),
@@ -762,24 +765,39 @@ fn build(
             s
         };
 
+        // A spatial group that closes a loop whose joints move in a space of 3 dimensions at
+        // the file's configuration (a planar or spherical loop written in space) is typed by
+        // the spatiality it really has.
+        let pairs: usize = kinds.iter().map(|&(_, n)| n).sum();
+        let real = grp.bodies.iter().filter(|&&x| !eqs.is_element(x)).count();
+        let mut planar_here = false;
+        if let Some(tw) = twists
+            && pairs > real
+        {
+            active_joints.sort_unstable();
+            active_joints.dedup();
+            planar_here = spatiality(active_joints.iter().map(|&j| &tw[j])) <= 3;
+            // The freedoms of a ball (or another joint of several) that the group's
+            // single-freedom joints keep out of their plane are locked: the joint acts as
+            // the planar joint it is inside the plane (the S of a planar loop as its pin).
+            if !planar_here && let Some(acts) = locked_planar(tw, &active_joints) {
+                planar_here = true;
+                kinds.clear();
+                for &(ji, jt, n) in &counted {
+                    let k = acts.iter().find(|&&(j, _)| j == ji).map_or(jt, |&(_, k)| k);
+                    match kinds.iter_mut().find(|(x, _)| *x == k) {
+                        Some((_, c)) => *c += n,
+                        None => kinds.push((k, n)),
+                    }
+                }
+            }
+        }
         // Joint types in catalogue order, as the BTreeMap over `JointType` gave them.
         kinds.sort_unstable_by_key(|&(k, _)| k);
         let mut kind = String::new();
         for (k, n) in &kinds {
             let _ = write!(kind, "{n}{}", k.code());
         }
-        // A spatial group that closes a loop whose joints move in a space of 3 dimensions at
-        // the file's configuration (a planar or spherical loop written in space) is typed by
-        // the spatiality it really has.
-        let pairs: usize = kinds.iter().map(|&(_, n)| n).sum();
-        let real = grp.bodies.iter().filter(|&&x| !eqs.is_element(x)).count();
-        let planar_here = twists.is_some_and(|tw| {
-            pairs > real && {
-                active_joints.sort_unstable();
-                active_joints.dedup();
-                spatiality(active_joints.iter().map(|&j| &tw[j])) <= 3
-            }
-        });
         kind.push_str(if planar_here { "2D" } else { m.space.suffix() });
         (
             kind,
@@ -969,6 +987,127 @@ fn spatiality<'a>(twists: impl Iterator<Item = &'a nalgebra::DMatrix<f64>>) -> u
         return 0;
     }
     nalgebra::DMatrix::from_columns(&cols).rank(1e-6)
+}
+
+/// Whether the single-freedom joints among `joints` (twists `tw`, 6 × freedoms, angular part
+/// first) move in a plane or about a point, and every joint of several freedoms keeps at least
+/// one inside that motion space: then the group is solved as a planar (spherical) one, its
+/// other freedoms locked by the single-freedom joints, which fix the bodies' turns out of the
+/// plane. Returns each such joint with the kind it acts as when one freedom is left (a turn
+/// about the plane's normal: R; a slide: P); `None` otherwise.
+fn locked_planar(
+    tw: &[nalgebra::DMatrix<f64>],
+    joints: &[usize],
+) -> Option<Vec<(usize, JointType)>> {
+    use nalgebra::{DMatrix, DVector, Vector3};
+    const TOL: f64 = 1e-6;
+    let rank = |cols: &[DVector<f64>]| {
+        if cols.is_empty() {
+            0
+        } else {
+            DMatrix::from_columns(cols).rank(TOL)
+        }
+    };
+    let single: Vec<usize> = joints
+        .iter()
+        .copied()
+        .filter(|&j| tw[j].ncols() == 1)
+        .collect();
+    let multi: Vec<usize> = joints
+        .iter()
+        .copied()
+        .filter(|&j| tw[j].ncols() > 1)
+        .collect();
+    if single.is_empty() || multi.is_empty() {
+        return None;
+    }
+    // The motion algebra the single-freedom joints generate: their twists closed under the
+    // Lie bracket [(w1, v1), (w2, v2)] = (w1 × w2, w1 × v2 − w2 × v1).
+    let mut basis: Vec<DVector<f64>> = Vec::new();
+    let add = |basis: &mut Vec<DVector<f64>>, v: DVector<f64>| {
+        let n = v.norm();
+        if n > TOL {
+            let v = v / n;
+            basis.push(v);
+            if rank(basis) < basis.len() {
+                basis.pop();
+            }
+        }
+    };
+    for &j in &single {
+        add(&mut basis, tw[j].column(0).into_owned());
+    }
+    let part = |v: &DVector<f64>, at: usize| Vector3::new(v[at], v[at + 1], v[at + 2]);
+    let mut grew = true;
+    while grew && basis.len() <= 3 {
+        grew = false;
+        let n = basis.len();
+        for a in 0..n {
+            for b in a + 1..n {
+                let (w1, v1) = (part(&basis[a], 0), part(&basis[a], 3));
+                let (w2, v2) = (part(&basis[b], 0), part(&basis[b], 3));
+                let w = w1.cross(&w2);
+                let v = w1.cross(&v2) - w2.cross(&v1);
+                let before = basis.len();
+                add(
+                    &mut basis,
+                    DVector::from_vec(vec![w.x, w.y, w.z, v.x, v.y, v.z]),
+                );
+                grew |= basis.len() > before;
+            }
+        }
+    }
+    if basis.len() != 3 {
+        return None;
+    }
+    let mut acts = Vec::new();
+    for &j in &multi {
+        let t: Vec<DVector<f64>> = tw[j]
+            .column_iter()
+            .map(|c| c.into_owned().normalize())
+            .collect();
+        let mut both = t.clone();
+        both.extend(basis.iter().cloned());
+        // dim(T ∩ L) = dim T + dim L − dim(T + L).
+        let inside = (rank(&t) + 3).saturating_sub(rank(&both));
+        if inside == 0 {
+            return None;
+        }
+        if inside == 1 {
+            // The one freedom inside: a null vector of [T, −L] gives T·a in both.
+            let k = t.len();
+            let mut m = DMatrix::zeros(6, k + 3);
+            for (c, v) in t.iter().enumerate() {
+                m.set_column(c, v);
+            }
+            for (c, v) in basis.iter().enumerate() {
+                m.set_column(k + c, &(-v));
+            }
+            // The eigenvector of the smallest eigenvalue of MᵀM (square: M may be wide).
+            let eig = (m.transpose() * &m).symmetric_eigen();
+            let last = eig
+                .eigenvalues
+                .iter()
+                .enumerate()
+                .min_by(|x, y| x.1.total_cmp(y.1))
+                .map(|(i, _)| i)?;
+            let a = eig.eigenvectors.column(last);
+            let mut w = DVector::zeros(6);
+            for (c, v) in t.iter().enumerate() {
+                w += v * a[c];
+            }
+            let (ang, lin) = (part(&w, 0), part(&w, 3));
+            let kind = if ang.norm() <= TOL * lin.norm().max(1.0) {
+                JointType::P
+            } else if ang.dot(&lin).abs() <= TOL * ang.norm() * lin.norm().max(1.0) {
+                JointType::R
+            } else {
+                continue;
+            };
+            acts.push((j, kind));
+        }
+    }
+    Some(acts)
 }
 
 /// The over- and under-determined parts in words and lists.
@@ -1217,5 +1356,44 @@ mod tests {
             super::push_id(&mut s, &id);
             assert_eq!(s, format!("x{id}"));
         }
+    }
+
+    /// A rotation about `axis` through `p`, as the joint models write it.
+    fn turn(axis: [f64; 3], p: [f64; 3]) -> nalgebra::DVector<f64> {
+        let u = nalgebra::Vector3::from(axis);
+        let m = nalgebra::Vector3::from(p).cross(&u);
+        nalgebra::DVector::from_vec(vec![u.x, u.y, u.z, m.x, m.y, m.z])
+    }
+
+    fn twists(cols: &[nalgebra::DVector<f64>]) -> nalgebra::DMatrix<f64> {
+        nalgebra::DMatrix::from_columns(cols)
+    }
+
+    #[test]
+    fn a_ball_between_pins_on_parallel_axes_acts_as_a_pin() {
+        use crate::joint::JointType;
+        let x = [1.0, 0.0, 0.0];
+        let ball = [0.0, 0.3, 0.2];
+        let tw = vec![
+            twists(&[turn(x, [0.0, 0.0, 0.0])]),
+            twists(&[turn(x, [0.0, 1.0, 0.1])]),
+            twists(&[
+                turn(x, ball),
+                turn([0.0, 1.0, 0.0], ball),
+                turn([0.0, 0.0, 1.0], ball),
+            ]),
+        ];
+        // Two parallel pins generate the plane's motions (turns about x, slides in y and z);
+        // the ball keeps only its turn about x: a pin.
+        assert_eq!(
+            super::locked_planar(&tw, &[0, 1, 2]),
+            Some(vec![(2, JointType::R)])
+        );
+        // All the ball's turns count when the pins are not parallel: spatial.
+        let mut skew = tw.clone();
+        skew[1] = twists(&[turn([0.0, 1.0, 0.0], [0.0, 1.0, 0.1])]);
+        assert_eq!(super::locked_planar(&skew, &[0, 1, 2]), None);
+        // Without a joint of several freedoms nothing is retyped.
+        assert_eq!(super::locked_planar(&tw, &[0, 1]), None);
     }
 }
