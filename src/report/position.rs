@@ -10,6 +10,17 @@ fn num(x: f64) -> String {
     if s == "-0" { "0".into() } else { s.to_string() }
 }
 
+/// A rotation's axis as printed: an angle that prints as 0 has no meaningful axis (a rotation
+/// of 10^-8 degrees has one made of rounding noise), so it gets the axis an exact zero gets.
+fn axis_text(angle_deg: f64, axis: [f64; 3]) -> String {
+    let axis = if num(angle_deg) == "0" {
+        [0.0, 0.0, 1.0]
+    } else {
+        axis
+    };
+    format!("({}, {}, {})", num(axis[0]), num(axis[1]), num(axis[2]))
+}
+
 fn values_text(v: &JointValues) -> String {
     v.values
         .iter()
@@ -69,12 +80,7 @@ pub fn solve_table(r: &SolveReport) -> String {
             num(p.translation[1]),
             num(p.translation[2]),
             num(p.angle_deg),
-            format!(
-                "({}, {}, {})",
-                num(p.axis[0]),
-                num(p.axis[1]),
-                num(p.axis[2])
-            ),
+            axis_text(p.angle_deg, p.axis),
         ]);
     }
     let _ = writeln!(
@@ -179,4 +185,22 @@ pub fn finite_section(f: &FiniteMobility) -> String {
         let _ = writeln!(s, "- {n}");
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::axis_text;
+
+    /// A rotation too small to print (the xArm gripper's finger after a solve: 10^-8 degrees)
+    /// printed an axis of rounding noise, `(0.975093, 0.175655, -0.135423)`; it gets the zero
+    /// rotation's axis now. A rotation that prints keeps its own.
+    #[test]
+    fn an_angle_printed_as_zero_has_the_zero_rotations_axis() {
+        let noise = [0.975093, 0.175655, -0.135423];
+        assert_eq!(axis_text(1e-8, noise), "(0, 0, 1)");
+        assert_eq!(axis_text(-4e-7, noise), "(0, 0, 1)");
+        assert_eq!(axis_text(0.0, [0.0, 0.0, 1.0]), "(0, 0, 1)");
+        assert_eq!(axis_text(20.0, [1.0, 0.0, 0.0]), "(1, 0, 0)");
+        assert_eq!(axis_text(1e-6, noise), "(0.975093, 0.175655, -0.135423)");
+    }
 }
