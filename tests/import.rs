@@ -498,6 +498,15 @@ fn solve_takes_the_inputs_analyze_takes() {
     assert!(err.contains("no_such_joint"), "{err}");
 }
 
+/// The widest line of a report's tables (their rows start with a space or a rule).
+fn table_width(out: &str) -> usize {
+    out.lines()
+        .filter(|l| l.starts_with(' ') || l.starts_with('─'))
+        .map(|l| l.trim_end().chars().count())
+        .max()
+        .unwrap_or(0)
+}
+
 #[test]
 fn transform_tables_with_long_joint_ids_fit_120_columns() {
     // Imported ids are long (`connect:right_follower-right_coupler`) and every input is
@@ -506,12 +515,7 @@ fn transform_tables_with_long_joint_ids_fit_120_columns() {
     let file = fixture("robotiq_2f85.xml");
     let (code, out, err) = mbsa(&["transform", &file]);
     assert_eq!(code, 0, "{err}");
-    let widest = out
-        .lines()
-        .filter(|l| l.starts_with(' ') || l.starts_with('─'))
-        .map(|l| l.trim_end().chars().count())
-        .max()
-        .unwrap_or(0);
+    let widest = table_width(&out);
     assert!(widest <= 120, "{widest} columns:\n{out}");
     for id in [
         "connect:right_follower-right_coupler",
@@ -525,12 +529,7 @@ fn transform_tables_with_long_joint_ids_fit_120_columns() {
         "right_driver_joint,left_driver_joint,right_spring_link_joint,left_spring_link_joint";
     let (code, out, err) = mbsa(&["transform", &file, "--inputs", grounded]);
     assert_eq!(code, 0, "{err}");
-    let widest = out
-        .lines()
-        .filter(|l| l.starts_with(' ') || l.starts_with('─'))
-        .map(|l| l.trim_end().chars().count())
-        .max()
-        .unwrap_or(0);
+    let widest = table_width(&out);
     assert!(widest <= 120, "{widest} columns:\n{out}");
     assert!(out.contains("(world-right_spring_link)"), "{out}");
 }

@@ -1278,6 +1278,19 @@ mod tests {
         }
     }
 
+    /// A three-layer network of 3,000 left nodes (1-6 units, two random ends each) and 1,000
+    /// right nodes of 6 units, several left nodes feeding each right one: (left units, ends,
+    /// right units).
+    fn dense_three_layer() -> (Vec<u32>, Vec<[u32; 2]>, Vec<u32>) {
+        let mut rng = crate::rng::SplitMix64::new(19);
+        let (l, r) = (3_000usize, 1_000usize);
+        let left: Vec<u32> = (0..l).map(|_| 1 + rng.below(6) as u32).collect();
+        let ends: Vec<[u32; 2]> = (0..l)
+            .map(|_| [rng.below(r as u64) as u32, rng.below(r as u64) as u32])
+            .collect();
+        (left, ends, vec![6u32; r])
+    }
+
     /// Work regression: the greedy start updates each edge to t once, not at every push
     /// through it, and the pairs of the middle edges after its loop (a three-layer network of
     /// 3,000 left and 1,000 right nodes, several left nodes feeding each right one, with and
@@ -1286,13 +1299,8 @@ mod tests {
     /// t); the flow is the three-edge pushes', edge for edge.
     #[test]
     fn greedy_updates_each_sink_edge_once() {
-        let mut rng = crate::rng::SplitMix64::new(19);
-        let (l, r) = (3_000usize, 1_000usize);
-        let left: Vec<u32> = (0..l).map(|_| 1 + rng.below(6) as u32).collect();
-        let ends: Vec<[u32; 2]> = (0..l)
-            .map(|_| [rng.below(r as u64) as u32, rng.below(r as u64) as u32])
-            .collect();
-        let right = vec![6u32; r];
+        let (left, ends, right) = dense_three_layer();
+        let l = left.len();
         for warm in [false, true] {
             let mut net = Network::three_layer(&left, |i| ends[i], &right);
             if warm {
@@ -1383,13 +1391,7 @@ mod tests {
             phases > 100,
             "{phases} networks needed more than the greedy start"
         );
-        let mut rng = crate::rng::SplitMix64::new(19);
-        let (l, r) = (3_000usize, 1_000usize);
-        let left: Vec<u32> = (0..l).map(|_| 1 + rng.below(6) as u32).collect();
-        let ends: Vec<[u32; 2]> = (0..l)
-            .map(|_| [rng.below(r as u64) as u32, rng.below(r as u64) as u32])
-            .collect();
-        let right = vec![6u32; r];
+        let (left, ends, right) = dense_three_layer();
         let (got, total) = Network::three_layer_greedy(&left, |i| ends[i], &right);
         let mut want = Network::three_layer(&left, |i| ends[i], &right);
         assert_eq!(total, want.greedy(0, 1));
