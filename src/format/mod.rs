@@ -12,6 +12,8 @@ mod schema;
 mod tree;
 
 pub use error::{ErrorKind, LoadError};
+/// Decimal digits of an integer, as `Display` writes them (body ids, by the million).
+pub(crate) use model::push_int;
 pub use schema::schema;
 
 use crate::budget::Budget;

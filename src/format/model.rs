@@ -1236,40 +1236,36 @@ fn push_id(out: &mut String, i: usize, b: &BodyId) {
     }
 }
 
-/// `00` to `99`, two bytes each.
-const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+/// `00` to `99`, two digits an entry.
+const PAIRS: &str = "0001020304050607080910111213141516171819\
 2021222324252627282930313233343536373839\
 4041424344454647484950515253545556575859\
 6061626364656667686970717273747576777879\
 8081828384858687888990919293949596979899";
 
 /// Append the decimal digits of `n` (as `n.to_string()`).
-fn push_int(out: &mut String, n: i64) {
-    let mut digits = [0u8; 20];
-    let mut at = digits.len();
+pub(crate) fn push_int(out: &mut String, n: i64) {
+    // Two digits a step, least significant first (half the divisions; body ids have about
+    // six digits), then written most significant first as slices of `PAIRS`: no check of
+    // the digits as UTF-8 (`from_utf8` of a few bytes cost more than making them).
+    let mut pairs = [0u8; 10];
+    let mut k = 0;
     let mut m = n.unsigned_abs();
-    // Two digits a step (half the divisions; body ids have about six digits).
     while m >= 100 {
-        let pair = usize::try_from(m % 100).unwrap_or_default();
+        pairs[k] = (m % 100) as u8;
         m /= 100;
-        at -= 2;
-        digits[at] = PAIRS[2 * pair];
-        digits[at + 1] = PAIRS[2 * pair + 1];
-    }
-    if m >= 10 {
-        let pair = usize::try_from(m).unwrap_or_default();
-        at -= 2;
-        digits[at] = PAIRS[2 * pair];
-        digits[at + 1] = PAIRS[2 * pair + 1];
-    } else {
-        at -= 1;
-        digits[at] = b'0' + m as u8;
+        k += 1;
     }
     if n < 0 {
         out.push('-');
     }
-    // ASCII digits only.
-    out.push_str(std::str::from_utf8(&digits[at..]).unwrap_or_default());
+    // `m` < 100: one digit or two.
+    let top = usize::try_from(m).unwrap_or_default();
+    out.push_str(&PAIRS[2 * top + usize::from(top < 10)..2 * top + 2]);
+    for &p in pairs[..k].iter().rev() {
+        let p = usize::from(p);
+        out.push_str(&PAIRS[2 * p..2 * p + 2]);
+    }
 }
 
 /// The positions of the joints `keep` selects, sorted by body list, then by position: equal

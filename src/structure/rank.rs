@@ -1650,8 +1650,10 @@ fn check_at(
     let tol_words = [tol.rel.to_bits(), tol.abs.to_bits(), b as u64];
 
     // Pairs touching each body (compressed: `touch[start[x]..start[x + 1]]`), proper pairs
-    // only (a pair of a body with itself constrains nothing).
-    let mut start = vec![0usize; nb + 1];
+    // only (a pair of a body with itself constrains nothing). Four bytes an entry (a pair
+    // number fits `u32`, as in the decomposition's lists): the pass that fills them writes at
+    // random, and half the bytes are half the cache lines and pages it takes.
+    let mut start = vec![0u32; nb + 1];
     for e in 0..eqs.len() {
         let [h, o] = eqs.bodies(e);
         if h != o {
@@ -1663,17 +1665,18 @@ fn check_at(
         start[i + 1] += start[i];
     }
     let mut fill = start.clone();
-    let mut touch = vec![0usize; start[nb]];
+    let mut touch = vec![0u32; start[nb] as usize];
     for e in 0..eqs.len() {
         let [h, o] = eqs.bodies(e);
         if h != o {
             for x in [h, o] {
-                touch[fill[x]] = e;
+                touch[fill[x] as usize] = e as u32;
                 fill[x] += 1;
             }
         }
     }
     drop(fill);
+    let touching = |x: usize| &touch[start[x] as usize..start[x + 1] as usize];
 
     // (a) Isolated freedoms and reduced unknowns (each body on its own, in parallel).
     // The first pin pair of every element node.
@@ -1699,9 +1702,9 @@ fn check_at(
                     .map_or_else(|| DMatrix::zeros(b, 0), |r| r.transpose()),
             );
         }
-        let mine = &touch[start[body]..start[body + 1]];
+        let mine = touching(body);
         if let Some((bases, changed)) = &prev
-            && !mine.iter().any(|&e| changed[e])
+            && !mine.iter().any(|&e| changed[e as usize])
         {
             // Same rows, same tolerance: the last attempt's basis.
             return bases[body].clone();
@@ -1711,22 +1714,28 @@ fn check_at(
         // A body on one joint moves by that joint's own DOF, which an input drives.
         let mut joints = mine
             .iter()
-            .filter(|&&e| rows.nrows(e) > 0)
-            .map(|&e| eqs.joint[e]);
+            .map(|&e| e as usize)
+            .filter(|&e| rows.nrows(e) > 0)
+            .map(|e| eqs.joint[e]);
         let first = joints.next();
         if !joints.any(|j| Some(j) != first) {
             return frame.cloned();
         }
         let basis = |rows: &PairRows| match frame {
-            Some(s) => Some(local_basis(b, mine.iter().map(|&e| rows.get(e)), s, &tol)),
-            None => reduced_basis(b, mine.iter().map(|&e| rows.get(e)), &tol),
+            Some(s) => Some(local_basis(
+                b,
+                mine.iter().map(|&e| rows.get(e as usize)),
+                s,
+                &tol,
+            )),
+            None => reduced_basis(b, mine.iter().map(|&e| rows.get(e as usize)), &tol),
         };
         let Some(c) = cache else {
             return basis(&rows);
         };
         let mut d = Digest::new(2);
         tol_words.iter().for_each(|&w| d.word(w));
-        mine.iter().for_each(|&e| d.wide(rd[e]));
+        mine.iter().for_each(|&e| d.wide(rd[e as usize]));
         if let Some(s) = frame {
             d.matrix(s);
         }
@@ -1761,15 +1770,16 @@ fn check_at(
             .collect();
         let spurious = crate::par::map(iso_bodies.len(), |i| {
             let x = iso_bodies[i];
-            let mine = &touch[start[x]..start[x + 1]];
+            let mine = touching(x);
             confirm_seeds(seed, attempt).find(|&second| {
                 let fresh = PairRows::from_chunks(
                     b,
                     mine.chunks(PAIRS_PER_CHUNK)
                         .map(|c| {
                             let mut chunk = Chunk::default();
-                            c.iter()
-                                .for_each(|&e| chunk.push_matrix(&pair_rows_at(m, eqs, e, second)));
+                            c.iter().for_each(|&e| {
+                                chunk.push_matrix(&pair_rows_at(m, eqs, e as usize, second))
+                            });
                             chunk
                         })
                         .collect(),
@@ -1783,11 +1793,7 @@ fn check_at(
             .iter()
             .zip(spurious)
             .filter_map(|(&x, s)| s.map(|s| (x, s)))
-            .flat_map(|(x, s)| {
-                touch[start[x]..start[x + 1]]
-                    .iter()
-                    .map(move |&e| (joint[e], s))
-            })
+            .flat_map(|(x, s)| touching(x).iter().map(move |&e| (joint[e as usize], s)))
             .collect();
         if !suspects.is_empty() {
             suspects.sort_unstable();
