@@ -329,6 +329,37 @@ impl Meter {
     pub fn used(&self) -> u64 {
         self.used
     }
+
+    /// The units this meter allows in all (its limit).
+    pub fn allowed(&self) -> u64 {
+        self.allowed
+    }
+
+    /// A meter for one optional step: it starts where this one is and allows `num / den` of
+    /// the units left (at least none, at most all), so that the step stops early enough to
+    /// leave the rest of the analysis the remainder. Give its spending back with
+    /// [`Meter::settle`].
+    pub fn share(&self, num: u64, den: u64) -> Meter {
+        let left = self.allowed.saturating_sub(self.used);
+        let part = if den == 0 {
+            left
+        } else {
+            // In u128: `left · num` overflows u64 for the unlimited budget.
+            ((left as u128 * num as u128) / den as u128).min(left as u128) as u64
+        };
+        Meter {
+            used: self.used,
+            allowed: self.used.saturating_add(part),
+            what: self.what,
+        }
+    }
+
+    /// Take over what `sub` (from [`Meter::share`] of this meter) spent. A stopped step
+    /// charged its last amount before doing that work, so what it really did is at most its
+    /// limit: that much is charged here, and within this meter's own limit it never fails.
+    pub fn settle(&mut self, sub: &Meter) {
+        self.used = self.used.max(sub.used.min(sub.allowed));
+    }
 }
 
 /// A count for messages: the exact integer, except a saturated `u64::MAX`, which says
@@ -389,6 +420,38 @@ mod tests {
             other => panic!("{other:?}"),
         }
         assert_eq!(b.read_to_end(&[1u8; 1000][..], "x").unwrap().len(), 1000);
+    }
+
+    /// A share stops its step within its part of what is left; settling charges the parent
+    /// what the step did (at most the share's limit), never past the parent's own limit; the
+    /// unlimited meter's share does not overflow.
+    #[test]
+    fn a_meter_share_stops_within_its_part_and_settles_in_the_parent() {
+        let b = Budget {
+            max_work: 1000,
+            ..Budget::DEFAULT
+        };
+        let mut m = b.meter("x");
+        m.charge(200).unwrap();
+        let mut s = m.share(7, 8);
+        assert_eq!((s.used(), s.allowed()), (200, 900));
+        s.charge(700).unwrap();
+        let e = s.charge(1).unwrap_err();
+        assert_eq!((e.limit, e.allowed), (Limit::Work, 900));
+        m.settle(&s);
+        assert_eq!(m.used(), 900);
+        m.charge(100).unwrap();
+        assert!(m.charge(1).is_err());
+        // A step that finished within its share hands back exactly what it spent.
+        let mut m = b.meter("x");
+        let mut s = m.share(1, 2);
+        s.charge(300).unwrap();
+        m.settle(&s);
+        assert_eq!(m.used(), 300);
+        let u = Budget::UNLIMITED.meter("x");
+        let s = u.share(7, 8);
+        assert!(s.allowed() > u64::MAX / 8 * 7 - 8);
+        assert_eq!(u.share(1, 0).allowed(), u64::MAX);
     }
 
     #[test]

@@ -124,11 +124,20 @@ pub fn rigid(m: &Mechanism, r: &GeometricReport) -> String {
         .iter()
         .map(|w| (w.joint.as_str(), w.weight))
         .collect();
+    let unweighted: BTreeSet<&str> = r
+        .redundant_joints_unweighted
+        .iter()
+        .map(|j| j.as_str())
+        .collect();
     for (ji, j) in m.joints.iter().enumerate() {
         let mut label = format!("{} {}", j.id, j.kind.code());
         let mut attrs = String::new();
         if let Some(w) = redundant.get(j.id.as_str()) {
             label.push_str(&format!("\nredundant {w:.2}"));
+            attrs.push_str(", color=\"#c0392b\", fontcolor=\"#c0392b\", penwidth=2.5");
+        } else if unweighted.contains(j.id.as_str()) {
+            // In the redundant constraints, its weight not computed (the budget's note).
+            label.push_str("\nredundant");
             attrs.push_str(", color=\"#c0392b\", fontcolor=\"#c0392b\", penwidth=2.5");
         }
         draw_joint(&mut out, ji, &j.bodies, &label, &attrs);

@@ -89,6 +89,13 @@ pub fn table(r: &GeometricReport) -> String {
             .collect();
         let _ = writeln!(s, "  joints involved, by weight: {}", list.join(", "));
     }
+    if !r.redundant_joints_unweighted.is_empty() {
+        let _ = writeln!(
+            s,
+            "  joints involved, weights not computed: {}",
+            r.redundant_joints_unweighted.join(", ")
+        );
+    }
     if let Some(n) = &r.weights_note {
         let _ = writeln!(s, "  Note: {n}.");
     }
@@ -110,9 +117,16 @@ pub fn table(r: &GeometricReport) -> String {
             .iter()
             .map(|j| format!("{} {}", j.joint, j.dof))
             .collect();
+        // At the file's configuration "locked" is first order: a piston at a crank's dead
+        // centre has no velocity there but moves at once (Modelica's EngineV6).
+        let what = if r.geometry == "file" {
+            "joint freedoms with no first-order motion here; `--finite` names those that move nearby, as at a dead centre"
+        } else {
+            "joint freedoms that never move"
+        };
         let _ = writeln!(
             s,
-            "{} (joint freedoms that never move): {}",
+            "{} ({what}): {}",
             plural(r.locked, "locked DOF", "locked DOF"),
             list.join(", ")
         );

@@ -181,6 +181,13 @@ pub struct GeometricReport {
     pub redundant: usize,
     /// Joints taking part in the redundant constraints, by weight.
     pub redundant_joints: Vec<JointWeight>,
+    /// Joints taking part in the redundant constraints whose weights were not computed (in
+    /// file order): those carrying a self-stress of a rigid block analysed exactly whose
+    /// floating-point self-stresses did not fit in what the rest of the analysis left of the
+    /// budget, found from the exact ones over GF(2^61 − 1). Empty (absent from JSON)
+    /// whenever every weight was computed; else `weights_note` says why and how to get them.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub redundant_joints_unweighted: Vec<String>,
     /// Locked joint DOF (zero in every motion), total.
     pub locked: usize,
     /// Locked DOF per joint (joints with none omitted).
@@ -204,7 +211,9 @@ pub struct GeometricReport {
     pub loops_note: Option<String>,
     /// When the floating-point self-stresses the joints' weights come from are not null
     /// vectors to within rounding (‖yᵀA‖ above [`STRESS_RESIDUAL`] · σ_max, or the file's
-    /// precision at its own geometry): the weights are approximate, and by how much.
+    /// precision at its own geometry): the weights are approximate, and by how much. When
+    /// some were not computed (`redundant_joints_unweighted`): why, and the flag that gets
+    /// them (both sentences when both apply).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub weights_note: Option<String>,
     /// Finite-mobility check status.
@@ -221,6 +230,76 @@ pub struct GeometricReport {
 /// at a threshold raised to reach the exact rank, leave up to that much (10^-8 to 10^-4 on
 /// random spatial mechanisms of 400 to 2,000 bodies with their inputs).
 pub const STRESS_RESIDUAL: f64 = 1e-9;
+
+/// A part's self-stress step: done as the part was analysed (its additions to the weights,
+/// in order), or deferred (an exactly analysed part: optional beside its exact count).
+enum StressStep {
+    Done(Vec<(usize, f64)>),
+    Exact(Deferred),
+}
+
+/// The float self-stresses of an exactly analysed part, left for the end: the pairs of its
+/// exact support (with their bodies), their groups, the exact rank to reach, and how many
+/// self-stresses over how many rows.
+struct Deferred {
+    sub: Part,
+    sgroup: BTreeMap<usize, usize>,
+    target: usize,
+    stresses: usize,
+    rows: usize,
+}
+
+/// Why some rigid blocks' floating-point self-stresses were given up (the first limit met):
+/// the amount they needed at least, the limit, and how many self-stresses over how many
+/// constraint rows went without weights.
+struct Unweighted {
+    limit: Limit,
+    /// Work: the units of their share, all spent; memory: the bytes needed at least.
+    needed: u64,
+    /// The budget's limit (work units or bytes).
+    allowed: u64,
+    stresses: usize,
+    rows: usize,
+}
+
+impl Unweighted {
+    /// The note for `weights_note` (`joints`: how many are listed without weights;
+    /// `weighted`: whether other blocks' joints are listed with theirs).
+    fn note(&self, joints: usize, weighted: bool) -> String {
+        let need = match self.limit {
+            Limit::Work => format!(
+                "need more than the {} work units the rest of the analysis left of the work \
+                 limit of {} work units",
+                crate::budget::count_in_words(self.needed),
+                crate::budget::count_in_words(self.allowed)
+            ),
+            _ => format!(
+                "need at least {}, over the memory limit of {}",
+                crate::budget::bytes_in_words(self.needed),
+                crate::budget::bytes_in_words(self.allowed)
+            ),
+        };
+        // The weights of the other blocks are theirs (the self-stresses of separate blocks
+        // are independent), but printed relative to the largest computed.
+        let relative = if weighted {
+            "; the weights shown (other rigid blocks) are relative to the largest of them, not \
+             to the joints without one"
+        } else {
+            ""
+        };
+        format!(
+            "the weights of the {joints} joints listed without one were not computed: the \
+             floating-point self-stresses they come from ({} over {} constraint rows) {need}; \
+             those joints carry the exact self-stresses (over GF(2^61 - 1) at this \
+             realization) and the count of redundant constraints is exact{relative}; to \
+             compute the weights, raise the limit with `{} N` or scale every limit with \
+             `--budget X`",
+            self.stresses,
+            self.rows,
+            self.limit.flag()
+        )
+    }
+}
 
 /// A binary pair: joint index, hub body, other body.
 #[derive(Clone, Copy, Debug)]
@@ -1366,6 +1445,12 @@ fn analyze_models(
     let mut w: BTreeMap<usize, f64> = BTreeMap::new();
     // The largest ‖yᵀA‖ of the floating-point self-stresses the weights come from.
     let mut stress_residual: f64 = 0.0;
+    // Joints carrying the exact self-stresses of blocks whose float ones were given up, and
+    // why (the first limit met).
+    let mut unweighted: BTreeSet<usize> = BTreeSet::new();
+    let mut unweighted_why: Option<Unweighted> = None;
+    // Each part's self-stress step: done (its additions to `w`) or deferred.
+    let mut stress_steps: Vec<StressStep> = Vec::new();
     let mut locked_by_joint: BTreeMap<usize, usize> = BTreeMap::new();
     let mut uf: Vec<usize> = (0..nb).collect();
     let one_part = parts.len() == 1;
@@ -1445,21 +1530,15 @@ fn analyze_models(
                     ..sub
                 };
                 let target = srows.saturating_sub(prow - r);
-                let res = self_stresses(
-                    &sub,
-                    &pairs,
-                    models,
-                    &comp,
-                    &sgroup,
-                    sgroup.len(),
+                // Optional beside the exact count: run once every other part is done, on
+                // what is left of the budget, and given up past it.
+                stress_steps.push(StressStep::Exact(Deferred {
+                    sub,
+                    sgroup,
                     target,
-                    base_abs,
-                    Some(target),
-                    budget,
-                    meter,
-                    &mut w,
-                )?;
-                stress_residual = stress_residual.max(res);
+                    stresses: prow - r,
+                    rows: srows,
+                }));
             }
             rank += r;
             float_rank += r;
@@ -1606,6 +1685,7 @@ fn analyze_models(
 
         // Left null space (self-stresses) by the same elimination on the transpose.
         let rank_here = target.unwrap_or(elim.rank);
+        let mut log = Vec::new();
         let res = self_stresses(
             part,
             &pairs,
@@ -1618,9 +1698,18 @@ fn analyze_models(
             None,
             budget,
             meter,
-            &mut w,
+            &mut log,
         )?;
         stress_residual = stress_residual.max(res);
+        if stress_steps.is_empty() {
+            // Nothing deferred before it (always so at the file's geometry, where the sparse
+            // parts add to `w` as they go): added now, as before.
+            for (j, s) in log {
+                *w.entry(j).or_insert(0.0) += s;
+            }
+        } else {
+            stress_steps.push(StressStep::Done(log));
+        }
 
         // Locked DOF per joint: allowed dimension minus the rank used over all motions.
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * (d + 2 * b)) as u64))?;
@@ -1691,6 +1780,64 @@ fn analyze_models(
             if r != x {
                 union_min(&mut uf, part.bodies[r], part.bodies[x]);
             }
+        }
+    }
+    // The joints' weights, in the parts' order (the same additions in the same order as when
+    // each part added its own as it went: the same sums bit for bit). An exactly analysed
+    // part's float self-stresses come last, on the units every other step left (nothing
+    // after this charges the meter): wherever the whole analysis fits the budget they are
+    // computed as before; where they do not fit (the work or memory limit), they are given
+    // up and the joints carrying the exact self-stresses are listed without weights.
+    for step in stress_steps {
+        let log = match step {
+            StressStep::Done(log) => log,
+            StressStep::Exact(d) => {
+                let mut rest = meter.share(1, 1);
+                let units = rest.allowed() - meter.used();
+                let mut log = Vec::new();
+                let res = self_stresses(
+                    &d.sub,
+                    &pairs,
+                    models,
+                    &comp,
+                    &d.sgroup,
+                    d.sgroup.len(),
+                    d.target,
+                    base_abs,
+                    Some(d.target),
+                    budget,
+                    &mut rest,
+                    &mut log,
+                );
+                meter.settle(&rest);
+                match res {
+                    Ok(res) => {
+                        stress_residual = stress_residual.max(res);
+                        log
+                    }
+                    Err(e) if e.limit == Limit::Work || e.limit == Limit::Memory => {
+                        unweighted.extend(d.sub.pairs.iter().map(|&pi| pairs[pi].joint));
+                        let (needed, allowed) = match e.limit {
+                            Limit::Work => (units, budget.max_work),
+                            _ => (e.needed, budget.max_memory_bytes),
+                        };
+                        let u = unweighted_why.get_or_insert(Unweighted {
+                            limit: e.limit,
+                            needed,
+                            allowed,
+                            stresses: 0,
+                            rows: 0,
+                        });
+                        u.stresses += d.stresses;
+                        u.rows += d.rows;
+                        Vec::new()
+                    }
+                    Err(e) => return Err(e),
+                }
+            }
+        };
+        for (j, s) in log {
+            *w.entry(j).or_insert(0.0) += s;
         }
     }
     let exact_note = exact.map(|_| {
@@ -2007,9 +2154,11 @@ fn analyze_models(
         }
     };
 
+    let redundant_joints_unweighted: Vec<String> =
+        unweighted.iter().map(|&j| m.joints[j].id.clone()).collect();
     // The weights' own check: at the file's geometry its rounded numbers allow residuals
     // up to the precision they carry (as for the rank decisions).
-    let weights_note = {
+    let approximate = {
         let floor = STRESS_RESIDUAL * smax;
         let limit = motion::file_threshold(m, &used).map_or(floor, |t| t.max(floor));
         let per = |x: f64| x / smax.max(f64::MIN_POSITIVE);
@@ -2022,6 +2171,18 @@ fn analyze_models(
                 per(limit)
             )
         })
+    };
+    let weights_note = match (
+        unweighted_why.map(|u| {
+            u.note(
+                redundant_joints_unweighted.len(),
+                !redundant_joints.is_empty(),
+            )
+        }),
+        approximate,
+    ) {
+        (Some(a), Some(b)) => Some(format!("{a}. {b}")),
+        (a, b) => a.or(b),
     };
     Ok(GeometricReport {
         name: m.name.clone(),
@@ -2039,6 +2200,7 @@ fn analyze_models(
         mobility,
         redundant,
         redundant_joints,
+        redundant_joints_unweighted,
         locked,
         locked_joints,
         isolated,
@@ -2065,9 +2227,10 @@ fn analyze_models(
 }
 
 /// The self-stresses of a part (the left null space of its rows, by the elimination on the
-/// transpose with the pairs as unknowns, orthonormalized), each joint's share of them added
-/// to `w`. With `retry`, the threshold moves (as for the motions) until the elimination's
-/// rank is that number, the rank decided exactly. Returns the largest ‖yᵀA‖ of the unit
+/// transpose with the pairs as unknowns, orthonormalized), each joint's share of them pushed
+/// onto `w` as (joint, share), pair by pair, once nothing more can fail. With `retry`, the
+/// threshold moves (as for the motions) until the elimination's rank is that number, the rank
+/// decided exactly. Returns the largest ‖yᵀA‖ of the unit
 /// self-stresses found (the weights' check: not small where the float rank was reached only
 /// by dropping pivots that are not rounding).
 #[allow(clippy::too_many_arguments)]
@@ -2083,7 +2246,7 @@ fn self_stresses(
     retry: Option<usize>,
     budget: &Budget,
     meter: &mut Meter,
-    w: &mut BTreeMap<usize, f64>,
+    w: &mut Vec<(usize, f64)>,
 ) -> Result<f64, BudgetExceeded> {
     let prow: usize = part
         .pairs
@@ -2183,7 +2346,7 @@ fn self_stresses(
     for y in &stresses {
         for (lp, &pi) in part.pairs.iter().enumerate() {
             let s = y.rows(poff[lp], psizes[lp]).norm_squared();
-            *w.entry(pairs[pi].joint).or_insert(0.0) += s;
+            w.push((pairs[pi].joint, s));
         }
     }
     Ok(worst)
@@ -2463,6 +2626,76 @@ mod tests {
             "the rounded Bennett linkage is overconstrained"
         );
         assert_eq!(r.weights_note, None);
+    }
+
+    /// Issue 16, "no cliffs": an exactly analysed block's floating-point self-stresses (for
+    /// the joints' weights) run last, on what the rest of the analysis left of the budget.
+    /// Where they do not fit (work or memory), the analysis still answers: the same report
+    /// (exact count, motions, clusters) but the joints carrying the exact self-stresses listed
+    /// without weights (every joint the weights name among them) and a note saying why and
+    /// which flag gets them. The old code stopped with the limit's error on both budgets. With
+    /// room, no list (absent from JSON) and the weights as before.
+    #[test]
+    fn unweighted_joints_when_the_float_self_stresses_do_not_fit() {
+        let (m, _) = generate::random(400, false, 6).expect("generates");
+        let opts = GeometricOptions::default();
+        let full = analyze(&m, &opts).expect("answers");
+        assert!(full.redundant > 0 && !full.redundant_joints.is_empty());
+        assert!(full.redundant_joints_unweighted.is_empty());
+        let json = serde_json::to_string(&full).expect("serializes");
+        assert!(
+            !json.contains("redundant_joints_unweighted"),
+            "absent when unused"
+        );
+        let tight = [
+            (
+                Budget {
+                    max_work: 100_000_000,
+                    ..Budget::DEFAULT
+                },
+                "--max-work",
+            ),
+            (
+                Budget {
+                    max_memory_bytes: 4_000_000,
+                    ..Budget::DEFAULT
+                },
+                "--max-memory",
+            ),
+        ];
+        for (budget, flag) in tight {
+            let cut = analyze_within(&m, &opts, &budget).expect("answers without weights");
+            assert!(cut.redundant_joints.is_empty());
+            let listed: BTreeSet<&str> = cut
+                .redundant_joints_unweighted
+                .iter()
+                .map(|j| j.as_str())
+                .collect();
+            assert_eq!(listed.len(), cut.redundant_joints_unweighted.len());
+            for j in &full.redundant_joints {
+                assert!(listed.contains(j.joint.as_str()), "{} not listed", j.joint);
+            }
+            let note = cut.weights_note.clone().expect("a note");
+            assert!(note.contains("were not computed"), "{note}");
+            assert!(note.contains(flag), "{note}");
+            assert!(note.contains(&format!("{} joints", listed.len())), "{note}");
+            let json = serde_json::to_string(&cut).expect("serializes");
+            assert!(json.contains("redundant_joints_unweighted"));
+            // Everything else is the full report's.
+            let mut a = cut.clone();
+            a.redundant_joints_unweighted.clear();
+            a.redundant_joints = full.redundant_joints.clone();
+            a.weights_note = None;
+            let mut f = full.clone();
+            f.weights_note = None;
+            assert_eq!(a, f);
+        }
+        // Just enough work for the analysis with its weights: the same report.
+        let room = Budget {
+            max_work: 300_000_000,
+            ..Budget::DEFAULT
+        };
+        assert_eq!(analyze_within(&m, &opts, &room).expect("answers"), full);
     }
 
     #[test]
