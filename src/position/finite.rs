@@ -707,9 +707,17 @@ pub fn finite_mobility(
         }
     }
     if first_order > 0 {
+        // At a sample `step` away a toggle's joint moves about `step` times its second-order
+        // rate: a piston at a crank's dead centre 1e-3 rad away slides at 1e-4 of the crank's
+        // rate (Modelica's EngineV6 has two). So the floor scales with the step and with the
+        // fastest joint; a joint locked for good stays at rounding (1e-10), far below it.
+        let scale = (0..model.pairs.len())
+            .map(|p| motion(&near, p))
+            .fold(0.0, f64::max);
+        let floor = 1e-3 * opts.step * scale;
         for p in 0..model.pairs.len() {
             let id = &m.joints[model.pairs[p].joint].id;
-            if motion(&n0, p) < 1e-7 && motion(&near, p) > 1e-4 && !locked_at_toggle.contains(id) {
+            if motion(&n0, p) < 1e-7 && motion(&near, p) > floor && !locked_at_toggle.contains(id) {
                 locked_at_toggle.push(id.clone());
             }
         }
@@ -727,8 +735,13 @@ pub fn finite_mobility(
     let mut notes = Vec::new();
     if singular {
         notes.push(format!(
-            "singular configuration: first-order mobility {first_order} but the mechanism moves with {finite} DOF; {instantaneous_only} freedom(s) are instantaneous only (joints {})",
-            singular_joints.join(", ")
+            "singular configuration: first-order mobility {first_order} but the mechanism moves with {finite} DOF; {instantaneous_only} freedom(s) are instantaneous only{}",
+            // No joint is named when no nearby configuration was reached to compare with.
+            if singular_joints.is_empty() {
+                String::new()
+            } else {
+                format!(" (joints {})", singular_joints.join(", "))
+            }
         ));
     }
     if over {
