@@ -14,6 +14,10 @@ pub struct Outcome {
     pub actual: String,
     /// Whether they agree.
     pub ok: bool,
+    /// What the value does not say (the `determined` verdict at a singular configuration:
+    /// [`crate::structure::check_finite`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 fn outcome<T: PartialEq + ToString>(key: &'static str, expected: T, actual: T) -> Outcome {
@@ -22,6 +26,7 @@ fn outcome<T: PartialEq + ToString>(key: &'static str, expected: T, actual: T) -
         ok: expected == actual,
         expected: expected.to_string(),
         actual: actual.to_string(),
+        note: None,
     }
 }
 
@@ -55,7 +60,15 @@ pub fn evaluate(
             ..Default::default()
         };
         match crate::structure::analyze(m, &opts, &crate::structure::Library::builtin()) {
-            Ok(a) => {
+            Ok(mut a) => {
+                if e.determined.is_some() {
+                    crate::structure::check_finite(
+                        m,
+                        &mut a,
+                        geometry.precision,
+                        crate::budget::Budget::DEFAULT.max_work,
+                    );
+                }
                 if let Some(x) = e.groups {
                     out.push(outcome("groups", x, a.groups.len() as u64));
                 }
@@ -64,7 +77,9 @@ pub fn evaluate(
                 }
                 if let Some(x) = e.determined {
                     let determined = a.status == crate::structure::Status::Determined;
-                    out.push(outcome("determined", x, determined));
+                    let mut o = outcome("determined", x, determined);
+                    o.note = a.finite.map(|f| f.note);
+                    out.push(o);
                 }
                 if let Some(x) = e.uncontrolled {
                     out.push(outcome("uncontrolled", x, a.uncontrolled));
@@ -114,5 +129,6 @@ fn geometry_failed(err: crate::motion::MotionError) -> Outcome {
         expected: "a geometric analysis".into(),
         actual: err.to_string(),
         ok: false,
+        note: None,
     }
 }

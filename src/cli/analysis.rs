@@ -145,7 +145,13 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
     if !args.count_only {
         args.geometry.closure_check(&file.file, &m)?;
     }
-    let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
+    let mut a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
+    structure::check_finite(
+        &m,
+        &mut a,
+        args.geometry.precision()?,
+        super::budget().max_work,
+    );
     let out = match format {
         // Streamed: at 10^6 bodies the table is hundreds of megabytes.
         OutputFormat::Table => emit_with(|w| mbsa::report::structure::write_table(w, &a)),

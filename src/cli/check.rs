@@ -50,6 +50,11 @@ pub fn run(
                 summary.join(", ")
             };
             let _ = writeln!(text, "ok      {name}: {summary}");
+            for o in &outcomes {
+                if let Some(n) = &o.note {
+                    let _ = writeln!(text, "        note: {}: {n}", o.key);
+                }
+            }
         } else {
             failed += 1;
             let _ = writeln!(text, "FAILED  {name}:");
@@ -60,6 +65,9 @@ pub fn run(
                     "        {mark:<8} {}: expected {}, got {}",
                     o.key, o.expected, o.actual
                 );
+                if let Some(n) = &o.note {
+                    let _ = writeln!(text, "                 note: {n}");
+                }
             }
         }
         emit(&text)?;

@@ -270,6 +270,134 @@ pub struct Analysis {
     /// transformations: they fix nothing, so inputs take their place).
     #[serde(skip)]
     pub set_aside: Vec<u32>,
+    /// Set by [`check_finite`] when the file's configuration is singular (fewer finite than
+    /// first-order freedoms): the verdict and the groups are first-order answers there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub finite: Option<FiniteCaveat>,
+}
+
+/// The file's configuration is singular: fewer finite than first-order freedoms
+/// ([`check_finite`]). The numbers are those of `mbsa rigid --finite`.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct FiniteCaveat {
+    /// First-order mobility: the nullity of the constraint Jacobian at the file's
+    /// configuration (frame fixed, inputs not counted).
+    pub first_order: usize,
+    /// Finite mobility: the local dimension of the set of configurations there.
+    pub finite: usize,
+    /// First-order freedoms that do not extend to a finite motion.
+    pub instantaneous_only: usize,
+    /// Joints that move in those freedoms.
+    pub singular_joints: Vec<String>,
+    /// The note added to the analysis's notes.
+    pub note: String,
+}
+
+/// Largest mechanism (bodies) [`check_finite`] tests: the test is dense (an SVD of the whole
+/// constraint Jacobian per trial point), seconds at 160 bodies.
+pub const FINITE_CHECK_BODIES: usize = 64;
+
+/// Work cap of [`check_finite`] (the units of [`crate::budget::Budget::max_work`], about the
+/// dense flops): a mechanism that needs more is not tested (the verdict stays the first-order
+/// one, as before, and nothing is said). Measured (release, `docs/benchmarks.md`): a run that
+/// stops at the cap costs 0.04-0.08 s of CPU; a flat parallelogram needs under 10^7 units,
+/// `@rig-double-banana` (19 first-order freedoms, one slicing level each) more than the cap
+/// and is not tested, a flat N-four-bar of 31 windows (64 bodies) about 2·10^9.
+pub const FINITE_CHECK_WORK: u64 = 200_000_000;
+
+/// Joints the note of [`check_finite`] names at most (the JSON lists them all).
+const NOTE_JOINTS: usize = 8;
+
+/// Whether the first-order verdict of `a` (an analysis of `m`) holds for finite motion at the
+/// file's configuration, and a note (and [`Analysis::finite`]) when it does not.
+///
+/// Runs only where the verdict can fail: at the file's geometry, when the analysis set aside
+/// constraints dependent at the configuration (a [`Redundancy`] with `configuration: true`).
+/// Otherwise the constraint Jacobian has full row rank there, the constraints are a
+/// submersion, and the configurations near it form a manifold of the first-order dimension
+/// (implicit function theorem): every first-order freedom extends to a motion and the verdict
+/// holds. Also only for at most [`FINITE_CHECK_BODIES`] bodies and within
+/// [`FINITE_CHECK_WORK`] work units (or `max_work`, when lower); past either, and on any
+/// error of the test, nothing is said. It runs the finite-mobility test of `mbsa rigid
+/// --finite` ([`crate::position::finite::finite_mobility_of_file`], seeded: deterministic) and
+/// speaks only when that finds fewer finite than first-order freedoms (a singular
+/// configuration: a flat or folded loop, a Stewart platform's singular leg). A redundancy by
+/// design (a planar loop written in space, a Bennett linkage) keeps its freedoms along the
+/// motion and says nothing.
+///
+/// The test takes the numbers as exact (it tracks curves of solutions to a residual of
+/// 1e-14), while the analysis takes rounded numbers as known to their precision: rounding
+/// alone can make a linkage that moves by design rigid at that scale (`@bennett-rounded-8`:
+/// first order 1, finite 0 as written). So a file whose numbers are rounded (a nonzero
+/// [`GeometryUsed::precision`]) is not tested unless `--tolerance 0` declares them exact, and a
+/// file that misses closure (tested at an assembled configuration, not the file's) says
+/// nothing. `precision` is `--tolerance`, `max_work` the caller's work limit.
+pub fn check_finite(m: &Mechanism, a: &mut Analysis, precision: Option<f64>, max_work: u64) {
+    use crate::position::finite::{FiniteOptions, finite_mobility_of_file};
+    // File geometry whose numbers are exact as written (or `--tolerance 0`).
+    let exact_file = a
+        .geometry
+        .as_ref()
+        .is_some_and(|g| g.is_file() && g.precision.unwrap_or(0.0) == 0.0);
+    let set_aside = a.redundant.iter().any(|r| r.configuration);
+    if a.count_only || !exact_file || !set_aside || m.bodies.len() > FINITE_CHECK_BODIES {
+        return;
+    }
+    let opts = FiniteOptions {
+        budget: crate::budget::Budget {
+            max_work: FINITE_CHECK_WORK.min(max_work),
+            ..crate::budget::Budget::DEFAULT
+        },
+        ..FiniteOptions::default()
+    };
+    // The closure tolerance `mbsa rigid --finite` takes from `--tolerance`.
+    let tolerance = precision.map(|p| {
+        crate::position::closure::tolerance_for(crate::position::residual::model_size(m), p)
+    });
+    let Ok(f) = finite_mobility_of_file(m, tolerance, &opts) else {
+        return;
+    };
+    if f.assembled || f.finite >= f.first_order {
+        return;
+    }
+    let inputs = a.mobility.inputs;
+    let consequence = if a.status == Status::Determined {
+        format!(
+            "its {inputs} input(s) fix every first-order freedom, but near this configuration \
+             they cannot all be set independently: \"determined\" holds to first order only"
+        )
+    } else {
+        "the verdict and the groups count first-order freedoms: they hold to first order only"
+            .to_string()
+    };
+    let joints = match f.singular_joints.len() {
+        0 => String::new(),
+        n if n <= NOTE_JOINTS => format!(", at joint(s) {}", f.singular_joints.join(", ")),
+        n => format!(
+            ", at joint(s) {} and {} more",
+            f.singular_joints[..NOTE_JOINTS].join(", "),
+            n - NOTE_JOINTS
+        ),
+    };
+    let note = format!(
+        "singular configuration: at the file's configuration the joints allow {} DOF to first \
+         order (inputs not counted) but only {} for finite motion ({} first-order freedom(s) \
+         do not extend to a motion{joints}): {consequence}; `mbsa rigid --finite` gives the \
+         details",
+        f.first_order, f.finite, f.instantaneous_only
+    );
+    if let Some(d) = a.diagnosis.as_mut() {
+        d.notes.push(note.clone());
+    } else {
+        a.notes.push(note.clone());
+    }
+    a.finite = Some(FiniteCaveat {
+        first_order: f.first_order,
+        finite: f.finite,
+        instantaneous_only: f.instantaneous_only,
+        singular_joints: f.singular_joints,
+        note,
+    });
 }
 
 /// The structural answer at generic (random) geometry, when it differs from the answer at the
@@ -569,7 +697,7 @@ fn build(
         _ => None,
     };
     let put_id = |s: &mut String, b: usize| match int_base {
-        Some(c) => push_int(s, b as i64 + c),
+        Some(c) => crate::format::push_int(s, b as i64 + c),
         None => s.push_str(id_of(b)),
     };
     // Solve-order key of every body: frame (0) and over-determined part (1) are known first,
@@ -959,6 +1087,7 @@ fn build(
         generic: None,
         notes,
         set_aside: vec![0; m.joints.len()],
+        finite: None,
     }
 }
 
@@ -1253,29 +1382,9 @@ fn diagnose(
 /// lists of a 10^6-body mechanism write millions of ids).
 fn push_id(s: &mut String, id: &crate::mechanism::BodyId) {
     match id {
-        crate::mechanism::BodyId::Int(i) => push_int(s, *i),
+        crate::mechanism::BodyId::Int(i) => crate::format::push_int(s, *i),
         crate::mechanism::BodyId::Name(n) => s.push_str(n),
     }
-}
-
-/// Append `i` in decimal, as `Display` writes it.
-fn push_int(s: &mut String, i: i64) {
-    let mut buf = [0u8; 20];
-    let mut k = buf.len();
-    let mut v = i.unsigned_abs();
-    loop {
-        k -= 1;
-        buf[k] = b'0' + (v % 10) as u8;
-        v /= 10;
-        if v == 0 {
-            break;
-        }
-    }
-    if i < 0 {
-        s.push('-');
-    }
-    // ASCII digits: always UTF-8.
-    s.push_str(std::str::from_utf8(&buf[k..]).unwrap_or_default());
 }
 
 /// Upper-case Roman numeral (1 → `I`); plain digits beyond 3999.
@@ -1395,5 +1504,86 @@ mod tests {
         assert_eq!(super::locked_planar(&skew, &[0, 1, 2]), None);
         // Without a joint of several freedoms nothing is retyped.
         assert_eq!(super::locked_planar(&tw, &[0, 1]), None);
+    }
+
+    /// A planar four-bar loop through the pins `pins` (A: frame-crank, B, C, D: rocker-frame),
+    /// with the joints in `driven` driven.
+    fn four_bar(space: &str, pins: [[f64; 2]; 4], driven: &[&str]) -> crate::Mechanism {
+        let mut text = format!("name = \"four-bar\"\nspace = \"{space}\"\nframe = 1\n");
+        let bodies = [[1, 2], [2, 3], [3, 4], [4, 1]];
+        for (k, id) in ["A", "B", "C", "D"].iter().enumerate() {
+            let [x, y] = pins[k];
+            let [a, b] = bodies[k];
+            text += &format!("[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\n");
+            if space == "planar" {
+                text += &format!("origin = [{x}, {y}]\n");
+            } else {
+                text += &format!("origin = [{x}, {y}, 0]\naxis = [0, 0, 1]\n");
+            }
+            if driven.contains(id) {
+                text += "driven = 1\n";
+            }
+        }
+        crate::format::load("four-bar", &text, crate::format::Format::Toml).expect("valid")
+    }
+
+    fn checked(m: &crate::Mechanism) -> super::Analysis {
+        let lib = super::Library::builtin();
+        let mut a = super::analyze(m, &super::Options::default(), &lib).expect("analyses");
+        super::check_finite(m, &mut a, None, u64::MAX);
+        a
+    }
+
+    /// A parallelogram four-bar written flat (every pin on one line) is at a singular
+    /// configuration: the parallelogram and the anti-parallelogram branches cross there, 2
+    /// first-order freedoms but 1 finite one. Its two inputs fix the first-order freedoms
+    /// ("determined" at the file's geometry), but they cannot be set independently: the note
+    /// says so, in the plane and written in space.
+    #[test]
+    fn a_flat_parallelogram_is_determined_to_first_order_only() {
+        let flat = [[0.0, 0.0], [1.0, 0.0], [3.0, 0.0], [2.0, 0.0]];
+        for space in ["planar", "spatial"] {
+            let a = checked(&four_bar(space, flat, &["A", "D"]));
+            assert_eq!(a.status, super::Status::Determined, "{space}");
+            let f = a.finite.as_ref().expect("singular: a caveat");
+            assert_eq!((f.first_order, f.finite, f.instantaneous_only), (2, 1, 1));
+            assert!(f.note.starts_with("singular configuration"), "{}", f.note);
+            assert!(f.note.contains("holds to first order only"), "{}", f.note);
+            assert!(a.notes.contains(&f.note), "{space}: {:?}", a.notes);
+            // Deterministic: the same note again.
+            assert_eq!(
+                checked(&four_bar(space, flat, &["A", "D"])).finite,
+                a.finite
+            );
+        }
+        // One input: under-determined to first order; the note is in the diagnosis.
+        let a = checked(&four_bar("planar", flat, &["A"]));
+        assert_eq!(a.status, super::Status::Underdetermined);
+        let f = a.finite.as_ref().expect("singular: a caveat");
+        let d = a.diagnosis.as_ref().expect("a diagnosis");
+        assert!(d.notes.contains(&f.note), "{:?}", d.notes);
+    }
+
+    /// The same loop at a generic pose, in the plane (full row rank: not even tested) and
+    /// written in space (3 constraints set aside by design, every freedom finite), and a Bennett
+    /// linkage (redundant by design, it moves): no caveat.
+    #[test]
+    fn redundancy_by_design_keeps_the_first_order_verdict() {
+        let generic = [[0.0, 0.0], [0.13, 0.97], [1.41, 1.22], [1.93, -0.08]];
+        for space in ["planar", "spatial"] {
+            let a = checked(&four_bar(space, generic, &["A"]));
+            assert_eq!(a.status, super::Status::Determined, "{space}");
+            assert_eq!(a.finite, None, "{space}");
+            assert!(a.notes.iter().all(|n| !n.contains("singular")), "{space}");
+        }
+        let (file, text) = crate::examples::find("rig-bennett").expect("bundled");
+        let m = crate::format::load(file, text, crate::format::Format::Toml).expect("valid");
+        let a = checked(&m);
+        assert!(
+            a.redundant.iter().any(|r| r.configuration),
+            "{:?}",
+            a.redundant
+        );
+        assert_eq!(a.finite, None);
     }
 }

@@ -1,0 +1,141 @@
+//! `mbsa analyze` and `mbsa check` at a singular configuration of the file: the first-order
+//! verdict gets a note (and the JSON key `finite`) when the finite-mobility test finds fewer
+//! finite than first-order freedoms, and only then (`structure::check_finite`).
+
+use assert_cmd::Command;
+
+fn mbsa(args: &[&str], stdin: &str) -> (i32, String, String) {
+    let out = Command::cargo_bin("mbsa")
+        .expect("the mbsa binary is built")
+        .args(args)
+        .write_stdin(stdin)
+        .output()
+        .expect("mbsa runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A parallelogram four-bar (cranks 1, coupler and frame 2) written flat, every pin on the x
+/// axis, both cranks driven, with an `[expect]` table: the parallelogram and the
+/// anti-parallelogram branches cross here (2 first-order freedoms, 1 finite).
+const FLAT_PARALLELOGRAM: &str = r#"
+name = "Flat parallelogram, both cranks driven"
+space = "planar"
+frame = 1
+
+[[joint]]
+id = "A"
+type = "R"
+bodies = [1, 2]
+driven = 1
+origin = [0, 0]
+
+[[joint]]
+id = "B"
+type = "R"
+bodies = [2, 3]
+origin = [1, 0]
+
+[[joint]]
+id = "C"
+type = "R"
+bodies = [3, 4]
+origin = [3, 0]
+
+[[joint]]
+id = "D"
+type = "R"
+bodies = [4, 1]
+driven = 1
+origin = [2, 0]
+
+[expect]
+determined = true
+"#;
+
+const NOTE: &str = "singular configuration: at the file's configuration the joints allow 2 DOF \
+                    to first order (inputs not counted) but only 1 for finite motion";
+
+#[test]
+fn a_flat_parallelogram_is_determined_to_first_order_only() {
+    let (code, out, err) = mbsa(&["analyze", "-"], FLAT_PARALLELOGRAM);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.lines().next().unwrap_or("").ends_with("; determined"),
+        "{out}"
+    );
+    assert!(out.contains(NOTE), "{out}");
+    assert!(
+        out.contains("\"determined\" holds to first order only"),
+        "{out}"
+    );
+
+    let (code, json, err) = mbsa(&["analyze", "-", "--format", "json"], FLAT_PARALLELOGRAM);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(v["status"], "determined");
+    let f = &v["finite"];
+    assert_eq!(f["first_order"], 2, "{json}");
+    assert_eq!(f["finite"], 1, "{json}");
+    assert_eq!(f["instantaneous_only"], 1, "{json}");
+    let note = f["note"].as_str().expect("a note");
+    assert!(
+        v["notes"]
+            .as_array()
+            .expect("notes")
+            .iter()
+            .any(|n| n == note)
+    );
+
+    // `check`: the expectation holds (the verdict is the first-order one) and the note follows.
+    let (code, out, err) = mbsa(&["check", "-"], FLAT_PARALLELOGRAM);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.starts_with("ok      -: determined true\n"), "{out}");
+    assert!(
+        out.contains("        note: determined: singular configuration"),
+        "{out}"
+    );
+
+    // Numbers declared rounded (the finite test takes them as exact): nothing is said.
+    let (code, out, err) = mbsa(&["analyze", "-", "--tolerance", "1e-6"], FLAT_PARALLELOGRAM);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("singular configuration"), "{out}");
+}
+
+/// Redundant by design, moving: a planar four-bar written in space, the Bennett linkage (exact
+/// and rounded to 8 decimals) keep their first-order verdict without a note.
+#[test]
+fn redundancy_by_design_gets_no_note() {
+    for name in [
+        "@four-bar-3d-driven",
+        "@rig-planar-four-bar-3d",
+        "@rig-bennett",
+        "@bennett-rounded-8",
+    ] {
+        let (code, out, err) = mbsa(&["analyze", name], "");
+        assert_eq!(code, 0, "{name}: {err}");
+        assert!(out.contains("set aside"), "{name}: {out}");
+        assert!(!out.contains("singular configuration"), "{name}: {out}");
+        let (code, json, err) = mbsa(&["analyze", name, "--format", "json"], "");
+        assert_eq!(code, 0, "{name}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+        assert!(v.get("finite").is_none(), "{name}: {json}");
+    }
+}
+
+/// `rigid --finite` on the Bennett linkage rounded to 8 digits: no nearby configuration is
+/// reached (rounded, it is rigid as written), so the singular note names no joints rather than
+/// printing an empty list.
+#[test]
+fn a_singular_note_with_no_joints_to_name_prints_no_empty_list() {
+    let (code, out, err) = mbsa(&["rigid", "--finite", "@bennett-rounded-8"], "");
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("singular configuration: first-order mobility 1"),
+        "{out}"
+    );
+    assert!(!out.contains("(joints )"), "{out}");
+}
