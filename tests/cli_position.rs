@@ -242,3 +242,129 @@ fn rigid_reports_finite_beside_first_order_mobility() {
     assert_eq!(code, 2, "{err}");
     assert!(err.contains("--finite needs the file's geometry"), "{err}");
 }
+
+/// Modelica's Fourbar1 (R-S-U-P written as 6 R + 1 P, bundled as `@msl-fourbar1`): the body
+/// between the ball and the universal joint keeps the distance between their centres, so the
+/// slider's travel has a closed form in the crank angle.
+#[test]
+fn modelica_fourbar1_sweep_is_the_closed_form() {
+    let (code, out, err) = mbsa(&[
+        "solve",
+        "@msl-fourbar1",
+        "--sweep",
+        "j1=-60..60:30",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("sweep JSON");
+    let steps = v["steps"].as_array().expect("steps");
+    assert_eq!(steps.len(), 5, "{out}");
+    for step in steps {
+        let t = step["value"].as_f64().expect("crank angle").to_radians();
+        // The ball's centre (0, 0.5, 0.1) turned about x; the universal joint's at
+        // (1 - s, 0.2, 0); 1.1 is their squared distance in the file.
+        let (ay, az) = (0.5 * t.cos() - 0.1 * t.sin(), 0.5 * t.sin() + 0.1 * t.cos());
+        let s = 1.0 - (1.1 - (ay - 0.2).powi(2) - az * az).sqrt();
+        let b2 = step["poses"]
+            .as_array()
+            .expect("poses")
+            .iter()
+            .find(|p| p["body"] == "b2")
+            .expect("b2");
+        let x = b2["translation"][0].as_f64().expect("x");
+        assert!(
+            (x + s).abs() < 1e-9,
+            "crank {t}: slider at {x}, closed form {}",
+            -s
+        );
+        // b2 only slides: no rotation, and the zero rotation's axis.
+        assert_eq!(b2["angle_deg"].as_f64(), Some(0.0));
+        assert_eq!(b2["axis"], serde_json::json!([0.0, 0.0, 1.0]), "{b2}");
+    }
+}
+
+/// Modelica's EngineV6 (`@msl-engine-v6`): six slider-cranks on one crankshaft. Each piston's
+/// travel has the slider-crank's closed form in its own crank offset and cylinder inclination.
+#[test]
+fn modelica_engine_v6_sweep_is_the_closed_form() {
+    let (code, out, err) = mbsa(&[
+        "solve",
+        "@msl-engine-v6",
+        "--sweep",
+        "bearing=0..360:45",
+        "--format",
+        "json",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("sweep JSON");
+    let steps = v["steps"].as_array().expect("steps");
+    assert_eq!(steps.len(), 9, "{out}");
+    let offset = [-30.0f64, 90.0, 210.0, 210.0, 90.0, -30.0];
+    let inclination = [-30.0f64, 30.0, -30.0, 30.0, -30.0, 30.0];
+    // Distance of the piston pin from the crank axis along the cylinder: crank 0.1, rod 0.2.
+    let reach = |angle: f64| {
+        let c = angle.to_radians().cos();
+        0.1 * c + (0.01 * c * c + 0.03).sqrt()
+    };
+    for step in steps {
+        let turn = step["value"].as_f64().expect("bearing angle");
+        for i in 0..6 {
+            let id = format!("cylinder{}.cylinder", i + 1);
+            let slide = step["joint_values"]
+                .as_array()
+                .expect("joint values")
+                .iter()
+                .find(|j| j["joint"] == id.as_str())
+                .and_then(|j| j["values"][0].as_f64())
+                .expect("the cylinder's slide");
+            // The P joint's axis points from the piston toward the crank: its value grows as
+            // the piston comes down.
+            let expected =
+                reach(offset[i] - inclination[i]) - reach(offset[i] + turn - inclination[i]);
+            assert!(
+                (slide - expected).abs() < 1e-9,
+                "{id} at {turn} deg: {slide}, closed form {expected}"
+            );
+        }
+    }
+}
+
+/// The engine's file configuration has cylinders 1 and 4 at dead centre: their pistons are
+/// stationary in the first-order motion but move at once (a toggle), which `solve --finite`
+/// names. Written with plain revolutes for the crank pins (not Modelica's planar-loop
+/// revolute), each planar loop has 3 redundant constraints.
+#[test]
+fn modelica_engine_v6_dead_centres_and_plain_revolutes() {
+    let (code, out, err) = mbsa(&["solve", "@msl-engine-v6", "--finite", "--format", "json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("finite JSON");
+    assert_eq!(v["finite"]["finite"], 1, "{out}");
+    assert_eq!(
+        v["finite"]["locked_at_toggle"],
+        serde_json::json!(["cylinder1.cylinder", "cylinder4.cylinder"]),
+        "{out}"
+    );
+    let text = mbsa::examples::find("msl-engine-v6")
+        .expect("bundled")
+        .1
+        .replace("type = \"SC\"", "type = \"R\"");
+    let dir = std::env::temp_dir().join(format!("mbsa-engine-v6-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let path = dir.join("engine-r.toml");
+    std::fs::write(&path, text).expect("write");
+    let path = path.to_str().expect("utf-8 path");
+    let (code, out, err) = mbsa(&["rigid", path, "--method", "geometric", "--format", "json"]);
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("rigid JSON");
+    assert_eq!(
+        (&v["count"], &v["mobility"], &v["redundant"]),
+        (
+            &serde_json::json!(-17),
+            &serde_json::json!(1),
+            &serde_json::json!(18)
+        ),
+        "{out}"
+    );
+}

@@ -167,12 +167,44 @@ impl PoseReport {
             angle = -angle;
         }
         let t = pose.translation * scale;
+        let angle_deg = tidy(angle.to_degrees());
+        // A rotation of 10^-13 degrees still has an axis, made of rounding noise: the angle
+        // reported as zero gets the zero rotation's axis, as documented.
+        if angle_deg == 0.0 {
+            axis = Vector3::z();
+        }
         PoseReport {
             body,
             translation: [tidy(t.x), tidy(t.y), tidy(t.z)],
             quaternion: [tidy(q.w), tidy(q.i), tidy(q.j), tidy(q.k)],
-            angle_deg: tidy(angle.to_degrees()),
+            angle_deg,
             axis: [tidy(axis.x), tidy(axis.y), tidy(axis.z)],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_rotation_reported_as_zero_has_the_zero_rotations_axis() {
+        // 10^-15 rad about a tilted axis: the angle is reported as 0 degrees, so the axis must
+        // be the documented [0, 0, 1], not the tilted axis the noise happens to have.
+        let tiny = Pose {
+            rotation: Rotation3::new(Vector3::new(0.6e-15, -0.8e-15, 0.0)).into_inner(),
+            translation: Vector3::zeros(),
+        };
+        let r = PoseReport::new("b".into(), &tiny, Space::Spatial, 1.0);
+        assert_eq!(r.angle_deg, 0.0);
+        assert_eq!(r.axis, [0.0, 0.0, 1.0]);
+        // A real rotation keeps its axis.
+        let turn = Pose {
+            rotation: Rotation3::new(Vector3::new(0.3, -0.4, 0.0)).into_inner(),
+            translation: Vector3::zeros(),
+        };
+        let r = PoseReport::new("b".into(), &turn, Space::Spatial, 1.0);
+        assert!((r.angle_deg - 0.5f64.to_degrees()).abs() < 1e-9);
+        assert_eq!(r.axis, [0.6, -0.8, 0.0]);
     }
 }

@@ -101,29 +101,101 @@ pub fn solve_table(r: &SolveReport) -> String {
     s
 }
 
-/// A sweep: one row per step, the swept value and every joint's values.
+/// Widest a sweep table gets before its joints are split over several tables.
+const TABLE_WIDTH: usize = 120;
+
+/// A sweep: one row per step, the swept value and every joint's values. A mechanism with many
+/// joints (Modelica's EngineV6: 19 joints, 420 columns) gets several tables of at most
+/// [`TABLE_WIDTH`] columns, each starting with the swept value, the joints in file order.
 pub fn sweep_table(joint: &str, rows: &[(f64, Vec<JointValues>)]) -> String {
-    let mut t = super::new_table();
-    let mut header = vec![format!("{joint} (input)")];
+    let input = format!("{joint} (input)");
+    let steps: Vec<String> = rows.iter().map(|(x, _)| num(*x)).collect();
+    // One column per joint with values: header, then a cell per step.
+    let mut columns: Vec<Vec<String>> = Vec::new();
     if let Some((_, first)) = rows.first() {
-        header.extend(
-            first
-                .iter()
-                .filter(|v| !v.values.is_empty())
-                .map(|v| v.joint.clone()),
-        );
+        for (k, v) in first.iter().enumerate() {
+            if v.values.is_empty() {
+                continue;
+            }
+            let mut col = vec![v.joint.clone()];
+            col.extend(
+                rows.iter()
+                    .map(|(_, vals)| vals.get(k).map(values_text).unwrap_or_default()),
+            );
+            columns.push(col);
+        }
     }
-    t.set_header(header);
-    for (x, vals) in rows {
-        let mut row = vec![num(*x)];
-        row.extend(
-            vals.iter()
-                .filter(|v| !v.values.is_empty())
-                .map(values_text),
-        );
-        t.add_row(row);
+    // A column's share of the width: its widest line and 3 characters of padding and rule.
+    let width = |cells: &mut dyn Iterator<Item = &String>| {
+        cells
+            .flat_map(|c| c.lines())
+            .map(|l| l.chars().count())
+            .max()
+            .unwrap_or(0)
+            + 3
+    };
+    let first = width(&mut std::iter::once(&input).chain(&steps));
+    // A multiple joint's values (the double banana's 15 pairs) wrap at their separators.
+    let room = TABLE_WIDTH.saturating_sub(first + 3).max(20);
+    for col in &mut columns {
+        for cell in col.iter_mut().skip(1) {
+            if cell.chars().count() > room {
+                *cell = wrap_values(cell, room);
+            }
+        }
     }
-    format!("{t}\n")
+    let mut chunks: Vec<Vec<&Vec<String>>> = Vec::new();
+    let mut chunk: Vec<&Vec<String>> = Vec::new();
+    let mut used = first;
+    for col in &columns {
+        let w = width(&mut col.iter());
+        if !chunk.is_empty() && used + w > TABLE_WIDTH {
+            chunks.push(std::mem::take(&mut chunk));
+            used = first;
+        }
+        used += w;
+        chunk.push(col);
+    }
+    chunks.push(chunk);
+    let mut out = String::new();
+    for (i, chunk) in chunks.iter().enumerate() {
+        let mut t = super::new_table();
+        let mut header = vec![input.clone()];
+        header.extend(chunk.iter().map(|c| c[0].clone()));
+        t.set_header(header);
+        for (r, step) in steps.iter().enumerate() {
+            let mut row = vec![step.clone()];
+            row.extend(chunk.iter().map(|c| c[r + 1].clone()));
+            t.add_row(row);
+        }
+        if i > 0 {
+            out.push('\n');
+        }
+        let _ = writeln!(out, "{t}");
+    }
+    out
+}
+
+/// `a / b / c ...` broken into lines of at most `room` characters at the separators (a single
+/// value longer than `room` keeps its line).
+fn wrap_values(text: &str, room: usize) -> String {
+    let mut out = String::new();
+    let mut line = 0;
+    for (i, v) in text.split(" / ").enumerate() {
+        let n = v.chars().count();
+        if i > 0 {
+            if line + 3 + n > room {
+                out.push_str(" /\n");
+                line = 0;
+            } else {
+                out.push_str(" / ");
+                line += 3;
+            }
+        }
+        out.push_str(v);
+        line += n;
+    }
+    out
 }
 
 /// The closure section (for other reports): one line when closed, else a line with the
@@ -189,7 +261,62 @@ pub fn finite_section(f: &FiniteMobility) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::axis_text;
+    use super::{JointValues, axis_text, sweep_table};
+
+    /// A sweep of many joints is split into tables of at most 120 columns, each led by the
+    /// swept value, every joint in one of them once, in order; a narrow sweep stays one table.
+    #[test]
+    fn a_wide_sweep_is_split_into_tables_that_fit() {
+        let joint = |id: &str, x: f64| JointValues {
+            joint: id.to_string(),
+            values: vec![x, -x],
+            units: vec!["length", "deg"],
+        };
+        let ids: Vec<String> = (1..=19).map(|i| format!("cylinder{i}.cylinder")).collect();
+        let rows: Vec<(f64, Vec<JointValues>)> = (0..4)
+            .map(|s| {
+                let x = 0.123456 * s as f64;
+                (s as f64 * 60.0, ids.iter().map(|id| joint(id, x)).collect())
+            })
+            .collect();
+        let text = sweep_table("bearing", &rows);
+        let tables: Vec<&str> = text.split("\n\n").collect();
+        assert!(tables.len() > 3, "{text}");
+        let mut seen = Vec::new();
+        for t in &tables {
+            let widest = t.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+            assert!(widest <= 120, "{widest} columns:\n{t}");
+            let header = t.lines().nth(1).expect("header line");
+            assert!(header.trim_start().starts_with("bearing (input)"), "{t}");
+            seen.extend(
+                header
+                    .split_whitespace()
+                    .filter(|w| w.starts_with("cylinder")),
+            );
+        }
+        assert_eq!(seen, ids.iter().map(String::as_str).collect::<Vec<_>>());
+        // A multiple joint's 15 values wrap inside their cell.
+        let multiple = vec![(
+            20.0,
+            vec![JointValues {
+                joint: "A".into(),
+                values: (0..15).map(|k| 13.812908 * f64::from(k)).collect(),
+                units: vec!["deg"; 15],
+            }],
+        )];
+        let text = sweep_table("A", &multiple);
+        assert!(text.lines().all(|l| l.chars().count() <= 120), "{text}");
+        assert!(text.contains("193.380712°"), "{text}");
+        // Four joints fit in one table.
+        let narrow: Vec<(f64, Vec<JointValues>)> =
+            rows.iter().map(|(x, v)| (*x, v[..4].to_vec())).collect();
+        assert_eq!(
+            sweep_table("bearing", &narrow)
+                .matches("bearing (input)")
+                .count(),
+            1
+        );
+    }
 
     /// A rotation too small to print (the xArm gripper's finger after a solve: 10^-8 degrees)
     /// printed an axis of rounding noise, `(0.975093, 0.175655, -0.135423)`; it gets the zero
