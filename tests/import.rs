@@ -554,3 +554,30 @@ fn stewart_upu_platform_has_its_yaw_locked_and_six_pistons_fight() {
     let v: serde_json::Value = serde_json::from_str(&out).expect("json");
     assert_eq!(v["status"], "overdetermined", "{out}");
 }
+
+#[test]
+fn stewart_upu_as_published_imports_with_a_warning_on_its_prologue() {
+    // Published with `<? xml version="1.0" ?>` (a space after `<?`): not well-formed, but
+    // Gazebo's tinyxml2 reads it. mbsa used to stop with "malformed XML" at 1:3.
+    let file = fixture("stewart_upu.sdf");
+    let text = std::fs::read_to_string(&file).expect("fixture");
+    assert!(
+        text.starts_with("<? xml version=\"1.0\" ?>\n"),
+        "as published"
+    );
+    let (code, out, err) = mbsa(&["import", &file]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("warning: 1 SDFormat import warning(s):")
+            && err.contains("stewart_upu.sdf:1:1: `<? xml version=\"1.0\" ?>` is not a well-formed XML declaration"),
+        "{err}"
+    );
+    assert!(out.contains("# warning: stewart_upu.sdf:1:1:"), "{out}");
+    // Locations after it are the file's own lines.
+    let line = text
+        .lines()
+        .position(|l| l.contains("<joint") && l.contains("\"piston1_prismatic_joint\""))
+        .expect("joint")
+        + 1;
+    assert!(out.contains(&format!("stewart_upu.sdf:{line}:")), "{out}");
+}

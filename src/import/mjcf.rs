@@ -82,6 +82,7 @@ pub(super) fn read(
     let mut scan = vec![(src.name.to_string(), src.text.to_string(), 0usize)];
     let mut seen: Vec<PathBuf> = Vec::new();
     let mut file_index = 0usize;
+    let mut tolerated: Vec<String> = Vec::new();
     while let Some((name, text, depth)) = scan.pop() {
         let s = Src::new(&name, &text);
         let doc = s.parse()?;
@@ -129,6 +130,15 @@ pub(super) fn read(
                 )
                 .with_help("include paths are relative to the directory of the main model file")
             })?;
+            // An included file may begin with a spaced `<? xml ...?>` too (as MuJoCo reads it).
+            let text = match super::tolerate_spaced_declarations(&path.display().to_string(), &text)
+            {
+                Some((t, w)) => {
+                    tolerated.extend(w);
+                    t
+                }
+                None => text,
+            };
             seen.push(path.clone());
             inc_paths.push((file_index, n.range().start, path.clone()));
             pending.push((path.display().to_string(), text.clone(), depth + 1));
@@ -242,6 +252,7 @@ pub(super) fn read(
         .map(str::to_string)
         .unwrap_or_else(|| stem(src.name));
     let mut b = Builder::new(&model_name, "world", "the MJCF world body");
+    b.warnings.extend(tolerated);
 
     // The configuration.
     let (qpos, config) = cx.keyframe(&top, options, &docs)?;

@@ -208,6 +208,12 @@ pub fn import_str(
                 )
             })?,
     };
+    // What the reference loaders tolerate at the start (a spaced `<? xml ...?>`), blanked.
+    let tolerated = tolerate_spaced_declarations(name, text);
+    let (text, tolerated_warnings) = match &tolerated {
+        Some((t, w)) => (t.as_str(), w.clone()),
+        None => (text, Vec::new()),
+    };
     let src = Src::new(name, text);
     if Path::new(name)
         .extension()
@@ -248,11 +254,91 @@ pub fn import_str(
     };
     // MJCF reads its files (includes too) itself and notes their rounding in the builder.
     builder.note_rounding(src.rounding());
+    // The main file's tolerated prologue comes first: it is what a reader sees first.
+    builder.warnings.splice(0..0, tolerated_warnings);
     builder.finish(name, format, options)
 }
 
 // ---------------------------------------------------------------------------------------------
 // XML helpers
+
+/// The declarations at the start of `text` written `<?` + white space (`<? xml version="1.0"?>`,
+/// as the published Stewart platform SDF begins), which no XML parser that checks
+/// well-formedness accepts (a processing instruction's target must follow `<?` at once). The
+/// models' reference loaders all read them: tinyxml2 (sdformat, MuJoCo, newer urdfdom) takes
+/// any `<?` … `?>` before the first other node as a declaration and never reads its content;
+/// TinyXML 1 (older urdfdom, OpenSim's SimTK Xml) keeps it as an unknown node. So these
+/// declarations, and only these (at the document's start, before any other node), are
+/// blanked: replaced by spaces of the same length, line breaks kept, so every later
+/// `file:line:column` is unchanged. Returns the blanked text and one warning per declaration
+/// (with its location), or `None` when there is nothing to tolerate; a `<?` + white space
+/// anywhere else stays an error (tinyxml2 rejects a declaration after another node too).
+pub(crate) fn tolerate_spaced_declarations(
+    name: &str,
+    text: &str,
+) -> Option<(String, Vec<String>)> {
+    let file = Path::new(name)
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_else(|| name.to_string());
+    let mut spans: Vec<Range<usize>> = Vec::new();
+    let mut at = text.len() - text.trim_start_matches('\u{FEFF}').len();
+    loop {
+        at += text[at..].len() - text[at..].trim_start_matches(is_xml_space).len();
+        let rest = &text[at..];
+        let Some(after) = rest.strip_prefix("<?") else {
+            break;
+        };
+        if after.starts_with(is_xml_space) {
+            // tinyxml2 ends a declaration at the first `?>`; without one it is an error.
+            let end = at + 2 + after.find("?>")? + 2;
+            spans.push(at..end);
+            at = end;
+        } else if after.starts_with("xml") && spans.is_empty() {
+            // A well-formed declaration first: a spaced one after it is still tolerated.
+            at += 2 + after.find("?>")? + 2;
+        } else {
+            break;
+        }
+    }
+    if spans.is_empty() {
+        return None;
+    }
+    let mut out = String::with_capacity(text.len());
+    let mut warnings = Vec::with_capacity(spans.len());
+    let mut last = 0;
+    for r in spans {
+        out.push_str(&text[last..r.start]);
+        let decl = &text[r.clone()];
+        out.extend(
+            decl.chars()
+                .map(|c| if c == '\n' || c == '\r' { c } else { ' ' }),
+        );
+        // Blanking keeps byte offsets only if every blanked character is one byte.
+        out.extend(std::iter::repeat_n(' ', decl.len() - decl.chars().count()));
+        let line = text[..r.start].matches('\n').count() + 1;
+        let col = text[..r.start]
+            .rsplit('\n')
+            .next()
+            .map_or(0, |l| l.chars().count())
+            + 1;
+        let shown: String = decl.chars().take(80).collect();
+        let shown = shown.replace(['\n', '\r'], " ");
+        warnings.push(format!(
+            "{file}:{line}:{col}: `{shown}` is not a well-formed XML declaration (no space may \
+             follow `<?`): read as a declaration with its content ignored, as the TinyXML parsers \
+             of Gazebo (sdformat), MuJoCo, urdfdom and OpenSim read it; write `<?xml` to silence this"
+        ));
+        last = r.end;
+    }
+    out.push_str(&text[last..]);
+    Some((out, warnings))
+}
+
+/// XML white space (`S` in the XML grammar).
+fn is_xml_space(c: char) -> bool {
+    matches!(c, ' ' | '\t' | '\n' | '\r')
+}
 
 /// One source file: its display name and text (for located errors).
 pub(crate) struct Src<'a> {

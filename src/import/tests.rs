@@ -593,3 +593,96 @@ fn precision_comes_from_the_source_numbers() {
     assert_eq!(precision_text(0.005f64.to_radians()), "8.73e-5");
     assert_eq!(precision_text(0.0), "0");
 }
+
+#[test]
+fn a_spaced_declaration_at_the_start_is_read_as_the_reference_loaders_read_it() {
+    // The published Stewart platform SDF begins `<? xml version="1.0" ?>`: not well-formed,
+    // but tinyxml2 (Gazebo, MuJoCo) takes any `<?` … `?>` first in the document as the
+    // declaration. Every importer accepts it with a located warning; the rest of the
+    // file's locations are unchanged.
+    let decl = "<? xml version=\"1.0\" ?>\n";
+    let cases: [(&str, String); 4] = [
+        (
+            "t.sdf",
+            r#"<sdf version="1.6"><model name="m"><link name="L"/>
+<joint name="J" type="revolute"><parent>world</parent><child>L</child><axis><xyz>0 0 1</xyz></axis></joint></model></sdf>"#
+                .to_string(),
+        ),
+        (
+            "t.urdf",
+            r#"<robot name="r"><link name="a"/><link name="b"/>
+<joint name="J" type="revolute"><parent link="a"/><child link="b"/></joint></robot>"#
+                .to_string(),
+        ),
+        (
+            "t.xml",
+            "<mujoco><worldbody><body name=\"a\">\n<joint name=\"J\"/></body></worldbody></mujoco>"
+                .to_string(),
+        ),
+        (
+            "t.osim",
+            r#"<OpenSimDocument Version="30000"><Model name="p"><BodySet><objects>
+<Body name="ground"/><Body name="a"><Joint><PinJoint name="J"><parent_body>ground</parent_body>
+<location_in_parent>0 0 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent>
+<location>0 0 0</location><orientation>0 0 0</orientation></PinJoint></Joint></Body>
+</objects></BodySet></Model></OpenSimDocument>"#
+                .to_string(),
+        ),
+    ];
+    for (name, body) in &cases {
+        let clean = import_str(name, body, None, &ImportOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert!(
+            clean.warnings.iter().all(|w| !w.contains("declaration")),
+            "{name}: {:?}",
+            clean.warnings
+        );
+        let spaced = format!("{decl}{body}");
+        let i = import_str(name, &spaced, None, &ImportOptions::default())
+            .unwrap_or_else(|e| panic!("{name}: {e:?}"));
+        assert_eq!(i.warnings.len(), clean.warnings.len() + 1, "{name}");
+        let w = &i.warnings[0];
+        assert!(
+            w.starts_with(&format!("{name}:1:1: `<? xml version=\"1.0\" ?>`"))
+                && w.contains("not a well-formed XML declaration")
+                && w.contains("TinyXML"),
+            "{name}: {w}"
+        );
+        assert_eq!(i.mechanism.joints.len(), clean.mechanism.joints.len());
+        // The comments naming source lines are one line later, nothing else moves.
+        assert!(i.toml.contains(&format!("{name}:3:")), "{name}: {}", i.toml);
+        // An error after the tolerated line is located as before (one line down).
+        let broken = format!("{decl}{}", body.replacen("name=\"J\"", "name=\"J\" <", 1));
+        let e = import_str(name, &broken, None, &ImportOptions::default()).unwrap_err();
+        assert!(e.message().starts_with("malformed XML"), "{name}: {e:?}");
+        assert_eq!(e.location().map(|l| l.1), Some(3), "{name}: {e:?}");
+    }
+    // Two of them, and one after a well-formed declaration, are tolerated too (tinyxml2 reads
+    // several declarations before the first other node).
+    let body = &cases[0].1;
+    let i = import_str(
+        "t.sdf",
+        &format!("<?xml version=\"1.0\"?>\n<?\txml version=\"1.0\"?>{decl}{body}"),
+        None,
+        &ImportOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e:?}"));
+    assert_eq!(i.warnings.len(), 2, "{:?}", i.warnings);
+    assert!(
+        i.warnings[0].starts_with("t.sdf:2:1: `<?\txml"),
+        "{:?}",
+        i.warnings
+    );
+    assert!(i.warnings[1].starts_with("t.sdf:2:"), "{:?}", i.warnings);
+    // Everything else stays an error: after a comment or inside the document (tinyxml2
+    // rejects a declaration after another node), unterminated, or `<?` + a non-name.
+    for bad in [
+        format!("<!-- c -->\n{decl}{body}"),
+        body.replacen("<model", &format!("{decl}<model"), 1),
+        format!("<? xml version=\"1.0\"\n{body}"),
+        format!("<?1xml?>{body}"),
+    ] {
+        let e = import_str("t.sdf", &bad, None, &ImportOptions::default()).unwrap_err();
+        assert!(e.message().starts_with("malformed XML"), "{bad}: {e:?}");
+    }
+}
