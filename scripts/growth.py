@@ -139,28 +139,31 @@ def main():
                 subprocess.run([BIN, "generate"] + gen(n), stdout=f, check=True)
             for name, args in cmds:
                 if name in capped:
-                    results[name].append((n, None, None, "not run"))
+                    results[name].append((n, None, None, "not run", None))
                     continue
                 wall, cpu, rss, code = measure([BIN] + args + [path], a)
                 print(f"{label:32} {n:>9} {name:24} wall {wall} cpu {cpu} rss {rss} -> {code}",
                       file=sys.stderr, flush=True)
                 if code == "timeout" or (cpu is not None and cpu > a.cap_seconds / 4):
                     capped.add(name)
-                results[name].append((n, cpu, rss, code))
+                results[name].append((n, cpu, rss, code, wall))
             os.remove(path)
         for name, _ in cmds:
             pts = results[name]
             cells = []
-            for n, cpu, rss, code in pts:
+            for n, cpu, rss, code, *wall in pts:
                 if code == "not run":
                     cells.append("not run")
                 elif code == "timeout":
                     cells.append(f"> {a.cap_seconds:.0f} s")
                 elif code not in (0, 1):
                     cells.append(f"exit {code}, {fmt_time(cpu)}")
+                elif wall and wall[0] is not None and cpu >= 1 and wall[0] < 0.8 * cpu:
+                    # Ran on more than one core: the wall time is what the user waits.
+                    cells.append(f"{fmt_time(cpu)} ({fmt_time(wall[0])} wall), {rss:.0f} MB")
                 else:
                     cells.append(f"{fmt_time(cpu)}, {rss:.0f} MB")
-            k = slope([(n, cpu) for n, cpu, _, code in pts if code in (0, 1)])
+            k = slope([(n, cpu) for n, cpu, _, code, _ in pts if code in (0, 1)])
             rows.append((label, name, cells, "–" if k is None else f"{k:.2f}"))
     header = "| family | command | " + " | ".join(f"{n:,}" for n in sizes) + " | exponent |"
     sep = "|---|---|" + "---|" * len(sizes) + "---|"
