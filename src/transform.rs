@@ -712,6 +712,20 @@ fn finish_notes(s: &mut Summary, opts: &TransformOptions) {
             crate::budget::count_in_words(s.expansions_total)
         ));
     }
+    // Zero placements always get a reason: the specific ones (too few drivable DOF, the
+    // joints over-determining the bodies) say "no placement"; otherwise the count itself.
+    if s.count_valid == 0
+        && s.f > 0
+        && !s.truncated
+        && !s.notes.iter().any(|n| n.contains("no placement"))
+    {
+        s.notes.push(format!(
+            "no placement of the {} input(s) on the {} joint(s) that may be driven passes the \
+             count: each one leaves some bodies with freedoms no input fixes while others get \
+             more inputs than freedoms",
+            s.f, s.drivable
+        ));
+    }
     if s.truncated {
         s.notes.push(format!(
             "the search stopped at --limit {}: more placements exist and are not ranked here{}",
@@ -2787,6 +2801,21 @@ impl Problem {
             return Ok(p);
         }
         p.need = (p.f - kept) as usize;
+        // Without this the search finds nothing and the user reads "0 placements" with no
+        // reason (a Stewart platform with --on P: 6 pistons for 11 inputs).
+        let capacity: i64 =
+            p.hi.iter()
+                .zip(&p.lo)
+                .map(|(&h, &l)| i64::from(h.saturating_sub(l)))
+                .sum();
+        if capacity < p.need as i64 {
+            p.note = Some(format!(
+                "the joints that may be driven carry {capacity} DOF in all, fewer than the {} \
+                 input(s) to place: no placement exists",
+                p.need
+            ));
+            return Ok(p);
+        }
         let mut s = State {
             flow: vec![[0; 2]; nq],
             used: vec![0; nb],

@@ -215,3 +215,81 @@ fn multiple_joints_are_expanded_into_spanning_trees() {
         insta::assert_snapshot!("transform_ternary_table", text);
     });
 }
+
+/// Zero placements always come with a reason. Too few drivable DOF (no S joint in the slider
+/// crank for `--on S`, at the file's geometry and by count alone): the note says how many DOF
+/// the allowed joints carry against the inputs to place.
+#[test]
+fn no_placement_for_want_of_drivable_dof_says_so() {
+    let (file, text) = mbsa::examples::find("slider-crank-geometry").expect("bundled example");
+    let m = load(file, text, Format::Toml).expect("bundled example loads");
+    let lib = Library::builtin();
+    for count_only in [false, true] {
+        let mut o = TransformOptions::default();
+        o.analysis.count_only = count_only;
+        o.analysis.geometry = mbsa::motion::GeometrySource::File;
+        o.on = Some(TransformOptions::parse_on("S").unwrap());
+        let r = transform(&m, &o, &lib, None).unwrap();
+        assert_eq!((r.summary.count_valid, r.summary.determined), (0, 0));
+        assert!(
+            r.summary.notes.iter().any(|n| n.contains("no placement")),
+            "count_only {count_only}: {:?}",
+            r.summary.notes
+        );
+        if !count_only {
+            assert!(
+                r.summary
+                    .notes
+                    .iter()
+                    .any(|n| n.contains("carry 0 DOF in all, fewer than the 1 input(s)")),
+                "{:?}",
+                r.summary.notes
+            );
+        }
+    }
+}
+
+/// Enough drivable DOF, yet every placement fails the count: a planar four-bar (A, C, D, E)
+/// with a pendant bar on B, and B excluded. Two inputs are needed, and the only joints left are
+/// in the four-bar's loop, which takes one: the note says nothing passes the count.
+#[test]
+fn no_placement_by_count_says_so() {
+    let text = r#"
+name = "four-bar with a pendant bar"
+space = "planar"
+frame = 0
+"#
+    .to_string()
+        + &[
+            ("A", 0, 1),
+            ("B", 1, 2),
+            ("C", 1, 3),
+            ("D", 3, 4),
+            ("E", 4, 0),
+        ]
+        .iter()
+        .map(|(id, a, b)| format!("[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\n"))
+        .collect::<String>();
+    let m = load("pendant.toml", &text, Format::Toml).expect("valid");
+    let lib = Library::builtin();
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("B").unwrap());
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert_eq!((r.summary.f, r.summary.count_valid), (2, 0));
+    let why: Vec<&String> = r
+        .summary
+        .notes
+        .iter()
+        .filter(|n| n.contains("no placement"))
+        .collect();
+    assert_eq!(why.len(), 1, "{:?}", r.summary.notes);
+    assert!(
+        why[0].contains("no placement of the 2 input(s) on the 4 joint(s)"),
+        "{}",
+        why[0]
+    );
+    // Without the exclusion there are placements and no such note.
+    let r = transform(&m, &opts(), &lib, None).unwrap();
+    assert!(r.summary.determined > 0);
+    assert!(r.summary.notes.iter().all(|n| !n.contains("no placement")));
+}
