@@ -126,16 +126,92 @@ fn redundancy_by_design_gets_no_note() {
     }
 }
 
-/// `rigid --finite` on the Bennett linkage rounded to 8 digits: no nearby configuration is
-/// reached (rounded, it is rigid as written), so the singular note names no joints rather than
-/// printing an empty list.
+/// `rigid --finite --tolerance 0` on the Bennett linkage rounded to 8 digits (its numbers
+/// taken as exact): no nearby configuration is reached (so taken, it is rigid), so the
+/// singular note names no joints rather than printing an empty list.
 #[test]
 fn a_singular_note_with_no_joints_to_name_prints_no_empty_list() {
-    let (code, out, err) = mbsa(&["rigid", "--finite", "@bennett-rounded-8"], "");
+    let (code, out, err) = mbsa(
+        &[
+            "rigid",
+            "--finite",
+            "@bennett-rounded-8",
+            "--tolerance",
+            "0",
+        ],
+        "",
+    );
     assert_eq!(code, 0, "{err}");
     assert!(
         out.contains("singular configuration: first-order mobility 1"),
         "{out}"
     );
     assert!(!out.contains("(joints )"), "{out}");
+}
+
+/// Rounded numbers: the finite test takes them as exact, the geometric analysis as known to
+/// their precision. Where the two disagree (the Bennett to 4 digits: first order 0 as written,
+/// true mobility 1 at ±5e-5; to 8 digits: first order 1, finite 0 as written) `rigid --finite`
+/// says "not decided" with what it found taken as exact, where it used to say finite 0 (and
+/// "singular configuration" at 8 digits) beside "true mobility 1" in the same report. Exact
+/// numbers, and `--tolerance 0`, keep the test's verdict.
+#[test]
+fn rounded_numbers_leave_a_disagreeing_finite_answer_undecided() {
+    for (name, precision, at_precision) in [
+        ("@bennett-rounded-4", 5e-5, true),
+        ("@bennett-rounded-8", 5e-8, false),
+    ] {
+        let (code, out, err) = mbsa(&["rigid", "--finite", name], "");
+        assert_eq!(code, 0, "{name}: {err}");
+        assert!(out.contains("true mobility 1"), "{name}: {out}");
+        assert!(
+            out.contains(
+                "Finite mobility: not decided at the written precision (taken as exact: 0;"
+            ),
+            "{name}: {out}"
+        );
+        assert!(
+            out.contains("- not decided: the geometry's numbers are rounded"),
+            "{name}: {out}"
+        );
+        assert!(!out.contains("- singular configuration:"), "{name}: {out}");
+        assert_eq!(
+            out.contains("the first-order count at their precision is 1"),
+            at_precision,
+            "{name}: {out}"
+        );
+        let (code, json, err) = mbsa(&["rigid", "--finite", name, "--format", "json"], "");
+        assert_eq!(code, 0, "{name}: {err}");
+        let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+        assert_eq!(v["finite"]["verdict"], "undecided", "{name}: {json}");
+        let rounded = v["finite"]["rounded"].as_f64().expect("the precision");
+        assert!(
+            (rounded - precision).abs() < 1e-3 * precision,
+            "{name}: {rounded}"
+        );
+    }
+    // Taken as exact, the test's own verdict.
+    let (_, json, _) = mbsa(
+        &[
+            "rigid",
+            "--finite",
+            "@bennett-rounded-8",
+            "--tolerance",
+            "0",
+            "--format",
+            "json",
+        ],
+        "",
+    );
+    let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(v["finite"]["verdict"], "singular", "{json}");
+    assert!(v["finite"].get("rounded").is_none(), "{json}");
+    // Exact numbers that agree: unchanged.
+    let (_, json, _) = mbsa(
+        &["rigid", "--finite", "@rig-bennett", "--format", "json"],
+        "",
+    );
+    let v: serde_json::Value = serde_json::from_str(&json).expect("JSON");
+    assert_eq!(v["finite"]["verdict"], "overconstrained_moving", "{json}");
+    assert!(v["finite"].get("rounded").is_none(), "{json}");
 }

@@ -400,6 +400,20 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
     } else {
         None
     };
+    // Rounded numbers: the test takes them as exact, the geometric analysis as known to their
+    // precision; where the two disagree the finite answer is not decided (and says why).
+    let mut finite = finite;
+    if let Some(f) = finite.as_mut() {
+        let precision = args
+            .geometry
+            .precision()?
+            .unwrap_or_else(|| mbsa::motion::written_precision(&m));
+        let at_precision = geometric
+            .as_ref()
+            .filter(|_| !args.with_inputs)
+            .map(|g| g.mobility);
+        mbsa::position::caveat_rounded(f, precision, at_precision);
+    }
     let text = match (format, &counting, &geometric) {
         (OutputFormat::Json, c, g) if finite.is_some() || (c.is_some() && g.is_some()) => {
             mbsa::report::json(&Both {

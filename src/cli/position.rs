@@ -279,6 +279,10 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
                     e => input_err(name, &e),
                 })?,
             );
+            // As `rigid --finite`: on rounded numbers a disagreement is not decided.
+            if let Some(f) = report.finite.as_mut() {
+                mbsa::position::caveat_rounded(f, mbsa::motion::written_precision(&m), None);
+            }
         }
         return emit(&match args.format {
             SolveFormat::Table => mbsa::report::position::solve_table(&report),

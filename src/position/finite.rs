@@ -65,6 +65,11 @@ pub enum Verdict {
     OverconstrainedMoving,
     /// Both: overconstrained by design and at a singular configuration.
     SingularOverconstrained,
+    /// The geometry's numbers are rounded and the test, which takes them as exact, disagrees
+    /// with the first-order count at their precision (or finds fewer finite than first-order
+    /// freedoms): whether the difference is a singular configuration or the rounding's
+    /// cannot be told from these numbers ([`caveat_rounded`]).
+    Undecided,
 }
 
 /// The finite-mobility report.
@@ -93,6 +98,51 @@ pub struct FiniteMobility {
     /// assembled first ([`finite_mobility_of_file`]; the first note says by how much).
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub assembled: bool,
+    /// Set with [`Verdict::Undecided`]: how precisely the geometry's numbers are known (file
+    /// units), which this test took as exact ([`caveat_rounded`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub rounded: Option<f64>,
+}
+
+/// The test takes the geometry's numbers as exact, while the first-order analyses take
+/// rounded numbers as known to their `precision` (file units; 0 when exact): rounding alone
+/// can lock a linkage that moves by design (`@bennett-rounded-8`: first order 1, finite 0 as
+/// written; `@bennett-rounded-4`: first order 0 as written, true mobility 1 at its precision).
+/// So on rounded numbers the test's answer stands only where it agrees with the first-order
+/// count at their precision (`first_order_at_precision`, the geometric analysis's true
+/// mobility, when known) and finds every first-order freedom finite. Otherwise the verdict
+/// becomes [`Verdict::Undecided`], the singular-configuration note gives way to one that says
+/// what was found taken as exact and what cannot be told, and [`FiniteMobility::rounded`]
+/// holds the precision. `mbsa analyze` does not run the test on rounded numbers for the same
+/// reason ([`crate::structure::check_finite`]); `--tolerance 0` takes them as exact in both.
+pub fn caveat_rounded(
+    f: &mut FiniteMobility,
+    precision: f64,
+    first_order_at_precision: Option<usize>,
+) {
+    let agrees = first_order_at_precision.is_none_or(|k| k == f.first_order);
+    let rounded = precision > 0.0;
+    if !rounded || (agrees && f.finite >= f.first_order) {
+        return;
+    }
+    f.notes.retain(|n| !n.starts_with("singular configuration"));
+    let at_precision = match first_order_at_precision {
+        Some(k) if k != f.first_order => {
+            format!(", where the first-order count at their precision is {k}")
+        }
+        _ => String::new(),
+    };
+    f.notes.push(format!(
+        "not decided: the geometry's numbers are rounded (known to ±{precision:e}) and this test \
+         takes them as exact; so taken they allow {} DOF to first order and {} for finite \
+         motion{at_precision}. Rounding alone can lock a linkage that moves by design (a Bennett \
+         linkage written to 8 digits), so whether the difference is a singular configuration's \
+         or the rounding's cannot be told from these numbers: write them with more digits (or \
+         take them as exact with `mbsa rigid --finite --tolerance 0`)",
+        f.first_order, f.finite
+    ));
+    f.verdict = Verdict::Undecided;
+    f.rounded = Some(precision);
 }
 
 /// The finite-mobility test of a file, at the configuration it describes. A closed file is
@@ -767,5 +817,69 @@ pub fn finite_mobility(
         locked_at_toggle,
         notes,
         assembled: false,
+        rounded: None,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn report(first_order: usize, finite: usize, singular: bool) -> FiniteMobility {
+        FiniteMobility {
+            count: -2,
+            first_order,
+            finite,
+            samples: Vec::new(),
+            verdict: if singular {
+                Verdict::Singular
+            } else {
+                Verdict::Regular
+            },
+            instantaneous_only: first_order.saturating_sub(finite),
+            singular_joints: Vec::new(),
+            locked_at_toggle: Vec::new(),
+            notes: if singular {
+                vec!["singular configuration: ...".into()]
+            } else {
+                Vec::new()
+            },
+            assembled: false,
+            rounded: None,
+        }
+    }
+
+    /// The caveat applies only to rounded numbers, and there only where the test disagrees
+    /// with the first-order count at their precision or finds fewer finite freedoms.
+    #[test]
+    fn only_a_disagreement_on_rounded_numbers_is_undecided() {
+        // Exact numbers: the test's verdict stands, singular or not.
+        let mut f = report(1, 0, true);
+        caveat_rounded(&mut f, 0.0, Some(1));
+        assert_eq!(f, report(1, 0, true));
+        // Rounded, agreeing, every freedom finite: unchanged.
+        let mut f = report(1, 1, false);
+        caveat_rounded(&mut f, 5e-5, Some(1));
+        assert_eq!(f, report(1, 1, false));
+        // Rounded, fewer finite freedoms: undecided, the singular note replaced.
+        let mut f = report(1, 0, true);
+        caveat_rounded(&mut f, 5e-8, Some(1));
+        assert_eq!((f.verdict, f.rounded), (Verdict::Undecided, Some(5e-8)));
+        assert_eq!(f.notes.len(), 1);
+        assert!(f.notes[0].starts_with("not decided: "), "{:?}", f.notes);
+        assert!(
+            !f.notes[0].contains("at their precision is"),
+            "{:?}",
+            f.notes
+        );
+        // Rounded, first order below the count at precision: undecided, and it says so.
+        let mut f = report(0, 0, false);
+        caveat_rounded(&mut f, 5e-5, Some(1));
+        assert_eq!(f.verdict, Verdict::Undecided);
+        assert!(f.notes[0].contains("the first-order count at their precision is 1"));
+        // Unknown count at precision (`solve --finite`): only fewer finite freedoms count.
+        let mut f = report(0, 0, false);
+        caveat_rounded(&mut f, 5e-5, None);
+        assert_eq!(f, report(0, 0, false));
+    }
 }

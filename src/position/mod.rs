@@ -31,7 +31,8 @@ pub use closure::{
     moved_mechanism, tolerance_for,
 };
 pub use finite::{
-    FiniteMobility, FiniteOptions, Verdict, finite_mobility, finite_mobility_of_file,
+    FiniteMobility, FiniteOptions, Verdict, caveat_rounded, finite_mobility,
+    finite_mobility_of_file,
 };
 pub use newton::{NewtonOptions, NewtonOutcome, System, Targets};
 pub use pose::{Configuration, Pose, PoseReport};

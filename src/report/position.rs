@@ -244,10 +244,18 @@ pub fn closure_lines(c: &Closure) -> String {
 /// Finite against first-order mobility.
 pub fn finite_section(f: &FiniteMobility) -> String {
     let mut s = String::new();
+    // Rounded numbers the test took as exact: the numbers are theirs, not the mechanism's.
+    let (value, taken) = if f.verdict == crate::position::Verdict::Undecided {
+        (
+            "not decided at the written precision".to_string(),
+            format!("taken as exact: {}; ", f.finite),
+        )
+    } else {
+        (f.finite.to_string(), String::new())
+    };
     let _ = writeln!(
         s,
-        "Finite mobility: {} (first order {}, count {}; nullity at {} nearby points: {:?})",
-        f.finite,
+        "Finite mobility: {value} ({taken}first order {}, count {}; nullity at {} nearby points: {:?})",
         f.first_order,
         f.count,
         f.samples.len(),
