@@ -68,6 +68,7 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
         let mut rows = GroupRows {
             groups: &a.groups,
             joined: String::new(),
+            widths: list_widths(&a.groups),
         };
         plain_table_with(out, &header, &mut rows, flush)?;
         out.push('\n');
@@ -162,6 +163,8 @@ struct GroupRows<'a> {
     groups: &'a [crate::structure::Group],
     /// The body list before it is wrapped.
     joined: String,
+    /// Wrap widths of the list columns: bodies, from, internal, to ([`list_widths`]).
+    widths: [usize; 4],
 }
 
 impl Rows for GroupRows<'_> {
@@ -181,7 +184,7 @@ impl Rows for GroupRows<'_> {
             }
             self.joined.push_str(b);
         }
-        wrap_into(buf, &self.joined, ',');
+        wrap_into(buf, &self.joined, ',', self.widths[0]);
         end(buf);
         for n in [g.nm, g.inputs as usize, g.level] {
             push_usize(buf, n);
@@ -189,8 +192,11 @@ impl Rows for GroupRows<'_> {
         }
         buf.push_str(&g.kind);
         end(buf);
-        for list in [&g.from, &g.internal, &g.to] {
-            wrap_into(buf, dash(list), '.');
+        for (list, width) in [&g.from, &g.internal, &g.to]
+            .into_iter()
+            .zip(&self.widths[1..])
+        {
+            wrap_into(buf, dash(list), '.', *width);
             end(buf);
         }
     }
@@ -216,18 +222,91 @@ fn push_usize(s: &mut String, mut n: usize) {
 /// (thousands of pairs) would otherwise make every row of the table as wide as its list.
 const CELL_WIDTH: usize = 48;
 
-/// Append a list (`9&10S.9&13R.` or `3,5,7`) to `out`, broken into lines of at most
-/// [`CELL_WIDTH`] characters after a separator, so that no entry is split.
-fn wrap_into(out: &mut String, text: &str, sep: char) {
+/// Width the group table keeps within when its entries allow (as `transform`'s tables).
+const TABLE_WIDTH: usize = 120;
+
+/// Wrap widths of the group table's list columns (bodies, from, internal, to). Each list
+/// wraps at [`CELL_WIDTH`] as long as the table then fits [`TABLE_WIDTH`]; otherwise the room
+/// the other columns leave is shared among the lists, none narrower than its longest entry
+/// (entries are never split) or its header, none wider than it needs. One pass over the
+/// groups, reading lengths only.
+fn list_widths(groups: &[crate::structure::Group]) -> [usize; 4] {
+    let chars = |t: &str| t.chars().count();
+    let digits = |n: usize| n.checked_ilog10().map_or(1, |d| d as usize + 1);
+    // SG, Nm, inputs, level, type: their headers, then their widest cells.
+    let mut fixed = [2usize, 2, 6, 5, 4];
+    // Headers: bodies, from, internal, to.
+    let mut atom = [6usize, 4, 8, 2];
+    let mut natural = atom;
+    for g in groups {
+        fixed[0] = fixed[0].max(chars(&g.name));
+        fixed[1] = fixed[1].max(digits(g.nm));
+        fixed[2] = fixed[2].max(digits(g.inputs as usize));
+        fixed[3] = fixed[3].max(digits(g.level));
+        fixed[4] = fixed[4].max(chars(&g.kind));
+        // The widest line of each list wrapped at CELL_WIDTH, as `wrap_into` wraps it.
+        let (mut line, mut widest) = (0, 0);
+        for (k, b) in g.bodies.iter().enumerate() {
+            let n = chars(b) + usize::from(k + 1 < g.bodies.len());
+            atom[0] = atom[0].max(n);
+            if line > 0 && line + n > CELL_WIDTH {
+                line = 0;
+            }
+            line += n;
+            widest = widest.max(line);
+        }
+        natural[0] = natural[0].max(widest);
+        for (c, list) in [&g.from, &g.internal, &g.to].into_iter().enumerate() {
+            let (mut line, mut widest) = (0, 0);
+            for entry in dash(list).split_inclusive('.') {
+                let n = chars(entry);
+                atom[c + 1] = atom[c + 1].max(n);
+                if line > 0 && line + n > CELL_WIDTH {
+                    line = 0;
+                }
+                line += n;
+                widest = widest.max(line);
+            }
+            natural[c + 1] = natural[c + 1].max(widest);
+        }
+    }
+    for c in 0..4 {
+        natural[c] = natural[c].max(atom[c]);
+    }
+    // Nine columns: two spaces of padding each and eight separators.
+    let room = TABLE_WIDTH.saturating_sub(fixed.iter().sum::<usize>() + 2 * 9 + 8);
+    if natural.iter().sum::<usize>() <= room {
+        return [CELL_WIDTH; 4];
+    }
+    let mut width = atom;
+    let mut left = room.saturating_sub(width.iter().sum());
+    while left > 0 {
+        let open: Vec<usize> = (0..4).filter(|&c| width[c] < natural[c]).collect();
+        if open.is_empty() {
+            break;
+        }
+        let share = (left / open.len()).max(1);
+        for c in open {
+            let add = share.min(natural[c] - width[c]).min(left);
+            width[c] += add;
+            left -= add;
+        }
+    }
+    width
+}
+
+/// Append a list (`9&10S.9&13R.` or `3,5,7`) to `out`, broken into lines of at most `width`
+/// characters after a separator, so that no entry is split.
+fn wrap_into(out: &mut String, text: &str, sep: char, width: usize) {
     // Never more than one line (characters are at most bytes): nothing to break.
-    if text.len() <= CELL_WIDTH {
+    if text.len() <= width {
         out.push_str(text);
         return;
     }
     let mut line = 0;
     for entry in text.split_inclusive(sep) {
         let n = entry.chars().count();
-        if line > 0 && line + n > CELL_WIDTH {
+        if line > 0 && line + n > width {
             out.push('\n');
             line = 0;
         }
@@ -393,6 +472,39 @@ mod tests {
                 comfy(&header, &rows),
                 "round {round}: {header:?} {rows:?}"
             );
+        }
+    }
+    /// Modelica's EngineV6 (long body and joint ids) made a 146-column group table; it now
+    /// fits 120, no list entry split; a table that fitted stays byte for byte what it was.
+    #[test]
+    fn the_group_table_fits_120_columns_when_its_entries_allow() {
+        let widest = |t: &str| t.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+        let lib = crate::structure::Library::builtin();
+        for (name, before) in [("msl-engine-v6", 146), ("stewart", 167), ("four-bar", 0)] {
+            let (file, text) = crate::examples::find(name).expect("bundled");
+            let m = crate::format::load(file, text, crate::format::Format::Toml).expect("valid");
+            let a = crate::structure::analyze(&m, &crate::structure::Options::default(), &lib)
+                .expect("analyses");
+            let t = table(&a);
+            let groups: String = t
+                .lines()
+                .skip_while(|l| !l.starts_with(" SG "))
+                .take_while(|l| !l.starts_with(" SG type"))
+                .collect::<Vec<_>>()
+                .join("\n");
+            assert!(widest(&groups) <= 120, "{name}:\n{t}");
+            // Every entry of every list whole in one cell line.
+            for g in &a.groups {
+                for entry in g.from.split_inclusive('.').chain(g.to.split_inclusive('.')) {
+                    assert!(groups.contains(entry), "{name}: {entry} split");
+                }
+            }
+            if before == 0 {
+                // Fitted already: the widths are the old fixed ones.
+                assert_eq!(list_widths(&a.groups), [CELL_WIDTH; 4], "{name}");
+            } else {
+                assert!(list_widths(&a.groups).iter().any(|&w| w < CELL_WIDTH));
+            }
         }
     }
 }
