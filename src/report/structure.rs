@@ -112,7 +112,7 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
             .collect();
         let _ = writeln!(
             out,
-            "isolated freedoms (no input can drive them, left out): {}",
+            "isolated freedoms (each turns one body alone, moving no other; left out): {}",
             list.join(", ")
         );
     }
@@ -238,6 +238,9 @@ fn list_widths(groups: &[crate::structure::Group]) -> [usize; 4] {
     // Headers: bodies, from, internal, to.
     let mut atom = [6usize, 4, 8, 2];
     let mut natural = atom;
+    // The longest piece of an entry broken after its `&` (a pair's two bodies apart): the
+    // narrowest a list column can be when whole entries do not fit.
+    let mut piece = atom;
     for g in groups {
         fixed[0] = fixed[0].max(chars(&g.name));
         fixed[1] = fixed[1].max(digits(g.nm));
@@ -261,6 +264,9 @@ fn list_widths(groups: &[crate::structure::Group]) -> [usize; 4] {
             for entry in dash(list).split_inclusive('.') {
                 let n = chars(entry);
                 atom[c + 1] = atom[c + 1].max(n);
+                for p in entry.split_inclusive('&') {
+                    piece[c + 1] = piece[c + 1].max(chars(p));
+                }
                 if line > 0 && line + n > CELL_WIDTH {
                     line = 0;
                 }
@@ -270,6 +276,7 @@ fn list_widths(groups: &[crate::structure::Group]) -> [usize; 4] {
             natural[c + 1] = natural[c + 1].max(widest);
         }
     }
+    piece[0] = atom[0];
     for c in 0..4 {
         natural[c] = natural[c].max(atom[c]);
     }
@@ -278,7 +285,12 @@ fn list_widths(groups: &[crate::structure::Group]) -> [usize; 4] {
     if natural.iter().sum::<usize>() <= room {
         return [CELL_WIDTH; 4];
     }
-    let mut width = atom;
+    // Whole entries when they fit, else entries broken after their `&` where needed.
+    let mut width = if atom.iter().sum::<usize>() <= room {
+        atom
+    } else {
+        piece
+    };
     let mut left = room.saturating_sub(width.iter().sum());
     while left > 0 {
         let open: Vec<usize> = (0..4).filter(|&c| width[c] < natural[c]).collect();
@@ -304,14 +316,22 @@ fn wrap_into(out: &mut String, text: &str, sep: char, width: usize) {
         return;
     }
     let mut line = 0;
-    for entry in text.split_inclusive(sep) {
-        let n = entry.chars().count();
+    let mut put = |out: &mut String, piece: &str| {
+        let n = piece.chars().count();
         if line > 0 && line + n > width {
             out.push('\n');
             line = 0;
         }
-        out.push_str(entry);
+        out.push_str(piece);
         line += n;
+    };
+    for entry in text.split_inclusive(sep) {
+        // An entry wider than a column narrowed to fit 120 breaks after its `&`.
+        if width < CELL_WIDTH && entry.chars().count() > width {
+            entry.split_inclusive('&').for_each(|p| put(out, p));
+        } else {
+            put(out, entry);
+        }
     }
 }
 
@@ -474,6 +494,59 @@ mod tests {
             );
         }
     }
+    /// Entries too long to fit whole (a Delta robot's `proximal_link_1&distal_link_1S.`, 32
+    /// characters, three list columns of them: 156 columns) break after their `&` and the
+    /// table fits 120; every piece is whole.
+    #[test]
+    fn entries_too_long_to_fit_whole_break_after_their_ampersand() {
+        let pair = |a: &str, b: &str, t: &str| format!("{a}&{b}{t}.");
+        let groups: Vec<crate::structure::Group> = (1..=3)
+            .map(|k| {
+                let arm = format!("proximal_link_{k}");
+                crate::structure::Group {
+                    name: format!("SG-{k}"),
+                    bodies: vec![arm.clone()],
+                    nm: 1,
+                    level: 1,
+                    inputs: 1,
+                    kind: "1R3D".into(),
+                    in_library: true,
+                    depends_on: Vec::new(),
+                    from: pair(&arm, "base_link", "R"),
+                    internal: pair(&arm, "distal_link_0", "S"),
+                    to: pair(&arm, &format!("distal_link_{k}"), "S")
+                        + &pair(&arm, &format!("distal_link_{}", k + 3), "S"),
+                }
+            })
+            .collect();
+        let widths = list_widths(&groups);
+        assert!(
+            widths[1] < "proximal_link_1&base_linkR.".len(),
+            "{widths:?}"
+        );
+        let mut rows = GroupRows {
+            groups: &groups,
+            joined: String::new(),
+            widths,
+        };
+        let header = [
+            "SG", "bodies", "Nm", "inputs", "level", "type", "from", "internal", "to",
+        ];
+        let mut out = String::new();
+        plain_table_with(&mut out, &header, &mut rows, &mut |_: &mut String| Ok(()))
+            .expect("renders");
+        let widest = out.lines().map(|l| l.chars().count()).max().unwrap_or(0);
+        assert!(widest <= 120, "{widest}:\n{out}");
+        for piece in [
+            "proximal_link_1&",
+            "base_linkR.",
+            "distal_link_4S.",
+            "distal_link_0S.",
+        ] {
+            assert!(out.contains(piece), "{piece}:\n{out}");
+        }
+    }
+
     /// Modelica's EngineV6 (long body and joint ids) made a 146-column group table; it now
     /// fits 120, no list entry split; a table that fitted stays byte for byte what it was.
     #[test]

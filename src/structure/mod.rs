@@ -117,7 +117,7 @@ pub struct TypeCount {
     pub in_library: bool,
 }
 
-/// A freedom of one body that no input can drive (like a bar's spin between two S joints).
+/// A freedom of one body that moves no other body (like a bar's spin between two S joints).
 #[derive(Clone, Debug, PartialEq, Eq, Serialize)]
 pub struct Isolated {
     /// The body.
@@ -655,7 +655,58 @@ fn analyze_once(
     a.unchecked = unchecked;
     a.geometry = geometry;
     a.set_aside = set_aside;
+    caveat_isolated_candidates(m, &mut a);
     Ok(Some(a))
+}
+
+/// The under-determined note's input candidates are found by count: every joint with a spare
+/// DOF on a body that can move. A body with an isolated freedom (a bar spinning between two
+/// balls) can take an input that only turns that freedom and fixes nothing else (a Delta
+/// robot's rods). Such candidates are named in the note, with how to test one.
+fn caveat_isolated_candidates(m: &Mechanism, a: &mut Analysis) {
+    let Some(d) = a.diagnosis.as_mut() else {
+        return;
+    };
+    let Some(u) = d.underdetermined.as_ref() else {
+        return;
+    };
+    if a.isolated.is_empty() {
+        return;
+    }
+    let spinning: std::collections::HashSet<&str> =
+        a.isolated.iter().map(|i| i.body.as_str()).collect();
+    let candidates: std::collections::HashSet<&str> =
+        u.input_candidates.iter().map(String::as_str).collect();
+    let doubtful: Vec<&str> = m
+        .joints
+        .iter()
+        .filter(|j| candidates.contains(j.id.as_str()))
+        .filter(|j| {
+            j.bodies
+                .iter()
+                .any(|&b| spinning.contains(m.body_id(b).to_string().as_str()))
+        })
+        .map(|j| j.id.as_str())
+        .collect();
+    if doubtful.is_empty() {
+        return;
+    }
+    let named = if doubtful.len() <= NOTE_JOINTS {
+        doubtful.join(", ")
+    } else {
+        format!(
+            "{} and {} more",
+            doubtful[..NOTE_JOINTS].join(", "),
+            doubtful.len() - NOTE_JOINTS
+        )
+    };
+    let head = format!("{} DOF not fixed by any input", u.missing);
+    if let Some(n) = d.notes.iter_mut().find(|n| n.starts_with(&head)) {
+        n.push_str(&format!(
+            " (counted; an input on {named} holds a body with an isolated freedom and may only \
+             turn it, fixing none: `--inputs` tests one)"
+        ));
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
