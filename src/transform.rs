@@ -736,6 +736,14 @@ fn finish_notes(s: &mut Summary, opts: &TransformOptions) {
                 ""
             }
         ));
+        if s.determined == 0 && s.count_valid > 0 {
+            // A Delta robot at --limit 20: every placement examined drove a rod's spin.
+            s.notes.push(format!(
+                "none of the {} placement(s) examined is determined: raise --limit, or narrow the \
+                 search with --on, --grounded or --exclude",
+                count_words(s.count_valid)
+            ));
+        }
     }
     if s.excluded_by_rank > 0 {
         s.notes.push(format!(

@@ -568,8 +568,13 @@ fn stewart_upu_as_published_imports_with_a_warning_on_its_prologue() {
     let (code, out, err) = mbsa(&["import", &file]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        err.contains("warning: 1 SDFormat import warning(s):")
+        err.contains("warning: 2 SDFormat import warning(s):")
             && err.contains("stewart_upu.sdf:1:1: `<? xml version=\"1.0\" ?>` is not a well-formed XML declaration"),
+        "{err}"
+    );
+    // Its controller plugin, the other warning, is located in the file's own lines too.
+    assert!(
+        err.contains("stewart_upu.sdf:33:2: <plugin> `joint_controller`"),
         "{err}"
     );
     assert!(out.contains("# warning: stewart_upu.sdf:1:1:"), "{out}");

@@ -293,3 +293,40 @@ frame = 0
     assert!(r.summary.determined > 0);
     assert!(r.summary.notes.iter().all(|n| !n.contains("no placement")));
 }
+
+/// `--limit` reached before any determined placement: besides "more placements exist" the note
+/// says none examined is determined and how to go on (a Delta robot at `--limit 20`: every
+/// placement examined drove a rod's spin). Here: the micro-manipulator at `--limit 1`, whose
+/// first placement the rank check excludes.
+#[test]
+fn a_limit_reached_with_nothing_determined_says_how_to_go_on() {
+    let (file, text) = mbsa::examples::find("micro-manipulator").expect("bundled example");
+    let m = load(file, text, Format::Toml).expect("bundled example loads");
+    let lib = Library::builtin();
+    let mut o = TransformOptions::default();
+    o.limit = Some(1);
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert!(
+        r.summary.truncated && r.summary.determined == 0,
+        "{:?}",
+        r.summary
+    );
+    assert!(
+        r.summary
+            .notes
+            .iter()
+            .any(|n| n.starts_with("none of the 1 placement(s) examined is determined")),
+        "{:?}",
+        r.summary.notes
+    );
+    // With room to find one, no such note.
+    o.limit = Some(100_000);
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert!(r.summary.determined > 0);
+    assert!(
+        r.summary
+            .notes
+            .iter()
+            .all(|n| !n.starts_with("none of the"))
+    );
+}

@@ -83,6 +83,13 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
         }
     }
     b.notes.push(format!("SDFormat 1.{version} frame rules"));
+    // SDFormat has no actuator element: what drives a model's joints is plugin code (a Gazebo
+    // controller), which nothing here reads. Said, so that "0 driven DOF" is not a surprise.
+    b.notes.push(
+        "SDFormat declares no actuators: no joint is driven (write `driven` on the driven \
+         joints, or give them with `--inputs`)"
+            .into(),
+    );
     Ok(b)
 }
 
@@ -151,6 +158,15 @@ fn read_model(
         .and_then(|s| s.text())
         .map(|t| t.trim() == "true" || t.trim() == "1")
         .unwrap_or(false);
+    for plugin in m.descendants().filter(|n| n.has_tag_name("plugin")) {
+        let loc = src.loc(plugin);
+        b.warn(format!(
+            "{loc}: <plugin> `{}` ({}) not read: a plugin is code, and one that drives joints \
+             drives none here; give the driven joints with `--inputs` or `driven`",
+            plugin.attribute("name").unwrap_or(""),
+            plugin.attribute("filename").unwrap_or("no filename")
+        ));
+    }
     for nested in children(m, "model") {
         let loc = src.loc(nested);
         b.warn(format!(

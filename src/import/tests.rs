@@ -438,6 +438,36 @@ fn sdf_1_7_relative_to_frames_and_expressed_in() {
     assert!(close(geom(&i, "J3").axis2.expect("axis2"), [0.0, 0.0, 1.0]));
 }
 
+/// SDFormat has no actuators: the import says no joint is driven, and each `<plugin>` of a
+/// model (the controller that drives a Gazebo Delta robot's arms) gets a located warning, as
+/// MJCF's unsupported elements do, where it used to be dropped without a word.
+#[test]
+fn sdf_plugins_are_warned_and_no_actuators_noted() {
+    let i = sdf(r#"<sdf version="1.7"><model name="m">
+        <plugin name="joint_controller" filename="libjoint_controller.so"/>
+        <link name="L"/>
+        <joint name="J" type="revolute"><parent>world</parent><child>L</child>
+          <axis><xyz>0 0 1</xyz></axis></joint>
+        </model></sdf>"#);
+    assert!(
+        i.notes
+            .iter()
+            .any(|n| n.starts_with("SDFormat declares no actuators")),
+        "{:?}",
+        i.notes
+    );
+    assert_eq!(i.warnings.len(), 1, "{:?}", i.warnings);
+    let w = &i.warnings[0];
+    assert!(
+        w.starts_with("t.sdf:2:9: <plugin> `joint_controller`"),
+        "{w}"
+    );
+    assert!(
+        w.contains("libjoint_controller.so") && w.contains("--inputs"),
+        "{w}"
+    );
+}
+
 #[test]
 fn sdf_1_9_degrees_and_quaternions_free_and_static_models() {
     let i = sdf(r#"<sdf version="1.9"><world name="w">
