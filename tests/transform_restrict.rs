@@ -303,8 +303,10 @@ fn a_limit_reached_with_nothing_determined_says_how_to_go_on() {
     let (file, text) = mbsa::examples::find("micro-manipulator").expect("bundled example");
     let m = load(file, text, Format::Toml).expect("bundled example loads");
     let lib = Library::builtin();
-    let mut o = TransformOptions::default();
-    o.limit = Some(1);
+    let mut o = TransformOptions {
+        limit: Some(1),
+        ..Default::default()
+    };
     let r = transform(&m, &o, &lib, None).unwrap();
     assert!(
         r.summary.truncated && r.summary.determined == 0,
