@@ -655,58 +655,7 @@ fn analyze_once(
     a.unchecked = unchecked;
     a.geometry = geometry;
     a.set_aside = set_aside;
-    caveat_isolated_candidates(m, &mut a);
     Ok(Some(a))
-}
-
-/// The under-determined note's input candidates are found by count: every joint with a spare
-/// DOF on a body that can move. A body with an isolated freedom (a bar spinning between two
-/// balls) can take an input that only turns that freedom and fixes nothing else (a Delta
-/// robot's rods). Such candidates are named in the note, with how to test one.
-fn caveat_isolated_candidates(m: &Mechanism, a: &mut Analysis) {
-    let Some(d) = a.diagnosis.as_mut() else {
-        return;
-    };
-    let Some(u) = d.underdetermined.as_ref() else {
-        return;
-    };
-    if a.isolated.is_empty() {
-        return;
-    }
-    let spinning: std::collections::HashSet<&str> =
-        a.isolated.iter().map(|i| i.body.as_str()).collect();
-    let candidates: std::collections::HashSet<&str> =
-        u.input_candidates.iter().map(String::as_str).collect();
-    let doubtful: Vec<&str> = m
-        .joints
-        .iter()
-        .filter(|j| candidates.contains(j.id.as_str()))
-        .filter(|j| {
-            j.bodies
-                .iter()
-                .any(|&b| spinning.contains(m.body_id(b).to_string().as_str()))
-        })
-        .map(|j| j.id.as_str())
-        .collect();
-    if doubtful.is_empty() {
-        return;
-    }
-    let named = if doubtful.len() <= NOTE_JOINTS {
-        doubtful.join(", ")
-    } else {
-        format!(
-            "{} and {} more",
-            doubtful[..NOTE_JOINTS].join(", "),
-            doubtful.len() - NOTE_JOINTS
-        )
-    };
-    let head = format!("{} DOF not fixed by any input", u.missing);
-    if let Some(n) = d.notes.iter_mut().find(|n| n.starts_with(&head)) {
-        n.push_str(&format!(
-            " (counted; an input on {named} holds a body with an isolated freedom and may only \
-             turn it, fixing none: `--inputs` tests one)"
-        ));
-    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -1064,7 +1013,7 @@ fn build(
         })
         .collect();
 
-    let mut diag = diagnose(m, eqs, dec, unsolved, &redundant);
+    let mut diag = diagnose(m, eqs, dec, unsolved, &redundant, &isolated);
     let over = diag.overdetermined.is_some();
     let under = diag.underdetermined.is_some();
     // Mixed whenever equations that can fight (too many by count, or a group's deficit the
@@ -1297,6 +1246,7 @@ fn diagnose(
     dec: &Decomposition,
     unsolved: Vec<usize>,
     redundant: &[Redundancy],
+    isolated: &[Isolated],
 ) -> Diagnosis {
     let id = |b: usize| m.body_id(b).to_string();
     let pair_label = |e: usize| {
@@ -1393,10 +1343,47 @@ fn diagnose(
                 cands.push(ji);
             }
         }
+        // The candidates are found by count. A body with an isolated freedom (a bar spinning
+        // between two balls) can take an input that only turns that freedom and fixes nothing
+        // else (a Delta robot's rods): such candidates are named, with how to test one.
+        let spinning: std::collections::HashSet<&str> =
+            isolated.iter().map(|i| i.body.as_str()).collect();
+        let doubtful: Vec<String> = if spinning.is_empty() {
+            Vec::new()
+        } else {
+            joint_ids(
+                cands
+                    .iter()
+                    .copied()
+                    .filter(|&ji| {
+                        m.joints[ji]
+                            .bodies
+                            .iter()
+                            .any(|&b| spinning.contains(id(b).as_str()))
+                    })
+                    .collect(),
+            )
+        };
+        let caveat = match doubtful.len() {
+            0 => String::new(),
+            n => format!(
+                " (counted; an input on {} holds a body with an isolated freedom and may only \
+                 turn it, fixing none: `--inputs` tests one)",
+                if n <= NOTE_JOINTS {
+                    doubtful.join(", ")
+                } else {
+                    format!(
+                        "{} and {} more",
+                        doubtful[..NOTE_JOINTS].join(", "),
+                        n - NOTE_JOINTS
+                    )
+                }
+            ),
+        };
         let input_candidates = joint_ids(cands);
         d.notes.push(format!(
             "{missing} DOF not fixed by any input: bodies {{{}}} can move; one more input on \
-             one of the joints {} would fix one DOF",
+             one of the joints {} would fix one DOF{caveat}",
             bodies.join(", "),
             input_candidates.join(", ")
         ));
