@@ -4,7 +4,7 @@
 //! columns decides its rank, and the remaining rows become a new block on its neighbours.
 
 use crate::budget::{BudgetExceeded, Meter};
-use crate::motion::SplitMix64;
+use crate::rng::SplitMix64;
 use nalgebra::{DMatrix, DVector};
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;

@@ -5,6 +5,46 @@
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
+/// The motion space: B = 6 (spatial) or 3 (planar, spherical).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "lowercase")]
+pub enum Space {
+    /// Spatial motion, B = 6.
+    #[default]
+    Spatial,
+    /// Planar motion, B = 3.
+    Planar,
+    /// Spherical motion about a fixed point, B = 3.
+    Spherical,
+}
+
+impl Space {
+    /// DOF of a free body in this space.
+    pub fn b(self) -> u32 {
+        match self {
+            Space::Spatial => 6,
+            Space::Planar | Space::Spherical => 3,
+        }
+    }
+
+    /// The SG type suffix: `3D` for spatial, `2D` otherwise.
+    pub fn suffix(self) -> &'static str {
+        match self {
+            Space::Spatial => "3D",
+            Space::Planar | Space::Spherical => "2D",
+        }
+    }
+
+    /// Lower-case name as written in files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Space::Spatial => "spatial",
+            Space::Planar => "planar",
+            Space::Spherical => "spherical",
+        }
+    }
+}
+
 /// A kinematic pair kind. The declaration order is the catalogue order used in SG type strings.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize, Deserialize)]
 pub enum JointType {
@@ -159,8 +199,7 @@ impl JointType {
 
     /// Whether the kind is valid in a mechanism whose body DOF is `b` (`planar` selects
     /// between the two B = 3 spaces).
-    pub fn valid_in(self, space: crate::mechanism::Space) -> bool {
-        use crate::mechanism::Space;
+    pub fn valid_in(self, space: Space) -> bool {
         match space {
             Space::Spatial => true,
             Space::Planar => self.info().planar,

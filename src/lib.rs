@@ -15,6 +15,7 @@ pub mod examples;
 pub mod expect;
 pub mod format;
 pub mod generate;
+pub mod geometry;
 pub mod import;
 pub mod joint;
 pub mod mechanism;

@@ -5,50 +5,11 @@
 //! the file.
 
 use crate::joint::JointType;
+pub use crate::joint::Space;
 use serde::{Deserialize, Serialize};
 use std::cmp::Ordering;
 use std::fmt;
 use std::fmt::Write as _;
-
-/// The motion space: B = 6 (spatial) or 3 (planar, spherical).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Space {
-    /// Spatial motion, B = 6.
-    #[default]
-    Spatial,
-    /// Planar motion, B = 3.
-    Planar,
-    /// Spherical motion about a fixed point, B = 3.
-    Spherical,
-}
-
-impl Space {
-    /// DOF of a free body in this space.
-    pub fn b(self) -> u32 {
-        match self {
-            Space::Spatial => 6,
-            Space::Planar | Space::Spherical => 3,
-        }
-    }
-
-    /// The SG type suffix: `3D` for spatial, `2D` otherwise.
-    pub fn suffix(self) -> &'static str {
-        match self {
-            Space::Spatial => "3D",
-            Space::Planar | Space::Spherical => "2D",
-        }
-    }
-
-    /// Lower-case name as written in files.
-    pub fn name(self) -> &'static str {
-        match self {
-            Space::Spatial => "spatial",
-            Space::Planar => "planar",
-            Space::Spherical => "spherical",
-        }
-    }
-}
 
 /// A body id as written in the file: an integer or a string.
 #[derive(Clone, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]

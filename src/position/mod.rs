@@ -39,6 +39,6 @@ pub use pose::{Configuration, Pose, PoseReport};
 pub use realize::{Redrawn, with_random_geometry, with_random_geometry_away_from_folds};
 pub use residual::{ModelError, PositionModel};
 pub use solve::{
-    JointValues, Schedule, Solution, SolveError, SolveReport, Step, StepReport, joint_values,
-    schedule, solve_global, solve_groups,
+    JointValues, OrderedGroup, Schedule, Solution, SolveError, SolveOrder, SolveReport, Step,
+    StepReport, joint_values, schedule, solve_global, solve_groups,
 };

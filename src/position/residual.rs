@@ -20,54 +20,7 @@ use crate::motion::perpendicular_pair;
 use nalgebra::{DMatrix, Rotation3, Vector3};
 use std::f64::consts::PI;
 
-/// Why a mechanism has no position model.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum ModelError {
-    /// A geometry field the joint needs is missing.
-    #[error("joint `{joint}`: a {kind} joint needs `{field}` for the position level")]
-    MissingField {
-        /// Joint id.
-        joint: String,
-        /// Kind code.
-        kind: &'static str,
-        /// Field.
-        field: &'static str,
-    },
-    /// A direction is zero or not finite, or a number is not finite.
-    #[error("joint `{joint}`: `{field}` is zero or not finite")]
-    BadVector {
-        /// Joint id.
-        joint: String,
-        /// Field.
-        field: &'static str,
-    },
-    /// The kind has no position model (generic contact kinds, or not in this space).
-    #[error("joint `{joint}`: a {kind} joint has no position model in a {space} mechanism")]
-    NoModel {
-        /// Joint id.
-        joint: String,
-        /// Kind code.
-        kind: &'static str,
-        /// Space.
-        space: &'static str,
-    },
-    /// The mechanism is too large for a dense analysis.
-    #[error("{bodies} bodies: the dense position analysis handles at most {limit}")]
-    TooLarge {
-        /// Bodies.
-        bodies: usize,
-        /// Limit.
-        limit: usize,
-    },
-    /// Driving this kind is not supported.
-    #[error("joint `{joint}`: driving a {kind} joint is not supported by the position level")]
-    NotDrivable {
-        /// Joint id.
-        joint: String,
-        /// Kind code.
-        kind: &'static str,
-    },
-}
+pub use crate::motion::ModelError;
 
 /// The features of one joint, lengths scaled.
 #[derive(Clone, Debug)]

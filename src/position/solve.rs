@@ -6,7 +6,6 @@ use super::pose::{Configuration, PoseReport};
 use super::residual::{ModelError, PositionModel};
 use crate::budget::{BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
-use crate::structure::Analysis;
 use rayon::prelude::*;
 use serde::Serialize;
 use std::borrow::Cow;
@@ -76,6 +75,26 @@ impl Schedule {
     }
 }
 
+/// One structural group as a solve order sees it.
+pub struct OrderedGroup<'a> {
+    /// The group's name (`SG-I`).
+    pub name: &'a str,
+    /// Its solve level.
+    pub level: usize,
+    /// Its bodies, by id.
+    pub bodies: &'a [String],
+}
+
+/// A solve order: the structural groups with their levels, and the bodies of an
+/// over-determined part, solved first. The structural analysis
+/// ([`crate::structure::Analysis`]) gives one; the position level needs nothing else of it.
+pub trait SolveOrder {
+    /// The groups, in the analysis' order.
+    fn groups(&self) -> Vec<OrderedGroup<'_>>;
+    /// The bodies of the over-determined part, if any.
+    fn overdetermined(&self) -> Option<&[String]>;
+}
+
 /// The schedule of `m` from its structural analysis: the over-determined part first (it is
 /// known with the frame: step `over`, level 0), the groups by level, then the bodies no group
 /// holds (an under-determined part) as one last step `rest`; the first step is named
@@ -92,12 +111,13 @@ impl Schedule {
 /// body, solved where that body becomes known), and the model's pairs between the first body
 /// and the others are left out of the schedule unless driven. The equations are the same
 /// joint's, so the solution set is unchanged and independent of the listing order.
-pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule {
+pub fn schedule<O: SolveOrder + ?Sized>(m: &Mechanism, a: &O, model: &PositionModel) -> Schedule {
+    let groups = a.groups();
     let by_id: HashMap<String, usize> = (0..m.bodies.len())
         .map(|i| (m.body_id(i).to_string(), i))
         .collect();
-    let mut order: Vec<usize> = (0..a.groups.len()).collect();
-    order.sort_by_key(|&g| (a.groups[g].level, g));
+    let mut order: Vec<usize> = (0..groups.len()).collect();
+    order.sort_by_key(|&g| (groups[g].level, g));
     let mut placed = vec![false; m.bodies.len()];
     placed[m.frame] = true;
     let mut steps: Vec<Step> = Vec::new();
@@ -112,8 +132,8 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
         }
         bodies
     };
-    if let Some(over) = a.diagnosis.as_ref().and_then(|d| d.overdetermined.as_ref()) {
-        let bodies = take(&over.bodies, &mut placed);
+    if let Some(over) = a.overdetermined() {
+        let bodies = take(over, &mut placed);
         if !bodies.is_empty() {
             steps.push(Step {
                 name: "overdetermined".into(),
@@ -124,11 +144,11 @@ pub fn schedule(m: &Mechanism, a: &Analysis, model: &PositionModel) -> Schedule 
         }
     }
     for g in order {
-        let grp = &a.groups[g];
-        let bodies = take(&grp.bodies, &mut placed);
+        let grp = &groups[g];
+        let bodies = take(grp.bodies, &mut placed);
         if !bodies.is_empty() {
             steps.push(Step {
-                name: grp.name.clone(),
+                name: grp.name.to_string(),
                 level: grp.level,
                 bodies,
                 pairs: Vec::new(),

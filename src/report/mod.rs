@@ -26,6 +26,26 @@ pub fn new_table() -> Table {
     t
 }
 
+/// The `geometry:` line of table reports: which geometry the analysis used, how precisely the
+/// file's numbers are known, and the closure of the file's configuration when it was checked.
+pub fn geometry_line(g: &crate::geometry::GeometryUsed) -> String {
+    let mut s = match g.seed {
+        Some(seed) => format!("geometry: random (seed {seed}), {}", g.configuration),
+        None => format!("geometry: file, {}", g.configuration),
+    };
+    if let Some(p) = g.precision.filter(|&p| p > 0.0) {
+        s.push_str(&format!("; numbers known to ±{p:.0e}"));
+    }
+    if let Some(n) = &g.note {
+        s.push_str(&format!(" ({n})"));
+    }
+    if let Some(c) = &g.closure {
+        s.push('\n');
+        s.push_str(&position::closure_lines(c));
+    }
+    s
+}
+
 /// Pretty JSON with a trailing newline, for `--format json`.
 pub fn json<T: serde::Serialize>(value: &T) -> String {
     let mut s = serde_json::to_string_pretty(value).unwrap_or_else(|e| {

@@ -56,7 +56,7 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
         if a.count_only { " (count only)" } else { "" }
     );
     if let Some(g) = &a.geometry {
-        let _ = writeln!(out, "{}", g.line());
+        let _ = writeln!(out, "{}", super::geometry_line(g));
     }
     if !a.groups.is_empty() {
         // The rows are made one at a time into one buffer, twice (widths, then the lines):

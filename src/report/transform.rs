@@ -137,7 +137,7 @@ pub fn summary(s: &Summary) -> String {
         count_words(s.determined)
     );
     if let Some(g) = &s.geometry {
-        let _ = writeln!(out, "{}", g.line());
+        let _ = writeln!(out, "{}", super::geometry_line(g));
     }
     for n in &s.notes {
         let _ = writeln!(out, "note: {n}");

@@ -1455,6 +1455,26 @@ fn roman(mut n: usize) -> String {
     s
 }
 
+impl crate::position::SolveOrder for Analysis {
+    fn groups(&self) -> Vec<crate::position::OrderedGroup<'_>> {
+        self.groups
+            .iter()
+            .map(|g| crate::position::OrderedGroup {
+                name: &g.name,
+                level: g.level,
+                bodies: &g.bodies,
+            })
+            .collect()
+    }
+
+    fn overdetermined(&self) -> Option<&[String]> {
+        self.diagnosis
+            .as_ref()
+            .and_then(|d| d.overdetermined.as_ref())
+            .map(|o| o.bodies.as_slice())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     /// Scale regression: the rank check decomposes the whole mechanism once per round, and a
