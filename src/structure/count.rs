@@ -188,7 +188,7 @@ pub(crate) struct RawGroup {
 }
 
 /// The result of the count decomposition.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 #[cfg_attr(test, derive(PartialEq))]
 pub(crate) struct Decomposition {
     /// Part of each body.

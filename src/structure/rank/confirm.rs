@@ -1,11 +1,14 @@
 //! Confirmation of a deficit at a random realization: the joints involved drawn again at
 //! independent seeds.
 
+use super::attempt::{Attempt, Touching};
+use super::blocks::width;
 use super::exact::{MAX_EXACT_UNKNOWNS, exact_rank};
 use super::float::{MAX_DENSE_UNKNOWNS, REL_TOL, Tol, cube, rank_of};
-use super::rows::{PairRows, pair_rows_at};
+use super::rows::{Chunk, PAIRS_PER_CHUNK, PairRows, pair_rows_at};
+use super::unknowns::reduced_basis;
 use crate::mechanism::Mechanism;
-use crate::structure::count::Equations;
+use crate::structure::count::{Equations, Part};
 use nalgebra::DMatrix;
 
 /// The seed of the `attempt`-th independent redraw of a random realization `seed`.
@@ -101,4 +104,87 @@ pub(super) fn unconfirmed(
         }
     }
     None
+}
+
+impl Attempt<'_> {
+    /// An isolated freedom at a random realization is confirmed at a second one: the body's
+    /// pairs drawn again (a generic nullity is the smallest over realizations). The joints of
+    /// the bodies whose freedom a second draw does not have, with that draw's seed (sorted;
+    /// empty without confirmation).
+    pub(super) fn unconfirmed_isolated(
+        &self,
+        eqs: &Equations,
+        touching: &Touching,
+    ) -> Vec<(usize, u64)> {
+        let (Some(attempt), Some(seed)) = (self.confirm, self.used.seed) else {
+            return Vec::new();
+        };
+        let (m, b, q) = (self.m, self.b, &self.q);
+        let iso_bodies: Vec<usize> = (0..eqs.nodes)
+            .filter(|&x| x != m.frame && !eqs.is_element(x) && width(b, q, x) < b)
+            .collect();
+        let spurious = crate::par::map(iso_bodies.len(), |i| {
+            let x = iso_bodies[i];
+            let mine = touching.pairs(x);
+            confirm_seeds(seed, attempt).find(|&second| {
+                let fresh = PairRows::from_chunks(
+                    b,
+                    mine.chunks(PAIRS_PER_CHUNK)
+                        .map(|c| {
+                            let mut chunk = Chunk::default();
+                            c.iter().for_each(|&e| {
+                                chunk.push_matrix(&pair_rows_at(m, eqs, e as usize, second))
+                            });
+                            chunk
+                        })
+                        .collect(),
+                );
+                let again = reduced_basis(b, (0..mine.len()).map(|i| fresh.get(i)), &self.tol);
+                again.as_ref().map_or(b, |a| a.ncols()) > width(b, q, x)
+            })
+        });
+        let joint = &eqs.joint;
+        let mut suspects: Vec<(usize, u64)> = iso_bodies
+            .iter()
+            .zip(spurious)
+            .filter_map(|(&x, s)| s.map(|s| (x, s)))
+            .flat_map(|(x, s)| {
+                touching
+                    .pairs(x)
+                    .iter()
+                    .map(move |&e| (joint[e as usize], s))
+            })
+            .collect();
+        suspects.sort_unstable();
+        suspects.dedup();
+        suspects
+    }
+
+    /// A draw at which the deficient block (`shape`: rows, columns) has full rank, when this
+    /// attempt confirms deficits ([`unconfirmed`]); `None` confirms the deficit.
+    pub(super) fn unconfirmed_deficit(
+        &mut self,
+        eqs: &Equations,
+        block_eqs: &[usize],
+        bodies: &[usize],
+        part: Part,
+        shape: (usize, usize),
+    ) -> Option<u64> {
+        let (Some(attempt), Some(seed)) = (self.confirm, self.used.seed) else {
+            return None;
+        };
+        let needed = if part == Part::Over { shape.1 } else { shape.0 };
+        unconfirmed(
+            self.m,
+            eqs,
+            block_eqs,
+            bodies,
+            &self.rows,
+            &self.orig_rows,
+            shape,
+            needed,
+            confirm_seeds(seed, attempt),
+            &mut self.work,
+        )
+    }
 }

@@ -2,12 +2,106 @@
 //! (its isolated freedoms), screened for full column rank on the stack, and written about the
 //! body's own reference point at the file's geometry.
 
+use super::Bases;
+use super::attempt::{Attempt, Touching};
+use super::cache::Digest;
 use super::float::{Tol, svd_parts};
-use super::rows::RowsView;
+use super::rows::{PairRows, RowsView};
 use crate::mechanism::{Geometry, Mechanism, Space};
 use crate::motion::{self, GeometryUsed};
 use crate::structure::count::Equations;
 use nalgebra::DMatrix;
+
+impl Attempt<'_> {
+    /// Every node's reduced unknowns (each body on its own, in parallel): the frame none, an
+    /// element node the row space of its joint's rows, a body [`reduced_basis`] (or
+    /// [`local_basis`] at the file's geometry) of the pairs touching it. `prev`: the last
+    /// attempt's bases and which pairs were built again since.
+    pub(super) fn reduced_unknowns(
+        &self,
+        eqs: &Equations,
+        free: &PairRows,
+        touching: &Touching,
+        prev: Option<(Bases, Vec<bool>)>,
+    ) -> Bases {
+        let b = self.b;
+        // The first pin pair of every element node.
+        let mut pin_pair = vec![usize::MAX; eqs.elements.len()];
+        for e in (0..eqs.len()).rev() {
+            if eqs.is_element(eqs.hub[e]) && !eqs.input_only[e] {
+                pin_pair[eqs.hub[e] - eqs.bodies] = e;
+            }
+        }
+        crate::par::map(eqs.nodes, |body| {
+            if body == self.m.frame {
+                return Some(DMatrix::zeros(b, 0));
+            }
+            if eqs.is_element(body) {
+                // The shared element moves only across its joint's constraint directions: its
+                // unknowns are the row space of the joint's rows (orthonormal, so their
+                // transpose). (At the file's configuration `rows` may already have lost
+                // dependent equations: the joint's full rows are in `free` then.)
+                let e = pin_pair[body - eqs.bodies];
+                return Some(
+                    free.try_get(e)
+                        .or(self.rows.try_get(e))
+                        .map_or_else(|| DMatrix::zeros(b, 0), |r| r.transpose()),
+                );
+            }
+            let mine = touching.pairs(body);
+            if let Some((bases, changed)) = &prev
+                && !mine.iter().any(|&e| changed[e as usize])
+            {
+                // Same rows, same tolerance: the last attempt's basis.
+                return bases[body].clone();
+            }
+            self.body_basis(body, mine, eqs)
+        })
+    }
+
+    /// A body's reduced unknowns from the pairs `mine` touching it, through the cache when
+    /// there is one.
+    fn body_basis(&self, body: usize, mine: &[u32], eqs: &Equations) -> Option<DMatrix<f64>> {
+        let b = self.b;
+        let frame = self.local.as_ref().and_then(|lf| lf.frame[body].as_ref());
+        // Isolated means undrivable: a motion across a cut of two or more constraining joints.
+        // A body on one joint moves by that joint's own DOF, which an input drives.
+        let mut joints = mine
+            .iter()
+            .map(|&e| e as usize)
+            .filter(|&e| self.rows.nrows(e) > 0)
+            .map(|e| eqs.joint[e]);
+        let first = joints.next();
+        if !joints.any(|j| Some(j) != first) {
+            return frame.cloned();
+        }
+        let basis = |rows: &PairRows| match frame {
+            Some(s) => Some(local_basis(
+                b,
+                mine.iter().map(|&e| rows.get(e as usize)),
+                s,
+                &self.tol,
+            )),
+            None => reduced_basis(b, mine.iter().map(|&e| rows.get(e as usize)), &self.tol),
+        };
+        let Some(c) = self.cache else {
+            return basis(&self.rows);
+        };
+        let mut d = Digest::new(2);
+        self.tol_words.iter().for_each(|&w| d.word(w));
+        mine.iter().for_each(|&e| d.wide(self.rd[e as usize]));
+        if let Some(s) = frame {
+            d.matrix(s);
+        }
+        let k = d.finish();
+        if let Some(hit) = c.get_basis(k) {
+            return hit;
+        }
+        let v = basis(&self.rows);
+        c.put_basis(k, &v);
+        v
+    }
+}
 
 /// Stacks of more rows than this are reduced by a QR before the SVD in [`reduced_basis`].
 const TALL_STACK_ROWS: usize = 96;
