@@ -445,26 +445,8 @@ fn cholesky_blocks<const N: usize, const W: usize>(
     for kb in 0..nb {
         let k0 = kb * W;
         // The diagonal block (all updates from earlier bodies received).
-        for k in k0..k0 + W {
-            let d = g[k][k];
-            if d.is_nan() || d <= 0.0 {
-                return false;
-            }
-            let d = d.sqrt();
-            g[k][k] = d;
-            for i in k + 1..k0 + W {
-                let v = g[i][k] / d;
-                if !v.is_finite() {
-                    return false;
-                }
-                g[i][k] = v;
-            }
-            for i in k + 1..k0 + W {
-                let lik = g[i][k];
-                for j in k + 1..=i {
-                    g[i][j] -= lik * g[j][k];
-                }
-            }
+        if !factor_diagonal_block::<N, W>(g, k0) {
+            return false;
         }
         // The blocks below it: `L_IK = G_IK · L_KK^-T`, entry by entry in column order.
         let below_mask = (kb + 1..nb)
@@ -517,6 +499,35 @@ fn cholesky_blocks<const N: usize, const W: usize>(
                         }
                     }
                 }
+            }
+        }
+    }
+    true
+}
+
+/// [`cholesky_blocks`]' diagonal block of the body whose columns start at `k0`, factorized in
+/// place; whether every pivot is positive and every entry of the factor finite.
+#[allow(clippy::needless_range_loop)]
+#[inline]
+fn factor_diagonal_block<const N: usize, const W: usize>(g: &mut [[f64; N]; N], k0: usize) -> bool {
+    for k in k0..k0 + W {
+        let d = g[k][k];
+        if d.is_nan() || d <= 0.0 {
+            return false;
+        }
+        let d = d.sqrt();
+        g[k][k] = d;
+        for i in k + 1..k0 + W {
+            let v = g[i][k] / d;
+            if !v.is_finite() {
+                return false;
+            }
+            g[i][k] = v;
+        }
+        for i in k + 1..k0 + W {
+            let lik = g[i][k];
+            for j in k + 1..=i {
+                g[i][j] -= lik * g[j][k];
             }
         }
     }

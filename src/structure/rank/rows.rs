@@ -9,6 +9,7 @@ use std::collections::HashMap;
 
 /// A pair's rows as [`PairRows`] stores them (row-major).
 pub(super) type RowsView<'a> = MatrixView<'a, f64, Dyn, Dyn, Dyn, Dyn>;
+
 /// Rows of every pair at the given joint geometry: its constraint rows with its share of the
 /// driven DOF fixed, and (when `with_free`, for the file's configuration) its constraint rows
 /// alone (no input; empty otherwise).
@@ -23,37 +24,50 @@ pub(super) fn pair_rows(
     use rayon::prelude::*;
     let b = m.b() as usize;
     let n = eqs.len();
-    // Chunks of consecutive pairs, each built on its own (in parallel): a joint's models are
-    // built once per chunk (its pairs are consecutive), on the stack, all of a chunk's
-    // together ([`motion::pair_rows_many`] runs several joints' Gram-Schmidt in lockstep).
-    let chunk = |c: usize| {
-        let pairs = c * PAIRS_PER_CHUNK..n.min((c + 1) * PAIRS_PER_CHUNK);
-        // The models the pairs need (joint, driven), and which of them each pair reads: a
-        // pair's own, and the free one (nothing driven) where it needs it.
-        let mut jobs: Vec<(usize, u32)> = Vec::with_capacity(pairs.len());
-        let mut reads: Vec<[usize; 2]> = Vec::with_capacity(pairs.len());
-        let mut memo: [Option<(usize, u32, usize)>; 2] = [None, None];
-        let mut model = |ji: usize, driven: u32| {
-            let slot = usize::from(driven == 0);
-            match memo[slot] {
-                Some((j, d, k)) if j == ji && d == driven => k,
-                _ => {
-                    jobs.push((ji, driven));
-                    memo[slot] = Some((ji, driven, jobs.len() - 1));
-                    jobs.len() - 1
-                }
-            }
-        };
-        for e in pairs.clone() {
-            let ji = eqs.joint[e];
-            let own = model(ji, eqs.driven[e]);
-            let free = if eqs.input_only[e] || with_free {
-                model(ji, 0)
-            } else {
-                usize::MAX
-            };
-            reads.push([own, free]);
-        }
+    let at = Realization {
+        m,
+        geoms,
+        seed,
+        redrawn,
+        eqs,
+        with_free,
+    };
+    let chunks = n.div_ceil(PAIRS_PER_CHUNK);
+    let built: Vec<(Chunk, Chunk)> = if n >= 2 * PAIRS_PER_CHUNK {
+        (0..chunks).into_par_iter().map(|c| at.chunk(c)).collect()
+    } else {
+        (0..chunks).map(|c| at.chunk(c)).collect()
+    };
+    let (rows, free): (Vec<Chunk>, Vec<Chunk>) = built.into_iter().unzip();
+    let free = if with_free {
+        PairRows::from_chunks(b, free)
+    } else {
+        PairRows::from_chunks(b, Vec::new())
+    };
+    (PairRows::from_chunks(b, rows), free)
+}
+
+/// The joint geometry [`pair_rows`] builds the rows at: the file's (`geoms`) or a random
+/// realization (`seed`, the joints in `redrawn` at their own seeds).
+struct Realization<'a> {
+    m: &'a Mechanism,
+    geoms: &'a [Geometry],
+    seed: Option<u64>,
+    redrawn: &'a HashMap<usize, u64>,
+    eqs: &'a Equations,
+    with_free: bool,
+}
+
+impl Realization<'_> {
+    /// Chunk `c` of consecutive pairs, built on its own (in parallel): a joint's models are
+    /// built once per chunk (its pairs are consecutive), on the stack, all of a chunk's
+    /// together ([`motion::pair_rows_many`] runs several joints' Gram-Schmidt in lockstep).
+    /// The pairs' rows, and their rows without input (`with_free`).
+    fn chunk(&self, c: usize) -> (Chunk, Chunk) {
+        let (m, eqs, with_free) = (self.m, self.eqs, self.with_free);
+        let b = m.b() as usize;
+        let pairs = c * PAIRS_PER_CHUNK..eqs.len().min((c + 1) * PAIRS_PER_CHUNK);
+        let (jobs, reads) = self.models(pairs.clone());
         // Room for the rows the count gives each pair (the models give that many): a chunk
         // grown by doubling copied its rows about twice over.
         let expected: usize = eqs.cap[pairs.clone()].iter().map(|&k| k as usize).sum();
@@ -64,17 +78,17 @@ pub(super) fn pair_rows(
             Chunk::default()
         };
         SCRATCH.with_borrow_mut(|scratch| {
-            let models = match seed {
+            let models = match self.seed {
                 Some(seed) => motion::pair_rows_many(
                     m,
                     &jobs,
                     |ji| {
-                        let seed = redrawn.get(&ji).copied().unwrap_or(seed);
+                        let seed = self.redrawn.get(&ji).copied().unwrap_or(seed);
                         motion::random_pair_geometry(m, seed, ji)
                     },
                     scratch,
                 ),
-                None => motion::pair_rows_many(m, &jobs, |ji| &geoms[ji], scratch),
+                None => motion::pair_rows_many(m, &jobs, |ji| &self.geoms[ji], scratch),
             };
             for (e, [own, f]) in pairs.zip(reads) {
                 let own = models.get(own);
@@ -103,20 +117,39 @@ pub(super) fn pair_rows(
             }
         });
         (rows, free)
-    };
-    let chunks = n.div_ceil(PAIRS_PER_CHUNK);
-    let built: Vec<(Chunk, Chunk)> = if n >= 2 * PAIRS_PER_CHUNK {
-        (0..chunks).into_par_iter().map(chunk).collect()
-    } else {
-        (0..chunks).map(chunk).collect()
-    };
-    let (rows, free): (Vec<Chunk>, Vec<Chunk>) = built.into_iter().unzip();
-    let free = if with_free {
-        PairRows::from_chunks(b, free)
-    } else {
-        PairRows::from_chunks(b, Vec::new())
-    };
-    (PairRows::from_chunks(b, rows), free)
+    }
+
+    /// The models the pairs need (joint, driven), and which of them each pair reads: a pair's
+    /// own, and the free one (nothing driven) where it needs it (`usize::MAX` otherwise).
+    #[allow(clippy::type_complexity)]
+    fn models(&self, pairs: std::ops::Range<usize>) -> (Vec<(usize, u32)>, Vec<[usize; 2]>) {
+        let eqs = self.eqs;
+        let mut jobs: Vec<(usize, u32)> = Vec::with_capacity(pairs.len());
+        let mut reads: Vec<[usize; 2]> = Vec::with_capacity(pairs.len());
+        let mut memo: [Option<(usize, u32, usize)>; 2] = [None, None];
+        let mut model = |ji: usize, driven: u32| {
+            let slot = usize::from(driven == 0);
+            match memo[slot] {
+                Some((j, d, k)) if j == ji && d == driven => k,
+                _ => {
+                    jobs.push((ji, driven));
+                    memo[slot] = Some((ji, driven, jobs.len() - 1));
+                    jobs.len() - 1
+                }
+            }
+        };
+        for e in pairs {
+            let ji = eqs.joint[e];
+            let own = model(ji, eqs.driven[e]);
+            let free = if eqs.input_only[e] || self.with_free {
+                model(ji, 0)
+            } else {
+                usize::MAX
+            };
+            reads.push([own, free]);
+        }
+        (jobs, reads)
+    }
 }
 
 thread_local! {

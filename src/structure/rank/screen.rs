@@ -61,6 +61,43 @@ pub(super) fn sparse_full_rank(
         return None;
     }
     let nrows: usize = block_eqs.iter().map(|&e| rows.nrows(e)).sum();
+    let (blocks, frob2) = pair_blocks(block_eqs, bodies, eqs, rows, q, &sizes, file);
+    let n = nrows.max(ncols);
+    let tol = if file {
+        // At the file's geometry: the threshold `rigid`'s sparse path decides with (QR pivots
+        // against the SVD's threshold), `σ_max` bounded by `√(‖A‖₁ ‖A‖_∞)`, far tighter than
+        // the Frobenius norm on long chains of unit rows.
+        t.cut(norm_bound(&sizes, &blocks, ncols).min(frob2.sqrt()), n)
+    } else {
+        // At a random realization a margin above the SVD's threshold, so that the SVD would
+        // agree.
+        SCREEN_MARGIN * t.cut(frob2.sqrt(), n)
+    };
+    // Large blocks (file geometry: the screen sees dense-sized ones only) within the
+    // set-aside's memory cap; past it the block is left unchecked.
+    let rank = if file {
+        Elimination::run_within(&sizes, blocks, tol, SPARSE_ASIDE_BYTES)
+            .ok()?
+            .rank
+    } else {
+        Elimination::run(&sizes, blocks, tol).rank
+    };
+    let needed = if part == Part::Over { ncols } else { nrows };
+    (rank >= needed).then_some(rank)
+}
+
+/// The block's pairs as the sparse elimination takes them: each pair's rows on the reduced
+/// unknowns of its bodies in the block (`sizes` columns each), and the block's squared
+/// Frobenius norm.
+fn pair_blocks(
+    block_eqs: &[usize],
+    bodies: &[usize],
+    eqs: &Equations,
+    rows: &PairRows,
+    q: &[Option<DMatrix<f64>>],
+    sizes: &[usize],
+    file: bool,
+) -> (Vec<Block>, f64) {
     let mut blocks = Vec::with_capacity(block_eqs.len());
     let mut frob2 = 0.0;
     for &e in block_eqs {
@@ -106,50 +143,35 @@ pub(super) fn sparse_full_rank(
         frob2 += mat.norm_squared();
         blocks.push(Block { groups, mat });
     }
-    let n = nrows.max(ncols);
-    let tol = if file {
-        // At the file's geometry: the threshold `rigid`'s sparse path decides with (QR pivots
-        // against the SVD's threshold), `σ_max` bounded by `√(‖A‖₁ ‖A‖_∞)`, far tighter than
-        // the Frobenius norm on long chains of unit rows.
-        let mut col_sum = vec![0.0f64; ncols];
-        let offsets: Vec<usize> = sizes
-            .iter()
-            .scan(0, |acc, &s| {
-                let o = *acc;
-                *acc += s;
-                Some(o)
-            })
-            .collect();
-        let mut row_max = 0.0f64;
-        for blk in &blocks {
-            for row in blk.mat.row_iter() {
-                row_max = row_max.max(row.iter().map(|v| v.abs()).sum());
-            }
-            let mut c0 = 0;
-            for &k in &blk.groups {
-                for j in 0..sizes[k] {
-                    col_sum[offsets[k] + j] +=
-                        blk.mat.column(c0 + j).iter().map(|v| v.abs()).sum::<f64>();
-                }
-                c0 += sizes[k];
-            }
+    (blocks, frob2)
+}
+
+/// `√(‖A‖₁ ‖A‖_∞)`, a bound on `σ_max` of the block made of `blocks` (`ncols` columns, `sizes`
+/// per body).
+fn norm_bound(sizes: &[usize], blocks: &[Block], ncols: usize) -> f64 {
+    let mut col_sum = vec![0.0f64; ncols];
+    let offsets: Vec<usize> = sizes
+        .iter()
+        .scan(0, |acc, &s| {
+            let o = *acc;
+            *acc += s;
+            Some(o)
+        })
+        .collect();
+    let mut row_max = 0.0f64;
+    for blk in blocks {
+        for row in blk.mat.row_iter() {
+            row_max = row_max.max(row.iter().map(|v| v.abs()).sum());
         }
-        let col_max = col_sum.iter().copied().fold(0.0, f64::max);
-        t.cut((col_max * row_max).sqrt().min(frob2.sqrt()), n)
-    } else {
-        // At a random realization a margin above the SVD's threshold, so that the SVD would
-        // agree.
-        SCREEN_MARGIN * t.cut(frob2.sqrt(), n)
-    };
-    // Large blocks (file geometry: the screen sees dense-sized ones only) within the
-    // set-aside's memory cap; past it the block is left unchecked.
-    let rank = if file {
-        Elimination::run_within(&sizes, blocks, tol, SPARSE_ASIDE_BYTES)
-            .ok()?
-            .rank
-    } else {
-        Elimination::run(&sizes, blocks, tol).rank
-    };
-    let needed = if part == Part::Over { ncols } else { nrows };
-    (rank >= needed).then_some(rank)
+        let mut c0 = 0;
+        for &k in &blk.groups {
+            for j in 0..sizes[k] {
+                col_sum[offsets[k] + j] +=
+                    blk.mat.column(c0 + j).iter().map(|v| v.abs()).sum::<f64>();
+            }
+            c0 += sizes[k];
+        }
+    }
+    let col_max = col_sum.iter().copied().fold(0.0, f64::max);
+    (col_max * row_max).sqrt()
 }

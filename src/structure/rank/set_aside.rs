@@ -26,10 +26,28 @@ pub(super) fn redundant_at_configuration(
     local: Option<&LocalFrames>,
     set_aside: &mut [u32],
 ) -> Vec<Redundancy> {
-    let b = m.b() as usize;
+    let blocks = biconnected_blocks(eqs.nodes, eqs, m.frame);
+    let aside = Configuration {
+        m,
+        eqs,
+        free,
+        tol,
+        local,
+        depth: frame_depths(m, eqs),
+    };
+    let mut out = Vec::new();
+    for block in blocks {
+        if block.len() < 2 {
+            continue;
+        }
+        out.extend(aside.block(&block, rows, set_aside));
+    }
+    out
+}
+
+/// Distance of every node from the frame (breadth first over pairs).
+fn frame_depths(m: &Mechanism, eqs: &Equations) -> Vec<usize> {
     let nb = eqs.nodes;
-    let blocks = biconnected_blocks(nb, eqs, m.frame);
-    // Distance of every body from the frame (breadth first over pairs).
     let mut adj: Vec<Vec<usize>> = vec![Vec::new(); nb];
     for e in 0..eqs.len() {
         let [h, o] = eqs.bodies(e);
@@ -47,11 +65,32 @@ pub(super) fn redundant_at_configuration(
             }
         }
     }
-    let mut out = Vec::new();
-    for block in blocks {
-        if block.len() < 2 {
-            continue;
-        }
+    depth
+}
+
+/// What the set-aside reads: the pairs' rows without input (`free`), the threshold, the
+/// bodies' local frames and their distances from the frame.
+struct Configuration<'a> {
+    m: &'a Mechanism,
+    eqs: &'a Equations,
+    free: &'a PairRows,
+    tol: &'a Tol,
+    local: Option<&'a LocalFrames>,
+    depth: Vec<usize>,
+}
+
+impl Configuration<'_> {
+    /// The equations of one biconnected block (its pairs) dependent at the configuration set
+    /// aside: the pairs' `rows` replaced, the count per joint added to `set_aside`. The
+    /// redundancy, when any was.
+    fn block(
+        &self,
+        block: &[usize],
+        rows: &mut PairRows,
+        set_aside: &mut [u32],
+    ) -> Option<Redundancy> {
+        let (m, eqs, free) = (self.m, self.eqs, self.free);
+        let b = m.b() as usize;
         let mut bodies: Vec<usize> = block
             .iter()
             .flat_map(|&e| eqs.bodies(e))
@@ -60,18 +99,18 @@ pub(super) fn redundant_at_configuration(
         bodies.sort_unstable();
         bodies.dedup();
         let ncols = b * bodies.len();
-        let mut order = block.clone();
+        let mut order = block.to_vec();
         order.sort_by_key(|&e| {
             let [h, o] = eqs.bodies(e);
-            (depth[h].max(depth[o]), e)
+            (self.depth[h].max(self.depth[o]), e)
         });
         let nrows: usize = block.iter().map(|&e| free.nrows(e)).sum();
-        let cut = tol.cut(1.0, nrows.max(ncols));
+        let cut = self.tol.cut(1.0, nrows.max(ncols));
         // Pair `e`'s row `i` on the block's columns: (column of each side, the row on that
         // body's own twist about its reference point, signed).
         let side = |e: usize, i: usize, x: usize, sign: f64| -> Vec<f64> {
             let r = free.get(e);
-            match local.and_then(|lf| lf.frame[x].as_ref()) {
+            match self.local.and_then(|lf| lf.frame[x].as_ref()) {
                 Some(s) => (0..b)
                     .map(|k| sign * (0..b).map(|l| r[(i, l)] * s[(l, k)]).sum::<f64>())
                     .collect(),
@@ -85,15 +124,26 @@ pub(super) fn redundant_at_configuration(
         } else {
             independent_rows_sparse(eqs, free, &order, &bodies, b, cut, &side)
         };
-        let Some((kept, dropped)) = chosen else {
-            continue;
-        };
+        let (kept, dropped) = chosen?;
         if dropped == 0 {
-            continue;
+            return None;
         }
-        // Replace each pair's rows by its kept constraint rows plus its input rows.
+        let lowered = self.keep_rows(&kept, rows, set_aside);
+        Some(self.redundancy(block, &bodies, lowered, nrows, dropped))
+    }
+
+    /// Replace each pair's rows by its kept constraint rows plus its input rows; the joints
+    /// that lost rows (with repeats).
+    fn keep_rows(
+        &self,
+        kept: &[(usize, Vec<usize>)],
+        rows: &mut PairRows,
+        set_aside: &mut [u32],
+    ) -> Vec<usize> {
+        let (eqs, free) = (self.eqs, self.free);
+        let b = self.m.b() as usize;
         let mut lowered: Vec<usize> = Vec::new();
-        for (e, mine) in &kept {
+        for (e, mine) in kept {
             if mine.len() == free.nrows(*e) {
                 continue;
             }
@@ -109,6 +159,20 @@ pub(super) fn redundant_at_configuration(
             }
             rows.set(*e, &r);
         }
+        lowered
+    }
+
+    /// The redundancy of a block whose `nrows` constraint equations lost `dropped`, on the
+    /// joints `lowered`.
+    fn redundancy(
+        &self,
+        block: &[usize],
+        bodies: &[usize],
+        mut lowered: Vec<usize>,
+        nrows: usize,
+        dropped: usize,
+    ) -> Redundancy {
+        let (m, eqs) = (self.m, self.eqs);
         let mut joints: Vec<usize> = block.iter().map(|&e| eqs.joint[e]).collect();
         joints.sort_unstable();
         joints.dedup();
@@ -116,8 +180,8 @@ pub(super) fn redundant_at_configuration(
         lowered.dedup();
         let ids =
             |js: &[usize]| -> Vec<String> { js.iter().map(|&j| m.joints[j].id.clone()).collect() };
-        out.push(Redundancy {
-            bodies: body_names(m, eqs, &bodies),
+        Redundancy {
+            bodies: body_names(m, eqs, bodies),
             joints: ids(&joints),
             count: dropped as u32,
             lowered: ids(&lowered).join(", "),
@@ -131,9 +195,8 @@ pub(super) fn redundant_at_configuration(
                 nrows
             ),
             configuration: true,
-        });
+        }
     }
-    out
 }
 
 /// A pair's row on one body's columns (see [`redundant_at_configuration`]).
