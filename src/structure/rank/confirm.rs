@@ -19,7 +19,7 @@ fn fresh_seed(seed: u64, attempt: u64) -> u64 {
 /// Draws a deficit is confirmed at (each independent of the analysis's and of the others).
 const CONFIRM_DRAWS: u64 = 4;
 
-/// The seeds of the draws that confirm a deficit in attempt `attempt` of [`check`].
+/// The seeds of the draws that confirm a deficit in attempt `attempt` of [`check`](super::check).
 pub(super) fn confirm_seeds(seed: u64, attempt: u64) -> impl Iterator<Item = u64> {
     (0..CONFIRM_DRAWS).map(move |i| fresh_seed(seed, attempt * CONFIRM_DRAWS + i))
 }

@@ -59,8 +59,8 @@ pub(crate) enum Shortcut {
     Certified,
     /// Only whether the mechanism is determined matters: when the count does not find it
     /// determined, the check ends at once (`deficient`); when it does, the groups up to
-    /// [`MAX_DENSE_UNKNOWNS`] are checked first, and a deficient one ends the check,
-    /// unexplained (the larger groups would have been factorized for nothing).
+    /// [`MAX_DENSE_UNKNOWNS`](float::MAX_DENSE_UNKNOWNS) are checked first, and a deficient one
+    /// ends the check, unexplained (the larger groups would have been factorized for nothing).
     Determined,
 }
 
@@ -86,36 +86,36 @@ pub(crate) struct RankResult {
     /// Joints of a deficit that a second realization did not confirm (the draw was
     /// degenerate there), with the seed of a draw without the deficit: [`check`] draws them
     /// at it and starts over. Empty in a final result.
-    pub(super) suspects: Vec<(usize, u64)>,
+    suspects: Vec<(usize, u64)>,
     /// With suspects: what the next attempt can take over.
-    pub(super) kept_rows: Option<Kept>,
+    kept_rows: Option<Kept>,
 }
 
 /// Each body's reduced unknowns (`None`: all `B`).
-pub(super) type Bases = Vec<Option<DMatrix<f64>>>;
+type Bases = Vec<Option<DMatrix<f64>>>;
 
 /// What an attempt of [`check`] leaves to the next one: the rows, each pair's first row
 /// count, and the bodies' reduced unknowns (recomputed only where a pair changed).
-pub(super) struct Kept {
-    pub(super) rows: PairRows,
-    pub(super) first: Vec<u8>,
-    pub(super) bases: Bases,
+struct Kept {
+    rows: PairRows,
+    first: Vec<u8>,
+    bases: Bases,
 }
 
 /// Realizations a deficit may be drawn at before it is reported without confirmation.
 const MAX_DRAWS: u64 = 8;
 
-/// Which joints a random realization draws at another seed than the analysis's, and the
-/// attempt whose draws confirm a deficit ([`confirm_seeds`]; `None`: deficits are reported as
-/// found).
+/// Which joints a random realization draws at another seed than the analysis's, and the attempt
+/// whose draws confirm a deficit ([`confirm_seeds`](confirm::confirm_seeds); `None`: deficits are
+/// reported as found).
 #[derive(Default)]
-pub(super) struct Redraw {
-    pub(super) joints: HashMap<usize, u64>,
-    pub(super) confirm: Option<u64>,
+struct Redraw {
+    joints: HashMap<usize, u64>,
+    confirm: Option<u64>,
     /// The joints drawn again since the last attempt, and that attempt's rows with each pair's
     /// first row count: only their pairs and the pairs it lowered are built again.
-    pub(super) fresh: HashSet<usize>,
-    pub(super) rows: Option<Kept>,
+    fresh: HashSet<usize>,
+    rows: Option<Kept>,
 }
 
 /// Run the check; `eqs.cap` and `u` are lowered in place. With a `cache`, bodies' reduced

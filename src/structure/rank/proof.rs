@@ -11,14 +11,14 @@ use nalgebra::DMatrix;
 /// Largest square block [`surely_nonsingular`] decides (on the stack).
 const SMALL_BLOCK: usize = 36;
 
-/// Whether a small square block surely has full rank at the SVD's threshold, decided without
-/// the heap: the block as [`block_matrix`] builds it, its inverse `X` by Gaussian elimination
-/// with partial pivoting, and a check of the residual `‖I − A·X‖_F ≤ 1/2`, which proves `A`
-/// invertible with `‖A⁻¹‖₂ ≤ 2‖X‖_F`, so `σ_min ≥ 1 / (2‖X‖_F)`. When that is
-/// [`SCREEN_MARGIN`] times above the SVD threshold (`n · rel · σ_max`, `σ_max ≤ ‖A‖_F`), the
-/// SVD would find full rank too. Anything else (or a precision-derived threshold) goes to
-/// [`screen`] and the SVD, as before. The structural groups of generated mechanisms (one to
-/// four bodies) all come here: the sparse screen allocated a few matrices per pair.
+/// Whether a small square block surely has full rank at the SVD's threshold, decided without the
+/// heap: the block as [`block_matrix`](super::blocks::block_matrix) builds it, its inverse `X` by
+/// Gaussian elimination with partial pivoting, and a check of the residual `‖I − A·X‖_F ≤ 1/2`,
+/// which proves `A` invertible with `‖A⁻¹‖₂ ≤ 2‖X‖_F`, so `σ_min ≥ 1 / (2‖X‖_F)`. When that is
+/// [`SCREEN_MARGIN`] times above the SVD threshold (`n · rel · σ_max`, `σ_max ≤ ‖A‖_F`), the SVD
+/// would find full rank too. Anything else (or a precision-derived threshold) goes to [`screen`]
+/// and the SVD, as before. The structural groups of generated mechanisms (one to four bodies) all
+/// come here: the sparse screen allocated a few matrices per pair.
 #[allow(clippy::too_many_arguments, clippy::needless_range_loop)]
 pub(super) fn surely_nonsingular(
     b: usize,
@@ -64,10 +64,10 @@ struct RowSpan {
     w: [u8; 2],
 }
 
-/// Loads the rows of the pairs `block_eqs` into the cache together, before they are read one
-/// by one: the pairs of a block lie far apart in [`PairRows`] (and in `eqs`), so copying them
-/// pair after pair waited for memory once per pair (a third of [`nonsingular_within`]'s time
-/// and most of [`reduced_basis`]'s at 10^6 bodies). Changes no value.
+/// Loads the rows of the pairs `block_eqs` into the cache together, before they are read one by
+/// one: the pairs of a block lie far apart in [`PairRows`] (and in `eqs`), so copying them pair
+/// after pair waited for memory once per pair (a third of [`nonsingular_within`]'s time and most of
+/// [`reduced_basis`](super::unknowns::reduced_basis)'s at 10^6 bodies). Changes no value.
 fn warm(rows: &PairRows, eqs: &Equations, block_eqs: &[usize]) {
     let mut sum = 0.0;
     let mut ends = 0usize;

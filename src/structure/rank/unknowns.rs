@@ -111,15 +111,16 @@ const TALL_STACK_ROWS: usize = 96;
 /// body keeps all `b` unknowns, basis the identity), else an orthonormal basis of the
 /// complement of their null space.
 ///
-/// Full column rank is first screened by [`surely_full_rank`]: a singular value ratio above
-/// 1e-6 is far from the SVD threshold of [`REL_TOL`], so the SVD would keep every direction
-/// too. Anything else goes to the padded SVD.
+/// Full column rank is first screened by [`surely_full_rank`]: a singular value ratio above 1e-6 is
+/// far from the SVD threshold of [`REL_TOL`](super::float::REL_TOL), so the SVD would keep every
+/// direction too. Anything else goes to the padded SVD.
 pub(super) fn reduced_basis<'a>(
     b: usize,
     rows: impl Iterator<Item = RowsView<'a>> + Clone,
     t: &Tol,
 ) -> Option<DMatrix<f64>> {
-    // The pairs' rows are loaded into the cache together (see [`warm`]) as they are counted.
+    // The pairs' rows are loaded into the cache together (see [`warm`](super::proof::warm)) as they
+    // are counted.
     let mut touched = 0.0;
     let total: usize = rows
         .clone()
@@ -295,11 +296,11 @@ pub(super) fn local_basis<'a>(
 }
 
 /// Whether the stacked `rows` (`b` columns) surely have full column rank, far from the SVD
-/// threshold. Gaussian elimination with partial pivoting picks `b` rows, a square submatrix
-/// `T` with `|det T|` the product of the pivots and `σ_min(T) ≥ |det T| / ‖T‖_F^(b−1)`;
-/// removing rows never raises `σ_min`, and `σ_max ≤ F`, the Frobenius norm of all rows. So
-/// `|det T| > 1e-6 · F · ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, far above the SVD
-/// threshold (`n ·` [`REL_TOL`] with n ≤ 48 rows here). Runs for every body, on the stack.
+/// threshold. Gaussian elimination with partial pivoting picks `b` rows, a square submatrix `T`
+/// with `|det T|` the product of the pivots and `σ_min(T) ≥ |det T| / ‖T‖_F^(b−1)`; removing rows
+/// never raises `σ_min`, and `σ_max ≤ F`, the Frobenius norm of all rows. So `|det T| > 1e-6 · F ·
+/// ‖T‖_F^(b−1)` means `σ_min > 1e-6 · σ_max`, far above the SVD threshold (`n ·`
+/// [`REL_TOL`](super::float::REL_TOL) with n ≤ 48 rows here). Runs for every body, on the stack.
 fn surely_full_rank<'a>(b: usize, total: usize, rows: impl Iterator<Item = RowsView<'a>>) -> bool {
     // The arrays sized to the stack of rows (zeroing 48 rows for a body held by two pairs
     // cost as much as the elimination).
