@@ -188,7 +188,7 @@ pub(crate) struct RawGroup {
 }
 
 /// The result of the count decomposition.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 #[cfg_attr(test, derive(PartialEq))]
 pub(crate) struct Decomposition {
     /// Part of each body.
@@ -322,15 +322,50 @@ fn decompose_counted(
     u: &[u32],
     next: Option<Option<Prior>>,
 ) -> (Decomposition, u64, Option<FlowRound>) {
-    let ne = eqs.len();
-    let nb = eqs.nodes;
+    let (mut net, total) = greedy_flow(m, eqs, u);
+    let (from_src, round) = source_side(eqs, u, &mut net, total, next);
+    let (flow, eq_excess) = read_flow(m, eqs, &net);
+    let mut touched = vec![false; eqs.nodes];
+    for e in 0..eqs.len() {
+        for x in eqs.bodies(e) {
+            touched[x] = true;
+        }
+    }
+    let body_missing = missing_dof(m, eqs, &net, &touched);
+    let (mut body_part, mut eq_part, scanned) = split_parts(m, eqs, net, from_src, &touched);
+    let (deg, adj) = dependencies(eqs, &flow, &body_part, &eq_part);
+    let groups = ordered_groups(eqs, &body_part, deg, adj);
+    assign_groups(eqs, &flow, &groups, &mut body_part, &mut eq_part);
+    (
+        Decomposition {
+            body_part,
+            eq_part,
+            groups,
+            eq_excess,
+            body_missing,
+        },
+        scanned,
+        round,
+    )
+}
+
+/// The network's node of pair `e` (after the source and the sink).
+fn eq_node(e: usize) -> usize {
+    2 + e
+}
+
+/// The network's node of body `b` (after the pairs).
+fn body_node(eqs: &Equations, b: usize) -> usize {
+    2 + eqs.len() + b
+}
+
+/// The flow network source → pairs → bodies → sink with its greedy start pushed, and that
+/// start's value. Built directly in the order the edge list s → pairs, pair → bodies,
+/// bodies → t gives (the maximum flow found depends on that order).
+fn greedy_flow(m: &Mechanism, eqs: &Equations, u: &[u32]) -> (Network, u64) {
     let (src, sink) = (0usize, 1usize);
-    let eq_node = |e: usize| 2 + e;
-    let body_node = |b: usize| 2 + ne + b;
-    // Built directly in the order the edge list s → pairs, pair → bodies, bodies → t gives
-    // (the maximum flow found depends on that order).
     const NONE: u32 = u32::MAX;
-    let sink_caps: Vec<u32> = (0..nb)
+    let sink_caps: Vec<u32> = (0..eqs.nodes)
         .map(|b| match u.get(b) {
             Some(&ub) if b != m.frame => ub,
             _ => NONE,
@@ -341,13 +376,13 @@ fn decompose_counted(
         eqs.bodies(e)
             .map(|x| if x == frame { NONE } else { x as u32 })
     };
-    let (mut net, total) = if eqs.hint.len() == ne {
+    if eqs.hint.len() == eqs.len() {
         let mut net = Network::three_layer(&eqs.cap, ends, &sink_caps);
         let mut start = Vec::new();
         for (e, h) in eqs.hint.iter().enumerate() {
             for (x, &d) in eqs.bodies(e).into_iter().zip(h) {
                 if x != m.frame && d > 0 {
-                    start.push((eq_node(e), body_node(x), d));
+                    start.push((eq_node(e), body_node(eqs, x), d));
                 }
             }
         }
@@ -358,13 +393,23 @@ fn decompose_counted(
         // The greedy start pushed as the network is built: the same pushes (see
         // `Network::three_layer_greedy`).
         Network::three_layer_greedy(&eqs.cap, ends, &sink_caps)
-    };
-    drop(sink_caps);
+    }
+}
+
+/// The maximum flow from the greedy start worth `total`, and the nodes reachable from the
+/// source: they come with the flow (its last search), or are the previous round's (see
+/// [`same_source_side`]). With `next`, the [`FlowRound`] for the next decomposition.
+fn source_side(
+    eqs: &Equations,
+    u: &[u32],
+    net: &mut Network,
+    total: u64,
+    next: Option<Option<Prior>>,
+) -> (Vec<bool>, Option<FlowRound>) {
+    let (src, sink) = (0usize, 1usize);
     let prior = next.flatten();
     let known =
         prior.is_some_and(|p| same_source_side(eqs, u, net.nodes(), net.source_outflow(), p));
-    // The nodes reachable from the source come with the flow (its last search), or are the
-    // previous round's.
     let from_src: Vec<bool> = match prior {
         Some((round, _)) if known => (0..net.nodes())
             .map(|x| round.over[x / 64] >> (x % 64) & 1 != 0)
@@ -388,9 +433,15 @@ fn decompose_counted(
             counts: (eqs.cap.clone(), u.to_vec()),
         }
     });
+    (from_src, round)
+}
 
-    // Read the flow back: whether each side of each pair carries flow (all that is read of
-    // it below; two bytes a pair rather than eight, held with the network).
+/// Read the flow back: whether each side of each pair carries flow (all that is read of it
+/// later; two bytes a pair rather than eight, held with the network), and each pair's
+/// unsaturated equations.
+fn read_flow(m: &Mechanism, eqs: &Equations, net: &Network) -> (Vec<[bool; 2]>, Vec<u32>) {
+    let src = 0usize;
+    let ne = eqs.len();
     let mut flow = vec![[false; 2]; ne];
     let mut eq_excess = vec![0u32; ne];
     for (e, f) in flow.iter_mut().enumerate() {
@@ -400,37 +451,49 @@ fn decompose_counted(
             if v == src {
                 // Reverse of source edge: its residual is the flow in.
                 eq_excess[e] = eqs.cap[e] - net.residual(a).min(eqs.cap[e]);
-            } else if v == body_node(h) && h != m.frame {
+            } else if v == body_node(eqs, h) && h != m.frame {
                 // A forward edge of capacity INF: what it lost is its flow (read here rather
                 // than on its reverse, which sits at the body, far away).
                 f[0] = net.residual(a) < INF;
-            } else if v == body_node(o) {
+            } else if v == body_node(eqs, o) {
                 f[1] = net.residual(a) < INF;
             }
         }
     }
-    let mut body_missing = vec![0u32; nb];
-    let mut touched = vec![false; nb];
-    for e in 0..ne {
-        for x in eqs.bodies(e) {
-            touched[x] = true;
-        }
-    }
+    (flow, eq_excess)
+}
+
+/// Missing DOF per body (`u_b − flow`; none for the frame and bodies no pair `touched`).
+fn missing_dof(m: &Mechanism, eqs: &Equations, net: &Network, touched: &[bool]) -> Vec<u32> {
+    let sink = 1usize;
+    let mut body_missing = vec![0u32; eqs.nodes];
     for (b, miss) in body_missing.iter_mut().enumerate() {
         if b == m.frame || !touched[b] {
             continue;
         }
-        for a in net.edges(body_node(b)) {
+        for a in net.edges(body_node(eqs, b)) {
             if net.head(a) == sink {
                 *miss = net.residual(a);
             }
         }
     }
+    body_missing
+}
 
-    // Dulmage–Mendelsohn: reachable from the source = over-determined, reaching the sink =
-    // under-determined, the rest is perfectly matched within itself.
-    let to_sink = net.reaching(sink);
-    // The network is read no more: its pages take the parts' lists below.
+/// Dulmage–Mendelsohn: reachable from the source = over-determined, reaching the sink =
+/// under-determined, the rest is perfectly matched within itself (`Group(usize::MAX)` until
+/// the groups are known). The parts of the bodies and of the pairs, and the edges the
+/// network's searches examined. The network is read no more: its pages take the parts' lists.
+#[allow(clippy::type_complexity)]
+fn split_parts(
+    m: &Mechanism,
+    eqs: &Equations,
+    net: Network,
+    from_src: Vec<bool>,
+    touched: &[bool],
+) -> (Vec<Part>, Vec<Part>, u64) {
+    let nb = eqs.nodes;
+    let to_sink = net.reaching(1);
     let scanned = net.scanned();
     drop(net);
     let classify = |node: usize| {
@@ -442,7 +505,7 @@ fn decompose_counted(
             Part::Group(usize::MAX)
         }
     };
-    let mut body_part: Vec<Part> = (0..nb).map(|b| classify(body_node(b))).collect();
+    let mut body_part: Vec<Part> = (0..nb).map(|b| classify(body_node(eqs, b))).collect();
     body_part[m.frame] = Part::Frame;
     // Bodies no joint names are not part of the mechanism: no group, no missing DOF.
     for b in 0..nb {
@@ -450,13 +513,21 @@ fn decompose_counted(
             body_part[b] = Part::Frame;
         }
     }
-    let mut eq_part: Vec<Part> = (0..ne).map(|e| classify(eq_node(e))).collect();
-    drop(from_src);
-    drop(to_sink);
+    let eq_part: Vec<Part> = (0..eqs.len()).map(|e| classify(eq_node(e))).collect();
+    (body_part, eq_part, scanned)
+}
 
-    // Dependency graph among well-determined bodies: b depends on a when an equation that
-    // flows into b also touches a.
-    let well = |b: usize, parts: &[Part]| matches!(parts[b], Part::Group(_));
+/// Dependency graph among well-determined bodies, compressed (`adj[deg[x]..deg[x + 1]]`):
+/// b depends on a when an equation that flows into b also touches a.
+fn dependencies(
+    eqs: &Equations,
+    flow: &[[bool; 2]],
+    body_part: &[Part],
+    eq_part: &[Part],
+) -> (Vec<usize>, Vec<u32>) {
+    let nb = eqs.nodes;
+    let ne = eqs.len();
+    let well = |b: usize| matches!(body_part[b], Part::Group(_));
     // The dependency `x -> y` of side `i` of pair `e`, if any (counted, then placed: no list
     // of edges next to the arrays).
     let dep = |e: usize, i: usize| -> Option<(usize, usize)> {
@@ -465,7 +536,7 @@ fn decompose_counted(
         }
         let bs = eqs.bodies(e);
         let (x, y) = (bs[i], bs[1 - i]);
-        (well(x, &body_part) && y != x && well(y, &body_part)).then_some((x, y))
+        (well(x) && y != x && well(y)).then_some((x, y))
     };
     let mut deg = vec![0usize; nb + 1];
     for e in 0..ne {
@@ -488,8 +559,21 @@ fn decompose_counted(
             }
         }
     }
-    drop(fill);
-    let active: Vec<bool> = (0..nb).map(|b| well(b, &body_part)).collect();
+    (deg, adj)
+}
+
+/// The groups: the strongly connected components of the dependency graph (`deg`, `adj`)
+/// among well-determined bodies, with their levels, in canonical order.
+fn ordered_groups(
+    eqs: &Equations,
+    body_part: &[Part],
+    deg: Vec<usize>,
+    adj: Vec<u32>,
+) -> Vec<RawGroup> {
+    let nb = eqs.nodes;
+    let active: Vec<bool> = (0..nb)
+        .map(|b| matches!(body_part[b], Part::Group(_)))
+        .collect();
     let (mut members, bounds) = tarjan_flat(&deg, &adj, &active);
     drop(active);
     let nc = bounds.len() - 1;
@@ -525,13 +609,24 @@ fn decompose_counted(
     }
     drop(comp);
     drop(adj);
-    let groups = canonical_flat(&mut members, &bounds, level, &dstart, &dlist);
+    canonical_flat(&mut members, &bounds, level, &dstart, &dlist)
+}
+
+/// Each group's bodies and pairs take its number: a pair goes to the group its flow goes
+/// into.
+fn assign_groups(
+    eqs: &Equations,
+    flow: &[[bool; 2]],
+    groups: &[RawGroup],
+    body_part: &mut [Part],
+    eq_part: &mut [Part],
+) {
     for (g, grp) in groups.iter().enumerate() {
         for &b in &grp.bodies {
             body_part[b] = Part::Group(g);
         }
     }
-    for e in 0..ne {
+    for e in 0..eqs.len() {
         if matches!(eq_part[e], Part::Group(_)) {
             let bs = eqs.bodies(e);
             let receiving = if flow[e][0] {
@@ -561,17 +656,6 @@ fn decompose_counted(
             };
         }
     }
-    (
-        Decomposition {
-            body_part,
-            eq_part,
-            groups,
-            eq_excess,
-            body_missing,
-        },
-        scanned,
-        round,
-    )
 }
 
 /// Sort components into canonical order (level, size, smallest body) and renumber dependencies.
