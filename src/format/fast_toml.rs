@@ -2,7 +2,7 @@
 //! one `key = value` per line, bare keys, scalars and one-line arrays of scalars, top-level
 //! `[table]` headers and `[[joint]]` tables. It builds the same spanned tree as the toml crate
 //! (tested equal) without the crate's token vector, maps and per-value allocations, and reads
-//! the joints one at a time ([`super::tree::Lazy::TomlLines`]).
+//! the joints one at a time ([`super::read::Lazy::TomlLines`]).
 //!
 //! It accepts a strict subset of TOML and declines (`None`) at anything else: escapes,
 //! literal or multi-line strings, dotted or quoted keys, inline tables, nested arrays,
@@ -720,7 +720,7 @@ mod tests {
     /// Where the fast path reads a text, the toml crate reads it and gives the same tree.
     fn agrees(text: &str) -> bool {
         let fast = whole(text);
-        let serial = super::super::tree::parse_toml_serial(text).ok();
+        let serial = super::super::read::parse_toml_serial(text).ok();
         match fast {
             Some(f) => {
                 assert_eq!(Some(f), serial, "fast tree differs for {text:?}");
