@@ -1,24 +1,12 @@
 //! Bodies: the declared `body` list, the numbering of body ids met in the joints (dense while
 //! they are small integers), and the bodies put in id order at the end.
 
-use super::super::error::ErrorKind;
-use super::super::error::LoadError;
-use super::super::tree::Entry;
-use super::values::as_id;
-use super::values::as_map;
-use super::values::as_seq;
-use super::values::as_str;
-use super::values::check_keys;
-use super::values::err;
-use super::values::get;
-use super::values::label;
-use super::values::nearest;
-use super::values::required;
-use crate::mechanism::Body;
-use crate::mechanism::BodyId;
-use crate::mechanism::Joint;
-use crate::mechanism::Mechanism;
-use crate::mechanism::Space;
+use super::values::{
+    as_id, as_map, as_seq, as_str, check_keys, err, get, label, nearest, required,
+};
+use crate::format::error::{ErrorKind, LoadError};
+use crate::format::tree::Entry;
+use crate::mechanism::{Body, BodyId, Joint, Mechanism, Space};
 use std::collections::BTreeMap;
 use std::ops::Range;
 

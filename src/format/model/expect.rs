@@ -1,13 +1,8 @@
 //! The `[expect]` table: the results a file expects, checked by their own type.
 
-use super::super::error::ErrorKind;
-use super::super::error::LoadError;
-use super::super::tree::Node;
-use super::super::tree::Value;
-use super::values::as_map;
-use super::values::check_keys;
-use super::values::err;
-use super::values::out_of_range;
+use super::values::{as_map, check_keys, err, out_of_range};
+use crate::format::error::{ErrorKind, LoadError};
+use crate::format::tree::{Node, Value};
 use crate::mechanism::Expect;
 
 /// `[expect]`: keys and types from [`Expect`] itself, so the two stay in sync.

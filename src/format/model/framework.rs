@@ -1,31 +1,14 @@
 //! Bar-joint frameworks: points and bars, each bar a body, a joint where bars meet.
 
-use super::super::error::ErrorKind;
-use super::super::error::LoadError;
-use super::super::tree::Entry;
-use super::super::tree::Node;
 use super::bodies::undeclared;
-use super::frame_not_in_joint;
 use super::geometry::parse_vector;
-use super::no_joints;
-use super::values::as_id;
-use super::values::as_map;
-use super::values::as_seq;
-use super::values::check_keys;
-use super::values::err;
-use super::values::get;
-use super::values::label;
-use super::values::nearest;
-use super::values::required;
+use super::values::{as_id, as_map, as_seq, check_keys, err, get, label, nearest, required};
+use super::{frame_not_in_joint, no_joints};
+use crate::format::error::{ErrorKind, LoadError};
+use crate::format::tree::{Entry, Node};
 use crate::joint::JointType;
-use crate::mechanism::Body;
-use crate::mechanism::BodyId;
-use crate::mechanism::Geometry;
-use crate::mechanism::JointSpec;
-use crate::mechanism::Mechanism;
-use crate::mechanism::Space;
-use std::collections::BTreeMap;
-use std::collections::BTreeSet;
+use crate::mechanism::{Body, BodyId, Geometry, JointSpec, Mechanism, Space};
+use std::collections::{BTreeMap, BTreeSet};
 use std::ops::Range;
 
 const POINT_KEYS: &[&str] = &["id", "at"];

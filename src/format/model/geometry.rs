@@ -1,18 +1,11 @@
 //! Joint geometry: coordinate arrays, the geometry keys of a joint and its `second` table.
 
-use super::super::error::ErrorKind;
-use super::super::error::LoadError;
-use super::super::tree::Entry;
 use super::joints::c_name;
-use super::values::as_map;
-use super::values::as_number;
-use super::values::as_seq;
-use super::values::check_keys;
-use super::values::err;
+use super::values::{as_map, as_number, as_seq, check_keys, err};
+use crate::format::error::{ErrorKind, LoadError};
+use crate::format::tree::Entry;
 use crate::joint::JointType;
-use crate::mechanism::Geometry;
-use crate::mechanism::Second;
-use crate::mechanism::Space;
+use crate::mechanism::{Geometry, Second, Space};
 use std::ops::Range;
 
 const SECOND_KEYS: &[&str] = &["origin", "axis", "axis2", "normal"];

@@ -1,49 +1,20 @@
 //! The joint list of a joint-and-body file, read one joint at a time: type, bodies, driven
 //! DOF, id and geometry of each, then the default ids.
 
-use super::super::error::ErrorKind;
-use super::super::error::LoadError;
-use super::super::read::Lazy;
-use super::super::tree::Entry;
-use super::super::tree::Node;
-use super::super::tree::Value;
-use super::bodies::Interner;
-use super::bodies::in_dense_id_order;
-use super::bodies::in_id_order;
-use super::bodies::parse_bodies;
-use super::bodies::undeclared;
-use super::frame_not_in_joint;
-use super::geometry::parse_geometry;
-use super::geometry::parse_second;
-use super::joint_ids::ByList;
-use super::joint_ids::MaybeTaken;
-use super::joint_ids::by_body_list;
-use super::joint_ids::default_joint_ids;
-use super::joint_ids::merged_natural_order;
-use super::joint_ids::push_id;
-use super::joint_ids::push_int;
-use super::no_joints;
-use super::values::as_id;
-use super::values::as_int;
-use super::values::as_map;
-use super::values::as_seq;
-use super::values::as_str;
-use super::values::check_keys;
-use super::values::err;
-use super::values::label;
-use super::values::required;
-use crate::joint::CATALOGUE;
-use crate::joint::JointType;
-use crate::mechanism::BodyId;
-use crate::mechanism::Joint;
-use crate::mechanism::JointBodies;
-use crate::mechanism::JointGeometry;
-use crate::mechanism::Mechanism;
-use crate::mechanism::Space;
+use super::bodies::{Declared, Interner, in_dense_id_order, in_id_order, parse_bodies, undeclared};
+use super::geometry::{parse_geometry, parse_second};
+use super::joint_ids::{
+    ByList, MaybeTaken, by_body_list, default_joint_ids, merged_natural_order, push_id, push_int,
+};
+use super::values::{as_id, as_int, as_map, as_seq, as_str, check_keys, err, label, required};
+use super::{frame_not_in_joint, no_joints};
+use crate::format::error::{ErrorKind, LoadError};
+use crate::format::read::Lazy;
+use crate::format::tree::{Entry, Node, Value};
+use crate::joint::{CATALOGUE, JointType};
+use crate::mechanism::{BodyId, Joint, JointBodies, JointGeometry, Mechanism, Space};
 use std::borrow::Cow;
-use std::collections::HashMap;
-use std::collections::HashSet;
-use std::collections::hash_map;
+use std::collections::{HashMap, HashSet, hash_map};
 use std::ops::Range;
 
 const JOINT_KEYS: &[&str] = &[
@@ -111,18 +82,7 @@ pub(super) fn build_joints<'a>(
     // Bodies: the declared ones first (so that `index < n_declared` means declared), then the
     // frame, then in order of appearance.
     let hint = lazy.len_hint(&list);
-    let mut interner = Interner::new(declared.is_none(), hint);
-    let mut labels: Vec<Option<String>> = Vec::new();
-    let n_declared = match declared {
-        Some(d) => {
-            for (id, (label, _)) in d {
-                interner.get(id);
-                labels.push(label);
-            }
-            Some(interner.len())
-        }
-        None => None,
-    };
+    let (mut interner, labels, n_declared) = number_declared(declared, hint);
     let frame_index = interner.get(frame.clone());
     // A frame that leaves the dense numbering: no index was handed out before it.
     interner.renumbered = None;
@@ -156,6 +116,27 @@ pub(super) fn build_joints<'a>(
         frame_index,
         read,
     ))
+}
+
+/// The body numbering, sized for about `hint` joints, with the declared bodies first: their
+/// labels by index, and how many there are (`None`: no bodies declared).
+fn number_declared(
+    declared: Option<Declared>,
+    hint: usize,
+) -> (Interner, Vec<Option<String>>, Option<usize>) {
+    let mut interner = Interner::new(declared.is_none(), hint);
+    let mut labels: Vec<Option<String>> = Vec::new();
+    let n_declared = match declared {
+        Some(d) => {
+            for (id, (label, _)) in d {
+                interner.get(id);
+                labels.push(label);
+            }
+            Some(interner.len())
+        }
+        None => None,
+    };
+    (interner, labels, n_declared)
 }
 
 /// The joints read so far, and what their ids and bodies need while the list is read.

@@ -9,28 +9,16 @@ mod joint_ids;
 mod joints;
 mod values;
 
-use super::error::ErrorKind;
-use super::error::LoadError;
+use super::error::{ErrorKind, LoadError};
 use super::read::Lazy;
-use super::tree::Node;
-use super::tree::Value;
-use crate::mechanism::BodyId;
-use crate::mechanism::Mechanism;
-use crate::mechanism::Space;
+use super::tree::{Entry, Node, Value};
+use crate::mechanism::{BodyId, Mechanism, Space};
 use expect::parse_expect;
 use framework::build_framework;
 pub(crate) use joint_ids::push_int;
 use joints::build_joints;
 use std::ops::Range;
-use values::as_id;
-use values::as_map;
-use values::as_number;
-use values::as_str;
-use values::check_keys;
-use values::err;
-use values::get;
-use values::get_alias;
-use values::{label, nearest};
+use values::{as_id, as_map, as_number, as_str, check_keys, err, get, get_alias, label, nearest};
 
 const TOP_KEYS: &[&str] = &[
     "name",
@@ -56,21 +44,7 @@ pub(crate) fn build<'a>(
     default_name: &str,
     lazy: Lazy<'a>,
 ) -> Result<Mechanism, LoadError> {
-    // The joint lists leave the tree (a placeholder stays), to be read and freed one joint at
-    // a time: the largest part of a large file.
-    let mut lists: [Option<Value<'a>>; 2] = [None, None];
-    if let Value::Map(es) = &mut root.value {
-        for e in es.iter_mut() {
-            let slot = match e.key.as_ref() {
-                "joint" => 0,
-                "joints" => 1,
-                _ => continue,
-            };
-            if matches!(e.value.value, Value::Seq(_) | Value::Deferred) {
-                lists[slot] = Some(std::mem::replace(&mut e.value.value, Value::Deferred));
-            }
-        }
-    }
+    let mut lists = take_joint_lists(&mut root);
     let root = &root;
     let top = as_map(root, "the top level")?;
     if top.is_empty() {
@@ -109,19 +83,7 @@ pub(crate) fn build<'a>(
             Some("describe the mechanism either with `joint`/`body` or with `point`/`bar`".into()),
         ));
     }
-    let frame_entry = get(top, "frame").ok_or_else(|| {
-        let at = top[0].key_span.clone();
-        err(
-            ErrorKind::MissingFrame,
-            "no `frame`: the fixed body is required",
-            &at,
-            "the top level has no `frame`",
-            Some(
-                "add `frame = <body id>` (TOML) or `frame: <body id>` (YAML), e.g. frame = 1"
-                    .into(),
-            ),
-        )
-    })?;
+    let frame_entry = get(top, "frame").ok_or_else(|| missing_frame(top))?;
     let frame = as_id(&frame_entry.value, "`frame`")?;
 
     let mut m = if framework.is_some() {
@@ -155,6 +117,37 @@ pub(crate) fn build<'a>(
         m.precision = Some(parse_precision(&e.value)?);
     }
     Ok(m)
+}
+
+/// The joint lists taken out of the tree (a placeholder stays), to be read and freed one
+/// joint at a time: the largest part of a large file. `[joint, joints]`.
+fn take_joint_lists<'a>(root: &mut Node<'a>) -> [Option<Value<'a>>; 2] {
+    let mut lists: [Option<Value<'a>>; 2] = [None, None];
+    if let Value::Map(es) = &mut root.value {
+        for e in es.iter_mut() {
+            let slot = match e.key.as_ref() {
+                "joint" => 0,
+                "joints" => 1,
+                _ => continue,
+            };
+            if matches!(e.value.value, Value::Seq(_) | Value::Deferred) {
+                lists[slot] = Some(std::mem::replace(&mut e.value.value, Value::Deferred));
+            }
+        }
+    }
+    lists
+}
+
+/// No `frame` at the top level (`top`, not empty).
+fn missing_frame(top: &[Entry]) -> LoadError {
+    let at = top[0].key_span.clone();
+    err(
+        ErrorKind::MissingFrame,
+        "no `frame`: the fixed body is required",
+        &at,
+        "the top level has no `frame`",
+        Some("add `frame = <body id>` (TOML) or `frame: <body id>` (YAML), e.g. frame = 1".into()),
+    )
 }
 
 /// The `precision` key: how precisely every geometry number is known (±, file units), a

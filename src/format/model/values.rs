@@ -1,12 +1,8 @@
 //! Typed values out of the tree (maps, lists, strings, numbers, body ids, keys), each refusal
 //! located at the value it is about.
 
-use super::super::error::ErrorKind;
-use super::super::error::Label;
-use super::super::error::LoadError;
-use super::super::tree::Entry;
-use super::super::tree::Node;
-use super::super::tree::Value;
+use crate::format::error::{ErrorKind, Label, LoadError};
+use crate::format::tree::{Entry, Node, Value};
 use crate::mechanism::BodyId;
 use std::ops::Range;
 
