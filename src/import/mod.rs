@@ -25,6 +25,8 @@ pub(crate) use builder::{Builder, JointRec};
 pub(crate) use pose::{Pose, arr, point_closure, pose, rpy, unit};
 pub(crate) use xml::{Node, Src, child, children, tolerate_spaced_declarations};
 
+#[cfg(test)]
+use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use std::fmt::Write as _;
 use std::path::Path;
