@@ -37,6 +37,38 @@ pub(super) fn custom(
             )
             .with_help("a CustomJoint lists its six TransformAxis elements"));
     };
+    let axes = transform_axes(src, st)?;
+    let Composed {
+        rot,
+        t,
+        coupled,
+        driving,
+    } = compose(src, b, name, coords, f, &axes)?;
+    let x_fm = Pose::from_parts(Translation3::from(t), rot);
+    let origin = Some(arr((f * Point3::from(t)).coords));
+    let rots: Vec<&(bool, Vector3<f64>, String)> = driving.iter().filter(|d| d.0).collect();
+    let trans: Vec<&(bool, Vector3<f64>, String)> = driving.iter().filter(|d| !d.0).collect();
+    let (kind, geom, exact) = custom_kind(origin, &rots, &trans);
+    if driving.is_empty() {
+        // No coordinate moves anything: a weld.
+        return Ok((x_fm, JointType::F, Geometry::default(), vec!["weld".into()]));
+    }
+    let names: Vec<String> = driving.iter().map(|d| d.2.clone()).collect();
+    if coupled {
+        b.warn(format!("{loc}: CustomJoint `{name}`: coupled coordinates ({}) drive several axes or non-linear functions: not representable; imported as {} about its independent coordinates at the default values", names.join(", "), kind.code()));
+    } else if !exact {
+        b.warn(format!("{loc}: CustomJoint `{name}`: its spatial transform ({} rotation(s), {} translation(s)) maps to no mbsa joint: imported as {}", rots.len(), trans.len(), kind.code()));
+    }
+    let geom = if matches!(kind, JointType::F) {
+        Geometry::default()
+    } else {
+        geom
+    };
+    Ok((x_fm, kind, geom, names))
+}
+
+/// The TransformAxis elements of a SpatialTransform.
+fn transform_axes<'a>(src: &Src, st: Node<'a>) -> Result<Vec<Axis<'a>>, ImportError> {
     let mut axes: Vec<Axis> = Vec::new();
     for (k, ta) in children(st, "TransformAxis").enumerate() {
         let rotation = ta
@@ -67,19 +99,42 @@ pub(super) fn custom(
             n: ta,
         });
     }
+    Ok(axes)
+}
+
+/// The six axes composed at the default coordinates.
+struct Composed {
+    rot: UnitQuaternion<f64>,
+    t: Vector3<f64>,
+    /// Whether a coordinate drives several axes or a non-linear function.
+    coupled: bool,
+    /// (is rotation, world direction, coordinate) of each coordinate's driving axis.
+    driving: Vec<(bool, Vector3<f64>, String)>,
+}
+
+/// Compose the axes at the coordinates' default values (`f`: the joint's frame in the parent
+/// in the world); a function not evaluated is warned (taken as 0).
+fn compose(
+    src: &Src,
+    b: &mut Builder,
+    name: &str,
+    coords: &[(String, f64)],
+    f: Pose,
+    axes: &[Axis],
+) -> Result<Composed, ImportError> {
     let value_of = |c: &str| coords.iter().find(|x| x.0 == c).map(|x| x.1).unwrap_or(0.0);
     let mut rot = UnitQuaternion::identity();
     let mut t = Vector3::zeros();
     let mut coupled = false;
     let mut use_count: HashMap<&str, usize> = HashMap::new();
-    for a in &axes {
+    for a in axes {
         for c in &a.coords {
             *use_count.entry(c.as_str()).or_default() += 1;
         }
     }
     // (is rotation, world direction, coordinate) of each coordinate's driving axis.
     let mut driving: Vec<(bool, Vector3<f64>, String)> = Vec::new();
-    for a in &axes {
+    for a in axes {
         let x = a.coords.first().map(|c| value_of(c)).unwrap_or(0.0);
         let (v, linear) = match a.function {
             Some(fun) => match eval(src, fun, x)? {
@@ -118,12 +173,22 @@ pub(super) fn custom(
             t += a.axis * v;
         }
     }
-    let x_fm = Pose::from_parts(Translation3::from(t), rot);
-    let origin = Some(arr((f * Point3::from(t)).coords));
-    let rots: Vec<&(bool, Vector3<f64>, String)> = driving.iter().filter(|d| d.0).collect();
-    let trans: Vec<&(bool, Vector3<f64>, String)> = driving.iter().filter(|d| !d.0).collect();
+    Ok(Composed {
+        rot,
+        t,
+        coupled,
+        driving,
+    })
+}
+
+/// The mbsa joint that the driving rotations and translations make, and whether it is exact.
+fn custom_kind(
+    origin: Option<[f64; 3]>,
+    rots: &[&(bool, Vector3<f64>, String)],
+    trans: &[&(bool, Vector3<f64>, String)],
+) -> (JointType, Geometry, bool) {
     let par = |a: Vector3<f64>, b: Vector3<f64>| a.cross(&b).norm() < 1e-9;
-    let (kind, geom, exact) = match (rots.len(), trans.len()) {
+    match (rots.len(), trans.len()) {
         (1, 0) => (
             JointType::R,
             Geometry {
@@ -201,21 +266,5 @@ pub(super) fn custom(
                 false,
             )
         }
-    };
-    if driving.is_empty() {
-        // No coordinate moves anything: a weld.
-        return Ok((x_fm, JointType::F, Geometry::default(), vec!["weld".into()]));
     }
-    let names: Vec<String> = driving.iter().map(|d| d.2.clone()).collect();
-    if coupled {
-        b.warn(format!("{loc}: CustomJoint `{name}`: coupled coordinates ({}) drive several axes or non-linear functions: not representable; imported as {} about its independent coordinates at the default values", names.join(", "), kind.code()));
-    } else if !exact {
-        b.warn(format!("{loc}: CustomJoint `{name}`: its spatial transform ({} rotation(s), {} translation(s)) maps to no mbsa joint: imported as {}", rots.len(), trans.len(), kind.code()));
-    }
-    let geom = if matches!(kind, JointType::F) {
-        Geometry::default()
-    } else {
-        geom
-    };
-    Ok((x_fm, kind, geom, names))
 }

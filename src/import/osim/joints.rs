@@ -248,45 +248,14 @@ fn joint_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose) -> Result<Motio
             },
             vec![],
         ),
-        "UniversalJoint" => {
-            let r1 = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), qa(0));
-            (
-                pose(
-                    [0.0; 3],
-                    r1 * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), qa(1)),
-                ),
-                JointType::U,
-                Geometry {
-                    origin: g(Vector3::zeros()),
-                    axis: d(Vector3::x()),
-                    axis2: d(r1 * Vector3::y()),
-                    ..Geometry::default()
-                },
-                vec![],
-            )
-        }
+        "UniversalJoint" => universal_motion(f, qa(0), qa(1)),
         "FreeJoint" => (
             pose([qa(3), qa(4), qa(5)], xyz_body(&[qa(0), qa(1), qa(2)])),
             JointType::F,
             Geometry::default(),
             vec![],
         ),
-        "PlanarJoint" => {
-            let t = Vector3::new(qa(1), qa(2), 0.0);
-            (
-                pose(
-                    [t.x, t.y, 0.0],
-                    UnitQuaternion::from_axis_angle(&Vector3::z_axis(), qa(0)),
-                ),
-                JointType::PL,
-                Geometry {
-                    origin: g(t),
-                    normal: d(Vector3::z()),
-                    ..Geometry::default()
-                },
-                vec![],
-            )
-        }
+        "PlanarJoint" => planar_motion(f, qa(0), qa(1), qa(2)),
         "WeldJoint" => (
             Pose::identity(),
             JointType::F,
@@ -294,38 +263,7 @@ fn joint_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose) -> Result<Motio
             vec!["weld".into()],
         ),
         "CustomJoint" => custom(src, b, j.n, &j.name, &j.coords, f)?,
-        other => {
-            let loc = src.loc(j.n);
-            let (kind, geom) = match j.coords.len() {
-                1 => (
-                    JointType::R,
-                    Geometry {
-                        origin: g(Vector3::zeros()),
-                        axis: d(Vector3::z()),
-                        ..Geometry::default()
-                    },
-                ),
-                2 => (
-                    JointType::U,
-                    Geometry {
-                        origin: g(Vector3::zeros()),
-                        axis: d(Vector3::x()),
-                        axis2: d(Vector3::y()),
-                        ..Geometry::default()
-                    },
-                ),
-                3 => (
-                    JointType::S,
-                    Geometry {
-                        origin: g(Vector3::zeros()),
-                        ..Geometry::default()
-                    },
-                ),
-                _ => (JointType::F, Geometry::default()),
-            };
-            b.warn(format!("{loc}: <{other}> `{}` is not representable exactly: imported as {} (its {} coordinate(s))", j.name, kind.code(), j.coords.len()));
-            (Pose::identity(), kind, geom, vec![])
-        }
+        other => approximate_motion(src, b, j, f, other),
     })
 }
 
@@ -373,4 +311,87 @@ pub(super) fn add_joints(
         jindex.insert(k, ji);
     }
     Ok(jindex)
+}
+
+/// A UniversalJoint at angles `q0` (about x) and `q1` (about the turned y).
+fn universal_motion(f: Pose, q0: f64, q1: f64) -> Motion {
+    let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
+    let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
+    let r1 = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), q0);
+    (
+        pose(
+            [0.0; 3],
+            r1 * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), q1),
+        ),
+        JointType::U,
+        Geometry {
+            origin: g(Vector3::zeros()),
+            axis: d(Vector3::x()),
+            axis2: d(r1 * Vector3::y()),
+            ..Geometry::default()
+        },
+        vec![],
+    )
+}
+
+/// A PlanarJoint at rotation `q0` (about z) and translation (`q1`, `q2`).
+fn planar_motion(f: Pose, q0: f64, q1: f64, q2: f64) -> Motion {
+    let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
+    let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
+    let t = Vector3::new(q1, q2, 0.0);
+    (
+        pose(
+            [t.x, t.y, 0.0],
+            UnitQuaternion::from_axis_angle(&Vector3::z_axis(), q0),
+        ),
+        JointType::PL,
+        Geometry {
+            origin: g(t),
+            normal: d(Vector3::z()),
+            ..Geometry::default()
+        },
+        vec![],
+    )
+}
+
+/// A joint type not representable exactly (`other`): R, U or S by its number of coordinates
+/// (F beyond), warned.
+fn approximate_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose, other: &str) -> Motion {
+    let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
+    let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
+    let loc = src.loc(j.n);
+    let (kind, geom) = match j.coords.len() {
+        1 => (
+            JointType::R,
+            Geometry {
+                origin: g(Vector3::zeros()),
+                axis: d(Vector3::z()),
+                ..Geometry::default()
+            },
+        ),
+        2 => (
+            JointType::U,
+            Geometry {
+                origin: g(Vector3::zeros()),
+                axis: d(Vector3::x()),
+                axis2: d(Vector3::y()),
+                ..Geometry::default()
+            },
+        ),
+        3 => (
+            JointType::S,
+            Geometry {
+                origin: g(Vector3::zeros()),
+                ..Geometry::default()
+            },
+        ),
+        _ => (JointType::F, Geometry::default()),
+    };
+    b.warn(format!(
+        "{loc}: <{other}> `{}` is not representable exactly: imported as {} (its {} coordinate(s))",
+        j.name,
+        kind.code(),
+        j.coords.len()
+    ));
+    (Pose::identity(), kind, geom, vec![])
 }
