@@ -295,9 +295,42 @@ impl<'d> Ctx<'d> {
                 .with_help("define it with <default class=\"...\"> inside <default>"));
         }
         let kind = self.joint_kind(k, &class, free)?;
+        let (pos, axis) = self.joint_pos_axis(k, &class, free, rel)?;
+        let reference = self.joint_reference(k, &class, kind, free)?;
+        let qposadr = self.nq;
+        self.nq += match kind {
+            Kind::Free => 7,
+            Kind::Ball => 4,
+            _ => 1,
+        };
+        self.bodies[body].joints.push(MJoint {
+            name: k
+                .n
+                .attribute("name")
+                .filter(|n| !n.is_empty())
+                .map(str::to_string),
+            kind,
+            pos,
+            axis,
+            reference,
+            qposadr,
+            e: k,
+        });
+        Ok(())
+    }
+
+    /// A joint's position and unit axis in its body's frame (`rel`: the frames between them),
+    /// own or by class; a free joint's are the origin and z.
+    fn joint_pos_axis(
+        &self,
+        k: E<'d>,
+        class: &str,
+        free: bool,
+        rel: Pose,
+    ) -> Result<(Vector3<f64>, Vector3<f64>), ImportError> {
         let vec3 =
             |cx: &Self, attr: &str, default: [f64; 3]| -> Result<Vector3<f64>, ImportError> {
-                match cx.joint_attr(k, &class, attr) {
+                match cx.joint_attr(k, class, attr) {
                     Some((_, at)) => {
                         let v = cx
                             .src(at)
@@ -321,34 +354,14 @@ impl<'d> Ctx<'d> {
         let axis = match unit(axis_local.as_slice()) {
             Some(a) => rel.rotation * a,
             None => {
-                let at = self.joint_attr(k, &class, "axis").map(|x| x.1).unwrap_or(k);
+                let at = self.joint_attr(k, class, "axis").map(|x| x.1).unwrap_or(k);
                 return Err(self
                     .src(at)
                     .err_attr(at.n, "axis", "zero", "a joint axis of zero length")
                     .with_help("axis gives the direction of the joint axis"));
             }
         };
-        let reference = self.joint_reference(k, &class, kind, free)?;
-        let qposadr = self.nq;
-        self.nq += match kind {
-            Kind::Free => 7,
-            Kind::Ball => 4,
-            _ => 1,
-        };
-        self.bodies[body].joints.push(MJoint {
-            name: k
-                .n
-                .attribute("name")
-                .filter(|n| !n.is_empty())
-                .map(str::to_string),
-            kind,
-            pos,
-            axis,
-            reference,
-            qposadr,
-            e: k,
-        });
-        Ok(())
+        Ok((pos, axis))
     }
 
     /// A joint's kind: its `type` (own or by class); `free` for a `<freejoint>`.

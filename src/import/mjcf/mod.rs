@@ -38,6 +38,48 @@ enum Kind {
     Free,
 }
 
+impl Kind {
+    /// The mbsa joint of this kind at the world `anchor` and `axis`.
+    fn joint(self, anchor: Vector3<f64>, axis: Vector3<f64>) -> (JointType, Geometry) {
+        match self {
+            Kind::Hinge => (
+                JointType::R,
+                Geometry {
+                    origin: Some(arr(anchor)),
+                    axis: Some(arr(axis)),
+                    ..Geometry::default()
+                },
+            ),
+            Kind::Slide => (
+                JointType::P,
+                Geometry {
+                    origin: Some(arr(anchor)),
+                    axis: Some(arr(axis)),
+                    ..Geometry::default()
+                },
+            ),
+            Kind::Ball => (
+                JointType::S,
+                Geometry {
+                    origin: Some(arr(anchor)),
+                    ..Geometry::default()
+                },
+            ),
+            Kind::Free => (JointType::F, Geometry::default()),
+        }
+    }
+
+    /// The MJCF name of this kind.
+    fn word(self) -> &'static str {
+        match self {
+            Kind::Hinge => "hinge",
+            Kind::Slide => "slide",
+            Kind::Ball => "ball",
+            Kind::Free => "free",
+        }
+    }
+}
+
 struct MJoint<'d> {
     name: Option<String>,
     kind: Kind,
@@ -93,24 +135,7 @@ pub(super) fn read(
     let srcs: Vec<Src> = texts.iter().map(|(n, t)| Src::new(n, t)).collect();
     let docs: Vec<roxmltree::Document> =
         srcs.iter().map(|s| s.parse()).collect::<Result<_, _>>()?;
-    let mut inc = HashMap::new();
-    for (f, start, path) in &inc_paths {
-        let name = path.display().to_string();
-        if let Some(k) = texts.iter().position(|(n, _)| *n == name) {
-            inc.insert((*f, *start), k);
-        }
-    }
-    let mut cx = Ctx {
-        srcs: &srcs,
-        inc,
-        degree: true,
-        eulerseq: *b"xyz",
-        classes: HashMap::new(),
-        bodies: Vec::new(),
-        sites: HashMap::new(),
-        nq: 0,
-        unsupported: Vec::new(),
-    };
+    let mut cx = Ctx::new(&srcs, &texts, &inc_paths);
     let root = E {
         n: docs[0].root_element(),
         f: 0,
@@ -264,6 +289,33 @@ fn include_path(
 }
 
 impl<'d> Ctx<'d> {
+    /// A context over the files `srcs` (`texts`: their names and texts, in scan order), each
+    /// `<include>` of `inc_paths` mapped to the file it names.
+    fn new(
+        srcs: &'d [Src<'d>],
+        texts: &[(String, String)],
+        inc_paths: &[(usize, usize, PathBuf)],
+    ) -> Ctx<'d> {
+        let mut inc = HashMap::new();
+        for (f, start, path) in inc_paths {
+            let name = path.display().to_string();
+            if let Some(k) = texts.iter().position(|(n, _)| *n == name) {
+                inc.insert((*f, *start), k);
+            }
+        }
+        Ctx {
+            srcs,
+            inc,
+            degree: true,
+            eulerseq: *b"xyz",
+            classes: HashMap::new(),
+            bodies: Vec::new(),
+            sites: HashMap::new(),
+            nq: 0,
+            unsupported: Vec::new(),
+        }
+    }
+
     fn src(&self, e: E) -> &Src<'d> {
         &self.srcs[e.f]
     }
@@ -378,38 +430,8 @@ impl<'d> Ctx<'d> {
         bodies: [usize; 2],
     ) -> JointRec {
         let n = body.joints.len();
-        let (kind, geometry) = match j.kind {
-            Kind::Hinge => (
-                JointType::R,
-                Geometry {
-                    origin: Some(arr(anchor)),
-                    axis: Some(arr(axis)),
-                    ..Geometry::default()
-                },
-            ),
-            Kind::Slide => (
-                JointType::P,
-                Geometry {
-                    origin: Some(arr(anchor)),
-                    axis: Some(arr(axis)),
-                    ..Geometry::default()
-                },
-            ),
-            Kind::Ball => (
-                JointType::S,
-                Geometry {
-                    origin: Some(arr(anchor)),
-                    ..Geometry::default()
-                },
-            ),
-            Kind::Free => (JointType::F, Geometry::default()),
-        };
-        let kind_word = match j.kind {
-            Kind::Hinge => "hinge",
-            Kind::Slide => "slide",
-            Kind::Ball => "ball",
-            Kind::Free => "free",
-        };
+        let (kind, geometry) = j.kind.joint(anchor, axis);
+        let kind_word = j.kind.word();
         let id = j.name.clone().unwrap_or_else(|| {
             format!(
                 "{}:{kind_word}{}",

@@ -182,6 +182,7 @@ fn compose(
 }
 
 /// The mbsa joint that the driving rotations and translations make, and whether it is exact.
+/// Over 80 lines: one flat table, a row per combination of axes.
 fn custom_kind(
     origin: Option<[f64; 3]>,
     rots: &[&(bool, Vector3<f64>, String)],
