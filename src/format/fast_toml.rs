@@ -1,4 +1,4 @@
-//! A single-pass reader for the TOML that large mechanism files are written in (issue 16):
+//! A single-pass reader for the TOML that large mechanism files are written in:
 //! one `key = value` per line, bare keys, scalars and one-line arrays of scalars, top-level
 //! `[table]` headers and `[[joint]]` tables. It builds the same spanned tree as the toml crate
 //! (tested equal) without the crate's token vector, maps and per-value allocations, and reads

@@ -1,5 +1,5 @@
 //! A single-pass reader for the items of a YAML joint list in the shapes large files are
-//! written in (issue 16): each item a block mapping whose first key follows the `- `, one
+//! written in: each item a block mapping whose first key follows the `- `, one
 //! `key: value` a line, values plain scalars, one-line flow sequences of plain scalars
 //! (`[1, 2]`) or block sequences of plain scalars (`- 1` a line). The head of the file (every
 //! top-level key before the joint list) is read by saphyr as before; only the items, nearly
