@@ -1,8 +1,8 @@
-//! A single-pass reader for the TOML that large mechanism files are written in (issue 16):
+//! A single-pass reader for the TOML that large mechanism files are written in:
 //! one `key = value` per line, bare keys, scalars and one-line arrays of scalars, top-level
 //! `[table]` headers and `[[joint]]` tables. It builds the same spanned tree as the toml crate
 //! (tested equal) without the crate's token vector, maps and per-value allocations, and reads
-//! the joints one at a time ([`super::tree::Lazy::TomlLines`]).
+//! the joints one at a time ([`super::read::Lazy::TomlLines`]).
 //!
 //! It accepts a strict subset of TOML and declines (`None`) at anything else: escapes,
 //! literal or multi-line strings, dotted or quoted keys, inline tables, nested arrays,
@@ -72,24 +72,7 @@ pub(crate) fn parse(text: &str) -> Option<(Node<'_>, JointTables)> {
                 joints.count += 1;
                 in_joints = true;
             } else {
-                let (name, after) = bare_key(bytes, first + 1, end)?;
-                if bytes.get(after) != Some(&b']') {
-                    return None;
-                }
-                line_end(bytes, after + 1, end)?;
-                let key = &text[name.clone()];
-                if key == "joint" || top.iter().any(|e| e.key == key) {
-                    return None;
-                }
-                top.push(Entry {
-                    key: Cow::Borrowed(key),
-                    key_span: name,
-                    value: Node {
-                        span: first..after + 1,
-                        value: Value::Map(Vec::new()),
-                    },
-                });
-                table = Some(top.len() - 1);
+                table = Some(table_header(text, first, end, &mut top)?);
                 in_joints = false;
             }
         } else if let Some(entry) = line_entry(text, pos, end, &mut no_pool)? {
@@ -120,6 +103,35 @@ pub(crate) fn parse(text: &str) -> Option<(Node<'_>, JointTables)> {
         },
         joints,
     ))
+}
+
+/// A `[name]` header line from `first` to `end`: a new empty table pushed onto `top` (a
+/// repeated or `joint` name declined); gives its index.
+fn table_header<'a>(
+    text: &'a str,
+    first: usize,
+    end: usize,
+    top: &mut Vec<Entry<'a>>,
+) -> Option<usize> {
+    let bytes = text.as_bytes();
+    let (name, after) = bare_key(bytes, first + 1, end)?;
+    if bytes.get(after) != Some(&b']') {
+        return None;
+    }
+    line_end(bytes, after + 1, end)?;
+    let key = &text[name.clone()];
+    if key == "joint" || top.iter().any(|e| e.key == key) {
+        return None;
+    }
+    top.push(Entry {
+        key: Cow::Borrowed(key),
+        key_span: name,
+        value: Node {
+            span: first..after + 1,
+            value: Value::Map(Vec::new()),
+        },
+    });
+    Some(top.len() - 1)
 }
 
 /// `joint` (also the header's key: both in one file is an error the toml crate reports) or
@@ -720,7 +732,7 @@ mod tests {
     /// Where the fast path reads a text, the toml crate reads it and gives the same tree.
     fn agrees(text: &str) -> bool {
         let fast = whole(text);
-        let serial = super::super::tree::parse_toml_serial(text).ok();
+        let serial = super::super::read::parse_toml_serial(text).ok();
         match fast {
             Some(f) => {
                 assert_eq!(Some(f), serial, "fast tree differs for {text:?}");

@@ -1,9 +1,9 @@
 //! A single-pass reader for the items of a YAML joint list in the shapes large files are
-//! written in (issue 16): each item a block mapping whose first key follows the `- `, one
+//! written in: each item a block mapping whose first key follows the `- `, one
 //! `key: value` a line, values plain scalars, one-line flow sequences of plain scalars
 //! (`[1, 2]`) or block sequences of plain scalars (`- 1` a line). The head of the file (every
 //! top-level key before the joint list) is read by saphyr as before; only the items, nearly
-//! all of the text, are read here, one at a time ([`super::tree::Lazy::YamlLines`]), into the
+//! all of the text, are read here, one at a time ([`super::read::Lazy::YamlLines`]), into the
 //! same tree saphyr gives (tested equal on generated and mutated texts).
 //!
 //! It declines (`None`) at anything else: quotes, comments, anchors, aliases, tags, tabs,
@@ -258,7 +258,7 @@ fn block_seq(text: &str, mut line: usize, m: usize) -> Option<(Node<'_>, usize)>
 
 #[cfg(test)]
 mod tests {
-    use super::super::tree::{Lazy, parse_yaml, parse_yaml_fast};
+    use super::super::read::{Lazy, parse_yaml, parse_yaml_fast};
     use super::*;
 
     fn strip(n: &Node) -> String {

@@ -8,6 +8,7 @@ mod error;
 mod fast_toml;
 mod fast_yaml;
 mod model;
+mod read;
 mod schema;
 mod tree;
 
@@ -181,47 +182,47 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
             // error, read again by the toml crate below, which finds and locates every error.
             if let Some((root, joints)) = fast_toml::parse(text) {
                 let lazy = if joints.count == 0 {
-                    tree::Lazy::None
+                    read::Lazy::None
                 } else {
-                    tree::Lazy::TomlLines { text, joints }
+                    read::Lazy::TomlLines { text, joints }
                 };
                 if let Ok(m) = model::build(root, &name, lazy) {
                     return Ok(m);
                 }
             }
-            // Large files: the joints read a piece at a time (see `tree::parse_toml_lazy`);
+            // Large files: the joints read a piece at a time (see `read::parse_toml_lazy`);
             // anything that way cannot join is read again whole.
             let fallback = AtomicBool::new(false);
-            if let Some((root, lazy)) = tree::parse_toml_lazy(text, &fallback) {
+            if let Some((root, lazy)) = read::parse_toml_lazy(text, &fallback) {
                 let built = model::build(root, &name, lazy);
                 if !fallback.load(Ordering::Relaxed) {
                     return built;
                 }
             }
-            model::build(tree::parse_toml(text)?, &name, tree::Lazy::None)
+            model::build(read::parse_toml(text)?, &name, read::Lazy::None)
         }
         Format::Yaml => {
             // The joint list last, its items in the common shapes (`fast_yaml`): the head read
             // by saphyr, the items by hand. Anything else, and any error, read again below.
-            if let Some((root, lazy)) = tree::parse_yaml_fast(text)
+            if let Some((root, lazy)) = read::parse_yaml_fast(text)
                 && let Ok(m) = model::build(root, &name, lazy)
             {
                 return Ok(m);
             }
             // The joint list last (the common case): one read, the joints one at a time.
-            if let Some((root, lazy)) = tree::parse_yaml_resume(text)
+            if let Some((root, lazy)) = read::parse_yaml_resume(text)
                 && let Ok(m) = model::build(root, &name, lazy)
             {
                 return Ok(m);
             }
-            match tree::parse_yaml_lazy(text) {
+            match read::parse_yaml_lazy(text) {
                 // Otherwise the joints read one at a time from a second read of the text. Any
                 // error: found again by the whole read, in the order it finds them.
                 Ok(Some(root))
                     if matches!(&root.value, tree::Value::Map(es)
                         if es.iter().any(|e| matches!(e.value.value, tree::Value::Deferred))) =>
                 {
-                    match model::build(root, &name, tree::Lazy::Yaml { text }) {
+                    match model::build(root, &name, read::Lazy::Yaml { text }) {
                         Ok(m) => Ok(m),
                         Err(_) => yaml_whole(text, &name),
                     }
@@ -232,24 +233,24 @@ fn load_inner(source_name: &str, text: &str, format: Format) -> Result<Mechanism
         Format::Json => {
             // The joint list last (the common case): one pass, the joints one at a time.
             // Anything else, and any error, read again below (errors found and located there).
-            if let Some((root, lazy)) = tree::parse_json_resume(text)
+            if let Some((root, lazy)) = read::parse_json_resume(text)
                 && let Ok(m) = model::build(root, &name, lazy)
             {
                 return Ok(m);
             }
             // One pass: the tree parser refuses whatever serde_json refuses; after an error,
             // serde_json's check reports its own first (as when it ran before the tree).
-            tree::parse_json_tree(text)
+            read::parse_json_tree(text)
                 .and_then(|(root, lazy)| model::build(root, &name, lazy))
-                .map_err(|e| tree::json_check(text).err().unwrap_or(e))
+                .map_err(|e| read::json_check(text).err().unwrap_or(e))
         }
     }
 }
 
 /// YAML read whole (one tree), as before the lazy read.
 fn yaml_whole(text: &str, name: &str) -> Result<Mechanism, LoadError> {
-    match tree::parse_yaml(text)? {
-        Some(root) => model::build(root, name, tree::Lazy::None),
+    match read::parse_yaml(text)? {
+        Some(root) => model::build(root, name, read::Lazy::None),
         None => Err(model::empty_document()),
     }
 }

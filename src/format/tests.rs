@@ -337,7 +337,7 @@ fn yaml_lazy_reads_equal_the_whole_read() {
     let one_read: Vec<bool> = texts[..4]
         .iter()
         .map(|t| {
-            tree::parse_yaml_resume(t)
+            read::parse_yaml_resume(t)
                 .is_some_and(|(root, lazy)| model::build(root, "t", lazy).is_ok())
         })
         .collect();

@@ -22,12 +22,58 @@ struct UJoint<'a> {
     axis: Vector3<f64>,
 }
 
+/// A link of the file: its name and element, in file order.
+type Link<'a> = (String, Node<'a>);
+
 /// Read a URDF document.
 pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, ImportError> {
     let root = doc.root_element();
     let robot = root.attribute("name").unwrap_or("robot");
-    // Links, in order.
-    let mut links: Vec<(String, Node)> = Vec::new();
+    let links = read_links(src, root)?;
+    let mut joints: Vec<UJoint> = Vec::new();
+    for j in children(root, "joint") {
+        joints.push(parse_joint(src, j, &links, false)?);
+    }
+    let roots = tree_roots(src, &joints, &links)?;
+    let Some(&frame) = roots.first() else {
+        return Err(src
+            .err(
+                root,
+                "no root link",
+                "every link is the child of a joint: the tree has no root",
+            )
+            .with_help("one link (the base) must be the child of no joint"));
+    };
+    let mut b = Builder::new(robot, frame, "the URDF root link");
+    b.configuration = "every joint at position 0 (URDF has no default positions)".into();
+    let (world, joint_world) = world_poses(src, &joints, &roots)?;
+    for (name, _) in &links {
+        b.body(name, "");
+    }
+    for extra in roots.iter().skip(1) {
+        let fb = b.frame;
+        let e = b.body(extra, "");
+        b.warn(format!(
+            "link `{extra}` is a second root: given a free (F) joint to `{frame}`"
+        ));
+        b.joint(JointRec {
+            id: format!("{extra}:free"),
+            kind: JointType::F,
+            bodies: vec![fb, e],
+            driven: 0,
+            geometry: Geometry::default(),
+            comments: vec![format!("second root link `{extra}`: free")],
+        });
+    }
+    let index = add_tree_joints(src, &mut b, &joints, &joint_world)?;
+    read_transmissions(src, root, &mut b, &index);
+    read_closures(src, root, &mut b, &links, &world)?;
+    Ok(b)
+}
+
+/// The `<link>` elements, names unique.
+fn read_links<'a>(src: &Src, root: Node<'a>) -> Result<Vec<Link<'a>>, ImportError> {
+    let mut links: Vec<Link> = Vec::new();
     for l in children(root, "link") {
         let Some(name) = l.attribute("name") else {
             return Err(src
@@ -46,11 +92,16 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
         }
         links.push((name.to_string(), l));
     }
-    let mut joints: Vec<UJoint> = Vec::new();
-    for j in children(root, "joint") {
-        joints.push(parse_joint(src, j, &links, false)?);
-    }
-    // The tree: each link is the child of at most one joint.
+    Ok(links)
+}
+
+/// The links that are the child of no joint, in link order; each link is the child of at most
+/// one joint (the file is a tree).
+fn tree_roots<'l>(
+    src: &Src,
+    joints: &[UJoint],
+    links: &'l [Link],
+) -> Result<Vec<&'l str>, ImportError> {
     let mut parent_of: HashMap<&str, usize> = HashMap::new();
     for (k, j) in joints.iter().enumerate() {
         if let Some(&other) = parent_of.get(j.child.as_str()) {
@@ -60,25 +111,23 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
         }
         parent_of.insert(j.child.as_str(), k);
     }
-    let roots: Vec<&str> = links
+    Ok(links
         .iter()
         .map(|(n, _)| n.as_str())
         .filter(|n| !parent_of.contains_key(n))
-        .collect();
-    let Some(&frame) = roots.first() else {
-        return Err(src
-            .err(
-                root,
-                "no root link",
-                "every link is the child of a joint: the tree has no root",
-            )
-            .with_help("one link (the base) must be the child of no joint"));
-    };
-    let mut b = Builder::new(robot, frame, "the URDF root link");
-    b.configuration = "every joint at position 0 (URDF has no default positions)".into();
-    // World poses: walk down from the roots.
+        .collect())
+}
+
+/// World poses of the links and of the joints' frames, walking down from the roots; a joint
+/// never reached is on a cycle of parents.
+#[allow(clippy::type_complexity)]
+fn world_poses(
+    src: &Src,
+    joints: &[UJoint],
+    roots: &[&str],
+) -> Result<(HashMap<String, Pose>, Vec<Option<Pose>>), ImportError> {
     let mut world: HashMap<String, Pose> = HashMap::new();
-    for r in &roots {
+    for r in roots {
         world.insert(r.to_string(), Pose::identity());
     }
     let mut joint_world: Vec<Option<Pose>> = vec![None; joints.len()];
@@ -110,28 +159,20 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
                 ));
         }
     }
-    for (name, _) in &links {
-        b.body(name, "");
-    }
-    for extra in roots.iter().skip(1) {
-        let fb = b.frame;
-        let e = b.body(extra, "");
-        b.warn(format!(
-            "link `{extra}` is a second root: given a free (F) joint to `{frame}`"
-        ));
-        b.joint(JointRec {
-            id: format!("{extra}:free"),
-            kind: JointType::F,
-            bodies: vec![fb, e],
-            driven: 0,
-            geometry: Geometry::default(),
-            comments: vec![format!("second root link `{extra}`: free")],
-        });
-    }
+    Ok((world, joint_world))
+}
+
+/// The tree's joints (a `mimic` warned); gives the index of each joint not fixed, by name.
+fn add_tree_joints(
+    src: &Src,
+    b: &mut Builder,
+    joints: &[UJoint],
+    joint_world: &[Option<Pose>],
+) -> Result<HashMap<String, usize>, ImportError> {
     let mut index: HashMap<String, usize> = HashMap::new();
     for (k, j) in joints.iter().enumerate() {
         let Some(jw) = joint_world[k] else { continue };
-        if let Some(ji) = add_joint(src, &mut b, j, jw, "<joint")? {
+        if let Some(ji) = add_joint(src, b, j, jw, "<joint")? {
             index.insert(j.name.clone(), ji);
         }
         if let Some(m) = child(j.n, "mimic") {
@@ -145,7 +186,11 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
             ));
         }
     }
-    // Transmissions.
+    Ok(index)
+}
+
+/// `<transmission>`: one driven DOF for each joint it names (up to the joint's grade).
+fn read_transmissions(src: &Src, root: Node, b: &mut Builder, index: &HashMap<String, usize>) {
     for t in children(root, "transmission") {
         let tname = t
             .attribute("name")
@@ -171,73 +216,29 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
             }
         }
     }
-    // Loop closures: Drake ball constraints and Gazebo joints.
+}
+
+/// Loop closures (Drake ball constraints and Gazebo joints); other unknown elements warned.
+fn read_closures(
+    src: &Src,
+    root: Node,
+    b: &mut Builder,
+    links: &[Link],
+    world: &HashMap<String, Pose>,
+) -> Result<(), ImportError> {
     let find = |name: &str| -> Option<Pose> { world.get(name).copied() };
     for e in root.children().filter(|c| c.is_element()) {
         match e.tag_name().name() {
-            "ball_constraint" => {
-                let part = |tag: &str| child(e, tag);
-                let (Some(ba), Some(pa), Some(bb), Some(pb)) = (
-                    part("ball_constraint_body_A"),
-                    part("ball_constraint_p_AP"),
-                    part("ball_constraint_body_B"),
-                    part("ball_constraint_p_BQ"),
-                ) else {
-                    return Err(src
-                        .err(
-                            e,
-                            "incomplete",
-                            "drake:ball_constraint needs body_A, p_AP, body_B and p_BQ",
-                        )
-                        .with_help("see Drake's URDF extension reference"));
-                };
-                let name_of = |n: Node| -> Result<(String, Pose), ImportError> {
-                    let name = n.attribute("name").unwrap_or("");
-                    match find(name) {
-                        Some(p) => Ok((name.to_string(), p)),
-                        None => Err(src
-                            .err_attr(
-                                n,
-                                "name",
-                                "no such link",
-                                format!("link `{name}` is not defined"),
-                            )
-                            .with_help("name a <link> of the robot")),
-                    }
-                };
-                let (na, wa) = name_of(ba)?;
-                let (nb, wb) = name_of(bb)?;
-                let pa = src
-                    .nums_attr(pa, "value", 3)?
-                    .unwrap_or_else(|| vec![0.0; 3]);
-                let pb = src
-                    .nums_attr(pb, "value", 3)?
-                    .unwrap_or_else(|| vec![0.0; 3]);
-                let p1 = wa * Point3::new(pa[0], pa[1], pa[2]);
-                let p2 = wb * Point3::new(pb[0], pb[1], pb[2]);
-                let loc = src.loc(e);
-                if (p1 - p2).norm() > 1e-6 {
-                    b.warn(format!("{loc}: drake:ball_constraint between `{na}` and `{nb}` is not closed at this configuration (gap {:.3e}): its joint carries body B's point in `second` (`mbsa assemble` closes the loop)", (p1 - p2).norm()));
-                }
-                let (ia, ib) = (b.body(&na, ""), b.body(&nb, ""));
-                b.joint(JointRec {
-                    id: format!("ball:{na}-{nb}"),
-                    kind: JointType::S,
-                    bodies: vec![ia, ib],
-                    driven: 0,
-                    geometry: super::point_closure(p1.coords, p2.coords),
-                    comments: vec![format!("<drake:ball_constraint> (loop closure) at {loc}")],
-                });
-            }
+            "ball_constraint" => ball_constraint(src, e, b, world)?,
             "gazebo" if e.attribute("reference").is_none() => {
                 for gj in children(e, "joint") {
-                    let j = parse_joint(src, gj, &links, true)?;
+                    let j = parse_joint(src, gj, links, true)?;
                     let Some(child_world) = find(&j.child) else {
                         continue;
                     };
                     // SDFormat semantics: the joint pose is in the child link's frame.
                     let jw = child_world * j.origin;
-                    add_joint(src, &mut b, &j, jw, "<gazebo><joint")?;
+                    add_joint(src, b, &j, jw, "<gazebo><joint")?;
                 }
             }
             "joint" | "link" | "transmission" | "material" | "gazebo" => {}
@@ -247,14 +248,77 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
             }
         }
     }
-    Ok(b)
+    Ok(())
+}
+
+/// A `drake:ball_constraint`: an S joint between body A's point and body B's.
+fn ball_constraint(
+    src: &Src,
+    e: Node,
+    b: &mut Builder,
+    world: &HashMap<String, Pose>,
+) -> Result<(), ImportError> {
+    let find = |name: &str| -> Option<Pose> { world.get(name).copied() };
+    let part = |tag: &str| child(e, tag);
+    let (Some(ba), Some(pa), Some(bb), Some(pb)) = (
+        part("ball_constraint_body_A"),
+        part("ball_constraint_p_AP"),
+        part("ball_constraint_body_B"),
+        part("ball_constraint_p_BQ"),
+    ) else {
+        return Err(src
+            .err(
+                e,
+                "incomplete",
+                "drake:ball_constraint needs body_A, p_AP, body_B and p_BQ",
+            )
+            .with_help("see Drake's URDF extension reference"));
+    };
+    let name_of = |n: Node| -> Result<(String, Pose), ImportError> {
+        let name = n.attribute("name").unwrap_or("");
+        match find(name) {
+            Some(p) => Ok((name.to_string(), p)),
+            None => Err(src
+                .err_attr(
+                    n,
+                    "name",
+                    "no such link",
+                    format!("link `{name}` is not defined"),
+                )
+                .with_help("name a <link> of the robot")),
+        }
+    };
+    let (na, wa) = name_of(ba)?;
+    let (nb, wb) = name_of(bb)?;
+    let pa = src
+        .nums_attr(pa, "value", 3)?
+        .unwrap_or_else(|| vec![0.0; 3]);
+    let pb = src
+        .nums_attr(pb, "value", 3)?
+        .unwrap_or_else(|| vec![0.0; 3]);
+    let p1 = wa * Point3::new(pa[0], pa[1], pa[2]);
+    let p2 = wb * Point3::new(pb[0], pb[1], pb[2]);
+    let loc = src.loc(e);
+    if (p1 - p2).norm() > 1e-6 {
+        b.warn(format!("{loc}: drake:ball_constraint between `{na}` and `{nb}` is not closed at this configuration (gap {:.3e}): its joint carries body B's point in `second` (`mbsa assemble` closes the loop)", (p1 - p2).norm()));
+    }
+    let (ia, ib) = (b.body(&na, ""), b.body(&nb, ""));
+    b.joint(JointRec {
+        id: format!("ball:{na}-{nb}"),
+        kind: JointType::S,
+        bodies: vec![ia, ib],
+        driven: 0,
+        geometry: super::point_closure(p1.coords, p2.coords),
+        comments: vec![format!("<drake:ball_constraint> (loop closure) at {loc}")],
+    });
+    Ok(())
 }
 
 /// Parse a `<joint>` (URDF attributes, or SDFormat-style children inside `<gazebo>`).
 fn parse_joint<'a>(
     src: &Src,
     j: Node<'a>,
-    links: &[(String, Node)],
+    links: &[Link],
     sdf_style: bool,
 ) -> Result<UJoint<'a>, ImportError> {
     let Some(name) = j.attribute("name") else {
@@ -269,60 +333,9 @@ fn parse_joint<'a>(
                 "URDF joint types: revolute, continuous, prismatic, fixed, floating, planar",
             ));
     };
-    let link = |tag: &str| -> Result<String, ImportError> {
-        let Some(n) = child(j, tag) else {
-            return Err(src
-                .err(
-                    j,
-                    format!("no <{tag}>"),
-                    format!("joint `{name}` has no <{tag}>"),
-                )
-                .with_help(format!("write <{tag} link=\"...\"/>")));
-        };
-        let l = if sdf_style {
-            n.text().unwrap_or("").trim()
-        } else {
-            n.attribute("link").unwrap_or("")
-        };
-        if !links.iter().any(|(x, _)| x == l) {
-            let at = if sdf_style {
-                src.err_text(
-                    n,
-                    "no such link",
-                    format!("joint `{name}` names link `{l}`, which is not defined"),
-                )
-            } else {
-                src.err_attr(
-                    n,
-                    "link",
-                    "no such link",
-                    format!("joint `{name}` names link `{l}`, which is not defined"),
-                )
-            };
-            return Err(at.with_help("name a <link> of the robot"));
-        }
-        Ok(l.to_string())
-    };
-    let parent = link("parent")?;
-    let child_link = link("child")?;
-    let origin = if sdf_style {
-        match child(j, "pose") {
-            Some(p) => {
-                let v = src.nums_text(p, 6)?;
-                pose([v[0], v[1], v[2]], rpy(v[3], v[4], v[5]))
-            }
-            None => Pose::identity(),
-        }
-    } else {
-        match child(j, "origin") {
-            Some(o) => {
-                let xyz = src.nums_attr(o, "xyz", 3)?.unwrap_or_else(|| vec![0.0; 3]);
-                let r = src.nums_attr(o, "rpy", 3)?.unwrap_or_else(|| vec![0.0; 3]);
-                pose([xyz[0], xyz[1], xyz[2]], rpy(r[0], r[1], r[2]))
-            }
-            None => Pose::identity(),
-        }
-    };
+    let parent = joint_link(src, j, name, "parent", links, sdf_style)?;
+    let child_link = joint_link(src, j, name, "child", links, sdf_style)?;
+    let origin = joint_origin(src, j, sdf_style)?;
     let axis_node = child(j, "axis");
     let axis_v = match axis_node {
         Some(a) if sdf_style => match child(a, "xyz") {
@@ -352,6 +365,71 @@ fn parse_joint<'a>(
         child: child_link,
         origin,
         axis,
+    })
+}
+
+/// The link a joint's `<parent>` or `<child>` (`tag`) names, defined in `links`.
+fn joint_link(
+    src: &Src,
+    j: Node,
+    name: &str,
+    tag: &str,
+    links: &[Link],
+    sdf_style: bool,
+) -> Result<String, ImportError> {
+    let Some(n) = child(j, tag) else {
+        return Err(src
+            .err(
+                j,
+                format!("no <{tag}>"),
+                format!("joint `{name}` has no <{tag}>"),
+            )
+            .with_help(format!("write <{tag} link=\"...\"/>")));
+    };
+    let l = if sdf_style {
+        n.text().unwrap_or("").trim()
+    } else {
+        n.attribute("link").unwrap_or("")
+    };
+    if !links.iter().any(|(x, _)| x == l) {
+        let at = if sdf_style {
+            src.err_text(
+                n,
+                "no such link",
+                format!("joint `{name}` names link `{l}`, which is not defined"),
+            )
+        } else {
+            src.err_attr(
+                n,
+                "link",
+                "no such link",
+                format!("joint `{name}` names link `{l}`, which is not defined"),
+            )
+        };
+        return Err(at.with_help("name a <link> of the robot"));
+    }
+    Ok(l.to_string())
+}
+
+/// A joint's pose in its parent link: `<origin xyz rpy>`, or SDFormat's `<pose>`.
+fn joint_origin(src: &Src, j: Node, sdf_style: bool) -> Result<Pose, ImportError> {
+    Ok(if sdf_style {
+        match child(j, "pose") {
+            Some(p) => {
+                let v = src.nums_text(p, 6)?;
+                pose([v[0], v[1], v[2]], rpy(v[3], v[4], v[5]))
+            }
+            None => Pose::identity(),
+        }
+    } else {
+        match child(j, "origin") {
+            Some(o) => {
+                let xyz = src.nums_attr(o, "xyz", 3)?.unwrap_or_else(|| vec![0.0; 3]);
+                let r = src.nums_attr(o, "rpy", 3)?.unwrap_or_else(|| vec![0.0; 3]);
+                pose([xyz[0], xyz[1], xyz[2]], rpy(r[0], r[1], r[2]))
+            }
+            None => Pose::identity(),
+        }
     })
 }
 

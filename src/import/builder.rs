@@ -1,0 +1,351 @@
+//! The shared intermediate model the readers fill: bodies (welded ones merged by union-find),
+//! joints, warnings and notes; written as format-v1 TOML and read back.
+
+use super::error::ImportError;
+use super::pins::merge_pins;
+use super::toml_text::{comment_text, num, precision_text, toml_str, written_rounding};
+use super::{Import, ImportOptions, SourceFormat};
+use crate::joint::JointType;
+use crate::mechanism::Geometry;
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A joint of the intermediate model.
+#[derive(Clone, Debug)]
+pub(crate) struct JointRec {
+    pub id: String,
+    pub kind: JointType,
+    /// Body indices into [`Builder::names`].
+    pub bodies: Vec<usize>,
+    pub driven: u32,
+    pub geometry: Geometry,
+    /// Comment lines naming the source element(s).
+    pub comments: Vec<String>,
+}
+
+/// The shared intermediate model the readers fill.
+pub(crate) struct Builder {
+    pub model_name: String,
+    /// The configuration, in words (`qpos0`, `keyframe "home"`, ...).
+    pub configuration: String,
+    names: Vec<String>,
+    comments: Vec<String>,
+    index: HashMap<String, usize>,
+    uf: Vec<usize>,
+    pub frame: usize,
+    pub joints: Vec<JointRec>,
+    pub warnings: Vec<String>,
+    pub notes: Vec<String>,
+    /// The coarsest rounding of the source numbers that enter the geometry ([`super::Src::note`]):
+    /// the written model's `precision` (with at least the importer's own rounding).
+    source_rounding: f64,
+}
+
+impl Builder {
+    /// A new model whose fixed frame is the body `frame`.
+    pub fn new(model_name: &str, frame: &str, frame_comment: &str) -> Builder {
+        let mut b = Builder {
+            model_name: model_name.to_string(),
+            configuration: String::new(),
+            names: Vec::new(),
+            comments: Vec::new(),
+            index: HashMap::new(),
+            uf: Vec::new(),
+            frame: 0,
+            joints: Vec::new(),
+            warnings: Vec::new(),
+            notes: Vec::new(),
+            source_rounding: 0.0,
+        };
+        b.frame = b.body(frame, frame_comment);
+        b
+    }
+
+    /// The body named `name` (created if new).
+    pub fn body(&mut self, name: &str, comment: &str) -> usize {
+        if let Some(&i) = self.index.get(name) {
+            return i;
+        }
+        let i = self.names.len();
+        self.names.push(name.to_string());
+        self.comments.push(comment.to_string());
+        self.index.insert(name.to_string(), i);
+        self.uf.push(i);
+        i
+    }
+
+    /// A body name not used yet, from `base`.
+    pub fn fresh_name(&self, base: &str) -> String {
+        if !self.index.contains_key(base) {
+            return base.to_string();
+        }
+        (2..)
+            .map(|k| format!("{base}#{k}"))
+            .find(|n| !self.index.contains_key(n))
+            .unwrap_or_else(|| base.to_string())
+    }
+
+    /// The body named `name`, if it exists.
+    pub fn find_body(&self, name: &str) -> Option<usize> {
+        self.index.get(name).copied()
+    }
+
+    fn root(&self, mut i: usize) -> usize {
+        while self.uf[i] != i {
+            i = self.uf[i];
+        }
+        i
+    }
+
+    /// Weld `other` to `keep` (they become one body, named as `keep`'s group unless `other`'s
+    /// group holds the frame).
+    pub fn weld(&mut self, keep: usize, other: usize, why: &str) {
+        let (a, b) = (self.root(keep), self.root(other));
+        if a == b {
+            return;
+        }
+        let (keep_root, gone) = if b == self.root(self.frame) {
+            (b, a)
+        } else {
+            (a, b)
+        };
+        self.uf[gone] = keep_root;
+        let (kn, gn) = (self.names[other].clone(), self.names[keep].clone());
+        let _ = (kn, gn);
+        self.notes.push(format!(
+            "`{}` welded to `{}` ({why})",
+            self.names[other], self.names[keep]
+        ));
+    }
+
+    /// Add a joint; returns its index.
+    pub fn joint(&mut self, j: JointRec) -> usize {
+        self.joints.push(j);
+        self.joints.len() - 1
+    }
+
+    /// Note the rounding of source numbers that enter the geometry (a [`super::Src::rounding`]).
+    pub fn note_rounding(&mut self, rounding: f64) {
+        self.source_rounding = self.source_rounding.max(rounding);
+    }
+
+    /// Record a warning (an element not imported or not representable).
+    pub fn warn(&mut self, message: impl Into<String>) {
+        self.warnings.push(message.into());
+    }
+
+    /// Resolve welds, merge pins, write the TOML and read it back.
+    pub fn finish(
+        mut self,
+        source_name: &str,
+        format: SourceFormat,
+        options: &ImportOptions,
+    ) -> Result<Import, ImportError> {
+        let mut joints = self.joints_through_welds();
+        let merged_pins = if options.merge_pins {
+            merge_pins(&mut joints)
+        } else {
+            0
+        };
+        if merged_pins > 0 {
+            self.notes.push(format!(
+                "--merge-pins: {merged_pins} coaxial revolute joint(s) merged into multiple joints"
+            ));
+        }
+        unique_joint_ids(&mut joints);
+        let frame = self.root(self.frame);
+        if joints.is_empty() {
+            return Err(ImportError::new(format!(
+                "`{source_name}`: no joints to analyse (every body is welded to the frame or \
+                 the model has no joints)"
+            ))
+            .with_help("the analyses need at least one joint between two bodies"));
+        }
+        self.warn_unlinked(&joints, frame);
+        let toml = self.write_toml(source_name, format, &joints, frame);
+        let mechanism = crate::format::load(source_name, &toml, crate::format::Format::Toml)
+            .map_err(|e| {
+                ImportError::new(format!(
+                    "internal error: the imported model does not read back: {e}"
+                ))
+                .with_help("please report this with the source file")
+            })?;
+        Ok(Import {
+            mechanism,
+            toml,
+            format,
+            warnings: self.warnings,
+            notes: self.notes,
+            merged_pins,
+        })
+    }
+
+    /// The joints with their bodies through the welds; a joint whose bodies were welded
+    /// together is left out (warned).
+    fn joints_through_welds(&mut self) -> Vec<JointRec> {
+        let mut joints = std::mem::take(&mut self.joints);
+        let mut kept = Vec::with_capacity(joints.len());
+        for mut j in joints.drain(..) {
+            for b in &mut j.bodies {
+                *b = self.root(*b);
+            }
+            let mut seen = j.bodies.clone();
+            seen.sort_unstable();
+            seen.dedup();
+            if seen.len() < j.bodies.len() {
+                self.warnings.push(format!(
+                    "joint `{}` joins bodies welded together ({}): left out",
+                    j.id,
+                    j.bodies
+                        .iter()
+                        .map(|&b| format!("`{}`", self.names[b]))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+                continue;
+            }
+            kept.push(j);
+        }
+        kept
+    }
+
+    /// Warnings for a frame no joint touches and for bodies no joint names (left out).
+    fn warn_unlinked(&mut self, joints: &[JointRec], frame: usize) {
+        if !joints.iter().any(|j| j.bodies.contains(&frame)) {
+            self.warnings.push(format!(
+                "no joint touches the frame `{}`: the bodies are not linked to it",
+                self.names[frame]
+            ));
+        }
+        let mut used_bodies = vec![false; self.names.len()];
+        for j in joints {
+            for &b in &j.bodies {
+                used_bodies[b] = true;
+            }
+        }
+        used_bodies[frame] = true;
+        for (i, &u) in used_bodies.iter().enumerate() {
+            if !u && self.root(i) == i {
+                self.warnings.push(format!(
+                    "body `{}` is joined to nothing: left out",
+                    self.names[i]
+                ));
+            }
+        }
+    }
+
+    /// The format-v1 TOML text: a header of comments (source, configuration, notes, warnings),
+    /// the top-level keys, then each joint.
+    fn write_toml(
+        &self,
+        source_name: &str,
+        format: SourceFormat,
+        joints: &[JointRec],
+        frame: usize,
+    ) -> String {
+        let mut t = String::new();
+        let file = Path::new(source_name)
+            .file_name()
+            .and_then(|f| f.to_str())
+            .unwrap_or(source_name);
+        let _ = writeln!(
+            t,
+            "# Imported by `mbsa import` from {} ({}).",
+            comment_text(file),
+            format.name()
+        );
+        if !self.configuration.is_empty() {
+            let _ = writeln!(
+                t,
+                "# Configuration: {}. Joint origins and axes are in the world frame there.",
+                comment_text(&self.configuration)
+            );
+        }
+        for n in &self.notes {
+            let _ = writeln!(t, "# note: {}", comment_text(n));
+        }
+        for w in &self.warnings {
+            let _ = writeln!(t, "# warning: {}", comment_text(w));
+        }
+        let _ = writeln!(t, "name = {}", toml_str(&self.model_name));
+        let _ = writeln!(t, "space = \"spatial\"");
+        let _ = writeln!(t, "frame = {}", toml_str(&self.names[frame]));
+        let _ = writeln!(
+            t,
+            "# How precisely the numbers are known (±): the coarsest rounding of the source's \
+             numbers."
+        );
+        let _ = writeln!(
+            t,
+            "precision = {}",
+            precision_text(self.source_rounding.max(written_rounding(joints)))
+        );
+        for j in joints {
+            self.write_joint(&mut t, j);
+        }
+        t
+    }
+
+    /// One `[[joint]]` table of the TOML text.
+    fn write_joint(&self, t: &mut String, j: &JointRec) {
+        t.push('\n');
+        let _ = writeln!(t, "[[joint]]");
+        for c in &j.comments {
+            let _ = writeln!(t, "# {}", comment_text(c));
+        }
+        let _ = writeln!(t, "id = {}", toml_str(&j.id));
+        let _ = writeln!(t, "type = \"{}\"", j.kind.code());
+        let bodies: Vec<String> = j.bodies.iter().map(|&b| toml_str(&self.names[b])).collect();
+        let _ = writeln!(t, "bodies = [{}]", bodies.join(", "));
+        if j.driven > 0 {
+            let _ = writeln!(t, "driven = {}", j.driven);
+        }
+        let g = &j.geometry;
+        for (key, v) in [
+            ("origin", g.origin),
+            ("axis", g.axis),
+            ("axis2", g.axis2),
+            ("normal", g.normal),
+        ] {
+            if let Some(v) = v {
+                let _ = writeln!(t, "{key} = [{}, {}, {}]", num(v[0]), num(v[1]), num(v[2]));
+            }
+        }
+        if let Some(p) = g.pitch {
+            let _ = writeln!(t, "pitch = {}", num(p));
+        }
+        if let Some(s) = &g.second {
+            let fields: Vec<String> = s
+                .vectors()
+                .into_iter()
+                .filter_map(|(key, v)| {
+                    v.map(|v| format!("{key} = [{}, {}, {}]", num(v[0]), num(v[1]), num(v[2])))
+                })
+                .collect();
+            let _ = writeln!(t, "second = {{ {} }}", fields.join(", "));
+        }
+    }
+}
+
+/// Unique joint ids: an empty id becomes `joint`, a repeated one is suffixed `#2`, `#3`...
+fn unique_joint_ids(joints: &mut [JointRec]) {
+    let mut used: HashMap<String, usize> = HashMap::new();
+    for j in joints {
+        if j.id.is_empty() {
+            j.id = "joint".into();
+        }
+        let n = used.entry(j.id.clone()).or_insert(0);
+        *n += 1;
+        if *n > 1 {
+            let mut k = *n;
+            let mut id = format!("{}#{k}", j.id);
+            while used.contains_key(&id) {
+                k += 1;
+                id = format!("{}#{k}", j.id);
+            }
+            used.insert(id.clone(), 1);
+            j.id = id;
+        }
+    }
+}
