@@ -29,10 +29,10 @@
 //! the minimum-front order in general) plus `B + 2` back substitutions, then linear in the
 //! part's pairs and bodies (sorting aside).
 
-use super::{
-    Pair, Part, eliminate, find, merge_across_joints, orthonormalize, pair_block, small_null,
-    small_rank, threshold, union_min,
-};
+use super::clusters::{find, merge_across_joints, union_min};
+use super::dense::{orthonormalize, small_null, small_rank};
+use super::jacobian::{Complements, Pair, Part, eliminate, pair_block};
+use super::threshold;
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::elimination::{Block, sigma_max};
 use crate::mechanism::Mechanism;
@@ -139,7 +139,7 @@ pub(super) struct SparsePart<'a> {
     pub part: &'a Part,
     pub pairs: &'a [Pair],
     pub models: &'a [JointModel],
-    pub comp: &'a super::Complements,
+    pub comp: &'a Complements,
     pub iso: &'a [DMatrix<f64>],
     pub b: usize,
     pub used: &'a GeometryUsed,
