@@ -57,6 +57,28 @@ pub(super) struct ExactPart<'a> {
 /// What [`ExactPart::run`] finds: the rank, the local union-find, the self-stress support.
 pub(super) type ExactOutcome = (usize, Vec<usize>, Option<Vec<bool>>);
 
+/// Each body's twists over the `k` sampled motions: `B` field elements per motion, motion
+/// after motion, one body after another in the part's order (zero for a fixed body).
+struct Sampled {
+    sig: Vec<Fp>,
+    b: usize,
+    k: usize,
+}
+
+impl Sampled {
+    /// Body `li`'s twists.
+    fn of(&self, li: usize) -> &[Fp] {
+        let bk = self.b * self.k;
+        &self.sig[li * bk..(li + 1) * bk]
+    }
+
+    /// The twists of body `x` minus those of body `y` (B × k).
+    fn diff(&self, x: usize, y: usize) -> DMatrix<Fp> {
+        let (sx, sy, b) = (self.of(x), self.of(y), self.b);
+        DMatrix::from_fn(b, self.k, |i, j| sx[j * b + i] - sy[j * b + i])
+    }
+}
+
 impl ExactPart<'_> {
     /// The rank, the part's local union-find (a parent per body of `part.bodies`, each
     /// pointing to its cluster's smallest member) and, when its rows are dependent, the flags
@@ -69,6 +91,33 @@ impl ExactPart<'_> {
         meter: &mut Meter,
         locked: &mut BTreeMap<usize, usize>,
     ) -> Result<ExactOutcome, BudgetExceeded> {
+        let part = self.part;
+        let nb = self.iso.len();
+        let (rank, support, tw) = self.sample(budget, meter)?;
+        #[cfg(test)]
+        self.check_motions(&tw);
+        let nl = part.bodies.len();
+        let lpos = BodyIndex::new(
+            nb,
+            nl,
+            part.bodies.iter().enumerate().map(|(li, &x)| (x, li)),
+        );
+        let lidx = |x: usize| lpos.get(x).unwrap_or(0);
+        let eiso = self.own_isolated(meter)?;
+        self.locked(&tw, &eiso, &lidx, meter, locked)?;
+        let luf = self.clusters(&tw, &eiso, &lidx, meter)?;
+        Ok((rank, luf, support))
+    }
+
+    /// The part's exact factorization (B columns per body, its root and the frame fixed):
+    /// its rank, the support of its self-stresses when its rows are dependent, and each
+    /// body's twists over `B` random motions.
+    #[allow(clippy::type_complexity)]
+    fn sample(
+        &self,
+        budget: &Budget,
+        meter: &mut Meter,
+    ) -> Result<(usize, Option<Vec<bool>>, Sampled), BudgetExceeded> {
         let (part, pairs, b) = (self.part, self.pairs, self.b);
         let fixed = |x: usize| x == self.frame || x == part.root;
         let nb = self.iso.len();
@@ -143,7 +192,6 @@ impl ExactPart<'_> {
                 .collect(),
         };
         drop(factor);
-        // sig[li]: body li's twists over the k motions, motion after motion (zero if fixed).
         let bk = b * k;
         let mut sig = vec![Fp::ZERO; nl * bk];
         for (li, &x) in part.bodies.iter().enumerate() {
@@ -154,8 +202,14 @@ impl ExactPart<'_> {
                 }
             }
         }
-        drop(samples);
-        #[cfg(test)]
+        Ok((rank, support, Sampled { sig, b, k }))
+    }
+
+    /// Every sampled motion satisfies every row of the part.
+    #[cfg(test)]
+    fn check_motions(&self, tw: &Sampled) {
+        let (part, pairs, b, k) = (self.part, self.pairs, self.b, tw.k);
+        let (sig, bk) = (&tw.sig, b * k);
         for &pi in &part.pairs {
             let p = pairs[pi];
             let (x, y) = (
@@ -173,20 +227,16 @@ impl ExactPart<'_> {
                 }
             }
         }
-        let sig_of = |li: usize| &sig[li * bk..(li + 1) * bk];
-        let diff = |x: usize, y: usize| {
-            let (sx, sy) = (sig_of(x), sig_of(y));
-            DMatrix::from_fn(b, k, |i, j| sx[j * b + i] - sy[j * b + i])
-        };
-        let lpos = BodyIndex::new(
-            nb,
-            nl,
-            part.bodies.iter().enumerate().map(|(li, &x)| (x, li)),
-        );
-        let lidx = |x: usize| lpos.get(x).unwrap_or(0);
+    }
 
-        // Each body's own isolated motions, exactly (bodies the floating-point analysis
-        // found some for: the null space of its joints' rows with its neighbours fixed).
+    /// Each body's own isolated motions, exactly, by its index in the part (bodies the
+    /// floating-point analysis found some for: the null space of its joints' rows with its
+    /// neighbours fixed).
+    fn own_isolated(
+        &self,
+        meter: &mut Meter,
+    ) -> Result<BTreeMap<usize, DMatrix<Fp>>, BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
         let mut eiso: BTreeMap<usize, DMatrix<Fp>> = BTreeMap::new();
         for (li, &x) in part.bodies.iter().enumerate() {
             if self.iso[x].ncols() == 0 {
@@ -209,21 +259,45 @@ impl ExactPart<'_> {
                 eiso.insert(li, n);
             }
         }
-        // Locked DOF per joint: its allowed DOF minus the rank of the relative twist, with
-        // both bodies' own isolated motions (those of a fixed body, the frame or the part's
-        // root, are not among the part's motions).
-        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k) as u64))?;
+        Ok(eiso)
+    }
+
+    /// Locked DOF per joint: its allowed DOF minus the rank of the relative twist, with both
+    /// bodies' own isolated motions (those of a fixed body, the frame or the part's root, are
+    /// not among the part's motions).
+    fn locked(
+        &self,
+        tw: &Sampled,
+        eiso: &BTreeMap<usize, DMatrix<Fp>>,
+        lidx: &impl Fn(usize) -> usize,
+        meter: &mut Meter,
+        locked: &mut BTreeMap<usize, usize>,
+    ) -> Result<(), BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * tw.k) as u64))?;
         for &pi in &part.pairs {
             let p = pairs[pi];
             let (h, o) = (lidx(p.hub), lidx(p.other));
-            let used = rank_with(diff(o, h), [eiso.get(&h), eiso.get(&o)]);
+            let used = rank_with(tw.diff(o, h), [eiso.get(&h), eiso.get(&o)]);
             let allowed = self.models[p.joint].twists.ncols();
             *locked.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
         }
-        // Rigid together: the twist difference lies in the span of both bodies' isolated
-        // motions, for every motion.
+        Ok(())
+    }
+
+    /// The part's local union-find of rigid clusters: bodies whose twist difference lies in
+    /// the span of both bodies' isolated motions, for every motion.
+    fn clusters(
+        &self,
+        tw: &Sampled,
+        eiso: &BTreeMap<usize, DMatrix<Fp>>,
+        lidx: &impl Fn(usize) -> usize,
+        meter: &mut Meter,
+    ) -> Result<Vec<usize>, BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let (nl, bk) = (part.bodies.len(), b * tw.k);
         let same = |x: usize, y: usize| {
-            let d = diff(x, y);
+            let d = tw.diff(x, y);
             let (ix, iy) = (eiso.get(&x), eiso.get(&y));
             if ix.is_none() && iy.is_none() {
                 return d.iter().all(|v| v.is_zero());
@@ -231,7 +305,7 @@ impl ExactPart<'_> {
             rank_with(d, [ix, iy]) == rank_with(DMatrix::from_element(b, 0, Fp::ZERO), [ix, iy])
         };
         let mut luf: Vec<usize> = (0..nl).collect();
-        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k) as u64))?;
+        meter.charge((part.pairs.len() as u64).saturating_mul((b * b * tw.k) as u64))?;
         // Neighbours first (as the floating-point path does).
         for &pi in &part.pairs {
             let p = pairs[pi];
@@ -251,9 +325,9 @@ impl ExactPart<'_> {
             .copied()
             .filter(|x| !eiso.contains_key(x))
             .collect();
-        plain.sort_by(|&x, &y| sig_of(x).cmp(sig_of(y)).then(x.cmp(&y)));
+        plain.sort_by(|&x, &y| tw.of(x).cmp(tw.of(y)).then(x.cmp(&y)));
         for w in plain.windows(2) {
-            if sig_of(w[0]) == sig_of(w[1]) {
+            if tw.of(w[0]) == tw.of(w[1]) {
                 union_min(&mut luf, w[0], w[1]);
             }
         }
@@ -261,7 +335,7 @@ impl ExactPart<'_> {
             merge_across_joints(
                 part,
                 pairs,
-                &lidx,
+                lidx,
                 &mut luf,
                 |r| eiso.contains_key(&r),
                 same,
@@ -272,6 +346,6 @@ impl ExactPart<'_> {
             let r = find(&mut luf, x);
             luf[x] = r;
         }
-        Ok((rank, luf, support))
+        Ok(luf)
     }
 }
