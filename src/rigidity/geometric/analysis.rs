@@ -348,7 +348,8 @@ impl Analysis<'_> {
         Ok(())
     }
 
-    /// The report from what the parts added up to.
+    /// The report from what the parts added up to. Over 80 lines: the report's literal takes
+    /// one line a field.
     fn report(self, t: Tally, c: Closing) -> GeometricReport {
         let (m, nb, frame, b) = (self.m, self.nb, self.frame, self.b);
         let id = |i: usize| m.body_id(i).to_string();
@@ -378,25 +379,11 @@ impl Analysis<'_> {
         );
         let redundant_joints = self.ranked_joints(t.w);
         let locked: usize = t.locked_by_joint.values().sum();
-        let locked_joints = t
-            .locked_by_joint
-            .into_iter()
-            .filter(|(_, v)| *v > 0)
-            .map(|(j, v)| JointCount {
-                joint: m.joints[j].id.clone(),
-                dof: v,
-            })
-            .collect();
+        let locked_joints = self.locked_joints(t.locked_by_joint);
         let mut uf = t.uf;
         let clusters = super::clusters::clusters(&mut uf);
-        let rigid: Vec<RigidCluster> = clusters
-            .values()
-            .filter(|c| c.len() > 1 || c.contains(&frame))
-            .map(|c| RigidCluster {
-                bodies: c.iter().map(|&x| id(x)).collect(),
-                frame: c.contains(&frame),
-            })
-            .collect();
+        let rigid = self.rigid(&clusters);
+        let count = self.count();
         let (isolated_motions, structurally) = self.isolated_motions(&clusters, frame_spin);
         let isolated = fully + structurally;
         let (loops, loops_note) = super::loops::loops(m, c.full_twists);
@@ -413,12 +400,6 @@ impl Analysis<'_> {
             redundant_joints_unweighted.len(),
             !redundant_joints.is_empty(),
         );
-        let count: i64 = (b * m.movable()) as i64
-            - self
-                .pairs
-                .iter()
-                .map(|p| self.models[p.joint].rows.nrows() as i64)
-                .sum::<i64>();
         GeometricReport {
             name: m.name.clone(),
             space: m.space,
@@ -452,6 +433,43 @@ impl Analysis<'_> {
             }),
             numeric,
         }
+    }
+}
+
+impl Analysis<'_> {
+    /// Chebyshev-Gruebler-Kutzbach count with the driven DOF fixed.
+    fn count(&self) -> i64 {
+        (self.b * self.m.movable()) as i64
+            - self
+                .pairs
+                .iter()
+                .map(|p| self.models[p.joint].rows.nrows() as i64)
+                .sum::<i64>()
+    }
+
+    /// The joints with locked DOF, in joint order.
+    fn locked_joints(&self, locked_by_joint: BTreeMap<usize, usize>) -> Vec<JointCount> {
+        locked_by_joint
+            .into_iter()
+            .filter(|(_, v)| *v > 0)
+            .map(|(j, v)| JointCount {
+                joint: self.m.joints[j].id.clone(),
+                dof: v,
+            })
+            .collect()
+    }
+
+    /// The rigid clusters reported: two or more bodies, or the frame's.
+    fn rigid(&self, clusters: &BTreeMap<usize, Vec<usize>>) -> Vec<RigidCluster> {
+        let frame = self.frame;
+        clusters
+            .values()
+            .filter(|c| c.len() > 1 || c.contains(&frame))
+            .map(|c| RigidCluster {
+                bodies: c.iter().map(|&x| self.m.body_id(x).to_string()).collect(),
+                frame: c.contains(&frame),
+            })
+            .collect()
     }
 }
 

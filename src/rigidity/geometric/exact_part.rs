@@ -66,6 +66,28 @@ struct Sampled {
 }
 
 impl Sampled {
+    /// The twists of `bodies` (by their unknowns' index `local`, none when fixed) over the
+    /// `k` motions `samples`.
+    fn new(
+        samples: &[Vec<Fp>],
+        local: &BodyIndex,
+        bodies: &[usize],
+        b: usize,
+        k: usize,
+    ) -> Sampled {
+        let bk = b * k;
+        let mut sig = vec![Fp::ZERO; bodies.len() * bk];
+        for (li, &x) in bodies.iter().enumerate() {
+            if let Some(g) = local.get(x) {
+                for (j, v) in samples.iter().enumerate() {
+                    sig[li * bk + j * b..li * bk + (j + 1) * b]
+                        .copy_from_slice(&v[g * b..(g + 1) * b]);
+                }
+            }
+        }
+        Sampled { sig, b, k }
+    }
+
     /// Body `li`'s twists.
     fn of(&self, li: usize) -> &[Fp] {
         let bk = self.b * self.k;
@@ -111,7 +133,8 @@ impl ExactPart<'_> {
 
     /// The part's exact factorization (B columns per body, its root and the frame fixed):
     /// its rank, the support of its self-stresses when its rows are dependent, and each
-    /// body's twists over `B` random motions.
+    /// body's twists over `B` random motions. Over 80 lines: one factorization read three
+    /// ways, its checks and charges in their order.
     #[allow(clippy::type_complexity)]
     fn sample(
         &self,
@@ -192,17 +215,11 @@ impl ExactPart<'_> {
                 .collect(),
         };
         drop(factor);
-        let bk = b * k;
-        let mut sig = vec![Fp::ZERO; nl * bk];
-        for (li, &x) in part.bodies.iter().enumerate() {
-            if let Some(g) = local.get(x) {
-                for (j, v) in samples.iter().enumerate() {
-                    sig[li * bk + j * b..li * bk + (j + 1) * b]
-                        .copy_from_slice(&v[g * b..(g + 1) * b]);
-                }
-            }
-        }
-        Ok((rank, support, Sampled { sig, b, k }))
+        Ok((
+            rank,
+            support,
+            Sampled::new(&samples, &local, &part.bodies, b, k),
+        ))
     }
 
     /// Every sampled motion satisfies every row of the part.

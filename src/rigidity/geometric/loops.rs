@@ -28,6 +28,14 @@ pub(super) fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<
     if dim > 400 || nodes.saturating_mul(edges.len()) > 400_000 {
         return None;
     }
+    let cands = candidates(nodes, edges);
+    Some(independent(cands, edges.len(), dim))
+}
+
+/// Horton's candidate cycles, shortest first: for every node v and edge (a, b) off v's BFS
+/// tree whose tree paths to v meet only at v, the cycle of the edge and both paths (as bits
+/// over the edges).
+fn candidates(nodes: usize, edges: &[(usize, usize)]) -> Vec<(usize, Vec<u64>)> {
     let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nodes];
     for (ei, &(a, b)) in edges.iter().enumerate() {
         adj[a].push((b, ei));
@@ -78,6 +86,12 @@ pub(super) fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<
     }
     cands.sort();
     cands.dedup();
+    cands
+}
+
+/// The first `dim` candidates independent over GF(2) (greedy, in order), each as a sorted
+/// list of edge indices (out of `ne` edges).
+fn independent(cands: Vec<(usize, Vec<u64>)>, ne: usize, dim: usize) -> Vec<Vec<usize>> {
     let mut basis: Vec<(usize, Vec<u64>)> = Vec::new(); // (pivot bit, reduced vector)
     let mut out = Vec::new();
     for (_, bits) in cands {
@@ -89,7 +103,7 @@ pub(super) fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<
                 }
             }
         }
-        let pivot = (0..edges.len()).find(|&i| r[i / 64] >> (i % 64) & 1 == 1);
+        let pivot = (0..ne).find(|&i| r[i / 64] >> (i % 64) & 1 == 1);
         if let Some(p) = pivot {
             // Keep the basis reduced on earlier pivots as well.
             for (_, bv) in basis.iter_mut() {
@@ -101,7 +115,7 @@ pub(super) fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<
             }
             basis.push((p, r));
             out.push(
-                (0..edges.len())
+                (0..ne)
                     .filter(|&i| bits[i / 64] >> (i % 64) & 1 == 1)
                     .collect(),
             );
@@ -110,7 +124,7 @@ pub(super) fn min_cycle_basis(nodes: usize, edges: &[(usize, usize)]) -> Option<
             }
         }
     }
-    Some(out)
+    out
 }
 
 /// Order a cycle's edges into a walk; returns the node sequence.

@@ -130,32 +130,7 @@ pub(super) fn self_stresses(
         poff.push(acc);
         acc += s;
     }
-    let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
-    for (lp, &pi) in part.pairs.iter().enumerate() {
-        for x in [pairs[pi].hub, pairs[pi].other] {
-            if let Some(&g) = lgroup.get(&x)
-                && linc[g].last() != Some(&lp)
-            {
-                linc[g].push(lp);
-            }
-        }
-    }
-    let mut tblocks = Vec::new();
-    let mut gbodies: Vec<(usize, usize)> = lgroup.iter().map(|(&x, &g)| (g, x)).collect();
-    gbodies.sort_unstable();
-    for &(g, body) in &gbodies {
-        let s = comp[body].ncols();
-        let ps = std::mem::take(&mut linc[g]);
-        let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
-        let mut mat = DMatrix::zeros(s, width);
-        let mut c = 0;
-        for &lp in &ps {
-            let blk = pair_block(pairs, models, comp, part.pairs[lp], body).transpose();
-            mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
-            c += blk.ncols();
-        }
-        tblocks.push(Block { groups: ps, mat });
-    }
+    let tblocks = transposed_blocks(part, pairs, models, comp, lgroup, ngroups, &psizes);
     let nv = part.bodies.len() as u64;
     let mut telim = eliminate(&psizes, tblocks.clone(), abs_tol, budget, nv, meter)?;
     if let Some(target) = retry {
@@ -191,10 +166,63 @@ pub(super) fn self_stresses(
             .saturating_mul(2)
             .saturating_mul(stresses.len() as u64),
     )?;
-    let mut worst: f64 = 0.0;
+    let worst = residual(&stresses, &tblocks, &psizes, &poff);
     for y in &stresses {
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            let s = y.rows(poff[lp], psizes[lp]).norm_squared();
+            w.push((pairs[pi].joint, s));
+        }
+    }
+    Ok(worst)
+}
+
+/// The part's rows transposed, as blocks over the pairs: one per group (body) of `lgroup`,
+/// its columns of the rows of its pairs (`psizes` rows each), in the pairs' order.
+fn transposed_blocks(
+    part: &Part,
+    pairs: &[Pair],
+    models: &[JointModel],
+    comp: &Complements,
+    lgroup: &BTreeMap<usize, usize>,
+    ngroups: usize,
+    psizes: &[usize],
+) -> Vec<Block> {
+    let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
+    for (lp, &pi) in part.pairs.iter().enumerate() {
+        for x in [pairs[pi].hub, pairs[pi].other] {
+            if let Some(&g) = lgroup.get(&x)
+                && linc[g].last() != Some(&lp)
+            {
+                linc[g].push(lp);
+            }
+        }
+    }
+    let mut tblocks = Vec::new();
+    let mut gbodies: Vec<(usize, usize)> = lgroup.iter().map(|(&x, &g)| (g, x)).collect();
+    gbodies.sort_unstable();
+    for &(g, body) in &gbodies {
+        let s = comp[body].ncols();
+        let ps = std::mem::take(&mut linc[g]);
+        let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+        let mut mat = DMatrix::zeros(s, width);
+        let mut c = 0;
+        for &lp in &ps {
+            let blk = pair_block(pairs, models, comp, part.pairs[lp], body).transpose();
+            mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+            c += blk.ncols();
+        }
+        tblocks.push(Block { groups: ps, mat });
+    }
+    tblocks
+}
+
+/// The largest ‖yᵀA‖ of the unit self-stresses y, body by body (a body's transposed block
+/// holds its columns of A over its pairs' rows, at `poff`).
+fn residual(stresses: &[DVector<f64>], tblocks: &[Block], psizes: &[usize], poff: &[usize]) -> f64 {
+    let mut worst: f64 = 0.0;
+    for y in stresses {
         let mut s2 = 0.0;
-        for t in &tblocks {
+        for t in tblocks {
             let mut yl = DVector::zeros(t.mat.ncols());
             let mut c = 0;
             for &lp in &t.groups {
@@ -206,13 +234,7 @@ pub(super) fn self_stresses(
         }
         worst = worst.max(s2.sqrt());
     }
-    for y in &stresses {
-        for (lp, &pi) in part.pairs.iter().enumerate() {
-            let s = y.rows(poff[lp], psizes[lp]).norm_squared();
-            w.push((pairs[pi].joint, s));
-        }
-    }
-    Ok(worst)
+    worst
 }
 
 impl Analysis<'_> {

@@ -593,34 +593,7 @@ impl SparsePart<'_> {
             poff.push(acc);
             acc += s;
         }
-        let ngroups = self.groups.len();
-        let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
-        for (lp, &pi) in part.pairs.iter().enumerate() {
-            for x in [pairs[pi].hub, pairs[pi].other] {
-                if let Some(&g) = lgroup.get(&x)
-                    && linc[g].last() != Some(&lp)
-                {
-                    linc[g].push(lp);
-                }
-            }
-        }
-        let mut tblocks = Vec::with_capacity(ngroups);
-        let mut tentries = 0u64;
-        for (g, &body) in self.groups.iter().enumerate() {
-            let s = self.sizes[g];
-            // Kept for the residual check below.
-            let ps = linc[g].clone();
-            let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
-            tentries = tentries.saturating_add((s * width) as u64);
-            let mut mat = DMatrix::zeros(s, width);
-            let mut c = 0;
-            for &lp in &ps {
-                let blk = local_block(part.pairs[lp], body).transpose();
-                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
-                c += blk.ncols();
-            }
-            tblocks.push(Block { groups: ps, mat });
-        }
+        let (tblocks, linc, tentries) = self.transposed_blocks(lgroup, local_block, &psizes);
         let nv = part.bodies.len() as u64;
         let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv, meter)?;
         let e = prow.saturating_sub(telim.rank);
@@ -641,26 +614,7 @@ impl SparsePart<'_> {
         // Each stress's residual, group by group: the blocks again, transposed, times y'
         // (the elimination's own blocks are gone; rebuilding them costs what building did).
         meter.charge(tentries.saturating_mul(s as u64 + 1))?;
-        let mut res2 = vec![0.0f64; s];
-        for (g, &body) in self.groups.iter().enumerate() {
-            let mut acc = DMatrix::<f64>::zeros(self.sizes[g], s);
-            for &lp in &linc[g] {
-                let blk = local_block(part.pairs[lp], body);
-                let yl = y.rows(poff[lp], psizes[lp]);
-                acc += blk.transpose() * yl;
-            }
-            for (j, r) in res2.iter_mut().enumerate() {
-                *r += acc.column(j).norm_squared();
-            }
-        }
-        let residual = res2
-            .iter()
-            .enumerate()
-            .map(|(j, &r)| {
-                let n = y.column(j).norm();
-                if n > 0.0 { r.sqrt() / n } else { 0.0 }
-            })
-            .fold(0.0, f64::max);
+        let residual = self.residual(&y, &linc, local_block, &psizes, &poff);
         // Back to the original rows' stresses: y = D·y', D = 1 / row norms.
         for (lp, &pi) in part.pairs.iter().enumerate() {
             for i in 0..psizes[lp] {
@@ -680,5 +634,79 @@ impl SparsePart<'_> {
             }
         }
         Ok(residual)
+    }
+
+    /// The part's scaled rows transposed, as blocks over the pairs: one per group, its
+    /// columns of the rows of its pairs (`psizes` rows each), in the pairs' order; with each
+    /// group's pairs (local indices) and the blocks' entries.
+    #[allow(clippy::type_complexity)]
+    fn transposed_blocks(
+        &self,
+        lgroup: &BTreeMap<usize, usize>,
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+        psizes: &[usize],
+    ) -> (Vec<Block>, Vec<Vec<usize>>, u64) {
+        let (part, pairs) = (self.part, self.pairs);
+        let ngroups = self.groups.len();
+        let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            for x in [pairs[pi].hub, pairs[pi].other] {
+                if let Some(&g) = lgroup.get(&x)
+                    && linc[g].last() != Some(&lp)
+                {
+                    linc[g].push(lp);
+                }
+            }
+        }
+        let mut tblocks = Vec::with_capacity(ngroups);
+        let mut tentries = 0u64;
+        for (g, &body) in self.groups.iter().enumerate() {
+            let s = self.sizes[g];
+            // Kept for the residual check (`residual`).
+            let ps = linc[g].clone();
+            let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+            tentries = tentries.saturating_add((s * width) as u64);
+            let mut mat = DMatrix::zeros(s, width);
+            let mut c = 0;
+            for &lp in &ps {
+                let blk = local_block(part.pairs[lp], body).transpose();
+                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+                c += blk.ncols();
+            }
+            tblocks.push(Block { groups: ps, mat });
+        }
+        (tblocks, linc, tentries)
+    }
+
+    /// The largest residual ‖y'ᵀA'‖ / ‖y'‖ of the sampled stresses (the columns of `y`),
+    /// group by group over its pairs `linc`.
+    fn residual(
+        &self,
+        y: &DMatrix<f64>,
+        linc: &[Vec<usize>],
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+        psizes: &[usize],
+        poff: &[usize],
+    ) -> f64 {
+        let (part, s) = (self.part, y.ncols());
+        let mut res2 = vec![0.0f64; s];
+        for (g, &body) in self.groups.iter().enumerate() {
+            let mut acc = DMatrix::<f64>::zeros(self.sizes[g], s);
+            for &lp in &linc[g] {
+                let blk = local_block(part.pairs[lp], body);
+                let yl = y.rows(poff[lp], psizes[lp]);
+                acc += blk.transpose() * yl;
+            }
+            for (j, r) in res2.iter_mut().enumerate() {
+                *r += acc.column(j).norm_squared();
+            }
+        }
+        res2.iter()
+            .enumerate()
+            .map(|(j, &r)| {
+                let n = y.column(j).norm();
+                if n > 0.0 { r.sqrt() / n } else { 0.0 }
+            })
+            .fold(0.0, f64::max)
     }
 }

@@ -1,7 +1,7 @@
 //! Unit tests of the geometric rigidity analysis: the block-by-block, exact and whole-Jacobian
 //! paths agree; the weights carry their check.
 
-use super::jacobian::{Incidence, Pair, complement};
+use super::jacobian::{Complements, Incidence, Pair, complement};
 use super::*;
 use crate::budget::Budget;
 use crate::generate::{self, Variant};

@@ -445,212 +445,6 @@ impl Fast {
         }
         self.moves.truncate(mark);
     }
-
-    /// Whether node `n` is pinned to super-body `k` (B − k bars between them).
-    pub(super) fn pinned_to(&self, n: u32, k: u32) -> bool {
-        !self.is_body(n) && self.bars_between(n, k) >= self.weight(n) as usize
-    }
-
-    /// Whether node `n` has all its pebbles on bars to one super-body of the set.
-    pub(super) fn pinned_in_set(&self, n: u32, q_e: u32) -> bool {
-        let r = &self.v[n as usize];
-        if self.is_body(n) || r.nout < r.weight {
-            return false;
-        }
-        let mut heads = r.outs().map(|(h, _)| h);
-        let first = heads.next();
-        first.is_some_and(|h| self.qmark[h as usize] == q_e && heads.all(|y| y == h))
-    }
-
-    /// Reverse-search step: every vertex with a bar into `x` that reaches no free pebble
-    /// outside the set joins it, with every vertex its search visited.
-    pub(super) fn scan_in(&mut self, x: u32, q_e: u32, q: &mut Vec<u32>, seen: &mut Vec<u32>) {
-        let own = self.v[x as usize];
-        let own = &own.bar[..own.nout as usize];
-        let mut k = 0;
-        while k < self.inc[x as usize].len() {
-            let bar = self.inc[x as usize][k];
-            k += 1;
-            if own.contains(&bar) {
-                continue; // An out-bar of x.
-            }
-            let p = self.other(bar, x);
-            self.work += 1;
-            if self.qmark[p as usize] == q_e || self.fmark[p as usize] == q_e {
-                continue;
-            }
-            let e = self.next_epoch();
-            self.v[p as usize].mark = e;
-            let mut found = self.peb(p) > 0;
-            seen.clear();
-            seen.push(p);
-            let mut si = 0;
-            while si < seen.len() && !found {
-                let y = seen[si];
-                si += 1;
-                let ry = self.v[y as usize];
-                for (z, _) in ry.outs() {
-                    let z = z as usize;
-                    self.work += 1;
-                    if self.qmark[z] == q_e || self.v[z].mark == e {
-                        continue;
-                    }
-                    if self.fmark[z] == q_e || self.v[z].peb > 0 {
-                        found = true;
-                        break;
-                    }
-                    self.v[z].mark = e;
-                    seen.push(z as u32);
-                }
-            }
-            if found {
-                self.fmark[p as usize] = q_e;
-            } else {
-                for &y in seen.iter() {
-                    self.qmark[y as usize] = q_e;
-                    q.push(y);
-                }
-            }
-        }
-    }
-
-    /// In-bars of `x` (bars at it that are not its out-bars).
-    pub(super) fn in_degree(&self, x: u32) -> usize {
-        self.degree(x) - self.v[x as usize].nout as usize
-    }
-
-    /// After a failed gather on {u, v}: grow the minimal tight set to the maximal one and
-    /// contract it.
-    pub(super) fn contract(&mut self, u: u32, v: u32) {
-        self.qepoch = self.qepoch.wrapping_add(1);
-        if self.qepoch == 0 {
-            self.qmark.iter_mut().for_each(|m| *m = 0);
-            self.fmark.iter_mut().for_each(|m| *m = 0);
-            self.qepoch = 1;
-        }
-        let q_e = self.qepoch;
-        let mut q: Vec<u32> = Vec::with_capacity(self.visited.len() + 2);
-        for x in [u, v].into_iter().chain(std::mem::take(&mut self.visited)) {
-            if self.qmark[x as usize] != q_e {
-                self.qmark[x as usize] = q_e;
-                q.push(x);
-            }
-        }
-        // Reverse search (Lee and Streinu): a vertex with a bar into the set joins it when it
-        // reaches no free pebble outside the set. One super-body of the set, `keep` (the one
-        // with the most in-bars, usually the big component drawn in by the search), and the
-        // nodes pinned to it are never scanned: a vertex whose bars all go into them and that
-        // holds no free pebble would already have been tight with `keep` (contracted into it
-        // or pinned to it), so every other joiner has a bar into another member (or into
-        // the new bar's node, which the new bar may have just pinned: always scanned). Until the
-        // set stops growing, `big` is the candidate (a larger one replaces it, and the old one
-        // is scanned then) and pinned nodes wait.
-        let mut big: Option<u32> = None;
-        let mut fixed = false;
-        let mut waiting: Vec<u32> = Vec::new();
-        let mut seen: Vec<u32> = Vec::new();
-        // A body with fewer than B bars is in no tight set with another body (removing it
-        // would leave more bars than the count allows, or it alone would carry all w(T) - B
-        // bars, so the rest is nodes), so the maximal tight set is the closed set the search
-        // found: the body and nodes pinned to it (the others were pinned to it before). No
-        // reverse search, which would scan every bar into a shared joint's node.
-        let lone = [u, v]
-            .into_iter()
-            .find(|&x| self.is_body(x) && self.degree(x) < self.l as usize);
-        let mut qi = 0;
-        if lone.is_none() {
-            loop {
-                while qi < q.len() {
-                    let x = q[qi];
-                    qi += 1;
-                    if self.is_body(x) {
-                        match big {
-                            None => big = Some(x),
-                            Some(b) if !fixed && self.in_degree(x) > self.in_degree(b) => {
-                                big = Some(x);
-                                self.scan_in(b, q_e, &mut q, &mut seen);
-                            }
-                            Some(b) if b == x => {}
-                            Some(_) => self.scan_in(x, q_e, &mut q, &mut seen),
-                        }
-                    } else if x != u
-                        && x != v
-                        && (big.is_some_and(|b| self.pinned_to(x, b))
-                            || (!fixed && self.pinned_in_set(x, q_e)))
-                    {
-                        if !fixed {
-                            waiting.push(x);
-                        }
-                    } else {
-                        self.scan_in(x, q_e, &mut q, &mut seen);
-                    }
-                }
-                if fixed {
-                    break;
-                }
-                fixed = true;
-                let k = big.unwrap_or(u);
-                big = Some(k);
-                for x in std::mem::take(&mut waiting) {
-                    if !self.pinned_to(x, k) {
-                        self.scan_in(x, q_e, &mut q, &mut seen);
-                    }
-                }
-            }
-        }
-        let keep = lone.or(big).unwrap_or(u);
-        // The set is closed: every out-bar of a member is inside it. Drop them all.
-        for &x in &q {
-            let r = self.v[x as usize];
-            for (_, bar) in r.outs() {
-                self.unlink(bar);
-                self.work += 1;
-            }
-            self.v[x as usize].nout = 0;
-        }
-        for &x in &q {
-            if x == keep {
-                continue;
-            }
-            if self.is_body(x) {
-                // Relabel the in-bars (all from outside now) to the kept super-body.
-                let inn = std::mem::take(&mut self.inc[x as usize]);
-                for bar in inn {
-                    let side = usize::from(self.ends[bar as usize][0] != x);
-                    let t = self.ends[bar as usize][1 - side];
-                    self.ends[bar as usize][side] = keep;
-                    self.pos[bar as usize][side] = self.inc[keep as usize].len() as u32;
-                    self.inc[keep as usize].push(bar);
-                    let rt = &mut self.v[t as usize];
-                    for i in 0..rt.nout as usize {
-                        if rt.bar[i] == bar {
-                            rt.head[i] = keep;
-                        }
-                    }
-                    self.work += 1;
-                }
-                self.parent[x as usize] = keep;
-                let mut mine = std::mem::take(&mut self.members[x as usize]);
-                if mine.len() > self.members[keep as usize].len() {
-                    std::mem::swap(&mut mine, &mut self.members[keep as usize]);
-                }
-                self.work += mine.len() as u64;
-                self.members[keep as usize].extend(mine);
-                self.v[x as usize].peb = 0;
-            } else {
-                // A node of the component: pinned to the super-body by its B − k bars.
-                for _ in 0..self.weight(x) {
-                    self.link(x, keep);
-                }
-                self.v[x as usize].peb = 0;
-            }
-        }
-        self.v[keep as usize].peb = self.l;
-        let size = self.members[keep as usize].len();
-        if size >= 2 && size < self.n_bodies {
-            self.proper = true;
-        }
-    }
 }
 
 /// The outcome of the contracted game.
@@ -696,74 +490,7 @@ pub(super) fn solve_fast(
             game.insert_bar(t, h, x, y);
             accepted[i] = true;
         } else {
-            // One pebble for the bar itself, kept; the other B, only borrowed to show the bar
-            // independent (and then the pair not tight), go back where they came from. The
-            // kept one is the own pebble of an end, or else the one from the latest vertex in
-            // the insertion order (the local slack, not the pebbles of the old, settled part).
-            // One gather answers both questions: B + 2 pebbles on the pair before the bar are
-            // B + 1 after it (every set holding both ends gains exactly this bar), so the bar
-            // is independent and leaves the pair in no tight set; exactly B + 1 means
-            // independent and tight, and the failed search for the last one visited the
-            // minimal tight set, as a failed gather after the insertion would.
-            let (ox, oy) = (game.peb(x), game.peb(y));
-            let wide = game.weight(x) + game.weight(y) > l + 1;
-            game.recording = true;
-            let ok = game.gather(x, y, l + 1);
-            let loose = ok && wide && game.gather(x, y, l + 2);
-            game.recording = false;
-            if ok && wide && !loose {
-                // Tight once the bar is in: keep the moves (the contraction reads the state),
-                // pay with a pebble of the pair and contract the set the search found.
-                game.keep_moves(0);
-                let (t, h) = if game.peb(x) > 0 { (x, y) } else { (y, x) };
-                game.v[t as usize].peb -= 1;
-                game.link(t, h);
-                game.contract(x, y);
-                accepted[i] = true;
-            } else if ok {
-                let (t, h) = if ox > 0 {
-                    (x, y)
-                } else if oy > 0 {
-                    (y, x)
-                } else {
-                    let (z, s) = game
-                        .moves
-                        .iter()
-                        .map(|m| (m.0, m.1))
-                        .max_by_key(|&(z, _)| game.rank[z as usize])
-                        .unwrap_or((u32::MAX, x));
-                    let (p, q) = if s == x { (x, y) } else { (y, x) };
-                    game.undo_to(0);
-                    game.visited.clear();
-                    game.only = z;
-                    let got = if game.find_pebble(p, x, y) {
-                        Some((p, q))
-                    } else if game.find_pebble(q, x, y) {
-                        Some((q, p))
-                    } else {
-                        None
-                    };
-                    game.only = u32::MAX;
-                    match got {
-                        Some(p) => p,
-                        None => {
-                            let _ = game.find_pebble(x, x, y) || game.find_pebble(y, x, y);
-                            if game.peb(x) > 0 { (x, y) } else { (y, x) }
-                        }
-                    }
-                };
-                game.undo_to(0);
-                if loose {
-                    // Not tight after the bar (B + 2 pebbles were there): no check.
-                    game.v[t as usize].peb -= 1;
-                    game.link(t, h);
-                } else {
-                    game.insert_bar(t, h, x, y);
-                }
-                accepted[i] = true;
-            } else {
-                game.undo_to(0);
-            }
+            accepted[i] = game.place_by_search(x, y);
         }
         meter.charge(std::mem::take(&mut game.work))?;
     }
@@ -787,4 +514,89 @@ pub(super) fn solve_fast(
         rep,
         game,
     })
+}
+
+impl Fast {
+    /// A bar between super-bodies or nodes `x` and `y` that needs a search: whether it is
+    /// independent (then inserted, the tight set it closes contracted).
+    ///
+    /// One pebble for the bar itself, kept; the other B, only borrowed to show the bar
+    /// independent (and then the pair not tight), go back where they came from. The kept one
+    /// is the own pebble of an end, or else the one from the latest vertex in the insertion
+    /// order (the local slack, not the pebbles of the old, settled part). One gather answers
+    /// both questions: B + 2 pebbles on the pair before the bar are B + 1 after it (every set
+    /// holding both ends gains exactly this bar), so the bar is independent and leaves the
+    /// pair in no tight set; exactly B + 1 means independent and tight, and the failed search
+    /// for the last one visited the minimal tight set, as a failed gather after the insertion
+    /// would.
+    fn place_by_search(&mut self, x: u32, y: u32) -> bool {
+        let l = self.l;
+        let (ox, oy) = (self.peb(x), self.peb(y));
+        let wide = self.weight(x) + self.weight(y) > l + 1;
+        self.recording = true;
+        let ok = self.gather(x, y, l + 1);
+        let loose = ok && wide && self.gather(x, y, l + 2);
+        self.recording = false;
+        if ok && wide && !loose {
+            // Tight once the bar is in: keep the moves (the contraction reads the state),
+            // pay with a pebble of the pair and contract the set the search found.
+            self.keep_moves(0);
+            let (t, h) = if self.peb(x) > 0 { (x, y) } else { (y, x) };
+            self.v[t as usize].peb -= 1;
+            self.link(t, h);
+            self.contract(x, y);
+            true
+        } else if ok {
+            let (t, h) = if ox > 0 {
+                (x, y)
+            } else if oy > 0 {
+                (y, x)
+            } else {
+                self.latest_pebble(x, y)
+            };
+            self.undo_to(0);
+            if loose {
+                // Not tight after the bar (B + 2 pebbles were there): no check.
+                self.v[t as usize].peb -= 1;
+                self.link(t, h);
+            } else {
+                self.insert_bar(t, h, x, y);
+            }
+            true
+        } else {
+            self.undo_to(0);
+            false
+        }
+    }
+
+    /// The bar's (tail, head) when neither end had a pebble of its own: the pebble drawn
+    /// from the latest vertex in the insertion order the gather moved one from, fetched
+    /// again alone.
+    fn latest_pebble(&mut self, x: u32, y: u32) -> (u32, u32) {
+        let (z, s) = self
+            .moves
+            .iter()
+            .map(|m| (m.0, m.1))
+            .max_by_key(|&(z, _)| self.rank[z as usize])
+            .unwrap_or((u32::MAX, x));
+        let (p, q) = if s == x { (x, y) } else { (y, x) };
+        self.undo_to(0);
+        self.visited.clear();
+        self.only = z;
+        let got = if self.find_pebble(p, x, y) {
+            Some((p, q))
+        } else if self.find_pebble(q, x, y) {
+            Some((q, p))
+        } else {
+            None
+        };
+        self.only = u32::MAX;
+        match got {
+            Some(p) => p,
+            None => {
+                let _ = self.find_pebble(x, x, y) || self.find_pebble(y, x, y);
+                if self.peb(x) > 0 { (x, y) } else { (y, x) }
+            }
+        }
+    }
 }

@@ -235,69 +235,7 @@ pub(super) fn components(g: &Graph, game: &mut Game, accepted: &[bool]) -> Vec<V
         if game.gather(u, v, l + 1) {
             continue; // Room for one more bar: no tight set holds both ends.
         }
-        // The failed search visited the minimal tight set containing u and v.
-        let e = game.next_epoch();
-        let mut reach = vec![u, v];
-        game.mark[u as usize] = e;
-        game.mark[v as usize] = e;
-        for k in 0..game.visited.len() {
-            let x = game.visited[k];
-            if game.mark[x as usize] != e {
-                game.mark[x as usize] = e;
-                reach.push(x);
-            }
-        }
-        for &x in &reach {
-            state[x as usize] = 1;
-            touched.push(x);
-        }
-        let mut q = reach.clone();
-        let mut qi = 0;
-        let inn_lists = game.inn.take().expect("set above");
-        while qi < q.len() {
-            let x = q[qi];
-            qi += 1;
-            for &p in &inn_lists[x as usize] {
-                game.work += 1;
-                if state[p as usize] != 0 {
-                    continue;
-                }
-                // Does p reach a free pebble (outside u, v) without entering Q?
-                let e = game.next_epoch();
-                game.mark[p as usize] = e;
-                let mut found = game.peb[p as usize] > 0;
-                let mut seen = vec![p];
-                let mut si = 0;
-                while si < seen.len() && !found {
-                    let y = seen[si];
-                    si += 1;
-                    for &(z, _) in &game.out[y as usize] {
-                        game.work += 1;
-                        let zs = state[z as usize];
-                        if zs == 1 || game.mark[z as usize] == e {
-                            continue;
-                        }
-                        if zs == 2 || game.peb[z as usize] > 0 {
-                            found = true;
-                            break;
-                        }
-                        game.mark[z as usize] = e;
-                        seen.push(z);
-                    }
-                }
-                if found {
-                    state[p as usize] = 2;
-                    touched.push(p);
-                } else {
-                    for &y in &seen {
-                        state[y as usize] = 1;
-                        touched.push(y);
-                        q.push(y);
-                    }
-                }
-            }
-        }
-        game.inn = Some(inn_lists);
+        let q = tight_set(game, u, v, &mut state, &mut touched);
         let c = comps.len();
         let mut bodies: Vec<usize> = Vec::new();
         for &x in &q {
@@ -317,4 +255,86 @@ pub(super) fn components(g: &Graph, game: &mut Game, accepted: &[bool]) -> Vec<V
         touched.clear();
     }
     comps
+}
+
+/// The maximal tight set holding `u` and `v` after a failed gather, grown from the minimal
+/// one the search visited (Lee and Streinu's reverse search); `state` marks its members (1)
+/// and the vertices known to reach a free pebble (2), all listed in `touched`.
+fn tight_set(
+    game: &mut Game,
+    u: u32,
+    v: u32,
+    state: &mut [u8],
+    touched: &mut Vec<u32>,
+) -> Vec<u32> {
+    // The failed search visited the minimal tight set containing u and v.
+    let e = game.next_epoch();
+    let mut reach = vec![u, v];
+    game.mark[u as usize] = e;
+    game.mark[v as usize] = e;
+    for k in 0..game.visited.len() {
+        let x = game.visited[k];
+        if game.mark[x as usize] != e {
+            game.mark[x as usize] = e;
+            reach.push(x);
+        }
+    }
+    for &x in &reach {
+        state[x as usize] = 1;
+        touched.push(x);
+    }
+    let mut q = reach.clone();
+    let mut qi = 0;
+    let inn_lists = game.inn.take().expect("set above");
+    while qi < q.len() {
+        let x = q[qi];
+        qi += 1;
+        for &p in &inn_lists[x as usize] {
+            game.work += 1;
+            if state[p as usize] != 0 {
+                continue;
+            }
+            let (found, seen) = reaches_free(game, p, state);
+            if found {
+                state[p as usize] = 2;
+                touched.push(p);
+            } else {
+                for &y in &seen {
+                    state[y as usize] = 1;
+                    touched.push(y);
+                    q.push(y);
+                }
+            }
+        }
+    }
+    game.inn = Some(inn_lists);
+    q
+}
+
+/// Does `p` reach a free pebble (outside u, v) without entering the set (`state` 1)? And the
+/// vertices the search saw.
+fn reaches_free(game: &mut Game, p: u32, state: &[u8]) -> (bool, Vec<u32>) {
+    let e = game.next_epoch();
+    game.mark[p as usize] = e;
+    let mut found = game.peb[p as usize] > 0;
+    let mut seen = vec![p];
+    let mut si = 0;
+    while si < seen.len() && !found {
+        let y = seen[si];
+        si += 1;
+        for &(z, _) in &game.out[y as usize] {
+            game.work += 1;
+            let zs = state[z as usize];
+            if zs == 1 || game.mark[z as usize] == e {
+                continue;
+            }
+            if zs == 2 || game.peb[z as usize] > 0 {
+                found = true;
+                break;
+            }
+            game.mark[z as usize] = e;
+            seen.push(z);
+        }
+    }
+    (found, seen)
 }

@@ -22,6 +22,7 @@ use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use serde::Serialize;
 
+mod contract;
 mod fast;
 mod game;
 mod graph;
