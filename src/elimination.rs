@@ -119,87 +119,19 @@ impl Elimination {
         order: Option<&[usize]>,
         mut meter: Option<&mut Meter>,
     ) -> Result<Elimination, Stop> {
-        let bytes = |m: &DMatrix<f64>| (m.len() as u64).saturating_mul(8);
-        let mut held: u64 = blocks.iter().map(|b| bytes(&b.mat)).sum();
         let n = sizes.len();
-        let mut offsets = Vec::with_capacity(n);
-        let mut acc = 0;
-        for &s in sizes {
-            offsets.push(acc);
-            acc += s;
-        }
-        let mut store: Vec<Option<Block>> = Vec::new();
-        // Block ids per group, ascending (ids only grow); ids of blocks taken since are
-        // skipped and pruned lazily. Same order as a set of live ids, without its cost.
-        let mut of_group: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let add = |b: Block, store: &mut Vec<Option<Block>>, of_group: &mut Vec<Vec<usize>>| {
-            let id = store.len();
-            for &g in &b.groups {
-                of_group[g].push(id);
-            }
-            store.push(Some(b));
-        };
-        for b in blocks {
-            if !b.groups.is_empty() && b.mat.nrows() > 0 {
-                add(b, &mut store, &mut of_group);
-            }
-        }
-        // Tests keep the former bookkeeping (a set of live block ids per group, unions as
-        // sets) beside it and check that every score and every front's members agree.
-        #[cfg(test)]
-        let mut shadow = shadow::Shadow::new(n, &store);
-        // Scratch for unions of groups: a stamp per group (the union's members carry the
-        // current clock).
-        let mut stamp = vec![0usize; n];
-        let mut clock = 0usize;
-        // The front width of `g` now: the sizes of the union of the groups of its live blocks.
-        let score = |g: usize,
-                     store: &Vec<Option<Block>>,
-                     of_group: &mut Vec<Vec<usize>>,
-                     stamp: &mut Vec<usize>,
-                     clock: &mut usize| {
-            of_group[g].retain(|&bi| store[bi].is_some());
-            *clock += 1;
-            let mut width = 0;
-            for &bi in &of_group[g] {
-                if let Some(b) = &store[bi] {
-                    for &h in &b.groups {
-                        if stamp[h] != *clock {
-                            stamp[h] = *clock;
-                            width += sizes[h];
-                        }
-                    }
-                }
-            }
-            width
-        };
-        let mut heap = BinaryHeap::new();
-        let mut version = vec![0usize; n];
+        let mut f = Frontal::new(sizes, blocks, abs_tol, order.is_none());
         // A given order: the groups in turn, no scores.
         let mut next_in_order = order.map(|o| o.iter());
-        for g in (0..n).filter(|_| order.is_none()) {
-            let s = score(g, &store, &mut of_group, &mut stamp, &mut clock);
-            #[cfg(test)]
-            assert_eq!(s, shadow.score(g, &store, sizes), "score of group {g}");
-            heap.push(Reverse((s, g, 0usize)));
-        }
-        let mut done = vec![false; n];
-        let mut records = Vec::new();
-        let mut rank = 0;
-        let mut kept_min = f64::INFINITY;
-        let mut dropped_max: f64 = 0.0;
-        let mut dropped = Vec::new();
-        // Column offset of each group in the current front.
-        let mut col_of = vec![0usize; n];
         loop {
             let g = match next_in_order.as_mut() {
                 Some(it) => match it.next() {
                     Some(&g) => g,
                     None => break,
                 },
-                None => match heap.pop() {
+                None => match f.heap.pop() {
                     Some(Reverse((_, g, ver))) => {
-                        if done[g] || ver != version[g] {
+                        if f.done[g] || ver != f.version[g] {
                             continue;
                         }
                         g
@@ -207,164 +139,12 @@ impl Elimination {
                     None => break,
                 },
             };
-            if g >= n || done[g] {
+            if g >= n || f.done[g] {
                 continue;
             }
-            done[g] = true;
-            let ids = std::mem::take(&mut of_group[g]);
-            #[cfg(test)]
-            let live = shadow.take(g, &store);
-            let mut members: Vec<Block> = Vec::new();
-            #[cfg(test)]
-            let mut taken = Vec::new();
-            for id in ids {
-                #[cfg(test)]
-                if store[id].is_some() {
-                    taken.push(id);
-                }
-                if let Some(b) = store[id].take() {
-                    held = held.saturating_sub(bytes(&b.mat));
-                    members.push(b);
-                }
-            }
-            #[cfg(test)]
-            assert_eq!(taken, live, "members of the front of group {g}");
-            clock += 1;
-            stamp[g] = clock;
-            let mut others: Vec<usize> = Vec::new();
-            for b in &members {
-                for &h in &b.groups {
-                    if stamp[h] != clock {
-                        stamp[h] = clock;
-                        others.push(h);
-                    }
-                }
-            }
-            others.sort_unstable();
-            let sg = sizes[g];
-            // Column offsets in the front: g first, then the others.
-            col_of[g] = 0;
-            let mut width = sg;
-            for &h in &others {
-                col_of[h] = width;
-                width += sizes[h];
-            }
-            let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
-            let front_bytes = (nrows as u64)
-                .saturating_mul(width as u64)
-                .saturating_mul(8);
-            let members_bytes: u64 = members.iter().map(|b| bytes(&b.mat)).sum();
-            let need = held
-                .saturating_add(members_bytes)
-                .saturating_add(front_bytes.saturating_mul(2));
-            if need > max_bytes {
-                return Err(Stop::Memory(need));
-            }
-            if let Some(m) = meter.as_deref_mut() {
-                // Per cell of the front: zeroing and filling it, copying the rows left over
-                // out, and two passes (vᵀ·front, then the rank-one update) per pivot tried
-                // (at most min(group size, rows) of them). Large fronts run at memory speed,
-                // so each pass is charged, not each pivot once.
-                let steps = sg.min(nrows) as u64;
-                let cells = (nrows as u64).saturating_mul(width as u64);
-                m.charge(cells.saturating_mul(steps.saturating_mul(2).saturating_add(3)))
-                    .map_err(Stop::Work)?;
-            }
-            let mut front = DMatrix::zeros(nrows, width);
-            let mut r0 = 0;
-            for b in &members {
-                let mut c0 = 0;
-                for &h in &b.groups {
-                    let s = sizes[h];
-                    let dst = col_of[h];
-                    front
-                        .view_mut((r0, dst), (b.mat.nrows(), s))
-                        .copy_from(&b.mat.view((0, c0), (b.mat.nrows(), s)));
-                    c0 += s;
-                }
-                r0 += b.mat.nrows();
-            }
-            let mut perm: Vec<usize> = (0..sg).collect();
-            let mut r = 0;
-            while r < sg && r < nrows {
-                // Column pivoting among the group's remaining columns.
-                let (best, bn) = (r..sg)
-                    .map(|j| (j, front.view((r, j), (nrows - r, 1)).norm()))
-                    .fold((r, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
-                if bn <= abs_tol {
-                    dropped_max = dropped_max.max(bn);
-                    dropped.push(bn);
-                    break;
-                }
-                kept_min = kept_min.min(bn);
-                if best != r {
-                    front.swap_columns(best, r);
-                    perm.swap(best, r);
-                }
-                householder(&mut front, r, r);
-                r += 1;
-            }
-            rank += r;
-            let rmat = front.rows(0, r).into_owned();
-            if nrows > r && !others.is_empty() {
-                let mut rest = front.view((r, sg), (nrows - r, width - sg)).into_owned();
-                if rest.nrows() > rest.ncols() {
-                    // Compress: an orthogonal transformation keeps the row space.
-                    let k = rest.ncols();
-                    if let Some(m) = meter.as_deref_mut() {
-                        // Two passes over at most all of it per column.
-                        let cells = (rest.nrows() as u64).saturating_mul(k as u64);
-                        m.charge(cells.saturating_mul(k as u64).saturating_mul(2))
-                            .map_err(Stop::Work)?;
-                    }
-                    for c in 0..k {
-                        householder(&mut rest, c, c);
-                    }
-                    rest = rest.rows(0, k).into_owned();
-                }
-                held = held.saturating_add(bytes(&rest));
-                #[cfg(test)]
-                shadow.add(store.len(), &others);
-                add(
-                    Block {
-                        groups: others.clone(),
-                        mat: rest,
-                    },
-                    &mut store,
-                    &mut of_group,
-                );
-            } else if nrows > r {
-                // Rows left with no unknowns: their residual norm is a dropped decision.
-                let rest = front.view((r, 0), (nrows - r, width)).norm();
-                dropped_max = dropped_max.max(rest.min(abs_tol));
-            }
-            for &h in others.iter().filter(|_| order.is_none()) {
-                if !done[h] {
-                    version[h] += 1;
-                    let s = score(h, &store, &mut of_group, &mut stamp, &mut clock);
-                    #[cfg(test)]
-                    assert_eq!(s, shadow.score(h, &store, sizes), "score of group {h}");
-                    heap.push(Reverse((s, h, version[h])));
-                }
-            }
-            held = held.saturating_add(bytes(&rmat));
-            records.push(Record {
-                group: g,
-                perm,
-                rank: r,
-                others,
-                r: rmat,
-            });
+            f.eliminate(g, max_bytes, meter.as_deref_mut())?;
         }
-        Ok(Elimination {
-            offsets,
-            sizes: sizes.to_vec(),
-            records,
-            rank,
-            kept_min,
-            dropped_max,
-            dropped,
-        })
+        Ok(f.finish())
     }
 
     /// A threshold under which a new run should reach rank `target`, chosen from this run's
@@ -532,6 +312,342 @@ impl Elimination {
             }
         }
         out
+    }
+}
+
+/// The size in bytes of a block's matrix.
+fn bytes(m: &DMatrix<f64>) -> u64 {
+    (m.len() as u64).saturating_mul(8)
+}
+
+/// A multifrontal elimination under way ([`Elimination::run_ordered`]): the row blocks
+/// waiting, by group, the greedy order's scores, and what the fronts decided so far.
+struct Frontal<'s> {
+    sizes: &'s [usize],
+    abs_tol: f64,
+    /// Smallest front first (else a given order: no scores).
+    greedy: bool,
+    /// Bytes of the blocks waiting and the factors kept.
+    held: u64,
+    store: Vec<Option<Block>>,
+    /// Block ids per group, ascending (ids only grow); ids of blocks taken since are
+    /// skipped and pruned lazily. Same order as a set of live ids, without its cost.
+    of_group: Vec<Vec<usize>>,
+    /// Scratch for unions of groups: a stamp per group (the union's members carry the
+    /// current clock).
+    stamp: Vec<usize>,
+    clock: usize,
+    heap: BinaryHeap<Reverse<(usize, usize, usize)>>,
+    version: Vec<usize>,
+    done: Vec<bool>,
+    /// Column offset of each group in the current front.
+    col_of: Vec<usize>,
+    records: Vec<Record>,
+    rank: usize,
+    kept_min: f64,
+    dropped_max: f64,
+    dropped: Vec<f64>,
+    /// Tests keep the former bookkeeping (a set of live block ids per group, unions as
+    /// sets) beside it and check that every score and every front's members agree.
+    #[cfg(test)]
+    shadow: shadow::Shadow,
+}
+
+impl<'s> Frontal<'s> {
+    /// The blocks waiting (empty ones dropped) and, in the greedy order, every group scored.
+    fn new(sizes: &'s [usize], blocks: Vec<Block>, abs_tol: f64, greedy: bool) -> Self {
+        let held: u64 = blocks.iter().map(|b| bytes(&b.mat)).sum();
+        let n = sizes.len();
+        let mut f = Frontal {
+            sizes,
+            abs_tol,
+            greedy,
+            held,
+            store: Vec::new(),
+            of_group: vec![Vec::new(); n],
+            stamp: vec![0usize; n],
+            clock: 0usize,
+            heap: BinaryHeap::new(),
+            version: vec![0usize; n],
+            done: vec![false; n],
+            col_of: vec![0usize; n],
+            records: Vec::new(),
+            rank: 0,
+            kept_min: f64::INFINITY,
+            dropped_max: 0.0,
+            dropped: Vec::new(),
+            #[cfg(test)]
+            shadow: shadow::Shadow::new(n, &[]),
+        };
+        for b in blocks {
+            if !b.groups.is_empty() && b.mat.nrows() > 0 {
+                f.add(b);
+            }
+        }
+        #[cfg(test)]
+        {
+            f.shadow = shadow::Shadow::new(n, &f.store);
+        }
+        for g in (0..n).filter(|_| greedy) {
+            let s = f.score(g);
+            #[cfg(test)]
+            assert_eq!(s, f.shadow.score(g, &f.store, sizes), "score of group {g}");
+            f.heap.push(Reverse((s, g, 0usize)));
+        }
+        f
+    }
+
+    /// A new block waiting on its groups.
+    fn add(&mut self, b: Block) {
+        let id = self.store.len();
+        for &g in &b.groups {
+            self.of_group[g].push(id);
+        }
+        self.store.push(Some(b));
+    }
+
+    /// The front width of `g` now: the sizes of the union of the groups of its live blocks.
+    fn score(&mut self, g: usize) -> usize {
+        let store = &self.store;
+        self.of_group[g].retain(|&bi| store[bi].is_some());
+        self.clock += 1;
+        let mut width = 0;
+        for &bi in &self.of_group[g] {
+            if let Some(b) = &store[bi] {
+                for &h in &b.groups {
+                    if self.stamp[h] != self.clock {
+                        self.stamp[h] = self.clock;
+                        width += self.sizes[h];
+                    }
+                }
+            }
+        }
+        width
+    }
+
+    /// Group `g`'s front: its rows merged, its columns pivoted, the rows left passed on to
+    /// its neighbours, its factor recorded.
+    fn eliminate(
+        &mut self,
+        g: usize,
+        max_bytes: u64,
+        mut meter: Option<&mut Meter>,
+    ) -> Result<(), Stop> {
+        self.done[g] = true;
+        let (members, others) = self.take_members(g);
+        let sg = self.sizes[g];
+        let mut front = self.assemble(g, &members, &others, max_bytes, meter.as_deref_mut())?;
+        drop(members);
+        let nrows = front.nrows();
+        let (perm, r) = self.pivot(&mut front, sg);
+        self.rank += r;
+        let rmat = front.rows(0, r).into_owned();
+        if nrows > r && !others.is_empty() {
+            self.pass_on(&front, sg, r, &others, meter)?;
+        } else if nrows > r {
+            // Rows left with no unknowns: their residual norm is a dropped decision.
+            let rest = front.view((r, 0), (nrows - r, front.ncols())).norm();
+            self.dropped_max = self.dropped_max.max(rest.min(self.abs_tol));
+        }
+        let greedy = self.greedy;
+        for &h in others.iter().filter(|_| greedy) {
+            if !self.done[h] {
+                self.version[h] += 1;
+                let s = self.score(h);
+                #[cfg(test)]
+                assert_eq!(
+                    s,
+                    self.shadow.score(h, &self.store, self.sizes),
+                    "score of group {h}"
+                );
+                self.heap.push(Reverse((s, h, self.version[h])));
+            }
+        }
+        self.held = self.held.saturating_add(bytes(&rmat));
+        self.records.push(Record {
+            group: g,
+            perm,
+            rank: r,
+            others,
+            r: rmat,
+        });
+        Ok(())
+    }
+
+    /// The live blocks on `g`, taken out of waiting, and the other groups they touch
+    /// (ascending).
+    fn take_members(&mut self, g: usize) -> (Vec<Block>, Vec<usize>) {
+        let ids = std::mem::take(&mut self.of_group[g]);
+        #[cfg(test)]
+        let live = self.shadow.take(g, &self.store);
+        let mut members: Vec<Block> = Vec::new();
+        #[cfg(test)]
+        let mut taken = Vec::new();
+        for id in ids {
+            #[cfg(test)]
+            if self.store[id].is_some() {
+                taken.push(id);
+            }
+            if let Some(b) = self.store[id].take() {
+                self.held = self.held.saturating_sub(bytes(&b.mat));
+                members.push(b);
+            }
+        }
+        #[cfg(test)]
+        assert_eq!(taken, live, "members of the front of group {g}");
+        self.clock += 1;
+        self.stamp[g] = self.clock;
+        let mut others: Vec<usize> = Vec::new();
+        for b in &members {
+            for &h in &b.groups {
+                if self.stamp[h] != self.clock {
+                    self.stamp[h] = self.clock;
+                    others.push(h);
+                }
+            }
+        }
+        others.sort_unstable();
+        (members, others)
+    }
+
+    /// The front of `g`: the members' rows over `g`'s columns first, then the others'; or
+    /// the bytes it would pass `max_bytes` with, or the meter's limit.
+    fn assemble(
+        &mut self,
+        g: usize,
+        members: &[Block],
+        others: &[usize],
+        max_bytes: u64,
+        meter: Option<&mut Meter>,
+    ) -> Result<DMatrix<f64>, Stop> {
+        let sizes = self.sizes;
+        let sg = sizes[g];
+        // Column offsets in the front: g first, then the others.
+        self.col_of[g] = 0;
+        let mut width = sg;
+        for &h in others {
+            self.col_of[h] = width;
+            width += sizes[h];
+        }
+        let nrows: usize = members.iter().map(|b| b.mat.nrows()).sum();
+        let front_bytes = (nrows as u64)
+            .saturating_mul(width as u64)
+            .saturating_mul(8);
+        let members_bytes: u64 = members.iter().map(|b| bytes(&b.mat)).sum();
+        let need = self
+            .held
+            .saturating_add(members_bytes)
+            .saturating_add(front_bytes.saturating_mul(2));
+        if need > max_bytes {
+            return Err(Stop::Memory(need));
+        }
+        if let Some(m) = meter {
+            // Per cell of the front: zeroing and filling it, copying the rows left over
+            // out, and two passes (vᵀ·front, then the rank-one update) per pivot tried
+            // (at most min(group size, rows) of them). Large fronts run at memory speed,
+            // so each pass is charged, not each pivot once.
+            let steps = sg.min(nrows) as u64;
+            let cells = (nrows as u64).saturating_mul(width as u64);
+            m.charge(cells.saturating_mul(steps.saturating_mul(2).saturating_add(3)))
+                .map_err(Stop::Work)?;
+        }
+        let mut front = DMatrix::zeros(nrows, width);
+        let mut r0 = 0;
+        for b in members {
+            let mut c0 = 0;
+            for &h in &b.groups {
+                let s = sizes[h];
+                let dst = self.col_of[h];
+                front
+                    .view_mut((r0, dst), (b.mat.nrows(), s))
+                    .copy_from(&b.mat.view((0, c0), (b.mat.nrows(), s)));
+                c0 += s;
+            }
+            r0 += b.mat.nrows();
+        }
+        Ok(front)
+    }
+
+    /// Householder QR with column pivoting on the group's `sg` columns of the front, while a
+    /// column's norm exceeds the threshold: the permutation and the rank.
+    fn pivot(&mut self, front: &mut DMatrix<f64>, sg: usize) -> (Vec<usize>, usize) {
+        let nrows = front.nrows();
+        let mut perm: Vec<usize> = (0..sg).collect();
+        let mut r = 0;
+        while r < sg && r < nrows {
+            // Column pivoting among the group's remaining columns.
+            let (best, bn) = (r..sg)
+                .map(|j| (j, front.view((r, j), (nrows - r, 1)).norm()))
+                .fold((r, -1.0), |acc, x| if x.1 > acc.1 { x } else { acc });
+            if bn <= self.abs_tol {
+                self.dropped_max = self.dropped_max.max(bn);
+                self.dropped.push(bn);
+                break;
+            }
+            self.kept_min = self.kept_min.min(bn);
+            if best != r {
+                front.swap_columns(best, r);
+                perm.swap(best, r);
+            }
+            householder(front, r, r);
+            r += 1;
+        }
+        (perm, r)
+    }
+
+    /// The front's rows below the `r` pivots, on the other groups' columns, become a new
+    /// block on those groups (compressed to as many rows as columns).
+    fn pass_on(
+        &mut self,
+        front: &DMatrix<f64>,
+        sg: usize,
+        r: usize,
+        others: &[usize],
+        meter: Option<&mut Meter>,
+    ) -> Result<(), Stop> {
+        let (nrows, width) = front.shape();
+        let mut rest = front.view((r, sg), (nrows - r, width - sg)).into_owned();
+        if rest.nrows() > rest.ncols() {
+            // Compress: an orthogonal transformation keeps the row space.
+            let k = rest.ncols();
+            if let Some(m) = meter {
+                // Two passes over at most all of it per column.
+                let cells = (rest.nrows() as u64).saturating_mul(k as u64);
+                m.charge(cells.saturating_mul(k as u64).saturating_mul(2))
+                    .map_err(Stop::Work)?;
+            }
+            for c in 0..k {
+                householder(&mut rest, c, c);
+            }
+            rest = rest.rows(0, k).into_owned();
+        }
+        self.held = self.held.saturating_add(bytes(&rest));
+        #[cfg(test)]
+        self.shadow.add(self.store.len(), others);
+        self.add(Block {
+            groups: others.to_vec(),
+            mat: rest,
+        });
+        Ok(())
+    }
+
+    /// The factorization.
+    fn finish(self) -> Elimination {
+        let mut offsets = Vec::with_capacity(self.sizes.len());
+        let mut acc = 0;
+        for &s in self.sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        Elimination {
+            offsets,
+            sizes: self.sizes.to_vec(),
+            records: self.records,
+            rank: self.rank,
+            kept_min: self.kept_min,
+            dropped_max: self.dropped_max,
+            dropped: self.dropped,
+        }
     }
 }
 

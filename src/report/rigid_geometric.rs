@@ -36,6 +36,23 @@ fn plural(n: usize, one: &str, many: &str) -> String {
 /// 18 fully isolated + 1 structurally isolated + 0 proper; 1 redundant constraint ...".
 pub fn table(r: &GeometricReport) -> String {
     let mut s = String::new();
+    header(&mut s, r);
+    let _ = writeln!(s);
+    mobility_and_redundancy(&mut s, r);
+    isolated_motions(&mut s, r);
+    rigid_parts(&mut s, r);
+    loops(&mut s, r);
+    if let Some(n) = &r.finite_note {
+        let _ = writeln!(s, "Note: {n}.");
+    }
+    if let Some(w) = &r.numeric.warning {
+        let _ = writeln!(s, "Warning: {w}.");
+    }
+    s
+}
+
+/// The mechanism, the geometry analysed and the frame.
+fn header(s: &mut String, r: &GeometricReport) {
     let _ = writeln!(
         s,
         "Geometric rigidity: {} ({}, B = {})",
@@ -62,7 +79,10 @@ pub fn table(r: &GeometricReport) -> String {
     if let Some(c) = &r.geometry_used.closure {
         let _ = writeln!(s, "{}", super::position::closure_lines(c));
     }
-    let _ = writeln!(s);
+}
+
+/// The count against the true mobility, the redundant constraints and the locked DOF.
+fn mobility_and_redundancy(s: &mut String, r: &GeometricReport) {
     let _ = writeln!(s, "count {}; true mobility {}", r.count, r.mobility);
     let mut parts = Vec::new();
     if r.fully_isolated > 0 {
@@ -131,6 +151,10 @@ pub fn table(r: &GeometricReport) -> String {
             list.join(", ")
         );
     }
+}
+
+/// The isolated motions, each with its axis when it has one.
+fn isolated_motions(s: &mut String, r: &GeometricReport) {
     if !r.isolated_motions.is_empty() {
         let _ = writeln!(s);
         let _ = writeln!(s, "Isolated motions ({}):", r.isolated);
@@ -153,6 +177,10 @@ pub fn table(r: &GeometricReport) -> String {
             );
         }
     }
+}
+
+/// The rigid parts beyond single bodies.
+fn rigid_parts(s: &mut String, r: &GeometricReport) {
     let _ = writeln!(s);
     if r.rigid.is_empty() {
         let _ = writeln!(s, "Rigid parts: none beyond single bodies.");
@@ -166,6 +194,10 @@ pub fn table(r: &GeometricReport) -> String {
             let _ = writeln!(s, "  [{}]{tag}", c.bodies.join(", "));
         }
     }
+}
+
+/// The loops of the minimum cycle basis, or why they are not listed.
+fn loops(s: &mut String, r: &GeometricReport) {
     let _ = writeln!(s);
     if let Some(n) = &r.loops_note {
         let _ = writeln!(s, "Loops: {n}.");
@@ -184,11 +216,4 @@ pub fn table(r: &GeometricReport) -> String {
             );
         }
     }
-    if let Some(n) = &r.finite_note {
-        let _ = writeln!(s, "Note: {n}.");
-    }
-    if let Some(w) = &r.numeric.warning {
-        let _ = writeln!(s, "Warning: {w}.");
-    }
-    s
 }

@@ -29,12 +29,13 @@
 //! the minimum-front order in general) plus `B + 2` back substitutions, then linear in the
 //! part's pairs and bodies (sorting aside).
 
-use super::{
-    Pair, Part, eliminate, find, merge_across_joints, orthonormalize, pair_block, small_null,
-    small_rank, threshold, union_min,
-};
+use super::analysis::ZERO_TOL;
+use super::clusters::{find, merge_across_joints, union_min};
+use super::dense::{orthonormalize, small_null, small_rank};
+use super::jacobian::{Complements, Pair, Part, eliminate, pair_block};
+use super::threshold;
 use crate::budget::{Budget, BudgetExceeded, Meter};
-use crate::elimination::{Block, sigma_max};
+use crate::elimination::{Block, Elimination, sigma_max};
 use crate::mechanism::Mechanism;
 use crate::motion::{self, GeometryUsed, JointModel, Scale};
 use nalgebra::{DMatrix, DVector};
@@ -139,7 +140,7 @@ pub(super) struct SparsePart<'a> {
     pub part: &'a Part,
     pub pairs: &'a [Pair],
     pub models: &'a [JointModel],
-    pub comp: &'a super::Complements,
+    pub comp: &'a Complements,
     pub iso: &'a [DMatrix<f64>],
     pub b: usize,
     pub used: &'a GeometryUsed,
@@ -188,43 +189,108 @@ impl SparsePart<'_> {
         locked: &mut BTreeMap<usize, usize>,
         uf: &mut [usize],
     ) -> Result<SparseOut, BudgetExceeded> {
-        let (part, pairs, b) = (self.part, self.pairs, self.b);
-        let nl = part.bodies.len();
-        let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
+        let (part, b) = (self.part, self.b);
         let mut lgroup: BTreeMap<usize, usize> = BTreeMap::new();
         for (g, &x) in self.groups.iter().enumerate() {
             lgroup.insert(x, g);
         }
-        // Pairs of each of the part's bodies, then each group's shift.
-        let mut inc: Vec<Vec<usize>> = vec![Vec::new(); nl];
-        for &pi in &part.pairs {
-            let p = pairs[pi];
-            inc[lidx(p.hub)].push(pi);
-            if p.other != p.hub {
-                inc[lidx(p.other)].push(pi);
-            }
-        }
-        let shifts: Vec<Option<DMatrix<f64>>> = self
-            .groups
-            .iter()
-            .map(|&x| self.body_shift(x, &inc[lidx(x)]))
-            .collect();
+        let shifts = self.shifts();
         // The block of pair `pi` on `body`, in the body's local coordinates.
         let local_block = |pi: usize, body: usize| {
-            let blk = pair_block(pairs, self.models, self.comp, pi, body);
+            let blk = pair_block(self.pairs, self.models, self.comp, pi, body);
             match lgroup.get(&body).and_then(|&g| shifts[g].as_ref()) {
                 Some(s) => blk * s,
                 None => blk,
             }
         };
         meter.charge((part.pairs.len() * b * b * 8) as u64)?;
-        // Each row scaled to unit norm over the pair's columns (a rotation's rows about a far
-        // pin shrink to about 1/distance once written about a near point): same rank and
-        // null space; a self-stress y of the scaled rows is D·y' of the original ones.
-        let mut rownorm: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
-        let mut blocks = Vec::new();
+        let (blocks, rownorm) = self.scaled_blocks(&lgroup, &local_block);
+        let mut offsets = Vec::with_capacity(self.sizes.len());
+        let mut acc = 0;
+        for &s in self.sizes {
+            offsets.push(acc);
+            acc += s;
+        }
+        let lcols = acc;
+        let smax_l = sigma_max(self.sizes, &offsets, &blocks);
+        let (elim, abs_tol) = self.factor(blocks, smax_l, budget, meter)?;
+        let rank = elim.rank;
+        let (kept, dropped) = (elim.kept_min, elim.dropped_max);
+        let scale = if smax_l > 0.0 {
+            self.smax / smax_l
+        } else {
+            1.0
+        };
+        let (tw, k) =
+            self.sampled_twists(elim, &lgroup, &shifts, &offsets, lcols, budget, meter)?;
+
+        let scaled_block = |pi: usize, body: usize| {
+            let mut blk = local_block(pi, body);
+            if let Some(norms) = rownorm.get(&pi) {
+                for (i, &n) in norms.iter().enumerate() {
+                    blk.row_mut(i).unscale_mut(n);
+                }
+            }
+            blk
+        };
+        let unscale = |pi: usize, i: usize| rownorm.get(&pi).map_or(1.0, |v| v[i]);
+        let stress_residual = self.stresses(
+            &lgroup,
+            &scaled_block,
+            &unscale,
+            abs_tol,
+            rank,
+            budget,
+            meter,
+            w,
+        )?;
+        self.locked_sampled(&tw, k, meter, locked)?;
+        self.clusters_sampled(&tw, k, meter, uf)?;
+        Ok(SparseOut {
+            rank,
+            kept_min: kept * scale,
+            dropped_max: dropped * scale,
+            stress_residual: stress_residual * scale,
+        })
+    }
+
+    /// The part's index of each body.
+    fn lidx(&self, x: usize) -> usize {
+        self.part.bodies.binary_search(&x).unwrap_or(0)
+    }
+
+    /// Each group's shift to its body's local coordinates (from the pairs of each of the
+    /// part's bodies).
+    fn shifts(&self) -> Vec<Option<DMatrix<f64>>> {
+        let (part, pairs) = (self.part, self.pairs);
+        let mut inc: Vec<Vec<usize>> = vec![Vec::new(); part.bodies.len()];
         for &pi in &part.pairs {
             let p = pairs[pi];
+            inc[self.lidx(p.hub)].push(pi);
+            if p.other != p.hub {
+                inc[self.lidx(p.other)].push(pi);
+            }
+        }
+        self.groups
+            .iter()
+            .map(|&x| self.body_shift(x, &inc[self.lidx(x)]))
+            .collect()
+    }
+
+    /// The part's row blocks in local coordinates, each row scaled to unit norm over the
+    /// pair's columns (a rotation's rows about a far pin shrink to about 1/distance once
+    /// written about a near point): same rank and null space; a self-stress y of the scaled
+    /// rows is D·y' of the original ones. With each pair's row norms.
+    #[allow(clippy::type_complexity)]
+    fn scaled_blocks(
+        &self,
+        lgroup: &BTreeMap<usize, usize>,
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+    ) -> (Vec<Block>, BTreeMap<usize, Vec<f64>>) {
+        let mut rownorm: BTreeMap<usize, Vec<f64>> = BTreeMap::new();
+        let mut blocks = Vec::new();
+        for &pi in &self.part.pairs {
+            let p = self.pairs[pi];
             let mut bodies: Vec<usize> = [p.hub, p.other]
                 .into_iter()
                 .filter(|x| lgroup.contains_key(x))
@@ -261,20 +327,22 @@ impl SparsePart<'_> {
                 mat,
             });
         }
-        let mut offsets = Vec::with_capacity(self.sizes.len());
-        let mut acc = 0;
-        for &s in self.sizes {
-            offsets.push(acc);
-            acc += s;
-        }
-        let lcols = acc;
-        let smax_l = sigma_max(self.sizes, &offsets, &blocks);
-        // The relative threshold's size factor: that of the largest dense factorization done
-        // (a front), at least the dense path's largest whole Jacobian (SPARSE_COLUMNS), not
-        // the block's whole size (module docs).
+        (blocks, rownorm)
+    }
+
+    /// The part's elimination and its threshold. The relative threshold's size factor: that
+    /// of the largest dense factorization done (a front), at least the dense path's largest
+    /// whole Jacobian (SPARSE_COLUMNS), not the block's whole size (module docs).
+    fn factor(
+        &self,
+        blocks: Vec<Block>,
+        smax_l: f64,
+        budget: &Budget,
+        meter: &mut Meter,
+    ) -> Result<(Elimination, f64), BudgetExceeded> {
         let mut ntol = self.ntol.min(SPARSE_COLUMNS);
         let (_, mut abs_tol) = threshold(self.m, self.used, smax_l, ntol);
-        let nv = nl as u64;
+        let nv = self.part.bodies.len() as u64;
         let mut elim = eliminate(self.sizes, blocks.clone(), abs_tol, budget, nv, meter)?;
         let front = elim.max_front();
         if front > ntol && ntol < self.ntol {
@@ -282,17 +350,26 @@ impl SparsePart<'_> {
             abs_tol = threshold(self.m, self.used, smax_l, ntol).1;
             elim = eliminate(self.sizes, blocks, abs_tol, budget, nv, meter)?;
         }
-        let rank = elim.rank;
-        let (kept, dropped) = (elim.kept_min, elim.dropped_max);
-        let scale = if smax_l > 0.0 {
-            self.smax / smax_l
-        } else {
-            1.0
-        };
+        Ok((elim, abs_tol))
+    }
 
-        // Random motions and each body's twist (world coordinates) over them, each motion
-        // scaled to unit norm over the part's unknowns.
-        let d = lcols.saturating_sub(rank);
+    /// Random motions and each body's twist (world coordinates) over them, each motion
+    /// scaled to unit norm over the part's unknowns; and their number.
+    #[allow(clippy::too_many_arguments)]
+    fn sampled_twists(
+        &self,
+        elim: Elimination,
+        lgroup: &BTreeMap<usize, usize>,
+        shifts: &[Option<DMatrix<f64>>],
+        offsets: &[usize],
+        lcols: usize,
+        budget: &Budget,
+        meter: &mut Meter,
+    ) -> Result<(Vec<DMatrix<f64>>, usize), BudgetExceeded> {
+        let (part, b) = (self.part, self.b);
+        let nl = part.bodies.len();
+        let nv = nl as u64;
+        let d = lcols.saturating_sub(elim.rank);
         let k = d.min(b + EXTRA_SAMPLES);
         budget.check_memory(
             ((lcols + nl * b) as u64)
@@ -329,35 +406,23 @@ impl SparsePart<'_> {
                 }
             }
         }
+        Ok((tw, k))
+    }
 
-        let scaled_block = |pi: usize, body: usize| {
-            let mut blk = local_block(pi, body);
-            if let Some(norms) = rownorm.get(&pi) {
-                for (i, &n) in norms.iter().enumerate() {
-                    blk.row_mut(i).unscale_mut(n);
-                }
-            }
-            blk
-        };
-        let unscale = |pi: usize, i: usize| rownorm.get(&pi).map_or(1.0, |v| v[i]);
-        let stress_residual = self.stresses(
-            &lgroup,
-            &scaled_block,
-            &unscale,
-            abs_tol,
-            rank,
-            budget,
-            meter,
-            w,
-        )?;
-
-        // Locked DOF per joint: allowed dimension minus the rank of the relative twist over
-        // the sampled motions, with both bodies' own isolated motions.
-        let zero_tol = 1e-7;
+    /// Locked DOF per joint: allowed dimension minus the rank of the relative twist over the
+    /// `k` sampled motions, with both bodies' own isolated motions.
+    fn locked_sampled(
+        &self,
+        tw: &[DMatrix<f64>],
+        k: usize,
+        meter: &mut Meter,
+        locked: &mut BTreeMap<usize, usize>,
+    ) -> Result<(), BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * (k + 2 * b)) as u64))?;
         for &pi in &part.pairs {
             let p = pairs[pi];
-            let (th, to) = (&tw[lidx(p.hub)], &tw[lidx(p.other)]);
+            let (th, to) = (&tw[self.lidx(p.hub)], &tw[self.lidx(p.other)]);
             let mut cols: Vec<DVector<f64>> = (0..k).map(|j| to.column(j) - th.column(j)).collect();
             for body in [p.hub, p.other] {
                 for c in self.iso[body].column_iter() {
@@ -367,17 +432,29 @@ impl SparsePart<'_> {
             let used = if cols.is_empty() {
                 0
             } else {
-                small_rank(&DMatrix::from_columns(&cols), zero_tol)
+                small_rank(&DMatrix::from_columns(&cols), ZERO_TOL)
             };
             let allowed = self.models[p.joint].twists.ncols();
             *locked.entry(p.joint).or_insert(0) += allowed.saturating_sub(used);
         }
+        Ok(())
+    }
 
-        // Rigid clusters: bodies whose twists agree (modulo their own isolated motions) on
-        // every sampled motion: within zero_tol · sqrt(k) over the k unit samples (a difference
-        // within zero_tol over an orthonormal basis of the motions, the dense rule, is within
-        // that on any k unit motions).
-        let same_tol = zero_tol * (k.max(1) as f64).sqrt();
+    /// Rigid clusters: bodies whose twists agree (modulo their own isolated motions) on
+    /// every sampled motion: within ZERO_TOL · sqrt(k) over the k unit samples (a difference
+    /// within ZERO_TOL over an orthonormal basis of the motions, the dense rule, is within
+    /// that on any k unit motions). Merged into `uf`.
+    fn clusters_sampled(
+        &self,
+        tw: &[DMatrix<f64>],
+        k: usize,
+        meter: &mut Meter,
+        uf: &mut [usize],
+    ) -> Result<(), BudgetExceeded> {
+        let (part, pairs, b) = (self.part, self.pairs, self.b);
+        let nl = part.bodies.len();
+        let lidx = |x: usize| self.lidx(x);
+        let same_tol = ZERO_TOL * (k.max(1) as f64).sqrt();
         let iso_of = |li: usize| &self.iso[part.bodies[li]];
         let same = |x: usize, y: usize| {
             let diff = &tw[x] - &tw[y];
@@ -402,43 +479,8 @@ impl SparsePart<'_> {
                 union_min(&mut luf, x, y);
             }
         }
-        // Representatives without isolated motions of their own: sorted on a random
-        // projection of their sampled twists; equal twists project within same_tol.
         let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
-        let mut rng = crate::rng::SplitMix64::new(0x0063_6c75_7374_6572 ^ seed);
-        let mut dir: Vec<f64> = (0..b * k).map(|_| rng.next_signed()).collect();
-        let dn = dir
-            .iter()
-            .map(|v| v * v)
-            .sum::<f64>()
-            .sqrt()
-            .max(f64::MIN_POSITIVE);
-        for v in &mut dir {
-            *v /= dn;
-        }
-        let proj = |li: usize| -> f64 { tw[li].iter().zip(&dir).map(|(a, c)| a * c).sum() };
-        let mut plain: Vec<(f64, usize)> = reps
-            .iter()
-            .filter(|&&x| iso_of(x).ncols() == 0)
-            .map(|&x| (proj(x), x))
-            .collect();
-        plain.sort_by(|a, c| a.0.total_cmp(&c.0).then(a.1.cmp(&c.1)));
-        let mut compared: u64 = 0;
-        for i in 0..plain.len() {
-            for j in i + 1..plain.len() {
-                if plain[j].0 - plain[i].0 > same_tol {
-                    break;
-                }
-                compared += 1;
-                if compared.is_multiple_of(4096) {
-                    meter.charge(4096 * (b * k * 4) as u64)?;
-                }
-                let (a, c) = (plain[i].1, plain[j].1);
-                if find(&mut luf, a) != find(&mut luf, c) && same(a, c) {
-                    union_min(&mut luf, a, c);
-                }
-            }
-        }
+        self.merge_plain(&reps, tw, k, same_tol, &same, &mut luf, meter)?;
         // Representatives with isolated motions: compared with the clusters sharing a joint
         // with them (as the exact path does), until nothing changes.
         if reps.iter().any(|&x| iso_of(x).ncols() > 0) {
@@ -458,12 +500,60 @@ impl SparsePart<'_> {
                 union_min(uf, part.bodies[r], part.bodies[x]);
             }
         }
-        Ok(SparseOut {
-            rank,
-            kept_min: kept * scale,
-            dropped_max: dropped * scale,
-            stress_residual: stress_residual * scale,
-        })
+        Ok(())
+    }
+
+    /// Representatives `reps` without isolated motions of their own: sorted on a random
+    /// projection of their sampled twists; equal twists project within `same_tol`, and those
+    /// `same` says move alike are joined in `luf`.
+    #[allow(clippy::too_many_arguments)]
+    fn merge_plain(
+        &self,
+        reps: &[usize],
+        tw: &[DMatrix<f64>],
+        k: usize,
+        same_tol: f64,
+        same: &dyn Fn(usize, usize) -> bool,
+        luf: &mut [usize],
+        meter: &mut Meter,
+    ) -> Result<(), BudgetExceeded> {
+        let b = self.b;
+        let seed = self.part.pairs.first().copied().unwrap_or(0) as u64;
+        let mut rng = crate::rng::SplitMix64::new(0x0063_6c75_7374_6572 ^ seed);
+        let mut dir: Vec<f64> = (0..b * k).map(|_| rng.next_signed()).collect();
+        let dn = dir
+            .iter()
+            .map(|v| v * v)
+            .sum::<f64>()
+            .sqrt()
+            .max(f64::MIN_POSITIVE);
+        for v in &mut dir {
+            *v /= dn;
+        }
+        let proj = |li: usize| -> f64 { tw[li].iter().zip(&dir).map(|(a, c)| a * c).sum() };
+        let mut plain: Vec<(f64, usize)> = reps
+            .iter()
+            .filter(|&&x| self.iso[self.part.bodies[x]].ncols() == 0)
+            .map(|&x| (proj(x), x))
+            .collect();
+        plain.sort_by(|a, c| a.0.total_cmp(&c.0).then(a.1.cmp(&c.1)));
+        let mut compared: u64 = 0;
+        for i in 0..plain.len() {
+            for j in i + 1..plain.len() {
+                if plain[j].0 - plain[i].0 > same_tol {
+                    break;
+                }
+                compared += 1;
+                if compared.is_multiple_of(4096) {
+                    meter.charge(4096 * (b * k * 4) as u64)?;
+                }
+                let (a, c) = (plain[i].1, plain[j].1);
+                if find(luf, a) != find(luf, c) && same(a, c) {
+                    union_min(luf, a, c);
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Random self-stresses of the part (the elimination on the transpose, with the pairs as
@@ -503,34 +593,7 @@ impl SparsePart<'_> {
             poff.push(acc);
             acc += s;
         }
-        let ngroups = self.groups.len();
-        let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
-        for (lp, &pi) in part.pairs.iter().enumerate() {
-            for x in [pairs[pi].hub, pairs[pi].other] {
-                if let Some(&g) = lgroup.get(&x)
-                    && linc[g].last() != Some(&lp)
-                {
-                    linc[g].push(lp);
-                }
-            }
-        }
-        let mut tblocks = Vec::with_capacity(ngroups);
-        let mut tentries = 0u64;
-        for (g, &body) in self.groups.iter().enumerate() {
-            let s = self.sizes[g];
-            // Kept for the residual check below.
-            let ps = linc[g].clone();
-            let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
-            tentries = tentries.saturating_add((s * width) as u64);
-            let mut mat = DMatrix::zeros(s, width);
-            let mut c = 0;
-            for &lp in &ps {
-                let blk = local_block(part.pairs[lp], body).transpose();
-                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
-                c += blk.ncols();
-            }
-            tblocks.push(Block { groups: ps, mat });
-        }
+        let (tblocks, linc, tentries) = self.transposed_blocks(lgroup, local_block, &psizes);
         let nv = part.bodies.len() as u64;
         let telim = eliminate(&psizes, tblocks, abs_tol, budget, nv, meter)?;
         let e = prow.saturating_sub(telim.rank);
@@ -551,26 +614,7 @@ impl SparsePart<'_> {
         // Each stress's residual, group by group: the blocks again, transposed, times y'
         // (the elimination's own blocks are gone; rebuilding them costs what building did).
         meter.charge(tentries.saturating_mul(s as u64 + 1))?;
-        let mut res2 = vec![0.0f64; s];
-        for (g, &body) in self.groups.iter().enumerate() {
-            let mut acc = DMatrix::<f64>::zeros(self.sizes[g], s);
-            for &lp in &linc[g] {
-                let blk = local_block(part.pairs[lp], body);
-                let yl = y.rows(poff[lp], psizes[lp]);
-                acc += blk.transpose() * yl;
-            }
-            for (j, r) in res2.iter_mut().enumerate() {
-                *r += acc.column(j).norm_squared();
-            }
-        }
-        let residual = res2
-            .iter()
-            .enumerate()
-            .map(|(j, &r)| {
-                let n = y.column(j).norm();
-                if n > 0.0 { r.sqrt() / n } else { 0.0 }
-            })
-            .fold(0.0, f64::max);
+        let residual = self.residual(&y, &linc, local_block, &psizes, &poff);
         // Back to the original rows' stresses: y = D·y', D = 1 / row norms.
         for (lp, &pi) in part.pairs.iter().enumerate() {
             for i in 0..psizes[lp] {
@@ -590,5 +634,79 @@ impl SparsePart<'_> {
             }
         }
         Ok(residual)
+    }
+
+    /// The part's scaled rows transposed, as blocks over the pairs: one per group, its
+    /// columns of the rows of its pairs (`psizes` rows each), in the pairs' order; with each
+    /// group's pairs (local indices) and the blocks' entries.
+    #[allow(clippy::type_complexity)]
+    fn transposed_blocks(
+        &self,
+        lgroup: &BTreeMap<usize, usize>,
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+        psizes: &[usize],
+    ) -> (Vec<Block>, Vec<Vec<usize>>, u64) {
+        let (part, pairs) = (self.part, self.pairs);
+        let ngroups = self.groups.len();
+        let mut linc: Vec<Vec<usize>> = vec![Vec::new(); ngroups];
+        for (lp, &pi) in part.pairs.iter().enumerate() {
+            for x in [pairs[pi].hub, pairs[pi].other] {
+                if let Some(&g) = lgroup.get(&x)
+                    && linc[g].last() != Some(&lp)
+                {
+                    linc[g].push(lp);
+                }
+            }
+        }
+        let mut tblocks = Vec::with_capacity(ngroups);
+        let mut tentries = 0u64;
+        for (g, &body) in self.groups.iter().enumerate() {
+            let s = self.sizes[g];
+            // Kept for the residual check (`residual`).
+            let ps = linc[g].clone();
+            let width: usize = ps.iter().map(|&lp| psizes[lp]).sum();
+            tentries = tentries.saturating_add((s * width) as u64);
+            let mut mat = DMatrix::zeros(s, width);
+            let mut c = 0;
+            for &lp in &ps {
+                let blk = local_block(part.pairs[lp], body).transpose();
+                mat.view_mut((0, c), (s, blk.ncols())).copy_from(&blk);
+                c += blk.ncols();
+            }
+            tblocks.push(Block { groups: ps, mat });
+        }
+        (tblocks, linc, tentries)
+    }
+
+    /// The largest residual ‖y'ᵀA'‖ / ‖y'‖ of the sampled stresses (the columns of `y`),
+    /// group by group over its pairs `linc`.
+    fn residual(
+        &self,
+        y: &DMatrix<f64>,
+        linc: &[Vec<usize>],
+        local_block: &dyn Fn(usize, usize) -> DMatrix<f64>,
+        psizes: &[usize],
+        poff: &[usize],
+    ) -> f64 {
+        let (part, s) = (self.part, y.ncols());
+        let mut res2 = vec![0.0f64; s];
+        for (g, &body) in self.groups.iter().enumerate() {
+            let mut acc = DMatrix::<f64>::zeros(self.sizes[g], s);
+            for &lp in &linc[g] {
+                let blk = local_block(part.pairs[lp], body);
+                let yl = y.rows(poff[lp], psizes[lp]);
+                acc += blk.transpose() * yl;
+            }
+            for (j, r) in res2.iter_mut().enumerate() {
+                *r += acc.column(j).norm_squared();
+            }
+        }
+        res2.iter()
+            .enumerate()
+            .map(|(j, &r)| {
+                let n = y.column(j).norm();
+                if n > 0.0 { r.sqrt() / n } else { 0.0 }
+            })
+            .fold(0.0, f64::max)
     }
 }
