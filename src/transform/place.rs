@@ -1,0 +1,291 @@
+//! Placing one mechanism (or one part): each expansion's count-valid placements, found by the
+//! search and analysed in parallel batches, streamed in enumeration order.
+
+use super::expansion::{Expansion, Expansions};
+use super::groups::{Lean, evaluate, placement, placement_of};
+use super::oracle::Oracle;
+use super::partition::BodyNames;
+use super::parts::ExpansionParts;
+use super::problem::Problem;
+use super::rules::Rules;
+use super::{
+    Placed, Placement, Progress, ProgressFn, TransformError, TransformOptions, analysis_work,
+};
+use crate::budget::{BudgetExceeded, Meter};
+use crate::mechanism::Mechanism;
+use crate::structure::{self, Library};
+use rayon::prelude::*;
+
+/// Placements analysed per parallel batch (and between progress reports).
+pub(super) const BATCH: usize = 512;
+
+/// Bytes of the search's flows a batch may hold (warm starts of the analyses).
+pub(super) const BATCH_FLOW_BYTES: usize = 64 << 20;
+
+/// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
+/// (units of each pair into its two bodies).
+pub(super) type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
+
+/// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
+/// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the
+/// count-valid placements examined; the search goes on only to learn whether one more
+/// exists (`cut`).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn place(
+    m: &Mechanism,
+    rules: &Rules,
+    opts: &TransformOptions,
+    lib: &Library,
+    meter: &mut Meter,
+    progress: Option<ProgressFn<'_>>,
+    sink: &mut dyn FnMut(Placement) -> bool,
+    mut keep: Option<&mut Option<Problem>>,
+) -> Result<Placed, TransformError> {
+    let exps = Expansions::of(m, opts.max_expansions);
+    // With `keep` and one expansion, a placement analysed from the search's flow carries its
+    // inputs (`Placement::lean`), and the expansion's problem is kept to make its groups again.
+    let defer = keep.is_some() && exps.len == 1;
+    let mut r = Placed {
+        expansions: exps.len,
+        expansions_total: exps.total,
+        f: crate::mobility::mobility(m).mobility.count,
+        ..Placed::default()
+    };
+    let limit = opts.limit.unwrap_or(usize::MAX);
+    let per_eval = analysis_work(m);
+    // The body ids every placement's partition indexes (an expansion keeps the bodies).
+    let names = BodyNames::of(m);
+    // (expansion, placement, the search's flow for a warm start of the analysis)
+    let mut batch: Vec<Leaf> = Vec::new();
+    let mut stopped = false;
+    // Analyse a batch in parallel and stream its determined placements in order.
+    let flush = |e: &Expansion,
+                 cache: &structure::AnalysisCache,
+                 oracle: &Oracle,
+                 lean: Option<&Lean>,
+                 batch: &mut Vec<Leaf>,
+                 r: &mut Placed,
+                 meter: &mut Meter,
+                 stopped: &mut bool,
+                 sink: &mut dyn FnMut(Placement) -> bool|
+     -> Result<(), BudgetExceeded> {
+        if batch.is_empty() || *stopped {
+            batch.clear();
+            return Ok(());
+        }
+        // One unit a placement first; what each then spends (the exact decision of its
+        // inputs, a lean analysis, a full one and the rank decisions inside it) after the
+        // batch.
+        meter.charge(batch.len() as u64)?;
+        let results: Vec<(Option<Placement>, u64)> = batch
+            .par_iter()
+            .map_init(
+                // A copy of the expansion only for the placements analysed in full.
+                || None::<Mechanism>,
+                |mech, (x, w, flow)| {
+                    let decided = oracle.work(w);
+                    let certified = match oracle.decide(&e.mech, w) {
+                        Some(false) => return (None, decided),
+                        Some(true) => true,
+                        None => false,
+                    };
+                    if certified && let Some(l) = lean {
+                        let g = l.groups(&e.mech, flow, lib);
+                        let mut p = placement_of(&e.mech, e, *x, w, g);
+                        if defer {
+                            p.lean = Some(w.clone());
+                        }
+                        return (Some(p), decided.saturating_add(l.work));
+                    }
+                    let mech = mech.get_or_insert_with(|| e.mech.as_ref().clone());
+                    let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
+                    (
+                        a.map(|a| placement(mech, e, *x, &a, w, &names)),
+                        work.saturating_add(per_eval).saturating_add(decided),
+                    )
+                },
+            )
+            .collect();
+        // The analyses' work: a full analysis its estimate and its rank decisions (dense
+        // factorizations of growing groups above all), a lean one its pass over the arrays.
+        meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
+        let results = results.into_iter().map(|r| r.0);
+        let done = r.count_valid;
+        for (i, p) in results.enumerate() {
+            r.count_valid += 1;
+            match p {
+                Some(mut p) => {
+                    p.seq = done + i;
+                    r.determined += 1;
+                    if !*stopped && !sink(p) {
+                        *stopped = true;
+                    }
+                }
+                None => r.excluded += 1,
+            }
+        }
+        batch.clear();
+        if let Some(cb) = progress {
+            cb(Progress {
+                examined: r.count_valid,
+                total: r.count_valid,
+                determined: r.determined,
+            });
+        }
+        Ok(())
+    };
+    // The analyses charge their own meter (the search holds `meter`): each may spend the
+    // work budget.
+    let mut eval_meter = opts.budget.meter("the analysis of the placements");
+    let mut found = 0usize;
+    let mut batch_size = 1usize;
+    // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
+    let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
+    let mut by_parts = ExpansionParts::applies(&exps, rules, opts).then(ExpansionParts::default);
+    for x in 0..exps.len {
+        if let Some(parts) = &mut by_parts
+            && let Some(got) =
+                parts.place(&exps.skeleton(x), x, rules, opts, lib, &names.ids, meter)?
+        {
+            if x == 0 {
+                r.isolated = got.isolated;
+                r.set_aside = got.set_aside;
+                r.f = got.f;
+                r.drivable = got.drivable;
+            }
+            if let Some(p) = got.placement {
+                // As the search and `flush` count a placement of the whole expansion.
+                if found >= limit {
+                    r.cut = true;
+                    break;
+                }
+                found += 1;
+                let seq = r.count_valid;
+                r.count_valid += 1;
+                match p {
+                    Some(mut p) => {
+                        p.seq = seq;
+                        r.determined += 1;
+                        if !stopped && !sink(p) {
+                            stopped = true;
+                        }
+                    }
+                    None => r.excluded += 1,
+                }
+                if let Some(cb) = progress {
+                    cb(Progress {
+                        examined: r.count_valid,
+                        total: r.count_valid,
+                        determined: r.determined,
+                    });
+                }
+            }
+            if stopped {
+                break;
+            }
+            continue;
+        }
+        let e = &exps.get(x);
+        // The rank check's factorizations, shared by every analysis of this expansion: a
+        // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
+        let cache = structure::AnalysisCache::default();
+        let p = Problem::of(e, m, rules, opts, &cache, &names.ids, meter)?;
+        if x == 0 {
+            r.isolated = p.isolated;
+            r.set_aside = p.set_aside;
+            r.f = p.f;
+            r.drivable = p.drivable();
+            if let Some(n) = &p.note {
+                r.notes.push(n.clone());
+            }
+        }
+        let mut err: Option<BudgetExceeded> = None;
+        // `Oracle::Later`: decided once a placement of this expansion is rejected.
+        let mut late: Option<Oracle> = None;
+        let excluded_before = r.excluded;
+        p.search(meter, &mut |w, flow| {
+            if found >= limit {
+                r.cut = true;
+                return false;
+            }
+            found += 1;
+            batch.push((
+                x,
+                (0..w.len())
+                    .filter(|&q| w[q] > 0)
+                    .map(|q| (q, w[q]))
+                    .collect(),
+                flow.iter()
+                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                    .collect(),
+            ));
+            if batch.len() >= batch_size {
+                // Batches grow from one placement: the first ones stream at once.
+                batch_size = (batch_size * 2).min(max_batch);
+                // Only with more placements to analyse: a rejected single one (each
+                // expansion of a shared joint) pays nothing.
+                if late.is_none()
+                    && r.excluded > excluded_before
+                    && matches!(p.oracle, Oracle::Later { .. })
+                {
+                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+                }
+                if let Err(b) = flush(
+                    e,
+                    &cache,
+                    late.as_ref().unwrap_or(&p.oracle),
+                    p.lean.as_ref(),
+                    &mut batch,
+                    &mut r,
+                    &mut eval_meter,
+                    &mut stopped,
+                    &mut *sink,
+                ) {
+                    err = Some(b);
+                    return false;
+                }
+
+                if stopped {
+                    return false;
+                }
+            }
+            true
+        })?;
+        if let Some(b) = err {
+            return Err(b.into());
+        }
+        // The rest of the batch belongs to this expansion: analysed before the next is built.
+        if late.is_none()
+            && !batch.is_empty()
+            && r.excluded > excluded_before
+            && matches!(p.oracle, Oracle::Later { .. })
+        {
+            late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
+        }
+        flush(
+            e,
+            &cache,
+            late.as_ref().unwrap_or(&p.oracle),
+            p.lean.as_ref(),
+            &mut batch,
+            &mut r,
+            &mut eval_meter,
+            &mut stopped,
+            &mut *sink,
+        )?;
+        if defer
+            && x == 0
+            && p.lean.is_some()
+            && let Some(k) = keep.as_deref_mut()
+        {
+            // Only what making the groups again needs: the exact oracle's null vectors go.
+            let mut p = p;
+            p.oracle = Oracle::Undecided;
+            *k = Some(p);
+        }
+        if r.cut || stopped {
+            break;
+        }
+    }
+    Ok(r)
+}
