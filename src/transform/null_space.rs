@@ -2,6 +2,7 @@
 //! back-substitution along the blocks of a routing of the rows into the bodies' unknowns.
 
 use super::oracle::ORACLE_NULLITY;
+use crate::exact::Fp;
 use crate::mechanism::Mechanism;
 use std::cmp::Ordering;
 
@@ -25,246 +26,368 @@ pub(super) const BLOCK_MAX: usize = 384;
 /// a body to itself, a joint's rows are not `b − grade`, a row finds no unit, the routing's
 /// search exceeds its linear cap, the nullity exceeds [`ORACLE_NULLITY`], or a block is
 /// singular (at this `E` or because `J` has dependent rows) or larger than [`BLOCK_MAX`].
-pub(super) fn block_null_vectors(
-    m: &Mechanism,
-    seed: u64,
-) -> Option<(Vec<usize>, Vec<Vec<crate::exact::Fp>>)> {
-    use crate::exact::Fp;
-    use crate::exact::field::axpy_sub;
-    use crate::exact::models;
-    const NIL: u32 = u32::MAX;
-    let b = m.b() as usize;
-    let nb = m.bodies.len();
-    let nq = m.joints.len();
-    let frame = m.frame;
-    if b == 0 || nb == 0 {
-        return None;
-    }
-    let mut col = vec![usize::MAX; nb];
-    let mut c = 0;
-    for (x, slot) in col.iter_mut().enumerate() {
-        if x != frame {
-            *slot = c;
-            c += b;
-        }
-    }
-    let ncols = c;
-    // Each pair's two bodies and its rows.
-    let mut ends: Vec<[u32; 2]> = Vec::with_capacity(nq);
-    let mut rows_of: Vec<u8> = Vec::with_capacity(nq);
-    let mut deg = vec![0u32; nb + 1];
-    for j in &m.joints {
-        let [x, y] = j.bodies[..] else {
-            return None;
-        };
-        if x == y || x >= nb || y >= nb {
-            return None;
-        }
-        ends.push([x as u32, y as u32]);
-        rows_of.push((b - (j.grade() as usize).min(b)) as u8);
-        for z in [x, y] {
-            if z != frame {
-                deg[z + 1] += 1;
-            }
-        }
-    }
-    // The pairs at each body (frame excluded), compressed.
-    for z in 0..nb {
-        deg[z + 1] += deg[z];
-    }
-    let start = deg;
-    let mut fill: Vec<u32> = start[..nb].to_vec();
-    let mut touching = vec![0u32; start[nb] as usize];
-    for (q, e) in ends.iter().enumerate() {
-        for &z in e {
-            let z = z as usize;
-            if z != frame {
-                touching[fill[z] as usize] = q as u32;
-                fill[z] += 1;
-            }
-        }
-    }
-    drop(fill);
-    let side = |q: usize, z: usize| usize::from(ends[q][0] as usize != z);
-    // Each body's distance from the frame along the pairs: a row goes to the farther of its
-    // two bodies when both have room, so the free units (the random rows) stay near the
-    // frame, where the inputs of a linkage built outwards from its cranks sit and the blocks
-    // are small; a free unit far out would tie every group between it and the frame into
-    // one block.
-    let mut dist = vec![NIL; nb];
-    let mut queue: Vec<u32> = Vec::new();
-    dist[frame] = 0;
-    for e in &ends {
-        for s in 0..2 {
-            let (z, w) = (e[s] as usize, e[1 - s] as usize);
-            if z == frame && dist[w] == NIL {
-                dist[w] = 1;
-                queue.push(w as u32);
-            }
-        }
-    }
-    let mut head = 0;
-    while head < queue.len() {
-        let z = queue[head] as usize;
-        head += 1;
-        for &q in &touching[start[z] as usize..start[z + 1] as usize] {
-            let w = ends[q as usize][1 - side(q as usize, z)] as usize;
-            if dist[w] == NIL {
-                dist[w] = dist[z] + 1;
-                queue.push(w as u32);
-            }
-        }
-    }
-    // The routing: `flow[q][s]` rows of pair `q` on its body `ends[q][s]`.
-    let mut flow = vec![[0u8; 2]; nq];
-    let mut used = vec![0u8; nb];
-    let mut seen = vec![0u32; nb];
-    let mut prev: Vec<(u32, u32)> = vec![(NIL, NIL); nb];
-    let mut stamp = 0u32;
-    let mut work: u64 = 0;
-    let cap_work = 64 * (nb + nq) as u64 + 100_000;
-    for q in 0..nq {
-        for _ in 0..rows_of[q] {
-            stamp = stamp.checked_add(1)?;
-            queue.clear();
-            let [x, y] = ends[q];
-            // Unreached bodies (`NIL`) count as farthest.
-            let order = if dist[y as usize] > dist[x as usize] {
-                [y, x]
-            } else {
-                [x, y]
-            };
-            for z in order {
-                let z = z as usize;
-                if z != frame && seen[z] != stamp {
-                    seen[z] = stamp;
-                    prev[z] = (NIL, q as u32);
-                    queue.push(z as u32);
-                }
-            }
-            let mut head = 0;
-            let mut found = None;
-            while head < queue.len() {
-                let z = queue[head] as usize;
-                head += 1;
-                if (used[z] as usize) < b {
-                    found = Some(z);
-                    break;
-                }
-                for &q2 in &touching[start[z] as usize..start[z + 1] as usize] {
-                    let q2 = q2 as usize;
-                    work += 1;
-                    if flow[q2][side(q2, z)] == 0 {
-                        continue;
-                    }
-                    let w = ends[q2][1 - side(q2, z)] as usize;
-                    if w == frame || seen[w] == stamp {
-                        continue;
-                    }
-                    seen[w] = stamp;
-                    prev[w] = (z as u32, q2 as u32);
-                    queue.push(w as u32);
-                }
-            }
-            work += head as u64;
-            if work > cap_work {
-                return None;
-            }
-            // One more row on the free body; each pair on the path moves one of its rows
-            // from the body before it to the body after it.
-            let mut w = found?;
-            used[w] += 1;
-            loop {
-                let (z, q2) = prev[w];
-                let q2 = q2 as usize;
-                flow[q2][side(q2, w)] += 1;
-                if z == NIL {
-                    break;
-                }
-                let z = z as usize;
-                flow[q2][side(q2, z)] -= 1;
-                w = z;
-            }
-        }
-    }
-    drop((seen, prev, queue, dist));
-    let nrows: usize = rows_of.iter().map(|&r| r as usize).sum();
-    let n = ncols.checked_sub(nrows)?;
+pub(super) fn block_null_vectors(m: &Mechanism, seed: u64) -> Option<(Vec<usize>, Vec<Vec<Fp>>)> {
+    let pairs = Pairs::of(m)?;
+    let dist = pairs.distances();
+    let (flow, used) = pairs.route(&dist)?;
+    drop(dist);
+    let nrows: usize = pairs.rows_of.iter().map(|&r| r as usize).sum();
+    let n = pairs.ncols.checked_sub(nrows)?;
     if n > ORACLE_NULLITY {
         return None;
     }
-    let mut v: Vec<Vec<Fp>> = vec![vec![Fp::ZERO; ncols]; n];
-    let mut rng = crate::rng::SplitMix64::new(seed ^ 0xB10C_5B57_0000_0001);
-    // Tarjan's components of "a row routed to `z` touches `w`" (frame excluded), emitted
-    // sinks first: each block's rows touch only its own unknowns and those of blocks
-    // already solved. The arcs of each body in `touching` order, so the components come out
-    // as a walk of `touching` itself would find them.
-    let mut arc_start = vec![0usize; nb + 1];
-    let mut arcs: Vec<u32> = Vec::with_capacity(nrows);
-    for z in 0..nb {
-        for &q in &touching[start[z] as usize..start[z + 1] as usize] {
-            let q = q as usize;
-            if flow[q][side(q, z)] != 0 {
-                arcs.push(ends[q][1 - side(q, z)]);
-            }
-        }
-        arc_start[z + 1] = arcs.len();
-    }
-    let mut active = vec![true; nb];
-    active[frame] = false;
-    let (members, bounds) = crate::structure::tarjan_flat(&arc_start, &arcs, &active);
-    drop((arc_start, arcs, active));
-    let mut done = vec![false; nq];
-    let mut loc = vec![NIL; nb];
-    let mut unit = 0usize;
-    let mut a: Vec<Fp> = Vec::new();
+    let (members, bounds) = pairs.components(&flow, nrows);
+    let mut solve = Blocks {
+        m,
+        seed,
+        pairs: &pairs,
+        flow: &flow,
+        used: &used,
+        n,
+        v: vec![vec![Fp::ZERO; pairs.ncols]; n],
+        rng: crate::rng::SplitMix64::new(seed ^ 0xB10C_5B57_0000_0001),
+        done: vec![false; pairs.ends.len()],
+        loc: vec![NIL; pairs.col.len()],
+        unit: 0,
+        a: Vec::new(),
+    };
     let mut comp: Vec<usize> = Vec::new();
     for span in bounds.windows(2) {
         // `tarjan_flat` lists a component from the top of its stack down; the block takes it
         // bottom up (its root first), the order of its unknowns, rows and random rows.
         comp.clear();
         comp.extend(members[span[0]..span[1]].iter().rev().map(|&x| x as usize));
+        solve.block(&comp)?;
+    }
+    let (unit, v) = (solve.unit, solve.v);
+    (unit == n).then_some((pairs.col, v))
+}
+
+/// No body, no pair, no path step in [`block_null_vectors`].
+const NIL: u32 = u32::MAX;
+
+/// The pairs of a mechanism with binary joints as [`block_null_vectors`] routes them.
+struct Pairs {
+    /// Unknowns of a body.
+    b: usize,
+    frame: usize,
+    /// Column of each body's first unknown (`usize::MAX`: the frame), and the columns in all.
+    col: Vec<usize>,
+    ncols: usize,
+    /// Each pair's two bodies and its rows.
+    ends: Vec<[u32; 2]>,
+    rows_of: Vec<u8>,
+    /// The pairs at each body (frame excluded), compressed:
+    /// `touching[start[z]..start[z + 1]]`.
+    start: Vec<u32>,
+    touching: Vec<u32>,
+}
+
+impl Pairs {
+    /// The pairs of `m`; `None` when a joint is not binary or joins a body to itself.
+    fn of(m: &Mechanism) -> Option<Pairs> {
+        let b = m.b() as usize;
+        let nb = m.bodies.len();
+        let nq = m.joints.len();
+        let frame = m.frame;
+        if b == 0 || nb == 0 {
+            return None;
+        }
+        let mut col = vec![usize::MAX; nb];
+        let mut c = 0;
+        for (x, slot) in col.iter_mut().enumerate() {
+            if x != frame {
+                *slot = c;
+                c += b;
+            }
+        }
+        let ncols = c;
+        let mut ends: Vec<[u32; 2]> = Vec::with_capacity(nq);
+        let mut rows_of: Vec<u8> = Vec::with_capacity(nq);
+        let mut deg = vec![0u32; nb + 1];
+        for j in &m.joints {
+            let [x, y] = j.bodies[..] else {
+                return None;
+            };
+            if x == y || x >= nb || y >= nb {
+                return None;
+            }
+            ends.push([x as u32, y as u32]);
+            rows_of.push((b - (j.grade() as usize).min(b)) as u8);
+            for z in [x, y] {
+                if z != frame {
+                    deg[z + 1] += 1;
+                }
+            }
+        }
+        for z in 0..nb {
+            deg[z + 1] += deg[z];
+        }
+        let start = deg;
+        let mut fill: Vec<u32> = start[..nb].to_vec();
+        let mut touching = vec![0u32; start[nb] as usize];
+        for (q, e) in ends.iter().enumerate() {
+            for &z in e {
+                let z = z as usize;
+                if z != frame {
+                    touching[fill[z] as usize] = q as u32;
+                    fill[z] += 1;
+                }
+            }
+        }
+        Some(Pairs {
+            b,
+            frame,
+            col,
+            ncols,
+            ends,
+            rows_of,
+            start,
+            touching,
+        })
+    }
+
+    /// Pairs at body `z`.
+    fn at(&self, z: usize) -> &[u32] {
+        &self.touching[self.start[z] as usize..self.start[z + 1] as usize]
+    }
+
+    /// Which end of pair `q` body `z` is.
+    fn side(&self, q: usize, z: usize) -> usize {
+        usize::from(self.ends[q][0] as usize != z)
+    }
+
+    /// Each body's distance from the frame along the pairs (`NIL`: unreached). A row goes to
+    /// the farther of its two bodies when both have room, so the free units (the random rows)
+    /// stay near the frame, where the inputs of a linkage built outwards from its cranks sit
+    /// and the blocks are small; a free unit far out would tie every group between it and
+    /// the frame into one block.
+    fn distances(&self) -> Vec<u32> {
+        let frame = self.frame;
+        let mut dist = vec![NIL; self.col.len()];
+        let mut queue: Vec<u32> = Vec::new();
+        dist[frame] = 0;
+        for e in &self.ends {
+            for s in 0..2 {
+                let (z, w) = (e[s] as usize, e[1 - s] as usize);
+                if z == frame && dist[w] == NIL {
+                    dist[w] = 1;
+                    queue.push(w as u32);
+                }
+            }
+        }
+        let mut head = 0;
+        while head < queue.len() {
+            let z = queue[head] as usize;
+            head += 1;
+            for &q in self.at(z) {
+                let w = self.ends[q as usize][1 - self.side(q as usize, z)] as usize;
+                if dist[w] == NIL {
+                    dist[w] = dist[z] + 1;
+                    queue.push(w as u32);
+                }
+            }
+        }
+        dist
+    }
+
+    /// The routing: `flow[q][s]` rows of pair `q` on its body `ends[q][s]`, and the rows each
+    /// body holds. `None` when a row finds no unit or the search passes its linear cap.
+    fn route(&self, dist: &[u32]) -> Option<(Vec<[u8; 2]>, Vec<u8>)> {
+        let (b, frame) = (self.b, self.frame);
+        let nb = self.col.len();
+        let nq = self.ends.len();
+        let mut flow = vec![[0u8; 2]; nq];
+        let mut used = vec![0u8; nb];
+        let mut seen = vec![0u32; nb];
+        let mut prev: Vec<(u32, u32)> = vec![(NIL, NIL); nb];
+        let mut queue: Vec<u32> = Vec::new();
+        let mut stamp = 0u32;
+        let mut work: u64 = 0;
+        let cap_work = 64 * (nb + nq) as u64 + 100_000;
+        for q in 0..nq {
+            for _ in 0..self.rows_of[q] {
+                stamp = stamp.checked_add(1)?;
+                queue.clear();
+                let [x, y] = self.ends[q];
+                // Unreached bodies (`NIL`) count as farthest.
+                let order = if dist[y as usize] > dist[x as usize] {
+                    [y, x]
+                } else {
+                    [x, y]
+                };
+                for z in order {
+                    let z = z as usize;
+                    if z != frame && seen[z] != stamp {
+                        seen[z] = stamp;
+                        prev[z] = (NIL, q as u32);
+                        queue.push(z as u32);
+                    }
+                }
+                let mut head = 0;
+                let mut found = None;
+                while head < queue.len() {
+                    let z = queue[head] as usize;
+                    head += 1;
+                    if (used[z] as usize) < b {
+                        found = Some(z);
+                        break;
+                    }
+                    for &q2 in self.at(z) {
+                        let q2 = q2 as usize;
+                        work += 1;
+                        if flow[q2][self.side(q2, z)] == 0 {
+                            continue;
+                        }
+                        let w = self.ends[q2][1 - self.side(q2, z)] as usize;
+                        if w == frame || seen[w] == stamp {
+                            continue;
+                        }
+                        seen[w] = stamp;
+                        prev[w] = (z as u32, q2 as u32);
+                        queue.push(w as u32);
+                    }
+                }
+                work += head as u64;
+                if work > cap_work {
+                    return None;
+                }
+                // One more row on the free body; each pair on the path moves one of its rows
+                // from the body before it to the body after it.
+                let mut w = found?;
+                used[w] += 1;
+                loop {
+                    let (z, q2) = prev[w];
+                    let q2 = q2 as usize;
+                    flow[q2][self.side(q2, w)] += 1;
+                    if z == NIL {
+                        break;
+                    }
+                    let z = z as usize;
+                    flow[q2][self.side(q2, z)] -= 1;
+                    w = z;
+                }
+            }
+        }
+        Some((flow, used))
+    }
+
+    /// Tarjan's components of "a row routed to `z` touches `w`" (frame excluded), emitted
+    /// sinks first: each block's rows touch only its own unknowns and those of blocks
+    /// already solved. The arcs of each body in `touching` order, so the components come out
+    /// as a walk of `touching` itself would find them.
+    fn components(&self, flow: &[[u8; 2]], nrows: usize) -> (Vec<u32>, Vec<usize>) {
+        let nb = self.col.len();
+        let mut arc_start = vec![0usize; nb + 1];
+        let mut arcs: Vec<u32> = Vec::with_capacity(nrows);
+        for z in 0..nb {
+            for &q in self.at(z) {
+                let q = q as usize;
+                if flow[q][self.side(q, z)] != 0 {
+                    arcs.push(self.ends[q][1 - self.side(q, z)]);
+                }
+            }
+            arc_start[z + 1] = arcs.len();
+        }
+        let mut active = vec![true; nb];
+        active[self.frame] = false;
+        crate::structure::tarjan_flat(&arc_start, &arcs, &active)
+    }
+}
+
+/// The back-substitution of [`block_null_vectors`], block by block: the null vectors so far
+/// and what the blocks share.
+struct Blocks<'a> {
+    m: &'a Mechanism,
+    seed: u64,
+    pairs: &'a Pairs,
+    flow: &'a [[u8; 2]],
+    used: &'a [u8],
+    /// The nullity: free units, null vectors, right-hand sides.
+    n: usize,
+    /// The null vectors, solved block by block.
+    v: Vec<Vec<Fp>>,
+    rng: crate::rng::SplitMix64,
+    /// Pairs whose rows a block has taken.
+    done: Vec<bool>,
+    /// Each body's place in the current block (`NIL`: not in it).
+    loc: Vec<u32>,
+    /// Free units (random rows) placed so far.
+    unit: usize,
+    /// The current block's `[A | R]`, row-major.
+    a: Vec<Fp>,
+}
+
+impl Blocks<'_> {
+    /// Solve the block of bodies `comp` (root first) for every null vector; `None` when it
+    /// is singular, too large, or its rows do not fill it.
+    fn block(&mut self, comp: &[usize]) -> Option<()> {
+        let b = self.pairs.b;
         let d = b * comp.len();
         if d > BLOCK_MAX {
             return None;
         }
         for (i, &x) in comp.iter().enumerate() {
-            loc[x] = i as u32;
+            self.loc[x] = i as u32;
         }
         // [A | R] row-major: the block's rows on its unknowns, the right-hand sides.
-        let w_all = d + n;
-        a.clear();
-        a.resize(d * w_all, Fp::ZERO);
+        let w_all = d + self.n;
+        self.a.clear();
+        self.a.resize(d * w_all, Fp::ZERO);
+        let r = self.constraint_rows(comp, d, w_all)?;
+        let r = self.random_rows(comp, d, w_all, r)?;
+        if r != d {
+            return None;
+        }
+        gauss_jordan(&mut self.a, d, w_all)?;
+        let col = &self.pairs.col;
+        for &x in comp {
+            let i0 = self.loc[x] as usize * b;
+            for k in 0..b {
+                for (l, vl) in self.v.iter_mut().enumerate() {
+                    vl[col[x] + k] = self.a[(i0 + k) * w_all + d + l];
+                }
+            }
+            self.loc[x] = NIL;
+        }
+        Some(())
+    }
+
+    /// The rows routed into the block's bodies: their entries on its unknowns, and those on
+    /// the bodies of blocks solved before moved to the right-hand sides. The rows filled.
+    fn constraint_rows(&mut self, comp: &[usize], d: usize, w_all: usize) -> Option<usize> {
+        use crate::exact::models;
+        let (pairs, b) = (self.pairs, self.pairs.b);
         let mut r = 0usize;
-        for &x in &comp {
-            for &q in &touching[start[x] as usize..start[x + 1] as usize] {
+        for &x in comp {
+            for &q in pairs.at(x) {
                 let q = q as usize;
-                if done[q] || flow[q][side(q, x)] == 0 {
+                if self.done[q] || self.flow[q][pairs.side(q, x)] == 0 {
                     continue;
                 }
-                done[q] = true;
-                let rows = models::joint_rows(m, q, seed, 0);
-                if rows.nrows() != rows_of[q] as usize || rows.ncols() != b {
+                self.done[q] = true;
+                let rows = models::joint_rows(self.m, q, self.seed, 0);
+                if rows.nrows() != pairs.rows_of[q] as usize || rows.ncols() != b {
                     return None;
                 }
                 for i in 0..rows.nrows() {
                     if r >= d {
                         return None;
                     }
-                    let line = &mut a[r * w_all..(r + 1) * w_all];
-                    for (s, &u) in ends[q].iter().enumerate() {
+                    let line = &mut self.a[r * w_all..(r + 1) * w_all];
+                    for (s, &u) in pairs.ends[q].iter().enumerate() {
                         let u = u as usize;
-                        if u == frame {
+                        if u == pairs.frame {
                             continue;
                         }
                         for k in 0..b {
                             let e = if s == 0 { -rows[(i, k)] } else { rows[(i, k)] };
-                            if loc[u] != NIL {
-                                line[loc[u] as usize * b + k] += e;
+                            if self.loc[u] != NIL {
+                                line[self.loc[u] as usize * b + k] += e;
                             } else {
                                 // A body of a block solved before.
-                                for (l, vl) in v.iter().enumerate() {
-                                    line[d + l] -= e * vl[col[u] + k];
+                                for (l, vl) in self.v.iter().enumerate() {
+                                    line[d + l] -= e * vl[pairs.col[u] + k];
                                 }
                             }
                         }
@@ -273,63 +396,65 @@ pub(super) fn block_null_vectors(
                 }
             }
         }
-        for &x in &comp {
-            for _ in used[x] as usize..b {
-                if r >= d || unit >= n {
+        Some(r)
+    }
+
+    /// One random row on a body's unknowns for each unit the routing leaves free there, with
+    /// its own unit right-hand side, after row `r`. The rows filled.
+    fn random_rows(&mut self, comp: &[usize], d: usize, w_all: usize, r: usize) -> Option<usize> {
+        let b = self.pairs.b;
+        let mut r = r;
+        for &x in comp {
+            for _ in self.used[x] as usize..b {
+                if r >= d || self.unit >= self.n {
                     return None;
                 }
-                let line = &mut a[r * w_all..(r + 1) * w_all];
+                let line = &mut self.a[r * w_all..(r + 1) * w_all];
                 for k in 0..b {
-                    line[loc[x] as usize * b + k] = Fp::random_nonzero(&mut rng);
+                    line[self.loc[x] as usize * b + k] = Fp::random_nonzero(&mut self.rng);
                 }
-                line[d + unit] = Fp::ONE;
-                unit += 1;
+                line[d + self.unit] = Fp::ONE;
+                self.unit += 1;
                 r += 1;
             }
         }
-        if r != d {
-            return None;
-        }
-        // Gauss-Jordan: a singular block gives up.
-        for cc in 0..d {
-            let p = (cc..d).find(|&i| !a[i * w_all + cc].is_zero())?;
-            if p != cc {
-                for t in 0..w_all {
-                    a.swap(p * w_all + t, cc * w_all + t);
-                }
-            }
-            let inv = a[cc * w_all + cc].inv();
-            for t in cc..w_all {
-                a[cc * w_all + t] *= inv;
-            }
-            for i in 0..d {
-                if i == cc {
-                    continue;
-                }
-                let f = a[i * w_all + cc];
-                if f.is_zero() {
-                    continue;
-                }
-                let (lo, hi) = a.split_at_mut(i.max(cc) * w_all);
-                let (dst, src) = if i < cc {
-                    (&mut lo[i * w_all..(i + 1) * w_all], &hi[..w_all])
-                } else {
-                    (&mut hi[..w_all], &lo[cc * w_all..(cc + 1) * w_all])
-                };
-                axpy_sub(&mut dst[cc..], f, &src[cc..]);
+        Some(r)
+    }
+}
+
+/// Gauss-Jordan on the `d × w_all` row-major `[A | R]`: `A` becomes the identity and `R` the
+/// solutions. `None` when `A` is singular.
+fn gauss_jordan(a: &mut [Fp], d: usize, w_all: usize) -> Option<()> {
+    use crate::exact::field::axpy_sub;
+    for cc in 0..d {
+        let p = (cc..d).find(|&i| !a[i * w_all + cc].is_zero())?;
+        if p != cc {
+            for t in 0..w_all {
+                a.swap(p * w_all + t, cc * w_all + t);
             }
         }
-        for &x in &comp {
-            let i0 = loc[x] as usize * b;
-            for k in 0..b {
-                for (l, vl) in v.iter_mut().enumerate() {
-                    vl[col[x] + k] = a[(i0 + k) * w_all + d + l];
-                }
+        let inv = a[cc * w_all + cc].inv();
+        for t in cc..w_all {
+            a[cc * w_all + t] *= inv;
+        }
+        for i in 0..d {
+            if i == cc {
+                continue;
             }
-            loc[x] = NIL;
+            let f = a[i * w_all + cc];
+            if f.is_zero() {
+                continue;
+            }
+            let (lo, hi) = a.split_at_mut(i.max(cc) * w_all);
+            let (dst, src) = if i < cc {
+                (&mut lo[i * w_all..(i + 1) * w_all], &hi[..w_all])
+            } else {
+                (&mut hi[..w_all], &lo[cc * w_all..(cc + 1) * w_all])
+            };
+            axpy_sub(&mut dst[cc..], f, &src[cc..]);
         }
     }
-    (unit == n).then_some((col, v))
+    Some(())
 }
 
 /// The constraint rows `J` of `m` (binary joints, no inputs) over GF(p) at the random
