@@ -5,7 +5,7 @@ use super::expansion::{Expansion, Expansions};
 use super::groups::{Lean, evaluate, placement, placement_of};
 use super::oracle::Oracle;
 use super::partition::BodyNames;
-use super::parts::ExpansionParts;
+use super::parts::{ByParts, ExpansionParts};
 use super::problem::Problem;
 use super::rules::Rules;
 use super::{
@@ -42,42 +42,306 @@ pub(super) fn place(
     mut keep: Option<&mut Option<Problem>>,
 ) -> Result<Placed, TransformError> {
     let exps = Expansions::of(m, opts.max_expansions);
-    // With `keep` and one expansion, a placement analysed from the search's flow carries its
-    // inputs (`Placement::lean`), and the expansion's problem is kept to make its groups again.
-    let defer = keep.is_some() && exps.len == 1;
-    let mut r = Placed {
-        expansions: exps.len,
-        expansions_total: exps.total,
-        f: crate::mobility::mobility(m).mobility.count,
-        ..Placed::default()
+    let mut st = Placing {
+        cx: Analyses {
+            opts,
+            lib,
+            progress,
+            // The body ids every placement's partition indexes (an expansion keeps the bodies).
+            names: BodyNames::of(m),
+            per_eval: analysis_work(m),
+            // With `keep` and one expansion, a placement analysed from the search's flow
+            // carries its inputs (`Placement::lean`), and the expansion's problem is kept to
+            // make its groups again.
+            defer: keep.is_some() && exps.len == 1,
+        },
+        r: Placed {
+            expansions: exps.len,
+            expansions_total: exps.total,
+            f: crate::mobility::mobility(m).mobility.count,
+            ..Placed::default()
+        },
+        limit: opts.limit.unwrap_or(usize::MAX),
+        found: 0,
+        stopped: false,
+        batch: Vec::new(),
+        batch_size: 1,
+        // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
+        max_batch: (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH),
+        // The analyses charge their own meter (the search holds `meter`): each may spend the
+        // work budget.
+        eval_meter: opts.budget.meter("the analysis of the placements"),
     };
-    let limit = opts.limit.unwrap_or(usize::MAX);
-    let per_eval = analysis_work(m);
-    // The body ids every placement's partition indexes (an expansion keeps the bodies).
-    let names = BodyNames::of(m);
-    // (expansion, placement, the search's flow for a warm start of the analysis)
-    let mut batch: Vec<Leaf> = Vec::new();
-    let mut stopped = false;
-    // Analyse a batch in parallel and stream its determined placements in order.
-    let flush = |e: &Expansion,
-                 cache: &structure::AnalysisCache,
-                 oracle: &Oracle,
-                 lean: Option<&Lean>,
-                 batch: &mut Vec<Leaf>,
-                 r: &mut Placed,
-                 meter: &mut Meter,
-                 stopped: &mut bool,
-                 sink: &mut dyn FnMut(Placement) -> bool|
-     -> Result<(), BudgetExceeded> {
-        if batch.is_empty() || *stopped {
-            batch.clear();
+    let mut by_parts = ExpansionParts::applies(&exps, rules, opts).then(ExpansionParts::default);
+    for x in 0..exps.len {
+        if let Some(parts) = &mut by_parts
+            && let Some(got) = parts.place(
+                &exps.skeleton(x),
+                x,
+                rules,
+                opts,
+                lib,
+                &st.cx.names.ids,
+                meter,
+            )?
+        {
+            if st.take_by_parts(x, got, sink) {
+                break;
+            }
+            continue;
+        }
+        let e = &exps.get(x);
+        // The rank check's factorizations, shared by every analysis of this expansion: a
+        // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
+        let cache = structure::AnalysisCache::default();
+        let p = Problem::of(e, m, rules, opts, &cache, &st.cx.names.ids, meter)?;
+        if x == 0 {
+            st.r.isolated = p.isolated;
+            st.r.set_aside = p.set_aside;
+            st.r.f = p.f;
+            st.r.drivable = p.drivable();
+            if let Some(n) = &p.note {
+                st.r.notes.push(n.clone());
+            }
+        }
+        st.search_expansion(x, e, &p, &cache, meter, sink)?;
+        if st.cx.defer
+            && x == 0
+            && p.lean.is_some()
+            && let Some(k) = keep.as_deref_mut()
+        {
+            // Only what making the groups again needs: the exact oracle's null vectors go.
+            let mut p = p;
+            p.oracle = Oracle::Undecided;
+            *k = Some(p);
+        }
+        if st.r.cut || st.stopped {
+            break;
+        }
+    }
+    Ok(st.r)
+}
+
+/// What every analysis of one mechanism's placements reads.
+struct Analyses<'a> {
+    opts: &'a TransformOptions,
+    lib: &'a Library,
+    progress: Option<ProgressFn<'a>>,
+    names: BodyNames,
+    /// Work units charged for a full analysis.
+    per_eval: u64,
+    /// Whether a placement analysed from the search's flow keeps its inputs.
+    defer: bool,
+}
+
+/// The state of [`place`]: what it found, and the placements waiting for their analysis.
+struct Placing<'a> {
+    cx: Analyses<'a>,
+    r: Placed,
+    limit: usize,
+    /// Count-valid placements found (at most `limit`).
+    found: usize,
+    /// Whether the sink asked to stop.
+    stopped: bool,
+    /// (expansion, placement, the search's flow for a warm start of the analysis)
+    batch: Vec<Leaf>,
+    batch_size: usize,
+    max_batch: usize,
+    eval_meter: Meter,
+}
+
+impl Placing<'_> {
+    /// Stream the one placement an expansion placed part by part gave, if any; `true` when
+    /// the placing stops here.
+    fn take_by_parts(
+        &mut self,
+        x: usize,
+        got: ByParts,
+        sink: &mut dyn FnMut(Placement) -> bool,
+    ) -> bool {
+        let r = &mut self.r;
+        if x == 0 {
+            r.isolated = got.isolated;
+            r.set_aside = got.set_aside;
+            r.f = got.f;
+            r.drivable = got.drivable;
+        }
+        if let Some(p) = got.placement {
+            // As the search and `flush` count a placement of the whole expansion.
+            if self.found >= self.limit {
+                r.cut = true;
+                return true;
+            }
+            self.found += 1;
+            let seq = r.count_valid;
+            r.count_valid += 1;
+            match p {
+                Some(mut p) => {
+                    p.seq = seq;
+                    r.determined += 1;
+                    if !self.stopped && !sink(p) {
+                        self.stopped = true;
+                    }
+                }
+                None => r.excluded += 1,
+            }
+            self.report();
+        }
+        self.stopped
+    }
+
+    /// Search expansion `e` (number `x`, problem `p`) and analyse its placements in batches
+    /// that grow from one placement, so that the first ones stream at once.
+    fn search_expansion(
+        &mut self,
+        x: usize,
+        e: &Expansion,
+        p: &Problem,
+        cache: &structure::AnalysisCache,
+        meter: &mut Meter,
+        sink: &mut dyn FnMut(Placement) -> bool,
+    ) -> Result<(), TransformError> {
+        let mut err: Option<BudgetExceeded> = None;
+        // `Oracle::Later`: decided once a placement of this expansion is rejected.
+        let mut late: Option<Oracle> = None;
+        let excluded_before = self.r.excluded;
+        p.search(meter, &mut |w, flow| {
+            if self.found >= self.limit {
+                self.r.cut = true;
+                return false;
+            }
+            self.found += 1;
+            self.batch.push((
+                x,
+                (0..w.len())
+                    .filter(|&q| w[q] > 0)
+                    .map(|q| (q, w[q]))
+                    .collect(),
+                flow.iter()
+                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                    .collect(),
+            ));
+            if self.batch.len() >= self.batch_size {
+                // Batches grow from one placement: the first ones stream at once.
+                self.batch_size = (self.batch_size * 2).min(self.max_batch);
+                // Only with more placements to analyse: a rejected single one (each
+                // expansion of a shared joint) pays nothing.
+                if late.is_none()
+                    && self.r.excluded > excluded_before
+                    && matches!(p.oracle, Oracle::Later { .. })
+                {
+                    late = Some(p.oracle.dependent(
+                        &e.mech,
+                        &self.cx.opts.budget,
+                        &mut self.eval_meter,
+                    ));
+                }
+                let oracle = late.as_ref().unwrap_or(&p.oracle);
+                if let Err(b) = self.flush(e, cache, oracle, p.lean.as_ref(), &mut *sink) {
+                    err = Some(b);
+                    return false;
+                }
+
+                if self.stopped {
+                    return false;
+                }
+            }
+            true
+        })?;
+        if let Some(b) = err {
+            return Err(b.into());
+        }
+        // The rest of the batch belongs to this expansion: analysed before the next is built.
+        if late.is_none()
+            && !self.batch.is_empty()
+            && self.r.excluded > excluded_before
+            && matches!(p.oracle, Oracle::Later { .. })
+        {
+            late = Some(
+                p.oracle
+                    .dependent(&e.mech, &self.cx.opts.budget, &mut self.eval_meter),
+            );
+        }
+        let oracle = late.as_ref().unwrap_or(&p.oracle);
+        self.flush(e, cache, oracle, p.lean.as_ref(), sink)?;
+        Ok(())
+    }
+
+    /// Analyse the batch in parallel and stream its determined placements in order.
+    fn flush(
+        &mut self,
+        e: &Expansion,
+        cache: &structure::AnalysisCache,
+        oracle: &Oracle,
+        lean: Option<&Lean>,
+        sink: &mut dyn FnMut(Placement) -> bool,
+    ) -> Result<(), BudgetExceeded> {
+        if self.batch.is_empty() || self.stopped {
+            self.batch.clear();
             return Ok(());
         }
         // One unit a placement first; what each then spends (the exact decision of its
         // inputs, a lean analysis, a full one and the rank decisions inside it) after the
         // batch.
-        meter.charge(batch.len() as u64)?;
-        let results: Vec<(Option<Placement>, u64)> = batch
+        self.eval_meter.charge(self.batch.len() as u64)?;
+        let results = self.cx.analyse(&self.batch, e, cache, oracle, lean);
+        // The analyses' work: a full analysis its estimate and its rank decisions (dense
+        // factorizations of growing groups above all), a lean one its pass over the arrays.
+        self.eval_meter
+            .charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
+        let results = results.into_iter().map(|r| r.0);
+        let r = &mut self.r;
+        let done = r.count_valid;
+        for (i, p) in results.enumerate() {
+            r.count_valid += 1;
+            match p {
+                Some(mut p) => {
+                    p.seq = done + i;
+                    r.determined += 1;
+                    if !self.stopped && !sink(p) {
+                        self.stopped = true;
+                    }
+                }
+                None => r.excluded += 1,
+            }
+        }
+        self.batch.clear();
+        self.report();
+        Ok(())
+    }
+
+    /// Report the progress so far.
+    fn report(&self) {
+        if let Some(cb) = self.cx.progress {
+            cb(Progress {
+                examined: self.r.count_valid,
+                total: self.r.count_valid,
+                determined: self.r.determined,
+            });
+        }
+    }
+}
+
+impl Analyses<'_> {
+    /// Each placement of `batch` analysed (in parallel): its placement if it is determined,
+    /// and the work it spent.
+    fn analyse(
+        &self,
+        batch: &[Leaf],
+        e: &Expansion,
+        cache: &structure::AnalysisCache,
+        oracle: &Oracle,
+        lean: Option<&Lean>,
+    ) -> Vec<(Option<Placement>, u64)> {
+        let Analyses {
+            opts,
+            lib,
+            names,
+            per_eval,
+            defer,
+            ..
+        } = self;
+        batch
             .par_iter()
             .map_init(
                 // A copy of the expansion only for the placements analysed in full.
@@ -92,7 +356,7 @@ pub(super) fn place(
                     if certified && let Some(l) = lean {
                         let g = l.groups(&e.mech, flow, lib);
                         let mut p = placement_of(&e.mech, e, *x, w, g);
-                        if defer {
+                        if *defer {
                             p.lean = Some(w.clone());
                         }
                         return (Some(p), decided.saturating_add(l.work));
@@ -100,192 +364,11 @@ pub(super) fn place(
                     let mech = mech.get_or_insert_with(|| e.mech.as_ref().clone());
                     let (a, work) = evaluate(mech, w, flow, &opts.analysis, lib, cache, certified);
                     (
-                        a.map(|a| placement(mech, e, *x, &a, w, &names)),
-                        work.saturating_add(per_eval).saturating_add(decided),
+                        a.map(|a| placement(mech, e, *x, &a, w, names)),
+                        work.saturating_add(*per_eval).saturating_add(decided),
                     )
                 },
             )
-            .collect();
-        // The analyses' work: a full analysis its estimate and its rank decisions (dense
-        // factorizations of growing groups above all), a lean one its pass over the arrays.
-        meter.charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
-        let results = results.into_iter().map(|r| r.0);
-        let done = r.count_valid;
-        for (i, p) in results.enumerate() {
-            r.count_valid += 1;
-            match p {
-                Some(mut p) => {
-                    p.seq = done + i;
-                    r.determined += 1;
-                    if !*stopped && !sink(p) {
-                        *stopped = true;
-                    }
-                }
-                None => r.excluded += 1,
-            }
-        }
-        batch.clear();
-        if let Some(cb) = progress {
-            cb(Progress {
-                examined: r.count_valid,
-                total: r.count_valid,
-                determined: r.determined,
-            });
-        }
-        Ok(())
-    };
-    // The analyses charge their own meter (the search holds `meter`): each may spend the
-    // work budget.
-    let mut eval_meter = opts.budget.meter("the analysis of the placements");
-    let mut found = 0usize;
-    let mut batch_size = 1usize;
-    // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
-    let max_batch = (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH);
-    let mut by_parts = ExpansionParts::applies(&exps, rules, opts).then(ExpansionParts::default);
-    for x in 0..exps.len {
-        if let Some(parts) = &mut by_parts
-            && let Some(got) =
-                parts.place(&exps.skeleton(x), x, rules, opts, lib, &names.ids, meter)?
-        {
-            if x == 0 {
-                r.isolated = got.isolated;
-                r.set_aside = got.set_aside;
-                r.f = got.f;
-                r.drivable = got.drivable;
-            }
-            if let Some(p) = got.placement {
-                // As the search and `flush` count a placement of the whole expansion.
-                if found >= limit {
-                    r.cut = true;
-                    break;
-                }
-                found += 1;
-                let seq = r.count_valid;
-                r.count_valid += 1;
-                match p {
-                    Some(mut p) => {
-                        p.seq = seq;
-                        r.determined += 1;
-                        if !stopped && !sink(p) {
-                            stopped = true;
-                        }
-                    }
-                    None => r.excluded += 1,
-                }
-                if let Some(cb) = progress {
-                    cb(Progress {
-                        examined: r.count_valid,
-                        total: r.count_valid,
-                        determined: r.determined,
-                    });
-                }
-            }
-            if stopped {
-                break;
-            }
-            continue;
-        }
-        let e = &exps.get(x);
-        // The rank check's factorizations, shared by every analysis of this expansion: a
-        // placement re-factorizes only the blocks and bodies whose rows its inputs changed.
-        let cache = structure::AnalysisCache::default();
-        let p = Problem::of(e, m, rules, opts, &cache, &names.ids, meter)?;
-        if x == 0 {
-            r.isolated = p.isolated;
-            r.set_aside = p.set_aside;
-            r.f = p.f;
-            r.drivable = p.drivable();
-            if let Some(n) = &p.note {
-                r.notes.push(n.clone());
-            }
-        }
-        let mut err: Option<BudgetExceeded> = None;
-        // `Oracle::Later`: decided once a placement of this expansion is rejected.
-        let mut late: Option<Oracle> = None;
-        let excluded_before = r.excluded;
-        p.search(meter, &mut |w, flow| {
-            if found >= limit {
-                r.cut = true;
-                return false;
-            }
-            found += 1;
-            batch.push((
-                x,
-                (0..w.len())
-                    .filter(|&q| w[q] > 0)
-                    .map(|q| (q, w[q]))
-                    .collect(),
-                flow.iter()
-                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
-                    .collect(),
-            ));
-            if batch.len() >= batch_size {
-                // Batches grow from one placement: the first ones stream at once.
-                batch_size = (batch_size * 2).min(max_batch);
-                // Only with more placements to analyse: a rejected single one (each
-                // expansion of a shared joint) pays nothing.
-                if late.is_none()
-                    && r.excluded > excluded_before
-                    && matches!(p.oracle, Oracle::Later { .. })
-                {
-                    late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
-                }
-                if let Err(b) = flush(
-                    e,
-                    &cache,
-                    late.as_ref().unwrap_or(&p.oracle),
-                    p.lean.as_ref(),
-                    &mut batch,
-                    &mut r,
-                    &mut eval_meter,
-                    &mut stopped,
-                    &mut *sink,
-                ) {
-                    err = Some(b);
-                    return false;
-                }
-
-                if stopped {
-                    return false;
-                }
-            }
-            true
-        })?;
-        if let Some(b) = err {
-            return Err(b.into());
-        }
-        // The rest of the batch belongs to this expansion: analysed before the next is built.
-        if late.is_none()
-            && !batch.is_empty()
-            && r.excluded > excluded_before
-            && matches!(p.oracle, Oracle::Later { .. })
-        {
-            late = Some(p.oracle.dependent(&e.mech, &opts.budget, &mut eval_meter));
-        }
-        flush(
-            e,
-            &cache,
-            late.as_ref().unwrap_or(&p.oracle),
-            p.lean.as_ref(),
-            &mut batch,
-            &mut r,
-            &mut eval_meter,
-            &mut stopped,
-            &mut *sink,
-        )?;
-        if defer
-            && x == 0
-            && p.lean.is_some()
-            && let Some(k) = keep.as_deref_mut()
-        {
-            // Only what making the groups again needs: the exact oracle's null vectors go.
-            let mut p = p;
-            p.oracle = Oracle::Undecided;
-            *k = Some(p);
-        }
-        if r.cut || stopped {
-            break;
-        }
+            .collect()
     }
-    Ok(r)
 }
