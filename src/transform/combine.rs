@@ -10,7 +10,7 @@ use super::{
     Criterion, Input, Placed, Placement, Progress, ProgressFn, Scores, Summary, TransformError,
     TransformOptions, list_cap,
 };
-use crate::budget::Meter;
+use crate::budget::{BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use crate::structure::{Library, TypeCount};
 use std::collections::{BTreeMap, HashMap};
@@ -231,28 +231,67 @@ pub(super) fn combine_parts(
     sink: &mut dyn FnMut(Placement),
 ) -> Result<(), TransformError> {
     let cap = list_cap(m, opts.limit);
+    let (memo, per) = place_parts(m, sets, rules, opts, lib, meter, progress, summary, cap)?;
+    if summary.determined == 0 {
+        return Ok(());
+    }
+    let layers = key_layers(&memo, &per, meter)?;
+    let criteria = if opts.rank.is_empty() {
+        Criterion::DEFAULT.to_vec()
+    } else {
+        opts.rank.clone()
+    };
+    let Some(last) = layers.last() else {
+        return Ok(());
+    };
+    let mut whole: Vec<Key> = last.iter().map(|(k, _)| *k).collect();
+    whole.sort_by(|a, b| compare_scores(&a.scores(), &b.scores(), &criteria).then(a.cmp(b)));
+    let parts = Whole {
+        m,
+        sets,
+        memo: &memo,
+        per: &per,
+        layers: &layers,
+        ids: Arc::new(m.bodies.iter().map(|b| b.id.to_string()).collect()),
+        rebuild: per.iter().map(|&at| memo[at].shared).collect(),
+        cap,
+    };
+    let mut listed = 0usize;
+    for target in whole {
+        if !parts.stream_key(target, &mut listed, meter, sink)? {
+            break;
+        }
+    }
+    summary.listed = listed;
+    Ok(())
+}
+
+/// Place every part of `m` (`sets`), once per structure where parts may share it, and count
+/// the whole in `summary` (counts, truncation, notes). Each part's placements by key
+/// (`memo`), and the entry of `memo` of each part.
+#[allow(clippy::too_many_arguments)]
+fn place_parts(
+    m: &Mechanism,
+    sets: &[(Vec<usize>, Vec<usize>)],
+    rules: &Rules,
+    opts: &TransformOptions,
+    lib: &Library,
+    meter: &mut Meter,
+    progress: Option<ProgressFn<'_>>,
+    summary: &mut Summary,
+    cap: usize,
+) -> Result<(Vec<PartKeys>, Vec<usize>), TransformError> {
     let mut memo: Vec<PartKeys> = Vec::new();
     let mut index: HashMap<Vec<u32>, usize> = HashMap::new();
-    // The entry of `memo` of each part.
     let mut per: Vec<usize> = Vec::with_capacity(sets.len());
     let (mut count_valid, mut determined) = (1u128, 1u128);
     summary.expansions = 1;
     summary.expansions_total = 1;
     let mut examined = 0usize;
-    let whole_ids: Arc<Vec<String>> = Arc::new(m.bodies.iter().map(|b| b.id.to_string()).collect());
     let mut local = vec![usize::MAX; m.bodies.len()];
     let mut key: Vec<u32> = Vec::new();
     for (pi, (joints, bodies)) in sets.iter().enumerate() {
-        // A part alone takes the file's geometry (when the whole lacks some) if all its
-        // joints have theirs: placed alone then, as before.
-        let shared = rules.random
-            && joints.iter().all(|&j| m.joints[j].bodies.len() == 2)
-            && (opts.analysis.count_only
-                || matches!(
-                    opts.analysis.geometry,
-                    crate::motion::GeometrySource::Random { .. }
-                )
-                || joints.iter().all(|&j| m.joints[j].geometry.is_empty()));
+        let shared = shareable(m, joints, rules, opts);
         let seen = if shared {
             let joint = |q: usize| (m.joints[q].kind, &m.joints[q].bodies[..], q);
             part_key(m, joints, bodies, joint, rules, &mut local, &mut key);
@@ -265,29 +304,8 @@ pub(super) fn combine_parts(
             None => {
                 let mech = part_mechanism(m, joints, bodies, &mut local);
                 let prules = rules.restrict(joints);
-                let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
-                let placed = place(
-                    &mech,
-                    &prules,
-                    opts,
-                    lib,
-                    meter,
-                    None,
-                    &mut |p| {
-                        let e = by.entry(Key::of(&p.scores)).or_default();
-                        e.0 += 1;
-                        if e.1.len() < cap {
-                            e.1.push(p);
-                        }
-                        true
-                    },
-                    None,
-                )?;
-                memo.push(PartKeys {
-                    placed,
-                    keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
-                    shared,
-                });
+                let keys = part_keys(&mech, &prules, opts, lib, meter, cap, shared)?;
+                memo.push(keys);
                 if shared {
                     index.insert(key.clone(), memo.len() - 1);
                 }
@@ -324,10 +342,66 @@ pub(super) fn combine_parts(
          are the products of the parts' counts",
         sets.len()
     ));
-    if determined == 0 {
-        return Ok(());
-    }
-    // The keys of the whole, part by part: layer i holds the keys of parts 0..=i combined.
+    Ok((memo, per))
+}
+
+/// Whether the part of `m` with `joints` may be placed once for every part of its
+/// structure: binary joints and a random realization or none. A part alone takes the file's
+/// geometry (when the whole lacks some) if all its joints have theirs: placed alone then,
+/// as before.
+fn shareable(m: &Mechanism, joints: &[usize], rules: &Rules, opts: &TransformOptions) -> bool {
+    rules.random
+        && joints.iter().all(|&j| m.joints[j].bodies.len() == 2)
+        && (opts.analysis.count_only
+            || matches!(
+                opts.analysis.geometry,
+                crate::motion::GeometrySource::Random { .. }
+            )
+            || joints.iter().all(|&j| m.joints[j].geometry.is_empty()))
+}
+
+/// Place one part's mechanism and keep its placements by key (the first `cap` of each).
+fn part_keys(
+    mech: &Mechanism,
+    prules: &Rules,
+    opts: &TransformOptions,
+    lib: &Library,
+    meter: &mut Meter,
+    cap: usize,
+    shared: bool,
+) -> Result<PartKeys, TransformError> {
+    let mut by: BTreeMap<Key, (u128, Vec<Placement>)> = BTreeMap::new();
+    let placed = place(
+        mech,
+        prules,
+        opts,
+        lib,
+        meter,
+        None,
+        &mut |p| {
+            let e = by.entry(Key::of(&p.scores)).or_default();
+            e.0 += 1;
+            if e.1.len() < cap {
+                e.1.push(p);
+            }
+            true
+        },
+        None,
+    )?;
+    Ok(PartKeys {
+        placed,
+        keys: by.into_iter().map(|(k, (n, v))| (k, n, v)).collect(),
+        shared,
+    })
+}
+
+/// The keys of the whole, part by part: layer i holds the keys of parts 0..=i combined, with
+/// how many placements give each.
+fn key_layers(
+    memo: &[PartKeys],
+    per: &[usize],
+    meter: &mut Meter,
+) -> Result<Vec<Vec<(Key, u128)>>, BudgetExceeded> {
     let mut layers: Vec<Vec<(Key, u128)>> = Vec::with_capacity(per.len());
     for (i, &at) in per.iter().enumerate() {
         let pk = &memo[at];
@@ -349,21 +423,36 @@ pub(super) fn combine_parts(
         }
         layers.push(next.into_iter().collect());
     }
-    let criteria = if opts.rank.is_empty() {
-        Criterion::DEFAULT.to_vec()
-    } else {
-        opts.rank.clone()
-    };
-    let Some(last) = layers.last() else {
-        return Ok(());
-    };
-    let mut whole: Vec<Key> = last.iter().map(|(k, _)| *k).collect();
-    whole.sort_by(|a, b| compare_scores(&a.scores(), &b.scores(), &criteria).then(a.cmp(b)));
-    let n = per.len();
-    let rebuild: Vec<bool> = per.iter().map(|&at| memo[at].shared).collect();
-    let mut listed = 0usize;
-    'keys: for target in whole {
-        // Every choice of one key per part that joins to `target`, the last part first.
+    Ok(layers)
+}
+
+/// The placed parts of a whole, from which its best placements are joined.
+struct Whole<'a> {
+    m: &'a Mechanism,
+    sets: &'a [(Vec<usize>, Vec<usize>)],
+    memo: &'a [PartKeys],
+    per: &'a [usize],
+    layers: &'a [Vec<(Key, u128)>],
+    /// The whole's body ids.
+    ids: Arc<Vec<String>>,
+    /// Whether each part's inputs are named from the whole's joints.
+    rebuild: Vec<bool>,
+    /// The most placements listed.
+    cap: usize,
+}
+
+impl Whole<'_> {
+    /// Stream the placements of key `target`: every choice of one key per part that joins to
+    /// `target`, the last part first. `false` once the listing stops.
+    fn stream_key(
+        &self,
+        target: Key,
+        listed: &mut usize,
+        meter: &mut Meter,
+        sink: &mut dyn FnMut(Placement),
+    ) -> Result<bool, BudgetExceeded> {
+        let (memo, per, layers) = (self.memo, self.per, self.layers);
+        let n = per.len();
         let mut tgt = vec![target; n];
         let mut cursor = vec![0usize; n];
         let mut chosen = vec![0usize; n];
@@ -395,7 +484,7 @@ pub(super) fn combine_parts(
             }
             if !hit {
                 if i == n - 1 {
-                    break;
+                    return Ok(true);
                 }
                 i += 1;
                 continue;
@@ -405,53 +494,66 @@ pub(super) fn combine_parts(
                 cursor[i] = 0;
                 continue;
             }
-            // A full choice: the product of the parts' listed placements, the last part
-            // varying fastest.
-            let lists: Vec<&Vec<Placement>> =
-                (0..n).map(|p| &memo[per[p]].keys[chosen[p]].2).collect();
-            let mut digit = vec![0usize; n];
-            'prod: loop {
-                meter.charge(n as u64)?;
-                let members: Vec<&Placement> = (0..n).map(|p| &lists[p][digit[p]]).collect();
-                let labels: Vec<String> =
-                    members.iter().filter_map(|p| p.expansion.clone()).collect();
-                let names = |q: usize| {
-                    let j = m.joints.get(q)?;
-                    Some((j.id.clone(), m.joint_bodies_label(j)))
-                };
-                let Some(mut p) = join_parts(
-                    &names,
-                    None,
-                    sets,
-                    &members,
-                    &rebuild,
-                    &whole_ids,
-                    (!labels.is_empty()).then(|| labels.join("; ")),
-                    members.iter().map(|p| p.exp).max().unwrap_or(0),
-                ) else {
-                    break 'keys;
-                };
-                p.seq = listed;
-                sink(p);
-                listed += 1;
-                if listed >= cap {
-                    break 'keys;
-                }
-                let mut d = n;
-                loop {
-                    if d == 0 {
-                        break 'prod;
-                    }
-                    d -= 1;
-                    digit[d] += 1;
-                    if digit[d] < lists[d].len() {
-                        continue 'prod;
-                    }
-                    digit[d] = 0;
-                }
+            if !self.stream_product(&chosen, listed, meter, sink)? {
+                return Ok(false);
             }
         }
     }
-    summary.listed = listed;
-    Ok(())
+
+    /// A full choice (`chosen`: a key of each part): the product of the parts' listed
+    /// placements, the last part varying fastest. `false` once the listing stops.
+    fn stream_product(
+        &self,
+        chosen: &[usize],
+        listed: &mut usize,
+        meter: &mut Meter,
+        sink: &mut dyn FnMut(Placement),
+    ) -> Result<bool, BudgetExceeded> {
+        let m = self.m;
+        let n = self.per.len();
+        let lists: Vec<&Vec<Placement>> = (0..n)
+            .map(|p| &self.memo[self.per[p]].keys[chosen[p]].2)
+            .collect();
+        let mut digit = vec![0usize; n];
+        'prod: loop {
+            meter.charge(n as u64)?;
+            let members: Vec<&Placement> = (0..n).map(|p| &lists[p][digit[p]]).collect();
+            let labels: Vec<String> = members.iter().filter_map(|p| p.expansion.clone()).collect();
+            let names = |q: usize| {
+                let j = m.joints.get(q)?;
+                Some((j.id.clone(), m.joint_bodies_label(j)))
+            };
+            let Some(mut p) = join_parts(
+                &names,
+                None,
+                self.sets,
+                &members,
+                &self.rebuild,
+                &self.ids,
+                (!labels.is_empty()).then(|| labels.join("; ")),
+                members.iter().map(|p| p.exp).max().unwrap_or(0),
+            ) else {
+                return Ok(false);
+            };
+            p.seq = *listed;
+            sink(p);
+            *listed += 1;
+            if *listed >= self.cap {
+                return Ok(false);
+            }
+            let mut d = n;
+            loop {
+                if d == 0 {
+                    break 'prod;
+                }
+                d -= 1;
+                digit[d] += 1;
+                if digit[d] < lists[d].len() {
+                    continue 'prod;
+                }
+                digit[d] = 0;
+            }
+        }
+        Ok(true)
+    }
 }
