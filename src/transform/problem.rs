@@ -71,62 +71,11 @@ impl Problem {
     ) -> Result<Problem, BudgetExceeded> {
         let m = &e.mech;
         let nb = m.bodies.len();
-        let b = m.b();
-        let mut u = vec![b; nb];
-        u[m.frame] = 0;
-        let mut isolated = 0u32;
-        let mut oracle = Oracle::Undecided;
-        let mut lean = None;
-        // Constraint equations dependent at the file's configuration fix nothing: inputs take
-        // their place (a planar four-bar written in space takes one input, not none).
-        let mut set_aside = vec![0u32; m.joints.len()];
-        if !opts.analysis.count_only {
-            // Spins no input can drive (a bar between two spherical joints): the rank check's
-            // isolated freedoms with no input at all, on bodies held by two pairs or more. A
-            // body hanging on a single joint also moves with its neighbours held, but that is
-            // the joint's own freedom, which an input on it drives.
-            let mut pairs = vec![0usize; nb];
-            for j in &m.joints {
-                for &x in &j.bodies {
-                    pairs[x] += 1;
-                }
-            }
-            // The geometry was checked before the enumeration: this analysis cannot fail. It
-            // is charged like the analysis of one placement.
-            meter.charge(analysis_work(m))?;
-            let a =
-                structure::analyze_cached(m, &opts.analysis, &Library::empty(), Some(cache), None)
-                    .ok();
-            let a = a.as_ref();
-            if let Some(a) = a {
-                for (q, &n) in a.set_aside.iter().enumerate() {
-                    set_aside[q] = n;
-                }
-                oracle = Oracle::of(m, a, opts.full_analyses, meter)?;
-                if matches!(oracle, Oracle::Motions { .. })
-                    && !opts.full_analyses
-                    && opts.analysis.method == structure::Method::Flow
-                    && a.isolated.is_empty()
-                    && a.redundant.is_empty()
-                    && a.set_aside.iter().all(|&n| n == 0)
-                {
-                    lean = Some(Lean::of(m, ids));
-                }
-            }
-            for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
-                let id = crate::mechanism::BodyId::from_text(&iso.body);
-                if let Some(x) = m.body_index(&id)
-                    && pairs[x] >= 2
-                {
-                    u[x] = u[x].saturating_sub(iso.dimension);
-                    isolated += iso.dimension;
-                }
-            }
-        }
+        let un = Unknowns::of(m, opts, cache, ids, meter)?;
         let nq = m.joints.len();
         let mut p = Problem {
             frame: m.frame,
-            u,
+            u: un.u,
             a: Vec::with_capacity(nq),
             c: Vec::with_capacity(nq),
             touching: vec![Vec::new(); nb],
@@ -134,15 +83,35 @@ impl Problem {
             hi: vec![0; nq],
             kept_groups: Vec::new(),
             cand: Vec::new(),
-            isolated,
-            set_aside: set_aside.iter().sum(),
+            isolated: un.isolated,
+            set_aside: un.set_aside.iter().sum(),
             f: 0,
             need: 0,
             root: None,
             note: None,
-            oracle,
-            lean,
+            oracle: un.oracle,
+            lean: un.lean,
         };
+        let cons = p.pairs(e, orig, rules, &un.set_aside);
+        if !p.count(&cons) {
+            return Ok(p);
+        }
+        p.root = p.route(m, &cons, meter)?;
+        Ok(p)
+    }
+
+    /// Each pair's bodies and bounds under `rules`, and its constraint equations (the joint's
+    /// less those `set_aside`).
+    fn pairs(
+        &mut self,
+        e: &Expansion,
+        orig: &Mechanism,
+        rules: &Rules,
+        set_aside: &[u32],
+    ) -> Vec<u32> {
+        let m = &e.mech;
+        let b = m.b();
+        let nq = m.joints.len();
         let mut cons = vec![0u32; nq];
         let mut group_pairs: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
         for (q, j) in m.joints.iter().enumerate() {
@@ -151,11 +120,11 @@ impl Problem {
                 // Every joint of an expansion is binary; anything else would have no pair.
                 _ => (m.frame, m.frame),
             };
-            p.a.push(x);
-            p.c.push(y);
+            self.a.push(x);
+            self.c.push(y);
             for z in [x, y] {
-                if z != m.frame && !p.touching[z].contains(&q) {
-                    p.touching[z].push(q);
+                if z != m.frame && !self.touching[z].contains(&q) {
+                    self.touching[z].push(q);
                 }
             }
             cons[q] = b.saturating_sub(j.grade()).saturating_sub(set_aside[q]);
@@ -164,90 +133,108 @@ impl Problem {
             let ok = rules.allowed[o] && (!rules.grounded || x == m.frame || y == m.frame);
             let kept = rules.keep[o];
             if orig.joints[o].bodies.len() > 2 {
-                p.hi[q] = if ok || kept > 0 { k } else { 0 };
+                self.hi[q] = if ok || kept > 0 { k } else { 0 };
                 if kept > 0 {
                     group_pairs.entry(o).or_default().push(q);
                 }
             } else {
-                p.lo[q] = kept.min(k);
-                p.hi[q] = if ok { k } else { p.lo[q] };
+                self.lo[q] = kept.min(k);
+                self.hi[q] = if ok { k } else { self.lo[q] };
             }
         }
-        p.kept_groups = group_pairs
+        self.kept_groups = group_pairs
             .into_iter()
             .map(|(o, qs)| (qs, rules.keep[o]))
             .collect();
-        p.cand = (0..nq).filter(|&q| p.hi[q] > p.lo[q]).collect();
-        let total_u: i64 = p.u.iter().map(|&x| x as i64).sum();
+        self.cand = (0..nq).filter(|&q| self.hi[q] > self.lo[q]).collect();
+        cons
+    }
+
+    /// The inputs to place by count (`f`, and `need` beyond the kept ones); `false` with a
+    /// note when no placement can exist by count.
+    fn count(&mut self, cons: &[u32]) -> bool {
+        let total_u: i64 = self.u.iter().map(|&x| x as i64).sum();
         let total_c: i64 = cons.iter().map(|&x| x as i64).sum();
-        p.f = total_u - total_c;
-        let kept: i64 = p.lo.iter().map(|&x| x as i64).sum();
-        if p.f < 0 {
-            p.note = Some(format!(
+        self.f = total_u - total_c;
+        let kept: i64 = self.lo.iter().map(|&x| x as i64).sum();
+        if self.f < 0 {
+            self.note = Some(format!(
                 "the joints remove {} DOF more than the bodies have: no placement of inputs \
                  can determine the mechanism",
-                -p.f
+                -self.f
             ));
-            return Ok(p);
+            return false;
         }
-        if kept > p.f {
-            p.note = Some(format!(
+        if kept > self.f {
+            self.note = Some(format!(
                 "the kept inputs ({kept}) are more than the {} the mechanism takes",
-                p.f
+                self.f
             ));
-            return Ok(p);
+            return false;
         }
-        p.need = (p.f - kept) as usize;
+        self.need = (self.f - kept) as usize;
         // Without this the search finds nothing and the user reads "0 placements" with no
         // reason (a Stewart platform with --on P: 6 pistons for 11 inputs).
-        let capacity: i64 =
-            p.hi.iter()
-                .zip(&p.lo)
-                .map(|(&h, &l)| i64::from(h.saturating_sub(l)))
-                .sum();
-        if capacity < p.need as i64 {
-            p.note = Some(format!(
+        let capacity: i64 = self
+            .hi
+            .iter()
+            .zip(&self.lo)
+            .map(|(&h, &l)| i64::from(h.saturating_sub(l)))
+            .sum();
+        if capacity < self.need as i64 {
+            self.note = Some(format!(
                 "the joints that may be driven carry {capacity} DOF in all, fewer than the {} \
                  input(s) to place: no placement exists",
-                p.need
+                self.need
             ));
-            return Ok(p);
+            return false;
         }
+        true
+    }
+
+    /// The matching of the constraint equations `cons` and the kept inputs; `None` with a
+    /// note when some of them over-determine the bodies.
+    fn route(
+        &mut self,
+        m: &Mechanism,
+        cons: &[u32],
+        meter: &mut Meter,
+    ) -> Result<Option<State>, BudgetExceeded> {
+        let nq = m.joints.len();
         let mut s = State {
             flow: vec![[0; 2]; nq],
-            used: vec![0; nb],
+            used: vec![0; m.bodies.len()],
         };
-        let mut scratch = p.scratch();
+        let mut scratch = self.scratch();
         for (q, &n) in cons.iter().enumerate() {
             for _ in 0..n {
-                let r = p.augment(&mut s, &[q], &mut scratch);
+                let r = self.augment(&mut s, &[q], &mut scratch);
                 meter.charge(scratch.queue.len() as u64 + 1)?;
                 if r.is_none() {
-                    p.note = Some(format!(
+                    self.note = Some(format!(
                         "the joints' own equations over-determine the bodies near joint {} (by \
                          count): no placement of inputs can determine the mechanism",
                         m.joints[q].id
                     ));
-                    return Ok(p);
+                    return Ok(None);
                 }
             }
         }
         for q in 0..nq {
-            for _ in 0..p.lo[q] {
-                let r = p.augment(&mut s, &[q], &mut scratch);
+            for _ in 0..self.lo[q] {
+                let r = self.augment(&mut s, &[q], &mut scratch);
                 meter.charge(scratch.queue.len() as u64 + 1)?;
                 if r.is_none() {
-                    p.note = Some(format!(
+                    self.note = Some(format!(
                         "the kept input on joint {} over-determines the bodies it joins: no \
                          placement keeping it is determined",
                         m.joints[q].id
                     ));
-                    return Ok(p);
+                    return Ok(None);
                 }
             }
         }
-        p.root = Some(s);
-        Ok(p)
+        Ok(Some(s))
     }
 
     /// A flow routing the equations and the inputs of placement `w` (units per pair, sparse,
@@ -366,6 +353,89 @@ impl Problem {
             }
         }
         None
+    }
+}
+
+/// What the input-free analysis of an expansion tells its [`Problem`]: each body's unknowns
+/// (less its isolated spins), the equations set aside, and the exact decision of the
+/// placements.
+struct Unknowns {
+    u: Vec<u32>,
+    isolated: u32,
+    /// Constraint equations of each pair dependent at the file's configuration.
+    set_aside: Vec<u32>,
+    oracle: Oracle,
+    lean: Option<Lean>,
+}
+
+impl Unknowns {
+    fn of(
+        m: &Mechanism,
+        opts: &TransformOptions,
+        cache: &structure::AnalysisCache,
+        ids: &Arc<Vec<String>>,
+        meter: &mut Meter,
+    ) -> Result<Unknowns, BudgetExceeded> {
+        let nb = m.bodies.len();
+        let b = m.b();
+        let mut u = vec![b; nb];
+        u[m.frame] = 0;
+        let mut isolated = 0u32;
+        let mut oracle = Oracle::Undecided;
+        let mut lean = None;
+        // Constraint equations dependent at the file's configuration fix nothing: inputs take
+        // their place (a planar four-bar written in space takes one input, not none).
+        let mut set_aside = vec![0u32; m.joints.len()];
+        if !opts.analysis.count_only {
+            // Spins no input can drive (a bar between two spherical joints): the rank check's
+            // isolated freedoms with no input at all, on bodies held by two pairs or more. A
+            // body hanging on a single joint also moves with its neighbours held, but that is
+            // the joint's own freedom, which an input on it drives.
+            let mut pairs = vec![0usize; nb];
+            for j in &m.joints {
+                for &x in &j.bodies {
+                    pairs[x] += 1;
+                }
+            }
+            // The geometry was checked before the enumeration: this analysis cannot fail. It
+            // is charged like the analysis of one placement.
+            meter.charge(analysis_work(m))?;
+            let a =
+                structure::analyze_cached(m, &opts.analysis, &Library::empty(), Some(cache), None)
+                    .ok();
+            let a = a.as_ref();
+            if let Some(a) = a {
+                for (q, &n) in a.set_aside.iter().enumerate() {
+                    set_aside[q] = n;
+                }
+                oracle = Oracle::of(m, a, opts.full_analyses, meter)?;
+                if matches!(oracle, Oracle::Motions { .. })
+                    && !opts.full_analyses
+                    && opts.analysis.method == structure::Method::Flow
+                    && a.isolated.is_empty()
+                    && a.redundant.is_empty()
+                    && a.set_aside.iter().all(|&n| n == 0)
+                {
+                    lean = Some(Lean::of(m, ids));
+                }
+            }
+            for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
+                let id = crate::mechanism::BodyId::from_text(&iso.body);
+                if let Some(x) = m.body_index(&id)
+                    && pairs[x] >= 2
+                {
+                    u[x] = u[x].saturating_sub(iso.dimension);
+                    isolated += iso.dimension;
+                }
+            }
+        }
+        Ok(Unknowns {
+            u,
+            isolated,
+            set_aside,
+            oracle,
+            lean,
+        })
     }
 }
 
