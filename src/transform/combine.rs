@@ -64,10 +64,36 @@ pub(super) fn join_parts(
     }
     inputs.sort_unstable_by_key(|i| (i.0, i.1, i.2));
     groups.sort_unstable();
+    let (types, kinds, in_lib) = joined_types(members, &groups);
+    let partition = joined_partition(members, sets, &groups, ids);
+    Some(Placement {
+        rank: None,
+        family: None,
+        scores: key?.scores(),
+        inputs_at: inputs.iter().map(|i| i.0).collect(),
+        inputs: inputs.into_iter().map(|i| i.3).collect(),
+        expansion,
+        types,
+        partition,
+        seq: 0,
+        exp,
+        groups_at: groups.iter().map(|g| (g.0, g.2)).collect(),
+        kinds,
+        in_lib,
+        lean: None,
+    })
+}
+
+/// The group types of a joined placement in order of first appearance, and each group's
+/// type and coverage (`groups`: level, size, smallest body, part, group; canonical order).
+fn joined_types(
+    members: &[&Placement],
+    groups: &[(usize, usize, usize, usize, usize)],
+) -> (Vec<TypeCount>, Vec<u32>, Vec<bool>) {
     let mut types: Vec<TypeCount> = Vec::new();
     let mut kinds = Vec::with_capacity(groups.len());
     let mut in_lib = Vec::with_capacity(groups.len());
-    for &(_, _, _, pi, gi) in &groups {
+    for &(_, _, _, pi, gi) in groups {
         let p = members[pi];
         let kind = p
             .kinds
@@ -91,6 +117,17 @@ pub(super) fn join_parts(
         kinds.push(t as u32);
         in_lib.push(p.in_lib[gi]);
     }
+    (types, kinds, in_lib)
+}
+
+/// The partition of a joined placement: its `groups` (level, size, smallest body, part,
+/// group; canonical order) with their bodies in the whole's indices.
+fn joined_partition(
+    members: &[&Placement],
+    sets: &[(Vec<usize>, Vec<usize>)],
+    groups: &[(usize, usize, usize, usize, usize)],
+    ids: &Arc<Vec<String>>,
+) -> Partition {
     // A group's bodies in the whole's indices (`None`: a part named a body its id table
     // lacks, never expected; the partition is then kept as text).
     let whole = |pi: usize, gi: usize| -> Option<Vec<u32>> {
@@ -112,7 +149,7 @@ pub(super) fn join_parts(
     let indexed = members
         .iter()
         .all(|p| matches!(p.partition.0, Repr::Indexed { .. }));
-    let partition = if indexed {
+    if indexed {
         Partition::indexed(
             ids,
             groups
@@ -137,23 +174,7 @@ pub(super) fn join_parts(
                 })
                 .collect(),
         ))
-    };
-    Some(Placement {
-        rank: None,
-        family: None,
-        scores: key?.scores(),
-        inputs_at: inputs.iter().map(|i| i.0).collect(),
-        inputs: inputs.into_iter().map(|i| i.3).collect(),
-        expansion,
-        types,
-        partition,
-        seq: 0,
-        exp,
-        groups_at: groups.iter().map(|g| (g.0, g.2)).collect(),
-        kinds,
-        in_lib,
-        lean: None,
-    })
+    }
 }
 
 /// The scores of a placement as a combinable key: groups and covered groups add up over the
