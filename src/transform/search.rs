@@ -41,65 +41,10 @@ impl Problem {
             version: 1,
             free: 0,
         };
-        // The greedy first placement: as many units as fit on each candidate in order.
-        let mut placed = 0usize;
-        let mut full = vec![false; self.u.len()];
-        for &q in &self.cand {
-            while placed < self.need && t.w[q] < t.hi[q] {
-                // Bodies whose spare unknowns no unit reaches are marked `full` once, so a
-                // run of candidates that take no unit costs one pass (charged: bodies seen).
-                let r = self.augment_marked(&mut t.s, &[q], &mut t.sc, Some(&mut full));
-                meter.charge(t.sc.queue.len() as u64 + 1)?;
-                if r.is_none() {
-                    break;
-                }
-                t.w[q] += 1;
-                placed += 1;
-            }
-        }
-        if placed < self.need {
+        if !self.greedy(&mut t, meter)? {
             return Ok(());
         }
-        // Units every placement needs (matroid coloops) are fixed at once: a unit is needed
-        // unless some slot outside the placement reaches it by an alternating path (one BFS
-        // from all such slots). A tree (star, serial chain) is then decided in linear time.
-        {
-            let Search { s, w, hi, sc, .. } = &mut t;
-            sc.next_stamp();
-            for &q in &self.cand {
-                if w[q] < hi[q] {
-                    for x in [self.a[q], self.c[q]] {
-                        if x != self.frame && sc.seen[x] != sc.stamp {
-                            sc.seen[x] = sc.stamp;
-                            sc.queue.push(x);
-                        }
-                    }
-                }
-            }
-            let mut reached = vec![false; self.a.len()];
-            let mut qi = 0;
-            while qi < sc.queue.len() {
-                let x = sc.queue[qi];
-                qi += 1;
-                meter.charge(1 + self.touching[x].len() as u64)?;
-                for &r in &self.touching[x] {
-                    if s.flow[r][self.side(r, x)] == 0 {
-                        continue;
-                    }
-                    reached[r] = true;
-                    let y = self.other(r, x);
-                    if y != self.frame && y != x && sc.seen[y] != sc.stamp {
-                        sc.seen[y] = sc.stamp;
-                        sc.queue.push(y);
-                    }
-                }
-            }
-            for &q in &self.cand {
-                if !reached[q] {
-                    t.lo[q] = t.lo[q].max(t.w[q]);
-                }
-            }
-        }
+        self.fix_coloops(&mut t, meter)?;
         t.trail.clear();
         t.free = (0..t.w.len()).map(|q| t.free_of(q)).sum();
         // Choice points: (trail mark, candidate position) whose "no more units" branch is
@@ -145,6 +90,69 @@ impl Problem {
                 }
             }
         }
+    }
+
+    /// The greedy first placement: as many units as fit on each candidate in order.
+    /// `false` when it falls short (there is no placement).
+    fn greedy(&self, t: &mut Search, meter: &mut Meter) -> Result<bool, BudgetExceeded> {
+        let mut placed = 0usize;
+        let mut full = vec![false; self.u.len()];
+        for &q in &self.cand {
+            while placed < self.need && t.w[q] < t.hi[q] {
+                // Bodies whose spare unknowns no unit reaches are marked `full` once, so a
+                // run of candidates that take no unit costs one pass (charged: bodies seen).
+                let r = self.augment_marked(&mut t.s, &[q], &mut t.sc, Some(&mut full));
+                meter.charge(t.sc.queue.len() as u64 + 1)?;
+                if r.is_none() {
+                    break;
+                }
+                t.w[q] += 1;
+                placed += 1;
+            }
+        }
+        Ok(placed >= self.need)
+    }
+
+    /// Fix the units every placement needs (matroid coloops): a unit is needed
+    /// unless some slot outside the placement reaches it by an alternating path (one BFS
+    /// from all such slots). A tree (star, serial chain) is then decided in linear time.
+    fn fix_coloops(&self, t: &mut Search, meter: &mut Meter) -> Result<(), BudgetExceeded> {
+        let Search { s, w, hi, sc, .. } = t;
+        sc.next_stamp();
+        for &q in &self.cand {
+            if w[q] < hi[q] {
+                for x in [self.a[q], self.c[q]] {
+                    if x != self.frame && sc.seen[x] != sc.stamp {
+                        sc.seen[x] = sc.stamp;
+                        sc.queue.push(x);
+                    }
+                }
+            }
+        }
+        let mut reached = vec![false; self.a.len()];
+        let mut qi = 0;
+        while qi < sc.queue.len() {
+            let x = sc.queue[qi];
+            qi += 1;
+            meter.charge(1 + self.touching[x].len() as u64)?;
+            for &r in &self.touching[x] {
+                if s.flow[r][self.side(r, x)] == 0 {
+                    continue;
+                }
+                reached[r] = true;
+                let y = self.other(r, x);
+                if y != self.frame && y != x && sc.seen[y] != sc.stamp {
+                    sc.seen[y] = sc.stamp;
+                    sc.queue.push(y);
+                }
+            }
+        }
+        for &q in &self.cand {
+            if !reached[q] {
+                t.lo[q] = t.lo[q].max(t.w[q]);
+            }
+        }
+        Ok(())
     }
 
     /// "One more unit on `q`" when the placement has none spare there: add a unit of `q` and
