@@ -82,53 +82,7 @@ impl ExpansionParts {
             return Ok(None);
         }
         meter.charge((m.bodies.len() + e.ends.len()) as u64 / 8 + 1)?;
-        // One placement per part is enough to know whether there are several; the parts are
-        // analysed at the whole's random realization even where a part alone has the file's
-        // geometry.
-        let popts = TransformOptions {
-            limit: Some(1),
-            analysis: structure::Options {
-                geometry: random_source(opts.analysis.geometry),
-                ..opts.analysis
-            },
-            ..opts.clone()
-        };
-        let mut local = vec![usize::MAX; m.bodies.len()];
-        let mut of_part: Vec<usize> = Vec::with_capacity(sets.len());
-        let mut key: Vec<u32> = Vec::new();
-        for (joints, bodies) in &sets {
-            let joint = |q: usize| (m.joints[e.origin[q]].kind, &e.ends[q][..], e.origin[q]);
-            part_key(m, joints, bodies, joint, rules, &mut local, &mut key);
-            let at = match self.index.get(&key) {
-                Some(&at) => at,
-                None => {
-                    let mech = part_mechanism_of(m, joints, bodies, &mut local, |q| e.joint(q));
-                    let origins: Vec<usize> = joints.iter().map(|&q| e.origin[q]).collect();
-                    let prules = rules.restrict(&origins);
-                    let mut first: Option<Placement> = None;
-                    let placed = place(
-                        &mech,
-                        &prules,
-                        &popts,
-                        lib,
-                        meter,
-                        None,
-                        &mut |p| {
-                            first.get_or_insert(p);
-                            true
-                        },
-                        None,
-                    )?;
-                    self.results.push(PartResult {
-                        placed,
-                        placement: first,
-                    });
-                    self.index.insert(key.clone(), self.results.len() - 1);
-                    self.results.len() - 1
-                }
-            };
-            of_part.push(at);
-        }
+        let of_part = self.results_of(e, &sets, rules, opts, lib, meter)?;
         let results = &self.results;
         let placed = |i: usize| &results[of_part[i]].placed;
         if (0..sets.len()).any(|i| !placed(i).notes.is_empty()) {
@@ -179,6 +133,68 @@ impl ExpansionParts {
         };
         by.placement = Some(Some(p));
         Ok(Some(by))
+    }
+
+    /// The entry of `results` of each part of expansion `e` (`sets`), each structure placed
+    /// once.
+    fn results_of(
+        &mut self,
+        e: &Skeleton<'_>,
+        sets: &[(Vec<usize>, Vec<usize>)],
+        rules: &Rules,
+        opts: &TransformOptions,
+        lib: &Library,
+        meter: &mut Meter,
+    ) -> Result<Vec<usize>, TransformError> {
+        let m = e.m;
+        // One placement per part is enough to know whether there are several; the parts are
+        // analysed at the whole's random realization even where a part alone has the file's
+        // geometry.
+        let popts = TransformOptions {
+            limit: Some(1),
+            analysis: structure::Options {
+                geometry: random_source(opts.analysis.geometry),
+                ..opts.analysis
+            },
+            ..opts.clone()
+        };
+        let mut local = vec![usize::MAX; m.bodies.len()];
+        let mut of_part: Vec<usize> = Vec::with_capacity(sets.len());
+        let mut key: Vec<u32> = Vec::new();
+        for (joints, bodies) in sets {
+            let joint = |q: usize| (m.joints[e.origin[q]].kind, &e.ends[q][..], e.origin[q]);
+            part_key(m, joints, bodies, joint, rules, &mut local, &mut key);
+            let at = match self.index.get(&key) {
+                Some(&at) => at,
+                None => {
+                    let mech = part_mechanism_of(m, joints, bodies, &mut local, |q| e.joint(q));
+                    let origins: Vec<usize> = joints.iter().map(|&q| e.origin[q]).collect();
+                    let prules = rules.restrict(&origins);
+                    let mut first: Option<Placement> = None;
+                    let placed = place(
+                        &mech,
+                        &prules,
+                        &popts,
+                        lib,
+                        meter,
+                        None,
+                        &mut |p| {
+                            first.get_or_insert(p);
+                            true
+                        },
+                        None,
+                    )?;
+                    self.results.push(PartResult {
+                        placed,
+                        placement: first,
+                    });
+                    self.index.insert(key.clone(), self.results.len() - 1);
+                    self.results.len() - 1
+                }
+            };
+            of_part.push(at);
+        }
+        Ok(of_part)
     }
 }
 
