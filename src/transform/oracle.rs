@@ -54,53 +54,17 @@ impl Oracle {
         full_analyses: bool,
         meter: &mut Meter,
     ) -> Result<Oracle, BudgetExceeded> {
-        use crate::exact::{Factor, models};
+        use crate::exact::Factor;
         let Some(seed) = a.geometry.as_ref().and_then(|g| g.seed) else {
             return Ok(Oracle::Undecided);
         };
         let b = m.b() as usize;
-        let pair = |q: usize| match m.joints[q].bodies[..] {
-            [x, y] => Some((x, y)),
-            _ => None,
-        };
         if m.joints.iter().any(|j| j.bodies.len() != 2) {
             return Ok(Oracle::Undecided);
         }
-        // A dependency the analysis named among the constraint rows alone: the rows of the
-        // named joints, exactly.
-        for r in a.redundant.iter().filter(|r| !r.configuration) {
-            let named: std::collections::HashSet<&str> =
-                r.joints.iter().map(String::as_str).collect();
-            let qs: Vec<usize> = (0..m.joints.len())
-                .filter(|&q| named.contains(m.joints[q].id.as_str()))
-                .collect();
-            meter.charge(m.joints.len() as u64 / 8 + 1)?;
-            let mut bodies: Vec<usize> = qs
-                .iter()
-                .filter_map(|&q| pair(q))
-                .flat_map(|(x, y)| [x, y])
-                .filter(|&x| x != m.frame)
-                .collect();
-            bodies.sort_unstable();
-            bodies.dedup();
-            let rows: Vec<_> = qs
-                .iter()
-                .map(|&q| models::joint_rows(m, q, seed, 0))
-                .collect();
-            let total: usize = rows.iter().map(|r| r.nrows()).sum();
-            let rank = models::pairs_rank(
-                b,
-                bodies.len(),
-                &rows,
-                qs.iter().enumerate().filter_map(|(i, &q)| {
-                    let (x, y) = pair(q)?;
-                    Some((i, x, y))
-                }),
-                |x| bodies.binary_search(&x).ok(),
-            );
-            if rank < total {
-                return Ok(Oracle::Reject);
-            }
+        // A dependency the analysis named among the constraint rows alone.
+        if named_dependency(m, a, seed, meter)? {
+            return Ok(Oracle::Reject);
         }
         // The count's nullity of J: unknowns less constraint rows.
         let movable = m.bodies.len().saturating_sub(1);
@@ -265,4 +229,54 @@ impl Oracle {
             }
         }
     }
+}
+
+/// Whether a dependency the analysis `a` named among the constraint rows alone holds: the
+/// rows of the named joints at realization `seed`, exactly, of rank below their number.
+fn named_dependency(
+    m: &Mechanism,
+    a: &Analysis,
+    seed: u64,
+    meter: &mut Meter,
+) -> Result<bool, BudgetExceeded> {
+    use crate::exact::models;
+    let b = m.b() as usize;
+    let pair = |q: usize| match m.joints[q].bodies[..] {
+        [x, y] => Some((x, y)),
+        _ => None,
+    };
+    for r in a.redundant.iter().filter(|r| !r.configuration) {
+        let named: std::collections::HashSet<&str> = r.joints.iter().map(String::as_str).collect();
+        let qs: Vec<usize> = (0..m.joints.len())
+            .filter(|&q| named.contains(m.joints[q].id.as_str()))
+            .collect();
+        meter.charge(m.joints.len() as u64 / 8 + 1)?;
+        let mut bodies: Vec<usize> = qs
+            .iter()
+            .filter_map(|&q| pair(q))
+            .flat_map(|(x, y)| [x, y])
+            .filter(|&x| x != m.frame)
+            .collect();
+        bodies.sort_unstable();
+        bodies.dedup();
+        let rows: Vec<_> = qs
+            .iter()
+            .map(|&q| models::joint_rows(m, q, seed, 0))
+            .collect();
+        let total: usize = rows.iter().map(|r| r.nrows()).sum();
+        let rank = models::pairs_rank(
+            b,
+            bodies.len(),
+            &rows,
+            qs.iter().enumerate().filter_map(|(i, &q)| {
+                let (x, y) = pair(q)?;
+                Some((i, x, y))
+            }),
+            |x| bodies.binary_search(&x).ok(),
+        );
+        if rank < total {
+            return Ok(true);
+        }
+    }
+    Ok(false)
 }
