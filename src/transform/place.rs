@@ -42,36 +42,7 @@ pub(super) fn place(
     mut keep: Option<&mut Option<Problem>>,
 ) -> Result<Placed, TransformError> {
     let exps = Expansions::of(m, opts.max_expansions);
-    let mut st = Placing {
-        cx: Analyses {
-            opts,
-            lib,
-            progress,
-            // The body ids every placement's partition indexes (an expansion keeps the bodies).
-            names: BodyNames::of(m),
-            per_eval: analysis_work(m),
-            // With `keep` and one expansion, a placement analysed from the search's flow
-            // carries its inputs (`Placement::lean`), and the expansion's problem is kept to
-            // make its groups again.
-            defer: keep.is_some() && exps.len == 1,
-        },
-        r: Placed {
-            expansions: exps.len,
-            expansions_total: exps.total,
-            f: crate::mobility::mobility(m).mobility.count,
-            ..Placed::default()
-        },
-        limit: opts.limit.unwrap_or(usize::MAX),
-        found: 0,
-        stopped: false,
-        batch: Vec::new(),
-        batch_size: 1,
-        // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
-        max_batch: (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH),
-        // The analyses charge their own meter (the search holds `meter`): each may spend the
-        // work budget.
-        eval_meter: opts.budget.meter("the analysis of the placements"),
-    };
+    let mut st = Placing::new(m, &exps, opts, lib, progress, keep.is_some());
     let mut by_parts = ExpansionParts::applies(&exps, rules, opts).then(ExpansionParts::default);
     for x in 0..exps.len {
         if let Some(parts) = &mut by_parts
@@ -148,6 +119,50 @@ struct Placing<'a> {
     batch_size: usize,
     max_batch: usize,
     eval_meter: Meter,
+}
+
+impl<'a> Placing<'a> {
+    /// The state before the first expansion; with `keep`, a mechanism of one expansion
+    /// keeps its inputs on the placements analysed from the search's flow.
+    fn new(
+        m: &Mechanism,
+        exps: &Expansions<'_>,
+        opts: &'a TransformOptions,
+        lib: &'a Library,
+        progress: Option<ProgressFn<'a>>,
+        keep: bool,
+    ) -> Placing<'a> {
+        Placing {
+            cx: Analyses {
+                opts,
+                lib,
+                progress,
+                // The body ids every placement's partition indexes (an expansion keeps the bodies).
+                names: BodyNames::of(m),
+                per_eval: analysis_work(m),
+                // With `keep` and one expansion, a placement analysed from the search's flow
+                // carries its inputs (`Placement::lean`), and the expansion's problem is kept to
+                // make its groups again.
+                defer: keep && exps.len == 1,
+            },
+            r: Placed {
+                expansions: exps.len,
+                expansions_total: exps.total,
+                f: crate::mobility::mobility(m).mobility.count,
+                ..Placed::default()
+            },
+            limit: opts.limit.unwrap_or(usize::MAX),
+            found: 0,
+            stopped: false,
+            batch: Vec::new(),
+            batch_size: 1,
+            // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
+            max_batch: (BATCH_FLOW_BYTES / (2 * m.joints.len().max(1))).clamp(1, BATCH),
+            // The analyses charge their own meter (the search holds `meter`): each may spend the
+            // work budget.
+            eval_meter: opts.budget.meter("the analysis of the placements"),
+        }
+    }
 }
 
 impl Placing<'_> {
