@@ -266,10 +266,6 @@ impl Lean {
     /// The groups of placement `w` (pairs of `m`, all binary) whose search flow is `flow`.
     pub(super) fn groups(&self, m: &Mechanism, flow: &[[u8; 2]], lib: &Library) -> Groups {
         let nb = m.bodies.len();
-        let ends = |q: usize| {
-            let [a, c] = self.ends[q];
-            (a as usize, c as usize)
-        };
         let raw = self.raw(flow);
         // Solve-order key: the frame (and bodies no joint names) first, then the groups.
         let mut key = vec![-2i64; nb];
@@ -297,29 +293,7 @@ impl Lean {
         let mut kinds: Vec<(JointType, usize)> = Vec::new();
         for (g, grp) in raw.iter().enumerate() {
             let gk = g as i64;
-            kinds.clear();
-            for &x in &grp.1 {
-                for &q in &self.touch[self.start[x]..self.start[x + 1]] {
-                    let q = q as usize;
-                    let (a, c) = ends(q);
-                    let y = if a == x { c } else { a };
-                    // Active: internal (counted once, from its first body) or to a body
-                    // solved before.
-                    if (key[y] == gk && x != a) || key[y] > gk {
-                        continue;
-                    }
-                    let jt = self.kind[q];
-                    match kinds.iter_mut().find(|(k, _)| *k == jt) {
-                        Some((_, c)) => *c += 1,
-                        None => kinds.push((jt, 1)),
-                    }
-                }
-            }
-            kinds.sort_unstable_by_key(|&(k, _)| k);
-            let mut kind = String::new();
-            for (k, n) in &kinds {
-                let _ = std::fmt::Write::write_fmt(&mut kind, format_args!("{n}{}", k.code()));
-            }
+            let mut kind = self.kind_of(&grp.1, gk, &key, &mut kinds);
             kind.push_str(m.space.suffix());
             let t = match type_index.get(&kind) {
                 Some(&t) => t,
@@ -352,5 +326,45 @@ impl Lean {
                 .map(|grp| grp.1.iter().map(|&x| x as u32).collect()),
         );
         out
+    }
+
+    /// The SG type of the group of `bodies` (number `gk` in solve order, `key` each body's
+    /// group) without its space suffix: its active pairs counted by joint type. `kinds` is a
+    /// buffer.
+    fn kind_of(
+        &self,
+        bodies: &[usize],
+        gk: i64,
+        key: &[i64],
+        kinds: &mut Vec<(JointType, usize)>,
+    ) -> String {
+        let ends = |q: usize| {
+            let [a, c] = self.ends[q];
+            (a as usize, c as usize)
+        };
+        kinds.clear();
+        for &x in bodies {
+            for &q in &self.touch[self.start[x]..self.start[x + 1]] {
+                let q = q as usize;
+                let (a, c) = ends(q);
+                let y = if a == x { c } else { a };
+                // Active: internal (counted once, from its first body) or to a body
+                // solved before.
+                if (key[y] == gk && x != a) || key[y] > gk {
+                    continue;
+                }
+                let jt = self.kind[q];
+                match kinds.iter_mut().find(|(k, _)| *k == jt) {
+                    Some((_, c)) => *c += 1,
+                    None => kinds.push((jt, 1)),
+                }
+            }
+        }
+        kinds.sort_unstable_by_key(|&(k, _)| k);
+        let mut kind = String::new();
+        for (k, n) in kinds.iter() {
+            let _ = std::fmt::Write::write_fmt(&mut kind, format_args!("{n}{}", k.code()));
+        }
+        kind
     }
 }
