@@ -229,31 +229,7 @@ pub(super) fn part_sets_of<'a>(
     nj: usize,
     bodies_of: impl Fn(usize) -> &'a [usize],
 ) -> Vec<(Vec<usize>, Vec<usize>)> {
-    let mut parent: Vec<usize> = (0..nb).collect();
-    fn root(p: &mut [usize], mut x: usize) -> usize {
-        while p[x] != x {
-            p[x] = p[p[x]];
-            x = p[x];
-        }
-        x
-    }
-    for q in 0..nj {
-        let mut first: Option<usize> = None;
-        for &b in bodies_of(q) {
-            if b == frame || b >= nb {
-                continue;
-            }
-            match first {
-                None => first = Some(b),
-                Some(f) => {
-                    let (ra, rb) = (root(&mut parent, f), root(&mut parent, b));
-                    if ra != rb {
-                        parent[ra.max(rb)] = ra.min(rb);
-                    }
-                }
-            }
-        }
-    }
+    let mut parent = linked_bodies(nb, frame, nj, &bodies_of);
     // Part of each root, numbered by first joint, then bodies without joints by index.
     let mut part_of: Vec<Option<usize>> = vec![None; nb];
     let mut joints_of: Vec<Vec<usize>> = Vec::new();
@@ -307,6 +283,44 @@ pub(super) fn part_sets_of<'a>(
         bodies.insert(at, frame);
     }
     joints_of.into_iter().zip(bodies_of).collect()
+}
+
+/// Union-find of the bodies other than the frame, joined by the joints (`bodies_of(q)`):
+/// each body's parent, the smallest body of its set at the root.
+fn linked_bodies<'a>(
+    nb: usize,
+    frame: usize,
+    nj: usize,
+    bodies_of: &impl Fn(usize) -> &'a [usize],
+) -> Vec<usize> {
+    let mut parent: Vec<usize> = (0..nb).collect();
+    for q in 0..nj {
+        let mut first: Option<usize> = None;
+        for &b in bodies_of(q) {
+            if b == frame || b >= nb {
+                continue;
+            }
+            match first {
+                None => first = Some(b),
+                Some(f) => {
+                    let (ra, rb) = (root(&mut parent, f), root(&mut parent, b));
+                    if ra != rb {
+                        parent[ra.max(rb)] = ra.min(rb);
+                    }
+                }
+            }
+        }
+    }
+    parent
+}
+
+/// The root of `x` in the union-find `p`, halving the path.
+fn root(p: &mut [usize], mut x: usize) -> usize {
+    while p[x] != x {
+        p[x] = p[p[x]];
+        x = p[x];
+    }
+    x
 }
 
 /// The mechanism of one part of `m` (its `joints` and sorted `bodies`, the frame among them).

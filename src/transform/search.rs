@@ -157,6 +157,8 @@ impl Problem {
 
     /// "One more unit on `q`" when the placement has none spare there: add a unit of `q` and
     /// drop a free unit (above its lower bound) of another pair, along an alternating path.
+    /// (Over 80 lines: one breadth-first search for the free unit, then the walk back along its
+    /// path.)
     fn exchange_in(
         &self,
         t: &mut Search,
