@@ -182,7 +182,7 @@ fn joined_partition(
 /// maxima. So the whole's scores are a function of the parts' keys, and ranking the whole
 /// by any `--rank` order only needs each part's placements grouped by key.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub(super) struct Key {
+struct Key {
     groups: usize,
     covered: usize,
     all_covered: bool,
@@ -223,7 +223,7 @@ impl Key {
 /// One part's placements by key: how many, and the first `cap` of each (enumeration order,
 /// in the part's own indices), with what placing it found. Kept once for every part of the
 /// same structure ([`combine_parts`]).
-pub(super) struct PartKeys {
+struct PartKeys {
     placed: Placed,
     keys: Vec<(Key, u128, Vec<Placement>)>,
     /// Placed on a part of the same structure that may be another (binary joints, random

@@ -33,7 +33,7 @@ pub(super) fn trees(n: usize) -> u64 {
 /// The spanning tree with Prüfer sequence number `index` (base-n digits, most significant
 /// first), as sorted edges `(a, b)`, `a < b`, over local vertices `0..n`. Index 0 is the star on
 /// vertex 0.
-pub(super) fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
+fn prufer_tree(n: usize, mut index: u64) -> Vec<(usize, usize)> {
     if n < 2 {
         return Vec::new();
     }

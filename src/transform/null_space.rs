@@ -8,7 +8,7 @@ use std::cmp::Ordering;
 
 /// Unknowns of one block at most in [`block_null_vectors`] (a dense solve of about `d³`
 /// steps); a larger block falls back to the whole factorization.
-pub(super) const BLOCK_MAX: usize = 384;
+const BLOCK_MAX: usize = 384;
 
 /// A basis of the null space of `J` (the constraint rows of `m` at realization `seed`,
 /// exactly as [`jacobian`] builds them) without factorizing `J`, and each body's first
@@ -513,7 +513,7 @@ pub(super) struct JacobianRows {
 }
 
 /// A body without columns (the frame) in [`JacobianRows`].
-pub(super) const NO_GROUP: u32 = u32::MAX;
+const NO_GROUP: u32 = u32::MAX;
 
 impl JacobianRows {
     /// [`jacobian`]'s rows of `m` at `seed`; `None` where its indices (columns, rows,

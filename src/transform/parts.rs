@@ -26,7 +26,7 @@ pub(super) struct ByParts {
 
 /// The placements of one part of an expansion, as placed alone (in the part's own indices),
 /// kept for every part of any expansion with the same structure.
-pub(super) struct PartResult {
+struct PartResult {
     placed: Placed,
     /// The first determined placement (there is at most one when `placed.cut` is false).
     placement: Option<Placement>,
@@ -200,7 +200,7 @@ impl ExpansionParts {
 
 /// The random realization a geometry source falls back to (the file's geometry is never
 /// used where this is asked: the whole is analysed at a random realization).
-pub(super) fn random_source(g: crate::motion::GeometrySource) -> crate::motion::GeometrySource {
+fn random_source(g: crate::motion::GeometrySource) -> crate::motion::GeometrySource {
     use crate::motion::GeometrySource;
     match g {
         GeometrySource::Auto { seed } => GeometrySource::Random { seed },
@@ -223,7 +223,7 @@ pub(super) fn part_sets(m: &Mechanism) -> Vec<(Vec<usize>, Vec<usize>)> {
 
 /// [`part_sets`] of `nb` bodies, the frame `frame`, and `nj` joints whose bodies are
 /// `bodies_of(q)`.
-pub(super) fn part_sets_of<'a>(
+fn part_sets_of<'a>(
     nb: usize,
     frame: usize,
     nj: usize,
@@ -338,7 +338,7 @@ pub(super) fn part_mechanism(
 
 /// [`part_mechanism`] with joint `q` given by `joint(q)` (the pairs of an expansion not built
 /// as a whole, [`Skeleton`]); the bodies, frame and space are `m`'s.
-pub(super) fn part_mechanism_of(
+fn part_mechanism_of(
     m: &Mechanism,
     joints: &[usize],
     bodies: &[usize],

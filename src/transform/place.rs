@@ -17,14 +17,14 @@ use crate::structure::{self, Library};
 use rayon::prelude::*;
 
 /// Placements analysed per parallel batch (and between progress reports).
-pub(super) const BATCH: usize = 512;
+const BATCH: usize = 512;
 
 /// Bytes of the search's flows a batch may hold (warm starts of the analyses).
-pub(super) const BATCH_FLOW_BYTES: usize = 64 << 20;
+const BATCH_FLOW_BYTES: usize = 64 << 20;
 
 /// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
 /// (units of each pair into its two bodies).
-pub(super) type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
+type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
 
 /// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
 /// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the

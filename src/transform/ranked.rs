@@ -241,7 +241,7 @@ impl Serialize for Ranked {
     }
 }
 
-pub(super) fn finish_listing_note(s: &mut Summary) {
+fn finish_listing_note(s: &mut Summary) {
     if (s.listed as u128) < s.determined {
         s.notes.push(format!(
             "{} determined placements: the best {} are listed",

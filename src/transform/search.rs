@@ -6,7 +6,7 @@ use crate::budget::{BudgetExceeded, Meter};
 
 /// The search's callback: a placement (units per pair) and its flow (units of each pair into
 /// its two bodies); `false` stops the search.
-pub(super) type LeafFn<'a> = &'a mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool;
+type LeafFn<'a> = &'a mut dyn FnMut(&[u32], &[[u32; 2]]) -> bool;
 
 impl Problem {
     /// Visit every count-valid placement (sparse `(pair, driven)`, pair order) in
