@@ -87,17 +87,43 @@ impl CarriedSet<'_> {
         &mut self,
         touching: &[u32],
         p: &PivotRows<'_>,
-        mut trace: Option<&mut Trace>,
+        trace: Option<&mut Trace>,
     ) -> (Vec<(usize, SparseRow)>, usize, u64) {
-        let g = p.g;
-        let sg = self.sizes[g];
         let mut work = 0u64;
         let before: usize = touching
             .iter()
             .filter_map(|&c| self.carried[c as usize].as_ref())
             .map(Carried::entries)
             .sum();
-        // Each one's entries on the group after the reduction (zero on the pivot columns).
+        let mut res = self.reduce_by_pivots(touching, p, &mut work);
+        // The groups whose entries changed: the pivot rows' and the absorbed rows'.
+        let mut changed: Vec<usize> = p.others.to_vec();
+        let mut extra = Vec::new();
+        for &q in p.free {
+            if let Some(e) = self.pivot_on_free(q, p.g, &mut res, &mut changed, &mut work) {
+                extra.push(e);
+            }
+        }
+        let dependent = self.settle(res, changed, trace, &mut work);
+        let after: usize = touching
+            .iter()
+            .filter_map(|&c| self.carried[c as usize].as_ref())
+            .map(Carried::entries)
+            .sum();
+        *self.carried_len = self.carried_len.saturating_sub(before) + after;
+        (extra, dependent, work + touching.len() as u64)
+    }
+
+    /// Each row of `touching` still on group `p.g`, reduced by the pivot rows: its entries
+    /// on the group after the reduction (zero on the pivot columns), taken out of its parts.
+    fn reduce_by_pivots(
+        &mut self,
+        touching: &[u32],
+        p: &PivotRows<'_>,
+        work: &mut u64,
+    ) -> Vec<(u32, Vec<Fp>)> {
+        let g = p.g;
+        let sg = self.sizes[g];
         let mut res: Vec<(u32, Vec<Fp>)> = Vec::with_capacity(touching.len());
         for &c in touching {
             let Some(mut vals) = self.carried[c as usize].as_mut().and_then(|w| {
@@ -115,7 +141,7 @@ impl CarriedSet<'_> {
                 let row = &p.rows[k * p.width..(k + 1) * p.width];
                 axpy_sub(&mut vals, f, &row[..sg]);
                 self.sub_parts(c, f, p.others, &row[sg..]);
-                work += p.width as u64;
+                *work += p.width as u64;
                 if let (Some((tr, chosen, in_ids)), Some(w)) =
                     (p.tr, self.carried[c as usize].as_mut())
                 {
@@ -125,82 +151,98 @@ impl CarriedSet<'_> {
                             *w.combo.entry(in_ids[at as usize]).or_insert(Fp::ZERO) -= f * v;
                         }
                     }
-                    work += chosen.len() as u64;
+                    *work += chosen.len() as u64;
                 }
             }
             res.push((c, vals));
         }
-        // The groups whose entries changed: the pivot rows' and the absorbed rows'.
-        let mut changed: Vec<usize> = p.others.to_vec();
-        let mut extra = Vec::new();
-        for &q in p.free {
-            let best = res
-                .iter()
-                .enumerate()
-                .filter(|(_, (_, v))| !v[q].is_zero())
-                .min_by_key(|(i, (c, _))| {
-                    let len = self.carried[*c as usize]
-                        .as_ref()
-                        .map_or(0, Carried::entries);
-                    (len, *i)
-                })
-                .map(|(i, _)| i);
-            let Some(b) = best else {
-                continue;
-            };
-            let (cb, vb) = res.remove(b);
-            let Some(wb) = self.carried[cb as usize].take() else {
-                continue;
-            };
-            let inv = vb[q].inv();
-            // Flatten its other groups once, for the eliminations below.
-            let mut hs: Vec<usize> = Vec::with_capacity(wb.parts.len());
-            let mut flat: Vec<Fp> = Vec::new();
-            for (&h, part) in &wb.parts {
-                hs.push(h);
-                flat.extend_from_slice(part);
-            }
-            changed.extend_from_slice(&hs);
-            for (ci, vi) in res.iter_mut() {
-                let f = vi[q];
-                if f.is_zero() {
-                    continue;
-                }
-                let f = f * inv;
-                axpy_sub(vi, f, &vb);
-                self.sub_parts(*ci, f, &hs, &flat);
-                work += (sg + flat.len() + wb.combo.len()) as u64;
-                if let Some(wi) = self.carried[*ci as usize].as_mut() {
-                    for (&id, &v) in &wb.combo {
-                        *wi.combo.entry(id).or_insert(Fp::ZERO) -= f * v;
-                    }
-                }
-            }
-            // Its equation, normalized: x[q] = −Σ row · x.
-            let mut row: SparseRow = vb
-                .iter()
-                .enumerate()
-                .filter(|&(k, v)| k != q && !v.is_zero())
-                .map(|(k, &v)| ((self.offsets[g] + k) as u32, v * inv))
-                .collect();
-            let mut c0 = 0;
-            for &h in &hs {
-                for k in 0..self.sizes[h] {
-                    let v = flat[c0 + k];
-                    if !v.is_zero() {
-                        row.push(((self.offsets[h] + k) as u32, v * inv));
-                    }
-                }
-                c0 += self.sizes[h];
-            }
-            row.sort_unstable_by_key(|e| e.0);
-            work += row.len() as u64;
-            extra.push((q, row));
+        res
+    }
+
+    /// Free column `q` of group `g`: the shortest of the reduced rows `res` nonzero there
+    /// becomes its pivot, is eliminated from the others and leaves `res`; returns its
+    /// equation for the record, `x[q] = −Σ row · x`.
+    fn pivot_on_free(
+        &mut self,
+        q: usize,
+        g: usize,
+        res: &mut Vec<(u32, Vec<Fp>)>,
+        changed: &mut Vec<usize>,
+        work: &mut u64,
+    ) -> Option<(usize, SparseRow)> {
+        let sg = self.sizes[g];
+        let b = res
+            .iter()
+            .enumerate()
+            .filter(|(_, (_, v))| !v[q].is_zero())
+            .min_by_key(|(i, (c, _))| {
+                let len = self.carried[*c as usize]
+                    .as_ref()
+                    .map_or(0, Carried::entries);
+                (len, *i)
+            })
+            .map(|(i, _)| i)?;
+        let (cb, vb) = res.remove(b);
+        let wb = self.carried[cb as usize].take()?;
+        let inv = vb[q].inv();
+        // Flatten its other groups once, for the eliminations below.
+        let mut hs: Vec<usize> = Vec::with_capacity(wb.parts.len());
+        let mut flat: Vec<Fp> = Vec::new();
+        for (&h, part) in &wb.parts {
+            hs.push(h);
+            flat.extend_from_slice(part);
         }
-        // The rest are zero on the group: zero everywhere means dependent.
+        changed.extend_from_slice(&hs);
+        for (ci, vi) in res.iter_mut() {
+            let f = vi[q];
+            if f.is_zero() {
+                continue;
+            }
+            let f = f * inv;
+            axpy_sub(vi, f, &vb);
+            self.sub_parts(*ci, f, &hs, &flat);
+            *work += (sg + flat.len() + wb.combo.len()) as u64;
+            if let Some(wi) = self.carried[*ci as usize].as_mut() {
+                for (&id, &v) in &wb.combo {
+                    *wi.combo.entry(id).or_insert(Fp::ZERO) -= f * v;
+                }
+            }
+        }
+        // Its equation, normalized: x[q] = −Σ row · x.
+        let mut row: SparseRow = vb
+            .iter()
+            .enumerate()
+            .filter(|&(k, v)| k != q && !v.is_zero())
+            .map(|(k, &v)| ((self.offsets[g] + k) as u32, v * inv))
+            .collect();
+        let mut c0 = 0;
+        for &h in &hs {
+            for k in 0..self.sizes[h] {
+                let v = flat[c0 + k];
+                if !v.is_zero() {
+                    row.push(((self.offsets[h] + k) as u32, v * inv));
+                }
+            }
+            c0 += self.sizes[h];
+        }
+        row.sort_unstable_by_key(|e| e.0);
+        *work += row.len() as u64;
+        Some((q, row))
+    }
+
+    /// The reduced rows left in `res`, zero on the group: their parts on the `changed`
+    /// groups that cancelled dropped; zero everywhere means dependent (emitted to the
+    /// trace), else still carried. Returns how many were dependent.
+    fn settle(
+        &mut self,
+        res: Vec<(u32, Vec<Fp>)>,
+        mut changed: Vec<usize>,
+        mut trace: Option<&mut Trace>,
+        work: &mut u64,
+    ) -> usize {
         changed.sort_unstable();
         changed.dedup();
-        work += (res.len() * (changed.len() + 1)) as u64;
+        *work += (res.len() * (changed.len() + 1)) as u64;
         let mut dependent = 0;
         for (c, _) in res {
             let Some(w) = self.carried[c as usize].as_mut() else {
@@ -240,13 +282,7 @@ impl CarriedSet<'_> {
                 }
             }
         }
-        let after: usize = touching
-            .iter()
-            .filter_map(|&c| self.carried[c as usize].as_ref())
-            .map(Carried::entries)
-            .sum();
-        *self.carried_len = self.carried_len.saturating_sub(before) + after;
-        (extra, dependent, work + touching.len() as u64)
+        dependent
     }
 }
 
