@@ -58,22 +58,82 @@ pub(super) struct Split {
     pub(super) entries: usize,
 }
 
-/// [`blocks_of`] for any [`Rows`], with the rows without entries and the count of entries.
-pub(super) fn split_rows<R: Rows + ?Sized>(a: &R) -> Split {
-    let (sizes, offsets, group_of) = group_columns(a);
+/// Each row's set of groups (its columns are increasing, so the set is sorted and the
+/// groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
+/// for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
+/// row and its sort chased a pointer per comparison.
+struct RowGroupSets {
+    start: Vec<usize>,
+    sets: Vec<u32>,
+    /// The most groups of a row.
+    longest: usize,
+    /// The entries of the rows in all.
+    entries: usize,
+}
+
+impl RowGroupSets {
+    /// The groups of row `i`.
+    fn set(&self, i: u32) -> &[u32] {
+        &self.sets[self.start[i as usize]..self.start[i as usize + 1]]
+    }
+
+    /// The rows without entries, the nonempty rows sorted by set with their prefix keys,
+    /// and whether equal keys are equal sets (out of `ngroups` groups, `nrows` rows).
+    ///
+    /// The nonempty rows by set, then by index: the order of the former sort of `(set, row)`
+    /// pairs (the keys are distinct, so an unstable sort gives that order). Each row is
+    /// sorted with a prefix key of its set, its first group and one more than its second
+    /// (zero without), which orders sets of one or two groups as their lexicographic order
+    /// does; longer sets (or more groups than a `u32` holds) are compared in full where the
+    /// keys tie. With sets of at most two groups, equal keys are equal sets.
+    #[allow(clippy::type_complexity)]
+    fn rows_by_set(&self, ngroups: usize, nrows: usize) -> (Vec<u32>, Vec<(u64, u32)>, bool) {
+        let start = &self.start;
+        let set = |i: u32| self.set(i);
+        let narrow = ngroups < u32::MAX as usize;
+        let exact = narrow && self.longest <= 2;
+        let prefix = |s: &[u32]| match (narrow, s) {
+            (true, [a, b, ..]) => (u64::from(*a) << 32) | (u64::from(*b) + 1),
+            (true, [a]) => u64::from(*a) << 32,
+            _ => 0,
+        };
+        // A row without entries has no groups.
+        let empty: Vec<u32> = (0..nrows as u32)
+            .filter(|&i| start[i as usize] == start[i as usize + 1])
+            .collect();
+        let mut order: Vec<(u64, u32)> = Vec::with_capacity(nrows - empty.len());
+        order.extend(
+            (0..nrows as u32)
+                .filter(|&i| start[i as usize] != start[i as usize + 1])
+                .map(|i| (prefix(set(i)), i)),
+        );
+        if exact {
+            order.sort_unstable();
+        } else {
+            order.sort_unstable_by(|x, y| {
+                x.0.cmp(&y.0)
+                    .then_with(|| set(x.1).cmp(set(y.1)))
+                    .then(x.1.cmp(&y.1))
+            });
+        }
+        (empty, order, exact)
+    }
+}
+
+/// The [`RowGroupSets`] of `a`, given each column's group.
+fn row_group_sets<R: Rows + ?Sized>(
+    a: &R,
+    group_of: &[usize],
+    buf: &mut SparseRow,
+) -> RowGroupSets {
     let nrows = a.nrows();
-    let mut buf: SparseRow = Vec::new();
     let mut entries = 0;
-    // Each row's set of groups (its columns are increasing, so the set is sorted and the
-    // groups of a row are consecutive), all in one flat array: `sets[start[i]..start[i + 1]]`
-    // for row `i`. One vector of groups per row, sorted with its row index, held 64 bytes a
-    // row and its sort chased a pointer per comparison.
     let mut start: Vec<usize> = Vec::with_capacity(nrows + 1);
     let mut sets: Vec<u32> = Vec::new();
     start.push(0);
     let mut longest = 0;
     for i in 0..nrows {
-        let r = a.row(i, &mut buf);
+        let r = a.row(i, buf);
         entries += r.len();
         let from = sets.len();
         for &(c, _) in r {
@@ -85,39 +145,23 @@ pub(super) fn split_rows<R: Rows + ?Sized>(a: &R) -> Split {
         longest = longest.max(sets.len() - from);
         start.push(sets.len());
     }
-    let set = |i: u32| &sets[start[i as usize]..start[i as usize + 1]];
-    // The nonempty rows by set, then by index: the order of the former sort of `(set, row)`
-    // pairs (the keys are distinct, so an unstable sort gives that order). Each row is
-    // sorted with a prefix key of its set, its first group and one more than its second
-    // (zero without), which orders sets of one or two groups as their lexicographic order
-    // does; longer sets (or more groups than a `u32` holds) are compared in full where the
-    // keys tie. With sets of at most two groups, equal keys are equal sets.
-    let narrow = sizes.len() < u32::MAX as usize;
-    let exact = narrow && longest <= 2;
-    let prefix = |s: &[u32]| match (narrow, s) {
-        (true, [a, b, ..]) => (u64::from(*a) << 32) | (u64::from(*b) + 1),
-        (true, [a]) => u64::from(*a) << 32,
-        _ => 0,
-    };
-    // A row without entries has no groups.
-    let empty: Vec<u32> = (0..nrows as u32)
-        .filter(|&i| start[i as usize] == start[i as usize + 1])
-        .collect();
-    let mut order: Vec<(u64, u32)> = Vec::with_capacity(nrows - empty.len());
-    order.extend(
-        (0..nrows as u32)
-            .filter(|&i| start[i as usize] != start[i as usize + 1])
-            .map(|i| (prefix(set(i)), i)),
-    );
-    if exact {
-        order.sort_unstable();
-    } else {
-        order.sort_unstable_by(|x, y| {
-            x.0.cmp(&y.0)
-                .then_with(|| set(x.1).cmp(set(y.1)))
-                .then(x.1.cmp(&y.1))
-        });
+    RowGroupSets {
+        start,
+        sets,
+        longest,
+        entries,
     }
+}
+
+/// [`blocks_of`] for any [`Rows`], with the rows without entries and the count of entries.
+pub(super) fn split_rows<R: Rows + ?Sized>(a: &R) -> Split {
+    let (sizes, offsets, group_of) = group_columns(a);
+    let nrows = a.nrows();
+    let mut buf: SparseRow = Vec::new();
+    let rs = row_group_sets(a, &group_of, &mut buf);
+    let entries = rs.entries;
+    let (empty, order, exact) = rs.rows_by_set(sizes.len(), nrows);
+    let set = |i: u32| rs.set(i);
     let same = |x: &(u64, u32), y: &(u64, u32)| x.0 == y.0 && (exact || set(x.1) == set(y.1));
     let nblocks = order
         .iter()

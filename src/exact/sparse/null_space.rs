@@ -4,7 +4,7 @@
 use super::super::field::Fp;
 use super::factor::Factor;
 use super::matrix::SparseRow;
-use super::record::solve_extra;
+use super::record::{Record, solve_extra};
 use crate::rng::SplitMix64;
 use std::collections::BinaryHeap;
 
@@ -86,28 +86,7 @@ impl Factor {
     pub fn null_space(&self) -> Vec<SparseRow> {
         let n = self.sizes.len();
         let total = self.ncols();
-        // Records whose front used group h as a neighbour (those are solved after h).
-        let mut users: Vec<Vec<usize>> = vec![Vec::new(); n];
-        let mut rec_of = vec![usize::MAX; n];
-        for (ri, rec) in self.records.iter().enumerate() {
-            rec_of[rec.group()] = ri;
-            for &h in rec.others() {
-                users[h as usize].push(ri);
-            }
-            // A set-aside row's columns on groups outside the record's front.
-            let mut hs: Vec<usize> = rec
-                .extra
-                .iter()
-                .flat_map(|e| e.1.iter())
-                .map(|&(col, _)| self.offsets.partition_point(|&o| o <= col as usize) - 1)
-                .filter(|&h| h != rec.group() && !rec.others().contains(&(h as u32)))
-                .collect();
-            hs.sort_unstable();
-            hs.dedup();
-            for h in hs {
-                users[h].push(ri);
-            }
-        }
+        let users = self.record_users();
         let mut x = vec![Fp::ZERO; total];
         let mut touched_groups: Vec<usize> = Vec::new();
         let mut group_seen = vec![false; n];
@@ -130,33 +109,7 @@ impl Factor {
                 mark(rec.group(), &mut group_seen, &mut touched_groups);
                 while let Some(hi) = heap.pop() {
                     let h = &self.records[hi];
-                    let off = self.offsets[h.group()];
-                    let mut any = solve_extra(h, off, &mut x);
-                    for (i, &pc) in h.pivots().iter().enumerate() {
-                        let row = &h.rows[i * h.width()..(i + 1) * h.width()];
-                        let mut s = Fp::ZERO;
-                        for (j, &q) in h.free().iter().enumerate() {
-                            let v = x[off + q as usize];
-                            if !v.is_zero() {
-                                s += row[j] * v;
-                            }
-                        }
-                        let mut c = h.free().len();
-                        for &o in h.others() {
-                            let o = o as usize;
-                            let so = self.sizes[o];
-                            let xo = &x[self.offsets[o]..self.offsets[o] + so];
-                            for (k, &v) in xo.iter().enumerate() {
-                                if !v.is_zero() {
-                                    s += row[c + k] * v;
-                                }
-                            }
-                            c += so;
-                        }
-                        let val = -s;
-                        x[off + pc as usize] = val;
-                        any |= !val.is_zero();
-                    }
+                    let any = self.solve_sparse(h, &mut x);
                     if any {
                         mark(h.group(), &mut group_seen, &mut touched_groups);
                     }
@@ -190,5 +143,67 @@ impl Factor {
             }
         }
         out
+    }
+
+    /// Per group `h`, the records whose front used it as a neighbour (those are solved
+    /// after `h`), or whose set-aside rows reach it outside their front.
+    fn record_users(&self) -> Vec<Vec<usize>> {
+        let n = self.sizes.len();
+        let mut users: Vec<Vec<usize>> = vec![Vec::new(); n];
+        let mut rec_of = vec![usize::MAX; n];
+        for (ri, rec) in self.records.iter().enumerate() {
+            rec_of[rec.group()] = ri;
+            for &h in rec.others() {
+                users[h as usize].push(ri);
+            }
+            // A set-aside row's columns on groups outside the record's front.
+            let mut hs: Vec<usize> = rec
+                .extra
+                .iter()
+                .flat_map(|e| e.1.iter())
+                .map(|&(col, _)| self.offsets.partition_point(|&o| o <= col as usize) - 1)
+                .filter(|&h| h != rec.group() && !rec.others().contains(&(h as u32)))
+                .collect();
+            hs.sort_unstable();
+            hs.dedup();
+            for h in hs {
+                users[h].push(ri);
+            }
+        }
+        users
+    }
+
+    /// The pivots of record `h` by back substitution in `x`, skipping zero entries (a
+    /// null vector of [`Factor::null_space`] is zero on most groups). Whether any pivot or
+    /// set-aside column came out nonzero.
+    fn solve_sparse(&self, h: &Record, x: &mut [Fp]) -> bool {
+        let off = self.offsets[h.group()];
+        let mut any = solve_extra(h, off, x);
+        for (i, &pc) in h.pivots().iter().enumerate() {
+            let row = &h.rows[i * h.width()..(i + 1) * h.width()];
+            let mut s = Fp::ZERO;
+            for (j, &q) in h.free().iter().enumerate() {
+                let v = x[off + q as usize];
+                if !v.is_zero() {
+                    s += row[j] * v;
+                }
+            }
+            let mut c = h.free().len();
+            for &o in h.others() {
+                let o = o as usize;
+                let so = self.sizes[o];
+                let xo = &x[self.offsets[o]..self.offsets[o] + so];
+                for (k, &v) in xo.iter().enumerate() {
+                    if !v.is_zero() {
+                        s += row[c + k] * v;
+                    }
+                }
+                c += so;
+            }
+            let val = -s;
+            x[off + pc as usize] = val;
+            any |= !val.is_zero();
+        }
+        any
     }
 }

@@ -186,6 +186,7 @@ impl<'a> Pool<'a> {
     /// of a star, the last body of a determined group); a row crossing many groups that is
     /// only carried along adds little. Groups on more than [`EXACT_SCORE_BLOCKS`] blocks
     /// get a bound instead (they go late).
+    /// Over 80 lines: one estimate in two passes over the same blocks, sharing their marks.
     pub(super) fn score(
         &mut self,
         g: usize,

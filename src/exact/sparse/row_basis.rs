@@ -180,14 +180,7 @@ impl RowBasis {
         self.last_dependency = None;
         let mut ctouched: Vec<u32> = Vec::new();
         if self.track {
-            if self.cacc.len() <= id as usize {
-                let n = (2 * self.cacc.len()).max(id as usize + 1);
-                self.cacc.resize(n, Fp::ZERO);
-                self.cmark.resize(n, false);
-            }
-            self.cacc[id as usize] = Fp::ONE;
-            self.cmark[id as usize] = true;
-            ctouched.push(id);
+            self.start_combination(id, &mut ctouched);
         }
         let mut heap: BinaryHeap<Reverse<u32>> = BinaryHeap::with_capacity(row.len() * 2);
         let mut touched: Vec<u32> = Vec::with_capacity(row.len() * 2);
@@ -213,28 +206,7 @@ impl RowBasis {
             }
             let p = self.pivot[c as usize];
             if p == NO_PIVOT {
-                // Independent: the remainder (columns ≥ c) becomes a kept row leading at c.
-                let inv = v.inv();
-                let mut new_row: SparseRow = vec![(c, Fp::ONE)];
-                let mut rest: Vec<u32> = heap.into_iter().map(|r| r.0).collect();
-                rest.sort_unstable();
-                for k in rest {
-                    let w = self.acc[k as usize];
-                    if !w.is_zero() {
-                        new_row.push((k, w * inv));
-                    }
-                }
-                self.pivot[c as usize] = self.rows.len() as u32;
-                self.rows.push(new_row);
-                if self.track {
-                    ctouched.sort_unstable();
-                    let combo = ctouched
-                        .iter()
-                        .map(|&i| (i, self.cacc[i as usize] * inv))
-                        .filter(|e| !e.1.is_zero())
-                        .collect();
-                    self.combos.push(combo);
-                }
+                self.keep_remainder(c, v, heap, &mut ctouched);
                 kept = true;
                 break;
             }
@@ -265,22 +237,72 @@ impl RowBasis {
             self.mark[c as usize] = false;
         }
         if self.track {
-            ctouched.sort_unstable();
-            if !kept {
-                self.last_dependency = Some(
-                    ctouched
-                        .iter()
-                        .map(|&i| (i, self.cacc[i as usize]))
-                        .filter(|e| !e.1.is_zero())
-                        .collect(),
-                );
-            }
-            for i in ctouched {
-                self.cacc[i as usize] = Fp::ZERO;
-                self.cmark[i as usize] = false;
-            }
+            self.finish_combination(ctouched, kept);
         }
         kept
+    }
+
+    /// Tracking: the combination of the row being inserted (id `id`) starts as itself.
+    fn start_combination(&mut self, id: u32, ctouched: &mut Vec<u32>) {
+        if self.cacc.len() <= id as usize {
+            let n = (2 * self.cacc.len()).max(id as usize + 1);
+            self.cacc.resize(n, Fp::ZERO);
+            self.cmark.resize(n, false);
+        }
+        self.cacc[id as usize] = Fp::ONE;
+        self.cmark[id as usize] = true;
+        ctouched.push(id);
+    }
+
+    /// Tracking: the combination of the row just inserted (over the ids `ctouched`) is its
+    /// dependency if it was not kept; then cleared.
+    fn finish_combination(&mut self, mut ctouched: Vec<u32>, kept: bool) {
+        ctouched.sort_unstable();
+        if !kept {
+            self.last_dependency = Some(
+                ctouched
+                    .iter()
+                    .map(|&i| (i, self.cacc[i as usize]))
+                    .filter(|e| !e.1.is_zero())
+                    .collect(),
+            );
+        }
+        for i in ctouched {
+            self.cacc[i as usize] = Fp::ZERO;
+            self.cmark[i as usize] = false;
+        }
+    }
+
+    /// The row being inserted is independent: its remainder in `acc` (leading value `v` at
+    /// column `c`, the other columns left in `heap`) becomes a kept row leading at `c`.
+    fn keep_remainder(
+        &mut self,
+        c: u32,
+        v: Fp,
+        heap: BinaryHeap<Reverse<u32>>,
+        ctouched: &mut [u32],
+    ) {
+        let inv = v.inv();
+        let mut new_row: SparseRow = vec![(c, Fp::ONE)];
+        let mut rest: Vec<u32> = heap.into_iter().map(|r| r.0).collect();
+        rest.sort_unstable();
+        for k in rest {
+            let w = self.acc[k as usize];
+            if !w.is_zero() {
+                new_row.push((k, w * inv));
+            }
+        }
+        self.pivot[c as usize] = self.rows.len() as u32;
+        self.rows.push(new_row);
+        if self.track {
+            ctouched.sort_unstable();
+            let combo = ctouched
+                .iter()
+                .map(|&i| (i, self.cacc[i as usize] * inv))
+                .filter(|e| !e.1.is_zero())
+                .collect();
+            self.combos.push(combo);
+        }
     }
 
     /// Entries stored in the tracked combinations.

@@ -77,17 +77,7 @@ pub(super) fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
     }
     work += adj.len() as u64 * 4;
     drop(owners_of);
-    // Tarjan's strongly connected components; a component is completed only after every
-    // component it reaches, so completion order is reverse topological.
-    let (members, bounds) = crate::structure::tarjan_flat(&adj_start, &adj, &vec![true; n]);
-    let ncomp = (bounds.len() - 1) as u32;
-    let mut comp = vec![0u32; n];
-    for (c, span) in bounds.windows(2).enumerate() {
-        for &w in &members[span[0]..span[1]] {
-            comp[w as usize] = c as u32;
-        }
-    }
-    drop(members);
+    let (mut comp, ncomp) = components(&adj_start, &adj);
     // The over-determined part: groups reachable from rows the matching left over (in the
     // residual network: a row to any group it touches, a group to the rows matched to it).
     // Left-over rows join every front they touch whatever the order, so there the order
@@ -101,4 +91,20 @@ pub(super) fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
         };
     }
     (comp, work)
+}
+
+/// The strongly connected component of each of the `adj_start.len() - 1` groups, and
+/// their number: Tarjan's, a component completed only after every component it reaches,
+/// so completion order is reverse topological.
+fn components(adj_start: &[usize], adj: &[u32]) -> (Vec<u32>, u32) {
+    let n = adj_start.len() - 1;
+    let (members, bounds) = crate::structure::tarjan_flat(adj_start, adj, &vec![true; n]);
+    let ncomp = (bounds.len() - 1) as u32;
+    let mut comp = vec![0u32; n];
+    for (c, span) in bounds.windows(2).enumerate() {
+        for &w in &members[span[0]..span[1]] {
+            comp[w as usize] = c as u32;
+        }
+    }
+    (comp, ncomp)
 }
