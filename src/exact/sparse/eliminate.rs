@@ -586,11 +586,11 @@ impl<'a> Elimination<'a> {
     /// The front's pivot rows over the group's columns and the other groups they touch:
     /// those groups, the rows' width and the rows (row-major).
     fn pivot_rows(&mut self, f: &Front) -> (Vec<usize>, usize, Vec<Fp>) {
-        let (sg, r) = (f.sg, f.r);
-        let mut used = vec![0u64; f.words];
+        let (sg, r, words, masks) = (f.sg, f.r, f.words, &f.masks);
+        let mut used = vec![0u64; words];
         for i in 0..r {
-            for w in 0..f.words {
-                used[w] |= f.masks[i * f.words + w];
+            for w in 0..words {
+                used[w] |= masks[i * words + w];
             }
         }
         let rec_others: Vec<usize> = (0..f.others.len())
