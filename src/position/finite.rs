@@ -623,10 +623,6 @@ pub fn finite_mobility(
     let (_, j0, _) = sys.evaluate(&model, &targets, config);
     let n0 = null_basis_within(&j0, opts.rank_tolerance, meter)?;
     let first_order = n0.ncols();
-    let (_, jd0) = slice_coords(&sys, &model, config, config);
-    let mut rng = SplitMix64::new(opts.seed ^ 0xF1_u64);
-    let mut samples = Vec::new();
-    let mut best: Option<(usize, DMatrix<f64>)> = None;
     let curves = Curves {
         sys: &sys,
         model: &model,
@@ -639,9 +635,66 @@ pub fn finite_mobility(
     // theorem). Only the first level runs then, for the nearby samples; without this an open
     // chain of a few hundred joints ran one level per freedom (minutes).
     let regular = j0.ncols() - first_order == j0.nrows();
-    let mut finite = 0;
+    let levels = slice_levels(&curves, &n0, regular, opts, meter)?;
+    let finite = levels.finite;
+    let near = levels.best.map(|(_, n)| n).unwrap_or_else(|| n0.clone());
+    let motion = PairMotion {
+        model: &model,
+        sys: &sys,
+    };
+    let instantaneous_only = first_order.saturating_sub(finite);
+    let singular_joints = if instantaneous_only > 0 {
+        instantaneous_joints(m, &motion, &n0, &near)
+    } else {
+        Vec::new()
+    };
+    let locked_at_toggle = if first_order > 0 {
+        toggle_joints(m, &motion, &n0, &near, opts.step)
+    } else {
+        Vec::new()
+    };
+    Ok(finite_report(FiniteMobility {
+        count,
+        first_order,
+        finite,
+        samples: levels.samples,
+        verdict: Verdict::Regular,
+        instantaneous_only,
+        singular_joints,
+        locked_at_toggle,
+        notes: Vec::new(),
+        assembled: false,
+        rounded: None,
+    }))
+}
+
+/// What the slicing levels of [`finite_mobility`] found: the local dimension, the nullities
+/// of the nearby samples, and the nearby tangent space of least dimension met.
+struct Levels {
+    finite: usize,
+    samples: Vec<usize>,
+    best: Option<(usize, DMatrix<f64>)>,
+}
+
+/// The slicing levels of [`finite_mobility`] from the first-order motions `n0`: `k` runs up
+/// from 0 while some start is certified on a curve within `k` random tangent hyperplanes.
+fn slice_levels(
+    curves: &Curves<'_>,
+    n0: &DMatrix<f64>,
+    regular: bool,
+    opts: &FiniteOptions,
+    meter: &mut Meter,
+) -> Result<Levels, SolveError> {
+    let first_order = n0.ncols();
+    let (_, jd0) = slice_coords(curves.sys, curves.model, curves.config, curves.config);
+    let mut rng = SplitMix64::new(opts.seed ^ 0xF1_u64);
+    let mut levels = Levels {
+        finite: 0,
+        samples: Vec::new(),
+        best: None,
+    };
     let mut slices: Vec<(DVector<f64>, f64)> = Vec::new();
-    while finite < first_order {
+    while levels.finite < first_order {
         // The first-order motions that keep the slices: n0 times the null space of the
         // slices' rows on n0.
         let rows = DMatrix::from_fn(slices.len(), first_order, |i, c| {
@@ -652,77 +705,106 @@ pub fn finite_mobility(
         } else {
             null_basis_within(&rows, 1e-8, meter)?
         };
-        let kernel = &n0 * within;
+        let kernel = n0 * within;
         if kernel.ncols() == 0 {
             break;
         }
-        let tries = if slices.is_empty() {
-            TRIES.max(opts.samples)
-        } else {
-            TRIES
-        };
-        let mut found = false;
-        for t in 0..tries {
-            let v = &kernel * DVector::from_fn(kernel.ncols(), |_, _| rng.next_signed());
-            let v = &v / v.norm().max(1e-300);
-            let start = curves.start(&v);
-            let Some(y) =
-                solve_sliced(&sys, &model, &targets, config, &start, &slices, LAND, meter)?
-            else {
-                continue;
-            };
-            if slices.is_empty() && t < opts.samples {
-                // A nearby sample: its nullity (at a generic point of a reduced component,
-                // the component's dimension).
-                let (_, j1, _) = sys.evaluate(&model, &targets, &y);
-                let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
-                samples.push(n1.ncols());
-                if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
-                    best = Some((n1.ncols(), n1));
-                }
-            }
-            if found {
-                continue;
-            }
-            let (d, _) = slice_coords(&sys, &model, config, &y);
-            // Pulled back to the configuration (an isolated point, or the double roots of
-            // a non-reduced one, attract Newton): no evidence either way.
-            let away = d.norm() >= 0.05 * opts.step; // false for NaN too
-            if !away {
-                continue;
-            }
-            if curves.certified(&slices, &d, meter)? {
-                found = true;
-                if !slices.is_empty() {
-                    let (_, j1, _) = sys.evaluate(&model, &targets, &y);
-                    let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
-                    if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
-                        best = Some((n1.ncols(), n1));
-                    }
-                }
-                if !slices.is_empty() || t + 1 >= opts.samples {
-                    break;
-                }
-            }
-        }
+        let found = try_starts(curves, &kernel, &slices, opts, &mut rng, &mut levels, meter)?;
         if regular {
-            finite = first_order;
+            levels.finite = first_order;
             break;
         }
         if !found {
             break;
         }
-        finite += 1;
+        levels.finite += 1;
         // One more random tangent hyperplane through the configuration.
         let w = DVector::from_fn(first_order, |_, _| rng.next_signed());
-        let c = &n0 * w;
+        let c = n0 * w;
         slices.push((&c / c.norm().max(1e-300), 0.0));
     }
-    let near = best.map(|(_, n)| n).unwrap_or_else(|| n0.clone());
-    // Relative motion of pair p over the columns of a basis.
-    let motion = |basis: &DMatrix<f64>, p: usize| -> f64 {
-        let pair = &model.pairs[p];
-        let col = |body: usize| sys.bodies.iter().position(|&x| x == body);
+    Ok(levels)
+}
+
+/// One level of [`slice_levels`]: random starts along the motions `kernel` that keep the
+/// `slices`, landed and tested for a curve; the first level also samples the nullity at
+/// the landed points. Whether a curve was certified.
+fn try_starts(
+    curves: &Curves<'_>,
+    kernel: &DMatrix<f64>,
+    slices: &[(DVector<f64>, f64)],
+    opts: &FiniteOptions,
+    rng: &mut SplitMix64,
+    levels: &mut Levels,
+    meter: &mut Meter,
+) -> Result<bool, SolveError> {
+    let (sys, model, targets, config) = (curves.sys, curves.model, curves.targets, curves.config);
+    let tries = if slices.is_empty() {
+        TRIES.max(opts.samples)
+    } else {
+        TRIES
+    };
+    let mut found = false;
+    for t in 0..tries {
+        let v = kernel * DVector::from_fn(kernel.ncols(), |_, _| rng.next_signed());
+        let v = &v / v.norm().max(1e-300);
+        let start = curves.start(&v);
+        let Some(y) = solve_sliced(sys, model, targets, config, &start, slices, LAND, meter)?
+        else {
+            continue;
+        };
+        if slices.is_empty() && t < opts.samples {
+            // A nearby sample: its nullity (at a generic point of a reduced component, the
+            // component's dimension).
+            let (_, j1, _) = sys.evaluate(model, targets, &y);
+            let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
+            levels.samples.push(n1.ncols());
+            keep_least(&mut levels.best, n1);
+        }
+        if found {
+            continue;
+        }
+        let (d, _) = slice_coords(sys, model, config, &y);
+        // Pulled back to the configuration (an isolated point, or the double roots of a
+        // non-reduced one, attract Newton): no evidence either way.
+        let away = d.norm() >= 0.05 * opts.step; // false for NaN too
+        if !away {
+            continue;
+        }
+        if curves.certified(slices, &d, meter)? {
+            found = true;
+            if !slices.is_empty() {
+                let (_, j1, _) = sys.evaluate(model, targets, &y);
+                let n1 = null_basis_within(&j1, opts.rank_tolerance, meter)?;
+                keep_least(&mut levels.best, n1);
+            }
+            if !slices.is_empty() || t + 1 >= opts.samples {
+                break;
+            }
+        }
+    }
+    Ok(found)
+}
+
+/// Keep the nearby tangent basis `n1` if it has fewer columns than the best so far.
+fn keep_least(best: &mut Option<(usize, DMatrix<f64>)>, n1: DMatrix<f64>) {
+    if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
+        *best = Some((n1.ncols(), n1));
+    }
+}
+
+/// The relative motion of a pair over the columns of a basis of motions.
+struct PairMotion<'a> {
+    model: &'a PositionModel,
+    sys: &'a System,
+}
+
+impl PairMotion<'_> {
+    /// The largest relative motion of pair `p` over the columns of `basis`.
+    fn of(&self, basis: &DMatrix<f64>, p: usize) -> f64 {
+        let b = self.model.b();
+        let pair = &self.model.pairs[p];
+        let col = |body: usize| self.sys.bodies.iter().position(|&x| x == body);
         let mut worst: f64 = 0.0;
         for c in 0..basis.ncols() {
             let mut s = 0.0;
@@ -734,91 +816,103 @@ pub fn finite_mobility(
             worst = worst.max(s.sqrt());
         }
         worst
-    };
-    let mut singular_joints = Vec::new();
-    let mut locked_at_toggle = Vec::new();
-    let instantaneous_only = first_order.saturating_sub(finite);
-    if instantaneous_only > 0 {
-        // The part of the first-order motions far from the nearby tangent space.
-        let proj = &n0 - &near * (near.transpose() * &n0);
-        let svd = nalgebra::SVD::try_new(proj, true, false, f64::EPSILON, 10_000);
-        if let Some((Some(u), values)) = svd.map(|d| (d.u, d.singular_values)) {
-            let svd_values = values;
-            let keep: Vec<usize> = (0..svd_values.len())
-                .filter(|&i| svd_values[i] > 0.1)
-                .collect();
-            let extra = DMatrix::from_fn(u.nrows(), keep.len(), |r, c| u[(r, keep[c])]);
-            for p in 0..model.pairs.len() {
-                let id = &m.joints[model.pairs[p].joint].id;
-                if motion(&extra, p) > 1e-6 && !singular_joints.contains(id) {
-                    singular_joints.push(id.clone());
-                }
-            }
-        }
     }
-    if first_order > 0 {
-        // At a sample `step` away a toggle's joint moves about `step` times its second-order
-        // rate: a piston at a crank's dead centre 1e-3 rad away slides at 1e-4 of the crank's
-        // rate (Modelica's EngineV6 has two). So the floor scales with the step and with the
-        // fastest joint; a joint locked for good stays at rounding (1e-10), far below it.
-        let scale = (0..model.pairs.len())
-            .map(|p| motion(&near, p))
-            .fold(0.0, f64::max);
-        let floor = 1e-3 * opts.step * scale;
+}
+
+/// The joints moved by the part of the first-order motions `n0` far from the nearby
+/// tangent space `near` (the instantaneous-only freedoms).
+fn instantaneous_joints(
+    m: &Mechanism,
+    motion: &PairMotion<'_>,
+    n0: &DMatrix<f64>,
+    near: &DMatrix<f64>,
+) -> Vec<String> {
+    let model = motion.model;
+    let mut singular_joints = Vec::new();
+    let proj = n0 - near * (near.transpose() * n0);
+    let svd = nalgebra::SVD::try_new(proj, true, false, f64::EPSILON, 10_000);
+    if let Some((Some(u), values)) = svd.map(|d| (d.u, d.singular_values)) {
+        let svd_values = values;
+        let keep: Vec<usize> = (0..svd_values.len())
+            .filter(|&i| svd_values[i] > 0.1)
+            .collect();
+        let extra = DMatrix::from_fn(u.nrows(), keep.len(), |r, c| u[(r, keep[c])]);
         for p in 0..model.pairs.len() {
             let id = &m.joints[model.pairs[p].joint].id;
-            if motion(&n0, p) < 1e-7 && motion(&near, p) > floor && !locked_at_toggle.contains(id) {
-                locked_at_toggle.push(id.clone());
+            if motion.of(&extra, p) > 1e-6 && !singular_joints.contains(id) {
+                singular_joints.push(id.clone());
             }
         }
     }
+    singular_joints
+}
+
+/// The joints stationary in every first-order motion `n0` that move in the nearby tangent
+/// space `near` (toggles).
+fn toggle_joints(
+    m: &Mechanism,
+    motion: &PairMotion<'_>,
+    n0: &DMatrix<f64>,
+    near: &DMatrix<f64>,
+    step: f64,
+) -> Vec<String> {
+    let model = motion.model;
+    let mut locked_at_toggle = Vec::new();
+    // At a sample `step` away a toggle's joint moves about `step` times its second-order
+    // rate: a piston at a crank's dead centre 1e-3 rad away slides at 1e-4 of the crank's
+    // rate (Modelica's EngineV6 has two). So the floor scales with the step and with the
+    // fastest joint; a joint locked for good stays at rounding (1e-10), far below it.
+    let scale = (0..model.pairs.len())
+        .map(|p| motion.of(near, p))
+        .fold(0.0, f64::max);
+    let floor = 1e-3 * step * scale;
+    for p in 0..model.pairs.len() {
+        let id = &m.joints[model.pairs[p].joint].id;
+        if motion.of(n0, p) < 1e-7 && motion.of(near, p) > floor && !locked_at_toggle.contains(id) {
+            locked_at_toggle.push(id.clone());
+        }
+    }
+    locked_at_toggle
+}
+
+/// The verdict and notes of a finite-mobility report from its counts and joints.
+fn finite_report(mut r: FiniteMobility) -> FiniteMobility {
+    let (count, first_order, finite) = (r.count, r.first_order, r.finite);
+    let instantaneous_only = r.instantaneous_only;
     let singular = instantaneous_only > 0;
     // Really moving: a configuration that does not move (finite 0) is not "moving" whatever
     // the count (a rigid structure with redundant bars, a flat triangle written in space).
     let over = finite > 0 && (finite as i64) > count;
-    let verdict = match (singular, over) {
+    r.verdict = match (singular, over) {
         (false, false) => Verdict::Regular,
         (true, false) => Verdict::Singular,
         (false, true) => Verdict::OverconstrainedMoving,
         (true, true) => Verdict::SingularOverconstrained,
     };
-    let mut notes = Vec::new();
     if singular {
-        notes.push(format!(
+        r.notes.push(format!(
             "singular configuration: first-order mobility {first_order} but the mechanism moves with {finite} DOF; {instantaneous_only} freedom(s) are instantaneous only{}",
             // No joint is named when no nearby configuration was reached to compare with.
-            if singular_joints.is_empty() {
+            if r.singular_joints.is_empty() {
                 String::new()
             } else {
-                format!(" (joints {})", singular_joints.join(", "))
+                format!(" (joints {})", r.singular_joints.join(", "))
             }
         ));
     }
     if over {
-        notes.push(format!(
+        r.notes.push(format!(
             "overconstrained by design but really moving: the count gives {count}, the mechanism moves with {finite} DOF ({} redundant constraint(s) hold along the motion)",
             finite as i64 - count
         ));
     }
-    if !locked_at_toggle.is_empty() {
-        notes.push(format!(
+    if !r.locked_at_toggle.is_empty() {
+        r.notes.push(format!(
             "toggle: joint(s) {} are stationary in every first-order motion here but move at nearby configurations: locked only at this configuration",
-            locked_at_toggle.join(", ")
+            r.locked_at_toggle.join(", ")
         ));
     }
-    Ok(FiniteMobility {
-        count,
-        first_order,
-        finite,
-        samples,
-        verdict,
-        instantaneous_only,
-        singular_joints,
-        locked_at_toggle,
-        notes,
-        assembled: false,
-        rounded: None,
-    })
+    r
 }
 
 #[cfg(test)]

@@ -514,153 +514,167 @@ impl Network {
         t: usize,
         mut total: u64,
     ) -> (u64, Vec<bool>) {
-        const UNSEEN: u32 = u32::MAX;
         let n = self.nodes();
         if s == t {
             return (total, self.reachable_from(s));
         }
-        let mut level = vec![UNSEEN; n];
-        // Whether a node is labelled in this search, one bit a node (445 KB at 10^6 bodies,
-        // where `level` is 14 MB): the test of every edge's head stays in cache.
-        let mut seen = vec![0u64; n.div_ceil(64)];
-        let bit = |seen: &[u64], x: usize| seen[x / 64] >> (x % 64) & 1 != 0;
-        // The nodes labelled but not yet put in order, one bit a node (see [`ascending`]).
-        let mut fresh = vec![0u64; n.div_ceil(64)];
-        let mut next = vec![0u32; n];
-        // Nodes in order of their levels (a node's level is not read back from `level`: the
-        // search knows where each level ends in the queue). Four bytes a node: the queue
-        // holds most nodes while the network is at its largest. Reserved at once: grown by
-        // doubling, its earlier buffers were touched and freed too (12 MB more of the heap
-        // at 10^6 bodies); untouched room costs no pages.
-        let mut queue: Vec<u32> = Vec::with_capacity(n);
-        let mut path: Vec<usize> = Vec::new();
+        let mut phase = DinicPhase::new(n);
         loop {
-            // Levels: distance from s in the residual network, up to t's.
-            for &x in &queue {
-                level[x as usize] = UNSEEN;
-                seen[x as usize / 64] = 0;
-                fresh[x as usize / 64] = 0;
-            }
-            queue.clear();
-            level[s] = 0;
-            seen[s / 64] |= 1 << (s % 64);
-            fresh[s / 64] |= 1 << (s % 64);
-            queue.push(s as u32);
-            let mut scanned = 0;
-            // A level at a time: the level's nodes are `queue[lo..hi]`, scanned in ascending
-            // order (their edges are then read front to back through the edge array, not in
-            // the scattered order they were found in). The labels are the same: a node's
-            // level is its distance from s, whatever order a level is scanned in.
-            let (mut lx, mut lo) = (0u32, 0usize);
-            while lo < queue.len() {
-                if level[t] != UNSEEN && lx >= level[t] {
-                    break;
-                }
-                let hi = queue.len();
-                ascending(&mut queue[lo..hi], &mut fresh);
-                let lx1 = lx + 1;
-                for qi in lo..hi {
-                    let x = queue[qi] as usize;
-                    scanned += self.degree(x);
-                    // The implicit edges first (node 0's, or a left node's back to it), as
-                    // the edge list orders them. Whether the head is labelled is tested
-                    // first: for a left node's edge back to the source that spares a
-                    // scattered read.
-                    let (first, k) = self.implicit(x);
-                    for e in first..first + k {
-                        let v = self.head(e);
-                        if !bit(&seen, v) && self.residual(e) > 0 {
-                            seen[v / 64] |= 1 << (v % 64);
-                            fresh[v / 64] |= 1 << (v % 64);
-                            level[v] = lx1;
-                            queue.push(v as u32);
-                        }
-                    }
-                    for a in &self.arc[self.edges(x)] {
-                        let v = a.to as usize;
-                        if a.cap > 0 && !bit(&seen, v) {
-                            seen[v / 64] |= 1 << (v % 64);
-                            fresh[v / 64] |= 1 << (v % 64);
-                            level[v] = lx1;
-                            queue.push(v as u32);
-                        }
-                    }
-                }
-                lo = hi;
-                lx = lx1;
-            }
-            if level[t] == UNSEEN {
+            let scanned = self.label_levels(s, t, &mut phase);
+            if phase.level[t] == DinicPhase::UNSEEN {
                 // This search ran to the end: it labelled exactly the nodes reachable from s
                 // (the labels of earlier phases were cleared before it).
                 self.scan(scanned);
-                return (total, (0..n).map(|x| bit(&seen, x)).collect());
+                return (total, (0..n).map(|x| bit(&phase.seen, x)).collect());
             }
-            // Each node's current edge, as a position in its list of edges (implicit ones
-            // first).
-            for &x in &queue {
-                next[x as usize] = 0;
+            total += self.blocking_flow(s, t, &mut phase);
+        }
+    }
+
+    /// The levels of one Dinic phase: distance from `s` in the residual network, up to
+    /// `t`'s, the labelled nodes in `phase.queue` by level (the previous phase's labels
+    /// cleared first). Returns the edges scanned.
+    fn label_levels(&self, s: usize, t: usize, phase: &mut DinicPhase) -> usize {
+        const UNSEEN: u32 = DinicPhase::UNSEEN;
+        let DinicPhase {
+            level,
+            seen,
+            fresh,
+            queue,
+            ..
+        } = phase;
+        for &x in queue.iter() {
+            level[x as usize] = UNSEEN;
+            seen[x as usize / 64] = 0;
+            fresh[x as usize / 64] = 0;
+        }
+        queue.clear();
+        level[s] = 0;
+        seen[s / 64] |= 1 << (s % 64);
+        fresh[s / 64] |= 1 << (s % 64);
+        queue.push(s as u32);
+        let mut scanned = 0;
+        // A level at a time: the level's nodes are `queue[lo..hi]`, scanned in ascending
+        // order (their edges are then read front to back through the edge array, not in
+        // the scattered order they were found in). The labels are the same: a node's
+        // level is its distance from s, whatever order a level is scanned in.
+        let (mut lx, mut lo) = (0u32, 0usize);
+        while lo < queue.len() {
+            if level[t] != UNSEEN && lx >= level[t] {
+                break;
             }
-            // Blocking flow: advance along level-increasing edges, augment at t, retreat
-            // from dead ends (a retreated node is taken out of the phase).
-            path.clear();
-            let mut u = s;
-            loop {
-                if u == t {
-                    let d = path.iter().map(|&e| self.residual(e)).min().unwrap_or(0);
-                    for &e in &path {
-                        self.push(e, d);
+            let hi = queue.len();
+            ascending(&mut queue[lo..hi], fresh);
+            let lx1 = lx + 1;
+            for qi in lo..hi {
+                let x = queue[qi] as usize;
+                scanned += self.degree(x);
+                // The implicit edges first (node 0's, or a left node's back to it), as the
+                // edge list orders them. Whether the head is labelled is tested first: for
+                // a left node's edge back to the source that spares a scattered read.
+                let (first, k) = self.implicit(x);
+                for e in first..first + k {
+                    let v = self.head(e);
+                    if !bit(seen, v) && self.residual(e) > 0 {
+                        seen[v / 64] |= 1 << (v % 64);
+                        fresh[v / 64] |= 1 << (v % 64);
+                        level[v] = lx1;
+                        queue.push(v as u32);
                     }
-                    total += u64::from(d);
-                    let k = path
-                        .iter()
-                        .position(|&e| self.residual(e) == 0)
-                        .unwrap_or(0);
-                    path.truncate(k);
-                    u = match path.last() {
-                        Some(&e) => self.head(e),
-                        None => s,
-                    };
-                    continue;
                 }
-                let (first, k) = self.implicit(u);
-                let base = self.start[u] as usize;
-                let end = (k + self.edges(u).len()) as u32;
-                let mut advanced = false;
-                while next[u] < end {
-                    let i = next[u] as usize;
-                    let (e, v, cap) = if i < k {
-                        let e = first + i;
-                        (e, self.head(e), self.residual(e))
-                    } else {
-                        let e = base + (i - k);
-                        let a = self.arc[e];
-                        (e, a.to as usize, a.cap)
-                    };
-                    if cap > 0 && level[v] != UNSEEN && level[v] == level[u] + 1 {
-                        path.push(e);
-                        u = v;
-                        advanced = true;
-                        break;
+                for a in &self.arc[self.edges(x)] {
+                    let v = a.to as usize;
+                    if a.cap > 0 && !bit(seen, v) {
+                        seen[v / 64] |= 1 << (v % 64);
+                        fresh[v / 64] |= 1 << (v % 64);
+                        level[v] = lx1;
+                        queue.push(v as u32);
                     }
-                    next[u] += 1;
                 }
-                if advanced {
-                    continue;
+            }
+            lo = hi;
+            lx = lx1;
+        }
+        scanned
+    }
+
+    /// The blocking flow of one Dinic phase: advance along level-increasing edges, augment
+    /// at `t`, retreat from dead ends (a retreated node is taken out of the phase). Returns
+    /// the flow pushed.
+    fn blocking_flow(&mut self, s: usize, t: usize, phase: &mut DinicPhase) -> u64 {
+        const UNSEEN: u32 = DinicPhase::UNSEEN;
+        let DinicPhase {
+            level,
+            next,
+            queue,
+            path,
+            ..
+        } = phase;
+        // Each node's current edge, as a position in its list of edges (implicit ones
+        // first).
+        for &x in queue.iter() {
+            next[x as usize] = 0;
+        }
+        path.clear();
+        let mut pushed = 0u64;
+        let mut u = s;
+        loop {
+            if u == t {
+                let d = path.iter().map(|&e| self.residual(e)).min().unwrap_or(0);
+                for &e in path.iter() {
+                    self.push(e, d);
                 }
-                if u == s {
+                pushed += u64::from(d);
+                let k = path
+                    .iter()
+                    .position(|&e| self.residual(e) == 0)
+                    .unwrap_or(0);
+                path.truncate(k);
+                u = match path.last() {
+                    Some(&e) => self.head(e),
+                    None => s,
+                };
+                continue;
+            }
+            let (first, k) = self.implicit(u);
+            let base = self.start[u] as usize;
+            let end = (k + self.edges(u).len()) as u32;
+            let mut advanced = false;
+            while next[u] < end {
+                let i = next[u] as usize;
+                let (e, v, cap) = if i < k {
+                    let e = first + i;
+                    (e, self.head(e), self.residual(e))
+                } else {
+                    let e = base + (i - k);
+                    let a = self.arc[e];
+                    (e, a.to as usize, a.cap)
+                };
+                if cap > 0 && level[v] != UNSEEN && level[v] == level[u] + 1 {
+                    path.push(e);
+                    u = v;
+                    advanced = true;
                     break;
                 }
-                // Dead end: out of this phase; the edge into it is useless too.
-                level[u] = UNSEEN;
-                match path.pop() {
-                    Some(e) => {
-                        u = self.head(self.rev(e));
-                        next[u] += 1;
-                    }
-                    None => break,
+                next[u] += 1;
+            }
+            if advanced {
+                continue;
+            }
+            if u == s {
+                break;
+            }
+            // Dead end: out of this phase; the edge into it is useless too.
+            level[u] = UNSEEN;
+            match path.pop() {
+                Some(e) => {
+                    u = self.head(self.rev(e));
+                    next[u] += 1;
                 }
+                None => break,
             }
         }
+        pushed
     }
 
     /// The flow's value from node 0 of a network [`Network::three_layer`] built: what its
@@ -761,6 +775,48 @@ fn ascending(nodes: &mut [u32], fresh: &mut [u64]) {
         nodes.sort_unstable();
         for &x in nodes.iter() {
             fresh[x as usize / 64] &= !(1u64 << (x % 64));
+        }
+    }
+}
+
+/// Whether node `x` is set in a bit set of one bit a node.
+fn bit(seen: &[u64], x: usize) -> bool {
+    seen[x / 64] >> (x % 64) & 1 != 0
+}
+
+/// The labels of a Dinic phase ([`Network::max_flow_after_greedy`]), kept from phase to
+/// phase.
+struct DinicPhase {
+    /// Each node's level ([`DinicPhase::UNSEEN`]: not labelled).
+    level: Vec<u32>,
+    /// Whether a node is labelled in this search, one bit a node (445 KB at 10^6 bodies,
+    /// where `level` is 14 MB): the test of every edge's head stays in cache.
+    seen: Vec<u64>,
+    /// The nodes labelled but not yet put in order, one bit a node (see [`ascending`]).
+    fresh: Vec<u64>,
+    /// Each node's current edge in the blocking flow.
+    next: Vec<u32>,
+    /// Nodes in order of their levels (a node's level is not read back from `level`: the
+    /// search knows where each level ends in the queue). Four bytes a node: the queue holds
+    /// most nodes while the network is at its largest. Reserved at once: grown by doubling,
+    /// its earlier buffers were touched and freed too (12 MB more of the heap at 10^6
+    /// bodies); untouched room costs no pages.
+    queue: Vec<u32>,
+    /// The edges of the path being advanced.
+    path: Vec<usize>,
+}
+
+impl DinicPhase {
+    const UNSEEN: u32 = u32::MAX;
+
+    fn new(n: usize) -> DinicPhase {
+        DinicPhase {
+            level: vec![Self::UNSEEN; n],
+            seen: vec![0u64; n.div_ceil(64)],
+            fresh: vec![0u64; n.div_ceil(64)],
+            next: vec![0u32; n],
+            queue: Vec::with_capacity(n),
+            path: Vec::new(),
         }
     }
 }
