@@ -16,6 +16,7 @@ pub mod expect;
 pub mod format;
 pub mod generate;
 pub mod geometry;
+pub mod graph;
 pub mod import;
 pub mod joint;
 pub mod mechanism;

@@ -13,13 +13,13 @@ mod build;
 mod count;
 mod diagnose;
 pub mod exhaustive;
-pub(crate) mod flow;
 pub mod library;
 mod rank;
 
+pub(crate) use crate::graph::scc::tarjan;
 /// The count decomposition's components and canonical order, for `mbsa transform`'s analysis
 /// of certified placements from its search's flow.
-pub(crate) use count::{canonical, tarjan, tarjan_flat};
+pub(crate) use count::canonical;
 pub use library::{Library, LibraryError};
 
 use crate::joint::JointType;

@@ -291,7 +291,7 @@ impl Pairs {
         }
         let mut active = vec![true; nb];
         active[self.frame] = false;
-        crate::structure::tarjan_flat(&arc_start, &arcs, &active)
+        crate::graph::scc::tarjan_flat(&arc_start, &arcs, &active)
     }
 }
 

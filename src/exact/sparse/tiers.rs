@@ -20,7 +20,7 @@ pub fn elimination_tiers(a: &SparseMatrix) -> Vec<u32> {
 /// topological order, are the tiers: for a square generic matrix the blocks of its block
 /// triangular form, within which the greedy minimum-front order decides.
 pub(super) fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
-    use crate::structure::flow::{INF, Network};
+    use crate::graph::flow::{INF, Network};
     let n = sizes.len();
     let nb = blocks.len();
     if n == 0 || nb == 0 {
@@ -98,7 +98,7 @@ pub(super) fn tiers(sizes: &[usize], blocks: &[Blk]) -> (Vec<u32>, u64) {
 /// so completion order is reverse topological.
 fn components(adj_start: &[usize], adj: &[u32]) -> (Vec<u32>, u32) {
     let n = adj_start.len() - 1;
-    let (members, bounds) = crate::structure::tarjan_flat(adj_start, adj, &vec![true; n]);
+    let (members, bounds) = crate::graph::scc::tarjan_flat(adj_start, adj, &vec![true; n]);
     let ncomp = (bounds.len() - 1) as u32;
     let mut comp = vec![0u32; n];
     for (c, span) in bounds.windows(2).enumerate() {

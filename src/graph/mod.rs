@@ -1,0 +1,6 @@
+//! Graph algorithms with no mechanism knowledge: maximum flow and b-matching on a three-layer
+//! network ([`flow`]), strongly connected components ([`scc`]). The structural analysis, the
+//! exact factorization and the transformations all use them from here.
+
+pub mod flow;
+pub mod scc;
