@@ -1607,7 +1607,7 @@ mod tests {
         }
     }
 
-    /// The models bit for bit those of the code before session 11 (`reference.rs`: runtime
+    /// The models bit for bit those of the code before the specialisation (`reference.rs`: runtime
     /// dimension, squared norms summed again for every new vector): every kind in every
     /// space, every number of driven DOF, at random geometry, at axis-aligned geometry with
     /// small integer points (exact zeros and ties), at degenerate geometry (parallel axes,
@@ -1862,7 +1862,7 @@ mod tests {
         }
     }
 
-    /// A driven DOF of a kind without named DOF keeps a generic direction. Before session 10
+    /// A driven DOF of a kind without named DOF keeps a generic direction. Formerly
     /// a planar contact joint (one line, two allowed twists) dropped the first twist of its
     /// pivoted basis, and whenever the pivot was the rotation the twist kept was `r × e_ω`, a
     /// pure translation: a fixed fraction of draws gave an input that cannot turn the body.

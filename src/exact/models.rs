@@ -564,7 +564,7 @@ mod tests {
         }
     }
 
-    /// A driven DOF of a kind without named DOF keeps a generic direction: before session 10
+    /// A driven DOF of a kind without named DOF keeps a generic direction: Formerly
     /// the echelon null basis lost its first vector, so the twist kept had a zero in a free
     /// coordinate at every draw (a planar contact joint driven once: never a turn about the
     /// origin, or never a slide along x). Nothing driven gives the rows as before.

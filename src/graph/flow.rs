@@ -1351,7 +1351,7 @@ mod tests {
     /// through it, and the pairs of the middle edges after its loop (a three-layer network of
     /// 3,000 left and 1,000 right nodes, several left nodes feeding each right one, with and
     /// without a warm start): one push a path plus one per edge to t used, where each path
-    /// pushed along its middle edge too (session 16: 2 a path; before it, 3 with the edge to
+    /// pushed along its middle edge too (2 a path; formerly 3 with the edge to
     /// t); the flow is the three-edge pushes', edge for edge.
     #[test]
     fn greedy_updates_each_sink_edge_once() {

@@ -1,4 +1,4 @@
-//! The joint models as they were before session 11's specialisation (runtime motion-space
+//! The joint models as they were before their specialisation (runtime motion-space
 //! dimension, `complement_of` recomputing its squared norms): the reference the tests compare
 //! the current code with, bit for bit.
 

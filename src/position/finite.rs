@@ -282,7 +282,7 @@ fn slice_coords(
 
 /// Rotation vector (axis times angle) of an almost orthonormal matrix. Robust near the
 /// identity, where `Rotation3::angle` (an `acos` of the trace) gives NaN once rounding puts
-/// the trace above 3: that NaN silently disabled the curve test and the slices (session 6).
+/// the trace above 3: that NaN silently disabled the curve test and the slices.
 fn log_rotation(r: &nalgebra::Matrix3<f64>) -> nalgebra::Vector3<f64> {
     let w = nalgebra::Vector3::new(
         r[(2, 1)] - r[(1, 2)],

@@ -23,7 +23,7 @@ use crate::budget::{BudgetExceeded, Meter};
 /// - a bar that needs a search keeps one pebble (an end's own, or the one from the latest
 ///   vertex) and gives the B borrowed ones back along the paths they came by, after the
 ///   tightness check: on a flexible linkage the free pebbles stay at the frame and in the
-///   slack of the group being built, instead of wandering away with every search (session
+///   slack of the group being built, instead of wandering away with every search (as
 ///   5's game: 1.76 growth exponent on Assur linkages).
 ///
 /// The answers (which bars are independent, the rigid components) are those of the plain game;
@@ -74,7 +74,7 @@ pub(super) const MAX_OUT: usize = 6;
 
 /// One vertex of the contracted game in one cache line: a search step reads the vertex's
 /// out-bars (heads inline) and each head's mark and pebbles, one line each; turning a path
-/// round touches the same lines. Session 7 kept these in eight arrays and two heap lists per
+/// round touches the same lines. An earlier version kept these in eight arrays and two heap lists per
 /// vertex (about ten cache misses per step at 10^6 vertices).
 #[derive(Clone, Copy, Default)]
 #[repr(C, align(64))]
