@@ -23,8 +23,8 @@ use crate::budget::{BudgetExceeded, Meter};
 /// - a bar that needs a search keeps one pebble (an end's own, or the one from the latest
 ///   vertex) and gives the B borrowed ones back along the paths they came by, after the
 ///   tightness check: on a flexible linkage the free pebbles stay at the frame and in the
-///   slack of the group being built, instead of wandering away with every search (as
-///   5's game: 1.76 growth exponent on Assur linkages).
+///   slack of the group being built, instead of wandering away with every search (an
+///   earlier game grew with exponent 1.76 exponent on Assur linkages).
 ///
 /// The answers (which bars are independent, the rigid components) are those of the plain game;
 /// `tests/pebble_props.rs` compares them on random graphs.
