@@ -24,7 +24,7 @@ use crate::budget::{BudgetExceeded, Meter};
 ///   vertex) and gives the B borrowed ones back along the paths they came by, after the
 ///   tightness check: on a flexible linkage the free pebbles stay at the frame and in the
 ///   slack of the group being built, instead of wandering away with every search (an
-///   earlier game grew with exponent 1.76 exponent on Assur linkages).
+///   earlier game grew with exponent 1.76 on Assur linkages).
 ///
 /// The answers (which bars are independent, the rigid components) are those of the plain game;
 /// `tests/pebble_props.rs` compares them on random graphs.
