@@ -7,9 +7,9 @@
 
 use crate::mechanism::{Geometry, Mechanism};
 use crate::motion::{
-    JointModel, MotionError, Scale, check_file_geometry, configure, file_geometries, lacking,
-    lacking_of, lacks, random_joint_geometry, realize, scale_of, written_direction_precision,
-    written_precision,
+    FILE_TOL_FACTOR, JointModel, MotionError, Scale, check_file_geometry, configure,
+    file_geometries, lacking, lacking_of, lacks, lever, random_joint_geometry, realize, scale_of,
+    written_direction_precision, written_precision,
 };
 use crate::position::{self, Closure, ClosureStatus, closure};
 
@@ -242,4 +242,17 @@ pub fn geometries(
         None => file_geometries(m),
     };
     Ok((geoms, used))
+}
+
+/// The absolute rank threshold the file's rounding allows, at the dimensionless geometry the
+/// rank decisions see ([`GeometryUsed::scale`]): a point rounded by δ (file units) moves a
+/// joint's unit constraint rows by about δ/Lc, a direction rounded by δ_d by about
+/// δ_d·(1 + L) with lever arm L ([`crate::motion::lever`], in units of Lc); twice the sum (see
+/// [`FILE_TOL_FACTOR`]). The same model written in metres or millimetres, near the world
+/// origin or far from it, gets the same threshold. `None` at a random realization.
+pub fn file_threshold(m: &Mechanism, used: &GeometryUsed) -> Option<f64> {
+    let delta = used.precision.filter(|&d| d > 0.0)?;
+    let directions = used.direction_precision.unwrap_or(delta);
+    let scale = used.scale.unwrap_or(Scale::IDENTITY);
+    Some(FILE_TOL_FACTOR * (delta / scale.length + directions * lever(m, &scale)))
 }

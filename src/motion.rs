@@ -45,10 +45,6 @@ use crate::mechanism::{Geometry, Mechanism, Space};
 use nalgebra::{DMatrix, Vector3};
 
 pub use crate::rng::SplitMix64;
-// The geometry choice moved to `crate::geometry`; its old paths stay until every caller names the new one.
-pub use crate::geometry::{
-    GeometrySource, GeometryUsed, Realization, choose, geometries, realization,
-};
 
 mod batch;
 pub(crate) use batch::{Scratch, pair_rows_many};
@@ -1451,19 +1447,6 @@ pub(crate) fn lever(m: &Mechanism, scale: &Scale) -> f64 {
         .flat_map(|p| scale.point(p).into_iter())
         .filter(|x| x.is_finite())
         .fold(0.0f64, |a, x| a.max(x.abs()))
-}
-
-/// The absolute rank threshold the file's rounding allows, at the dimensionless geometry the
-/// rank decisions see ([`GeometryUsed::scale`]): a point rounded by δ (file units) moves a
-/// joint's unit constraint rows by about δ/Lc, a direction rounded by δ_d by about
-/// δ_d·(1 + L) with lever arm L ([`lever`], in units of Lc); twice the sum (see
-/// [`FILE_TOL_FACTOR`]). The same model written in metres or millimetres, near the world
-/// origin or far from it, gets the same threshold. `None` at a random realization.
-pub fn file_threshold(m: &Mechanism, used: &GeometryUsed) -> Option<f64> {
-    let delta = used.precision.filter(|&d| d > 0.0)?;
-    let directions = used.direction_precision.unwrap_or(delta);
-    let scale = used.scale.unwrap_or(Scale::IDENTITY);
-    Some(FILE_TOL_FACTOR * (delta / scale.length + directions * lever(m, &scale)))
 }
 
 /// Factor of the precision-derived threshold: rounding a point by δ moves a joint's unit rows

@@ -3,7 +3,7 @@
 //! draw. On main (session 9 start) 13 of the 480 small random mechanisms below got a verdict
 //! that changed with `--seed` (a redundant equation or an isolated DOF at some draws).
 
-use mbsa::motion::GeometrySource;
+use mbsa::geometry::GeometrySource;
 use mbsa::structure::{Analysis, Library, Options, Status, analyze};
 
 /// What a verdict is made of: the status, the isolated DOF and redundant equations in total,

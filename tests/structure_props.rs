@@ -181,7 +181,7 @@ fn rank_check_case(n: usize, planar: bool, seed: u64) -> Result<(), TestCaseErro
         return Ok(());
     };
     let opts = Options {
-        geometry: mbsa::motion::GeometrySource::Random {
+        geometry: mbsa::geometry::GeometrySource::Random {
             seed: seed ^ 0x5eed,
         },
         ..Options::default()
@@ -254,7 +254,7 @@ fn rank_check_keeps_a_deficit_other_draws_do_not_have() {
     let seed: u64 = 6682289030365868298;
     let m = random_mechanism(9, true, seed, false).expect("a mechanism");
     let opts = Options {
-        geometry: mbsa::motion::GeometrySource::Random {
+        geometry: mbsa::geometry::GeometrySource::Random {
             seed: seed ^ 0x5eed,
         },
         ..Options::default()

@@ -227,7 +227,7 @@ fn no_placement_for_want_of_drivable_dof_says_so() {
     for count_only in [false, true] {
         let mut o = TransformOptions::default();
         o.analysis.count_only = count_only;
-        o.analysis.geometry = mbsa::motion::GeometrySource::File;
+        o.analysis.geometry = mbsa::geometry::GeometrySource::File;
         o.on = Some(TransformOptions::parse_on("S").unwrap());
         let r = transform(&m, &o, &lib, None).unwrap();
         assert_eq!((r.summary.count_valid, r.summary.determined), (0, 0));

@@ -45,8 +45,8 @@ pub struct GeometryArgs {
 
 impl GeometryArgs {
     /// The geometry source these options ask for.
-    pub fn source(&self) -> mbsa::motion::GeometrySource {
-        use mbsa::motion::GeometrySource;
+    pub fn source(&self) -> mbsa::geometry::GeometrySource {
+        use mbsa::geometry::GeometrySource;
         match self.geometry {
             GeometryArg::Auto => GeometrySource::Auto { seed: self.seed },
             GeometryArg::File => GeometrySource::File,
@@ -63,7 +63,7 @@ impl GeometryArgs {
         if !m.joints.iter().any(|j| j.geometry.second.is_some()) {
             return Ok(());
         }
-        match mbsa::motion::choose(m, self.source(), self.precision()?) {
+        match mbsa::geometry::choose(m, self.source(), self.precision()?) {
             Ok(used) => {
                 if let Some(msg) = used.closure.as_ref().and_then(|c| c.message()) {
                     use std::io::Write;

@@ -787,9 +787,9 @@ mod tests {
             // The counts `analyze` decomposes: rows and unknowns after the rank check.
             let mut eqs = Equations::of(&m);
             let mut u = eqs.unknowns(&m);
-            let (geoms, used) = crate::motion::geometries(
+            let (geoms, used) = crate::geometry::geometries(
                 &m,
-                crate::motion::GeometrySource::Random { seed: 0 },
+                crate::geometry::GeometrySource::Random { seed: 0 },
                 None,
             )
             .expect("random geometry");

@@ -22,9 +22,10 @@ pub(crate) use crate::graph::scc::tarjan;
 pub(crate) use count::canonical;
 pub use library::{Library, LibraryError};
 
+use crate::geometry::{GeometrySource, GeometryUsed};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
-use crate::motion::{self, GeometrySource, GeometryUsed, MotionError};
+use crate::motion::{self, MotionError};
 use build::build;
 use count::{Equations, RawGroup};
 use serde::Serialize;
@@ -603,7 +604,7 @@ fn analyze_once(
         count::decompose(m, &eqs, &u)
     } else {
         // A random realization is drawn joint by joint where it is used.
-        let used = motion::choose(m, opts.geometry, opts.precision)?;
+        let used = crate::geometry::choose(m, opts.geometry, opts.precision)?;
         let geoms = match used.seed {
             Some(_) => Vec::new(),
             None => motion::file_geometries(m),
@@ -876,9 +877,12 @@ mod tests {
         let (m, _) = crate::generate::random(20_000, false, 3).expect("valid parameters");
         let mut eqs = super::Equations::of(&m);
         let mut u = eqs.unknowns(&m);
-        let (geoms, used) =
-            super::motion::geometries(&m, super::GeometrySource::Random { seed: 0 }, None)
-                .expect("random geometry");
+        let (geoms, used) = crate::geometry::geometries(
+            &m,
+            crate::geometry::GeometrySource::Random { seed: 0 },
+            None,
+        )
+        .expect("random geometry");
         let r = super::rank::check(
             &m,
             &geoms,

@@ -376,7 +376,7 @@ fn shareable(m: &Mechanism, joints: &[usize], rules: &Rules, opts: &TransformOpt
         && (opts.analysis.count_only
             || matches!(
                 opts.analysis.geometry,
-                crate::motion::GeometrySource::Random { .. }
+                crate::geometry::GeometrySource::Random { .. }
             )
             || joints.iter().all(|&j| m.joints[j].geometry.is_empty()))
 }

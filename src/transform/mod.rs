@@ -337,7 +337,7 @@ pub struct Summary {
     pub set_aside: u32,
     /// The joint geometry of the analyses (absent with `count_only`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub geometry: Option<crate::motion::GeometryUsed>,
+    pub geometry: Option<crate::geometry::GeometryUsed>,
     /// Inputs each placement has: the count plus the equations set aside, minus the isolated
     /// DOF (the true mobility less the isolated DOF).
     pub f: i64,
@@ -447,7 +447,7 @@ fn enumerate_kept(
     let geometry = if opts.analysis.count_only {
         None
     } else {
-        Some(crate::motion::choose(
+        Some(crate::geometry::choose(
             m,
             opts.analysis.geometry,
             opts.analysis.precision,

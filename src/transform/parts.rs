@@ -200,8 +200,8 @@ impl ExpansionParts {
 
 /// The random realization a geometry source falls back to (the file's geometry is never
 /// used where this is asked: the whole is analysed at a random realization).
-fn random_source(g: crate::motion::GeometrySource) -> crate::motion::GeometrySource {
-    use crate::motion::GeometrySource;
+fn random_source(g: crate::geometry::GeometrySource) -> crate::geometry::GeometrySource {
+    use crate::geometry::GeometrySource;
     match g {
         GeometrySource::Auto { seed } => GeometrySource::Random { seed },
         other => other,

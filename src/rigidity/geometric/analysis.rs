@@ -12,8 +12,9 @@ use super::report::{GeometricReport, JointCount, Numeric, RigidCluster};
 use super::{sparse_float, threshold};
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::exact::Fp;
+use crate::geometry::GeometryUsed;
 use crate::mechanism::Mechanism;
-use crate::motion::{self, GeometryUsed, JointModel};
+use crate::motion::{self, JointModel};
 use nalgebra::DMatrix;
 use std::collections::{BTreeMap, BTreeSet};
 

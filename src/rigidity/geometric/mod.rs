@@ -29,11 +29,12 @@
 
 use crate::budget::{Budget, BudgetExceeded};
 use crate::exact::Fp;
+use crate::geometry::GeometryUsed;
 use crate::mechanism::Mechanism;
-use crate::motion::{self, GeometryUsed, MotionError};
+use crate::motion::{self, MotionError};
 use nalgebra::DMatrix;
 
-pub use crate::motion::GeometrySource;
+pub use crate::geometry::GeometrySource;
 
 mod analysis;
 mod clusters;
@@ -114,7 +115,7 @@ fn analyze_split(
     one_part: usize,
     exact_from: usize,
 ) -> Result<GeometricReport, GeometricError> {
-    let real = motion::realization(m, opts.geometry, opts.precision)?;
+    let real = crate::geometry::realization(m, opts.geometry, opts.precision)?;
     // Full (undriven) twists for loop spatiality, at the same geometry: built only when the
     // loops are listed (a copy of the mechanism and a model per joint, hundreds of megabytes
     // at 10^6 bodies, where the loops are too many to list).
@@ -157,11 +158,11 @@ fn analyze_split(
 }
 
 /// Rank threshold of the analysis: relative to σ_max at random geometry; at the file's
-/// geometry also the perturbation its rounded numbers allow ([`motion::file_threshold`]).
+/// geometry also the perturbation its rounded numbers allow ([`crate::geometry::file_threshold`]).
 fn threshold(m: &Mechanism, used: &GeometryUsed, smax: f64, n: usize) -> (f64, f64) {
     let rel = 1e-9 * n.max(1) as f64;
     let mut abs = rel * smax.max(f64::MIN_POSITIVE);
-    if let Some(t) = motion::file_threshold(m, used) {
+    if let Some(t) = crate::geometry::file_threshold(m, used) {
         abs = abs.max(t);
     }
     (abs / smax.max(f64::MIN_POSITIVE), abs)

@@ -7,7 +7,7 @@ use super::jacobian::{Complements, Pair, Part, eliminate, pair_block};
 use super::report::JointWeight;
 use crate::budget::{Budget, BudgetExceeded, Limit, Meter};
 use crate::elimination::Block;
-use crate::motion::{self, JointModel};
+use crate::motion::JointModel;
 use nalgebra::{DMatrix, DVector};
 use std::collections::{BTreeMap, BTreeSet};
 
@@ -415,7 +415,8 @@ impl Analysis<'_> {
     ) -> Option<String> {
         let approximate = {
             let floor = STRESS_RESIDUAL * smax;
-            let limit = motion::file_threshold(self.m, &self.used).map_or(floor, |t| t.max(floor));
+            let limit =
+                crate::geometry::file_threshold(self.m, &self.used).map_or(floor, |t| t.max(floor));
             let per = |x: f64| x / smax.max(f64::MIN_POSITIVE);
             (stress_residual > limit).then(|| {
                 format!(

@@ -1,8 +1,8 @@
 //! The report of the geometric rigidity analysis: the counts, the joints and bodies they
 //! concern, the loops and the numerical facts of the rank decisions.
 
+use crate::geometry::GeometryUsed;
 use crate::mechanism::Space;
-use crate::motion::GeometryUsed;
 use serde::Serialize;
 
 /// A joint with a weight (participation in the redundant constraints).

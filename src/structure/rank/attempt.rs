@@ -8,8 +8,8 @@ use super::rows::{PairRows, pair_rows, pair_rows_at};
 use super::set_aside::redundant_at_configuration;
 use super::unknowns::LocalFrames;
 use super::{Bases, Kept, RankResult, Redraw, Shortcut};
+use crate::geometry::GeometryUsed;
 use crate::mechanism::{Geometry, Mechanism};
-use crate::motion::GeometryUsed;
 use crate::structure::count::{Decomposition, Equations, Part};
 use crate::structure::{Isolated, Redundancy, Unchecked};
 
@@ -200,7 +200,7 @@ fn tolerance(
             rel: 1e-9,
             abs: match &local {
                 Some(lf) => lf.threshold(used),
-                None => crate::motion::file_threshold(m, used).unwrap_or(0.0),
+                None => crate::geometry::file_threshold(m, used).unwrap_or(0.0),
             },
         },
         None => Tol {

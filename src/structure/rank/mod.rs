@@ -39,8 +39,8 @@ mod screen;
 mod set_aside;
 mod unknowns;
 
+use crate::geometry::GeometryUsed;
 use crate::mechanism::{Geometry, Mechanism};
-use crate::motion::GeometryUsed;
 use crate::structure::count::{Decomposition, Equations};
 use crate::structure::{Isolated, Redundancy, Unchecked};
 use attempt::check_at;

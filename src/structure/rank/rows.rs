@@ -352,8 +352,8 @@ pub(super) fn view(a: &DMatrix<f64>) -> RowsView<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::GeometrySource;
     use crate::joint::JointType;
-    use crate::motion::GeometrySource;
 
     /// The flat rows of every pair (built chunk by chunk, each joint's model once per chunk,
     /// the random geometry drawn where it is used) are exactly the rows of the pair's own
@@ -373,7 +373,8 @@ mod tests {
         for m in &cases {
             let eqs = Equations::of(m);
             let (geoms, used) =
-                motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
+                crate::geometry::geometries(m, GeometrySource::Random { seed: 3 }, None)
+                    .expect("random");
             assert!(eqs.len() > 2 * PAIRS_PER_CHUNK, "several chunks");
             let (rows, free) = pair_rows(m, &[], used.seed, &HashMap::new(), &eqs, false);
             assert_eq!(rows.len(), eqs.len());
@@ -423,7 +424,8 @@ mod tests {
         for m in &cases {
             let eqs = Equations::of(m);
             let (_, used) =
-                motion::geometries(m, GeometrySource::Random { seed: 3 }, None).expect("random");
+                crate::geometry::geometries(m, GeometrySource::Random { seed: 3 }, None)
+                    .expect("random");
             let (rows, _) = pair_rows(m, &[], used.seed, &HashMap::new(), &eqs, false);
             assert!(rows.chunks.len() > 2, "several chunks");
             for (c, chunk) in rows.chunks.iter().enumerate() {

@@ -369,7 +369,7 @@ fn biconnected_blocks(nb: usize, eqs: &Equations, root: usize) -> Vec<Vec<usize>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::motion::GeometrySource;
+    use crate::geometry::GeometrySource;
 
     /// A row of `n` windows written in space (R joints, parallel axes), two decimals in mm.
     fn windows_in_space(n: usize) -> String {

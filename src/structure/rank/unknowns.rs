@@ -7,8 +7,9 @@ use super::attempt::{Attempt, Touching};
 use super::cache::Digest;
 use super::float::{Tol, svd_parts};
 use super::rows::{PairRows, RowsView};
+use crate::geometry::GeometryUsed;
 use crate::mechanism::{Geometry, Mechanism, Space};
-use crate::motion::{self, GeometryUsed};
+use crate::motion;
 use crate::structure::count::Equations;
 use nalgebra::DMatrix;
 
@@ -248,7 +249,7 @@ impl LocalFrames {
         Some(LocalFrames { frame, lever })
     }
 
-    /// [`crate::motion::file_threshold`] with the body-local lever arm: a direction rounded by
+    /// [`crate::geometry::file_threshold`] with the body-local lever arm: a direction rounded by
     /// `δ_d` moves a row written about its body's reference point by `δ_d` times its distance
     /// from that point.
     pub(super) fn threshold(&self, used: &GeometryUsed) -> f64 {
