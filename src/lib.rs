@@ -22,6 +22,7 @@ pub mod joint;
 pub mod mechanism;
 pub mod mobility;
 pub mod motion;
+pub mod numbers;
 mod par;
 pub mod position;
 pub mod report;

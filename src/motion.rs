@@ -44,7 +44,9 @@ use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
 use nalgebra::{DMatrix, Vector3};
 
+use crate::numbers::rounding_of;
 pub use crate::rng::SplitMix64;
+use crate::rng::indexed_seed;
 
 mod batch;
 pub(crate) use batch::{Scratch, pair_rows_many};
@@ -1030,12 +1032,6 @@ fn random_geometry_to(
     }
 }
 
-/// The seed of joint `index`'s generator in a realization seeded `seed`: a SplitMix64 step of
-/// both, so a joint's geometry does not depend on the other joints.
-pub fn joint_seed(seed: u64, index: usize) -> u64 {
-    SplitMix64::new(seed ^ (index as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
-}
-
 /// A model that cannot fail: the generic contact model with the joint's grade (capped at B)
 /// and driven DOF (capped at the grade). Used by [`realize`] for joints no model fits.
 fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u64) -> StackModel {
@@ -1071,7 +1067,7 @@ fn fallback_model_in<const N: usize>(kind: JointType, driven: u32, seed: u64) ->
 pub fn realize(m: &Mechanism, seed: u64) -> Vec<JointModel> {
     crate::par::map(m.joints.len(), |i| {
         let j = &m.joints[i];
-        let s = joint_seed(seed, i);
+        let s = indexed_seed(seed, i);
         let mut rng = SplitMix64::new(s);
         let g = random_geometry(j.kind, m.space, &mut rng);
         stack_model(j.kind, &g, m.space, j.driven)
@@ -1239,7 +1235,7 @@ pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geome
     random_geometry(
         m.joints[i].kind,
         m.space,
-        &mut SplitMix64::new(joint_seed(seed, i)),
+        &mut SplitMix64::new(indexed_seed(seed, i)),
     )
 }
 
@@ -1247,7 +1243,7 @@ pub(crate) fn random_joint_geometry(m: &Mechanism, seed: u64, i: usize) -> Geome
 /// fields of [`random_joint_geometry`] its model reads, the later ones not drawn.
 pub(crate) fn random_pair_geometry(m: &Mechanism, seed: u64, i: usize) -> Geometry {
     let kind = m.joints[i].kind;
-    let mut rng = SplitMix64::new(joint_seed(seed, i));
+    let mut rng = SplitMix64::new(indexed_seed(seed, i));
     random_geometry_to(kind, m.space, &mut rng, model_reads(kind, m.space))
 }
 
@@ -1261,7 +1257,7 @@ pub(crate) fn file_geometries(m: &Mechanism) -> Vec<Geometry> {
         .enumerate()
         .map(|(i, j)| {
             if !modelled(j.kind, m.space) && j.geometry.is_empty() {
-                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(indexed_seed(0, i)))
             } else {
                 scale.geometry(&j.geometry)
             }
@@ -1285,7 +1281,7 @@ pub(crate) fn pair_stack_model(
 ) -> StackModel {
     let j = &m.joints[index];
     stack_model(j.kind, g, m.space, driven)
-        .unwrap_or_else(|_| fallback_model(j.kind, m.space, driven, joint_seed(0, index)))
+        .unwrap_or_else(|_| fallback_model(j.kind, m.space, driven, indexed_seed(0, index)))
 }
 
 /// One model per joint at the file geometry made dimensionless ([`scale_of`]: every point
@@ -1300,7 +1296,7 @@ pub fn configure(m: &Mechanism) -> Result<Vec<JointModel>, MotionError> {
         .enumerate()
         .map(|(i, j)| {
             let g = if !modelled(j.kind, m.space) && j.geometry.is_empty() {
-                random_geometry(j.kind, m.space, &mut SplitMix64::new(joint_seed(0, i)))
+                random_geometry(j.kind, m.space, &mut SplitMix64::new(indexed_seed(0, i)))
             } else {
                 scale.geometry(&j.geometry)
             };
@@ -1456,29 +1452,26 @@ pub(crate) fn lever(m: &Mechanism, scale: &Scale) -> f64 {
 /// is flagged.
 pub const FILE_TOL_FACTOR: f64 = 2.0;
 
-/// The rounding uncertainty of one number as written (see [`written_precision`]).
-pub fn rounding_of(x: f64) -> f64 {
-    if !x.is_finite() || x == 0.0 {
-        return 0.0;
-    }
-    let text = format!("{:e}", x.abs());
-    let (mantissa, exp) = text.split_once('e').unwrap_or((&text, "0"));
-    let exp: i32 = exp.parse().unwrap_or(0);
-    let digits = mantissa.chars().filter(|c| c.is_ascii_digit()).count() as i32;
-    if !(4..15).contains(&digits) {
-        // Short numbers are exact; 15-17 digits is full double precision.
-        return 0.0;
-    }
-    // The last significant digit sits at 10^(exp − digits + 1).
-    0.5 * 10f64.powi(exp - digits + 1)
-}
-
 #[cfg(test)]
 mod tests {
     use super::reference as old;
     use super::*;
     use crate::mechanism::{BodyId, JointSpec};
     use nalgebra::DVector;
+
+    /// The file's `precision` key is what the precision functions use, whatever the digits say.
+    #[test]
+    fn written_precision_takes_the_files_key() {
+        use crate::format::{Format, load};
+        let digits =
+            "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\norigin = [0.1234, 0, 0]\n";
+        let m = load("p.toml", digits, Format::Toml).unwrap();
+        assert_eq!(written_precision(&m), 5e-5);
+        let keyed = digits.replace("frame = 1\n", "frame = 1\nprecision = 1e-9\n");
+        let m = load("p.toml", &keyed, Format::Toml).unwrap();
+        assert_eq!(written_precision(&m), 1e-9);
+        assert_eq!(written_direction_precision(&m), 1e-9);
+    }
 
     /// [`complement`] in a motion space of runtime dimension `b` (3 or 6).
     fn complement_in(cols: &[Vb], b: usize) -> Vecs {

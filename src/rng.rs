@@ -39,6 +39,13 @@ impl SplitMix64 {
     }
 }
 
+/// The seed of item `index`'s own stream in a family seeded `seed`: one SplitMix64 step of
+/// both, so an item's draws do not depend on the other items (a joint's random geometry does
+/// not move when another joint is added).
+pub fn indexed_seed(seed: u64, index: usize) -> u64 {
+    SplitMix64::new(seed ^ (index as u64).wrapping_mul(0xD1B5_4A32_D192_ED03)).next_u64()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,8 +17,8 @@ use super::sparse::{Factor, Limits, Rows, SparseMatrix, SparseRow};
 use crate::budget::BudgetExceeded;
 use crate::joint::JointType;
 use crate::mechanism::{Mechanism, Space};
-use crate::motion::joint_seed;
 use crate::rng::SplitMix64;
+use crate::rng::indexed_seed;
 use nalgebra::DMatrix;
 
 type V3 = [Fp; 3];
@@ -153,7 +153,7 @@ pub fn joint_rows(m: &Mechanism, index: usize, seed: u64, driven: u32) -> DMatri
     let k = (j.kind.grade() as usize).min(b);
     let d = (driven as usize).min(k);
     // Its own stream, distinct from the floating-point realization's.
-    let mut rng = SplitMix64::new(joint_seed(seed ^ 0xE4AC_7F1E_1D00_0000, index));
+    let mut rng = SplitMix64::new(indexed_seed(seed ^ 0xE4AC_7F1E_1D00_0000, index));
     // Whether the twists have named DOF (format.md): a driven DOF of a kind without them is a
     // generic direction.
     let (all, named): (Vec<Vec<Fp>>, bool) = match twists(j.kind, m.space, &mut rng) {

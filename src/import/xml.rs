@@ -91,7 +91,7 @@ pub(crate) struct Src<'a> {
     pub text: &'a str,
     /// Byte offsets of the line starts (for `file:line:col` in warnings and comments).
     lines: Vec<usize>,
-    /// The coarsest rounding ([`crate::motion::rounding_of`]) of the numbers read so far that
+    /// The coarsest rounding ([`crate::numbers::rounding_of`]) of the numbers read so far that
     /// enter the geometry: what the imported file's `precision` key says
     /// ([`Builder::source_rounding`]).
     rounding: Cell<f64>,
@@ -118,7 +118,7 @@ impl<'a> Src<'a> {
     pub fn note(&self, xs: &[f64], unit: f64) {
         let r = xs
             .iter()
-            .map(|&x| crate::motion::rounding_of(x) * unit)
+            .map(|&x| crate::numbers::rounding_of(x) * unit)
             .fold(self.rounding.get(), f64::max);
         self.rounding.set(r);
     }

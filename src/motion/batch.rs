@@ -10,11 +10,12 @@
 //! by the one-joint code.
 
 use super::{
-    CANDIDATE_GAP, MAX_B, TwistSpec, Vb, Vecs, complement_of, fallback_model, joint_seed,
-    kept_twists, mix_seed, modelled, norm, orthonormal, project_unit, stack_model_in, twist_spec,
+    CANDIDATE_GAP, MAX_B, TwistSpec, Vb, Vecs, complement_of, fallback_model, kept_twists,
+    mix_seed, modelled, norm, orthonormal, project_unit, stack_model_in, twist_spec,
 };
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
+use crate::rng::indexed_seed;
 use std::borrow::Borrow;
 
 /// Joints per lockstep step where enough jobs share a length.
@@ -447,7 +448,7 @@ pub(crate) fn pair_rows_many<'s, G: Borrow<Geometry>>(
 ) -> &'s Slots {
     let requests = |i: usize| {
         let (ji, driven) = jobs[i];
-        (m.joints[ji].kind, geometry(ji), driven, joint_seed(0, ji))
+        (m.joints[ji].kind, geometry(ji), driven, indexed_seed(0, ji))
     };
     match m.space {
         Space::Spatial => rows_many::<6, G>(m.space, jobs.len(), requests, scratch),

@@ -3,14 +3,15 @@
 //! every joint's features sit on both its bodies).
 
 use crate::mechanism::Mechanism;
-use crate::motion::{SplitMix64, joint_seed, random_geometry};
+use crate::motion::random_geometry;
+use crate::rng::{SplitMix64, indexed_seed};
 
 /// `m` with every joint's geometry replaced by a random generic one (seeded per joint, as
 /// [`crate::motion::realize`] does).
 pub fn with_random_geometry(m: &Mechanism, seed: u64) -> Mechanism {
     let mut out = m.clone();
     for (i, j) in out.joints.iter_mut().enumerate() {
-        let mut rng = SplitMix64::new(joint_seed(seed, i));
+        let mut rng = SplitMix64::new(indexed_seed(seed, i));
         j.geometry = random_geometry(j.kind, m.space, &mut rng).into();
     }
     out
@@ -109,7 +110,7 @@ pub fn with_random_geometry_away_from_folds(
             done.draws += 1;
             let again = seed ^ (attempt as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15);
             for &ji in &mine {
-                let mut rng = SplitMix64::new(joint_seed(again, ji));
+                let mut rng = SplitMix64::new(indexed_seed(again, ji));
                 out.joints[ji].geometry =
                     random_geometry(out.joints[ji].kind, m.space, &mut rng).into();
             }
