@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Every command at 10^3..10^6 bodies: wall time, user CPU and peak memory, with growth exponents.
 
-Issue 16's table (docs/benchmarks.md, "Every command from 10^3 to 10^6 bodies"). For each family
+The table of docs/benchmarks.md, "Every command from 10^3 to 10^6 bodies"). For each family
 and size the mechanism is generated once (`mbsa generate`, TOML), then each command runs through
 the release binary under `/usr/bin/time` with a CPU-time cap and an address-space cap. Output goes to
 stdout as markdown; with --write the table replaces the block between the markers

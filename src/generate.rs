@@ -271,7 +271,7 @@ fn tree_space(kind: JointType, planar: bool) -> Result<Space, GenerateError> {
 /// An open serial chain of `bodies` bodies (the frame, body 1, included): joint k joins bodies
 /// k and k + 1, every joint of kind `kind`, all of its DOF driven when `driven` (a determined
 /// arm: one group per body) or none (mobility = the sum of the grades). No geometry: the
-/// geometric analyses use a random realization. For the scale benchmarks of issue 16.
+/// geometric analyses use a random realization. For the scale benchmarks (docs/benchmarks.md).
 pub fn serial_chain(
     bodies: u64,
     kind: JointType,
@@ -300,7 +300,7 @@ pub fn serial_chain(
 
 /// A star of `bodies` bodies (the frame, body 1, included): every other body joined to the
 /// frame by its own `kind` joint, or with `shared` by one multiple joint naming all of them.
-/// Every DOF driven when `driven`. No geometry. For the scale benchmarks of issue 16.
+/// Every DOF driven when `driven`. No geometry. For the scale benchmarks (docs/benchmarks.md).
 pub fn star(
     bodies: u64,
     kind: JointType,

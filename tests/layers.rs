@@ -26,7 +26,10 @@ const LAYERS: &[(&str, &[&str])] = &[
         &["format", "import", "generate", "examples", "diagnostic"],
     ),
     ("kinematics", &["motion", "position", "geometry"]),
-    ("analyses", &["structure", "rigidity", "transform", "expect"]),
+    (
+        "analyses",
+        &["structure", "rigidity", "transform", "expect"],
+    ),
     ("rendering", &["report"]),
     ("cli", &["cli", "main"]),
 ];
@@ -181,7 +184,9 @@ fn every_module_has_a_layer() {
 fn no_module_uses_a_layer_above_its_own() {
     let mut wrong = Vec::new();
     for (module, uses) in module_graph() {
-        let Some(own) = layer_of(&module) else { continue };
+        let Some(own) = layer_of(&module) else {
+            continue;
+        };
         for (used, file) in uses {
             let theirs = layer_of(&used).expect("filtered to known modules");
             if theirs > own {
@@ -234,7 +239,11 @@ fn modules_of_one_layer_import_each_other_without_cycles() {
     for m in graph.keys() {
         if !state.contains_key(m.as_str()) {
             let cycle = visit(m, &graph, &mut state, &mut Vec::new());
-            assert!(cycle.is_none(), "import cycle: {}", cycle.unwrap().join(" -> "));
+            assert!(
+                cycle.is_none(),
+                "import cycle: {}",
+                cycle.unwrap().join(" -> ")
+            );
         }
     }
 }
@@ -245,6 +254,9 @@ fn the_scanner_sees_imports_and_skips_comments() {
         "use crate::{joint::JointType, motion};\n/// [`crate::report`]\nlet s = \"crate::cli\";\nfn f() { crate::rng::x(); }",
     );
     let named = modules_named(&code);
-    let want: BTreeSet<String> = ["joint", "motion", "rng"].iter().map(|s| s.to_string()).collect();
+    let want: BTreeSet<String> = ["joint", "motion", "rng"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     assert_eq!(named, want);
 }

@@ -104,8 +104,8 @@ pub trait SolveOrder {
 /// A multiple joint is written in the model as pairs from its first listed body to each
 /// other one; the structural analysis sees it symmetrically (a node that belongs to the group
 /// placing its first bodies). When a step places some of its bodies before its first listed
-/// body is known (issue 13's pin `P = [2, 3, 4]`, bodies 3 and 4 in `SG-II`, 2 in `SG-III`),
-/// those pairs cannot tie 3 and 4 together where the analysis does: that step would be
+/// body is known (the pin `P = [2, 3, 4]` of the published case, bodies 3 and 4 in `SG-II`,
+/// 2 in `SG-III`), those pairs cannot tie 3 and 4 together where the analysis does: that step would be
 /// under-determined and the later one over-determined (and inconsistent). Such a joint is
 /// rooted at its earliest known body instead ([`Schedule::links`]: root against each other
 /// body, solved where that body becomes known), and the model's pairs between the first body

@@ -427,7 +427,7 @@ fn rank_without_records_is_the_factor_rank_within_the_same_budget() {
 }
 
 /// The work of factoring a square block triangular matrix whose singular diagonal blocks
-/// leave rows over (issue 16 item 4, `rigid --with-inputs` on a random spatial mechanism):
+/// leave rows over (`rigid --with-inputs` on a random spatial mechanism):
 /// carried through the fronts, such a row met every earlier body it reached, each front
 /// as wide as their union; set aside, it costs the records it meets.
 #[test]

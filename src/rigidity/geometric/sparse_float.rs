@@ -1,4 +1,4 @@
-//! The sparse floating-point path for large parts at the file's geometry (issue 16, item 4).
+//! The sparse floating-point path for large parts at the file's geometry.
 //!
 //! The dense path keeps every motion of a part as a dense orthonormal vector: `d` motions over
 //! `n` unknowns cost `d² · n` to orthonormalize and `d · n` memory, then every two clusters are

@@ -205,7 +205,7 @@ fn exact_path_agrees(m: &Mechanism, opts: &GeometricOptions) -> usize {
     compared
 }
 
-/// Issue 16: the joints' weights carry their own check. On random spatial 400 seed 6
+/// The joints' weights carry their own check. On random spatial 400 seed 6
 /// with its driven DOF kept, the transposed elimination reaches the exact rank only at a
 /// raised threshold, and the self-stresses it gives leave ‖yᵀA‖ about 6·10^-5 σ_max
 /// (above the analysis's own threshold, 1e-9 · rows · σ_max): the report says the weights
@@ -242,7 +242,7 @@ fn weights_carry_their_residual_check() {
     assert_eq!(r.weights_note, None);
 }
 
-/// Issue 16, "no cliffs": an exactly analysed block's floating-point self-stresses (for
+/// No cliffs: an exactly analysed block's floating-point self-stresses (for
 /// the joints' weights) run last, on what the rest of the analysis left of the budget.
 /// Where they do not fit (work or memory), the analysis still answers: the same report
 /// (exact count, motions, clusters) but the joints carrying the exact self-stresses listed

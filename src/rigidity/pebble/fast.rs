@@ -4,7 +4,7 @@
 use super::graph::Graph;
 use crate::budget::{BudgetExceeded, Meter};
 
-/// The component pebble game with contraction (issue 16 item 3): the game of [`Game`], but
+/// The component pebble game with contraction: the game of [`Game`], but
 /// every rigid component found is contracted into one vertex of weight B (a *super-body*, kept
 /// under the id of one of its bodies) and each joint node inside it is re-pinned to that
 /// vertex by B − k bars. A tight set behaves, for every bar outside it, like one body with its
