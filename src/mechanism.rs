@@ -417,6 +417,10 @@ pub struct Expect {
     /// Number of rigid parts (clusters with more than one body, or containing the frame).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rigid_parts: Option<u64>,
+    /// Whether the file has an `[expect]` table at all (an empty one checks nothing, and
+    /// `mbsa check` says so).
+    #[serde(skip)]
+    pub written: bool,
 }
 
 /// Compare joint ids in natural order (`1-2` < `1-10` < `13-9`, `A` < `B`): digit runs compare

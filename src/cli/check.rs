@@ -44,7 +44,9 @@ pub fn run(
                 .iter()
                 .map(|o| format!("{} {}", o.key, o.actual))
                 .collect();
-            let summary = if summary.is_empty() {
+            let summary = if summary.is_empty() && m.expect.written {
+                "valid (empty [expect] table: nothing checked)".to_string()
+            } else if summary.is_empty() {
                 "valid (no [expect] table)".to_string()
             } else {
                 summary.join(", ")

@@ -171,6 +171,49 @@ fn expect_is_read() {
     assert_eq!(e.kind(), ErrorKind::WrongType);
 }
 
+/// A non-finite or null expectation is refused where it is written: dropping it would let
+/// `mbsa check` pass a file that checks nothing.
+#[test]
+fn expect_values_must_be_written_values() {
+    let cases: [(&str, String, Format); 5] = [
+        ("t.toml", "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n[expect]\nmobility = nan\n".into(), Format::Toml),
+        ("t.toml", "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n[expect]\nredundant = -inf\n".into(), Format::Toml),
+        ("j.json", r#"{"frame": 1, "joints": [{"type": "R", "bodies": [1, 2]}], "expect": {"mobility": 1e999}}"#.into(), Format::Json),
+        ("y.yaml", "frame: 1\njoints: [{type: R, bodies: [1, 2]}]\nexpect:\n  mobility: .nan\n".into(), Format::Yaml),
+        ("y.yaml", "frame: 1\njoints: [{type: R, bodies: [1, 2]}]\nexpect:\n  determined: ~\n".into(), Format::Yaml),
+    ];
+    for (name, text, format) in cases {
+        let e = load(name, &text, format).expect_err(&text);
+        assert_eq!(e.kind(), ErrorKind::WrongType, "{text}");
+        assert!(e.message().starts_with("`expect."), "{}", e.message());
+        let (line, _) = e.line_col().expect("located");
+        let key_line = text
+            .lines()
+            .position(|l| {
+                l.contains("nan") || l.contains("inf") || l.contains("1e999") || l.contains('~')
+            })
+            .unwrap()
+            + 1;
+        assert_eq!(line, key_line, "{text}");
+    }
+    // An empty table is read as written, so that `check` can say it checks nothing.
+    let empty = load(
+        "e.toml",
+        "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n[expect]\n",
+        Format::Toml,
+    )
+    .unwrap();
+    assert!(empty.expect.written);
+    assert_eq!(empty.expect.mobility, None);
+    let none = load(
+        "n.toml",
+        "frame = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n",
+        Format::Toml,
+    )
+    .unwrap();
+    assert!(!none.expect.written);
+}
+
 #[test]
 fn frameworks() {
     let text = r#"

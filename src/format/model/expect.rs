@@ -17,6 +17,7 @@ pub(super) fn parse_expect(node: &Node) -> Result<Expect, LoadError> {
     check_keys(es, &keys, "expect")?;
     let mut object = serde_json::Map::new();
     for e in es {
+        refuse_absent(&e.key, &e.value)?;
         let v = to_json(&e.value)?;
         let one = serde_json::Value::Object([(e.key.to_string(), v.clone())].into_iter().collect());
         if let Err(x) = serde_json::from_value::<Expect>(one) {
@@ -35,15 +36,38 @@ pub(super) fn parse_expect(node: &Node) -> Result<Expect, LoadError> {
         }
         object.insert(e.key.to_string(), v);
     }
-    serde_json::from_value(serde_json::Value::Object(object)).map_err(|x| {
-        err(
-            ErrorKind::WrongType,
-            format!("`expect`: {x}"),
-            &node.span,
-            "here",
-            None,
-        )
-    })
+    let mut expect: Expect =
+        serde_json::from_value(serde_json::Value::Object(object)).map_err(|x| {
+            err(
+                ErrorKind::WrongType,
+                format!("`expect`: {x}"),
+                &node.span,
+                "here",
+                None,
+            )
+        })?;
+    expect.written = true;
+    Ok(expect)
+}
+
+/// A value that would read as "not expected": NaN or an infinity (JSON `1e999`, YAML `.nan`),
+/// or an explicit null. Dropping it would make `mbsa check` pass a file that checks nothing.
+fn refuse_absent(key: &str, node: &Node) -> Result<(), LoadError> {
+    let (what, label) = match node.value {
+        Value::Float(f) if !f.is_finite() => ("is not a finite number", "not finite"),
+        Value::Null => ("has no value", "no value"),
+        _ => return Ok(()),
+    };
+    Err(err(
+        ErrorKind::WrongType,
+        format!("`expect.{key}` {what}"),
+        &node.span,
+        label,
+        Some(match key {
+            "determined" => "write true or false, or remove the key".to_string(),
+            _ => "write the expected integer, or remove the key".to_string(),
+        }),
+    ))
 }
 
 fn to_json(node: &Node) -> Result<serde_json::Value, LoadError> {
