@@ -9,10 +9,10 @@
 //! lane that leaves the common path (a vector dropped, a non-finite value) is computed again
 //! by the one-joint code.
 
-use super::{
-    CANDIDATE_GAP, MAX_B, TwistSpec, Vb, Vecs, complement_of, fallback_model, kept_twists,
-    mix_seed, modelled, norm, orthonormal, project_unit, stack_model_in, twist_spec,
-};
+use super::gram::{CANDIDATE_GAP, MAX_B, Vb, Vecs, complement_of, norm, orthonormal, project_unit};
+use super::model::{fallback_model, kept_twists, mix_seed, stack_model_in};
+use super::modelled;
+use super::twists::{TwistSpec, twist_spec};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
 use crate::rng::indexed_seed;

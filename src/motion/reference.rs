@@ -4,11 +4,12 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::{
-    CANDIDATE_GAP, MAX_B, MIX_SALT, MotionError, StackModel, Vb, Vecs, in_plane, is_contact,
-    mix_seed, modelled, need, perpendicular_pair, random_unit, spatial_rot, spatial_trans, unit,
-    v3, v3b, world_turns,
+use super::gram::{CANDIDATE_GAP, MAX_B, Vb, Vecs};
+use super::model::{MIX_SALT, StackModel, mix_seed, random_unit};
+use super::twists::{
+    in_plane, need, perpendicular_pair, spatial_rot, spatial_trans, unit, v3, v3b, world_turns,
 };
+use super::{MotionError, is_contact, modelled};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Space};
 use crate::rng::SplitMix64;
