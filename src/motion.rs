@@ -48,6 +48,7 @@ pub use crate::rng::SplitMix64;
 
 mod batch;
 mod gram;
+pub mod kinds;
 mod lacking;
 mod model;
 mod realize;

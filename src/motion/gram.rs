@@ -49,6 +49,11 @@ impl Vecs {
         }
     }
 
+    /// The first `n` of `v`.
+    pub(super) fn from_parts(v: [Vb; MAX_B], n: usize) -> Vecs {
+        Vecs { v, n: n.min(MAX_B) }
+    }
+
     /// The vectors.
     pub(crate) fn as_slice(&self) -> &[Vb] {
         &self.v[..self.n]

@@ -5,7 +5,8 @@ use super::gram::{
     MAX_B, Vecs, as_rows, columns, complement, complement_of, orthonormal,
     orthonormal_if_well_conditioned,
 };
-use super::twists::{full_twists, v3, v3b};
+use super::kinds::{line, short};
+use super::twists::{full_twists, v3};
 use super::{JointModel, MotionError, modelled};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Space};
@@ -103,25 +104,22 @@ pub(super) fn contact_rows<const N: usize>(kind: JointType, g: &Geometry, space:
             d = random_unit(&mut rng);
         }
         let row = match space {
-            Space::Spatial => {
-                let m = q.cross(&d);
-                [m.x, m.y, m.z, d.x, d.y, d.z]
-            }
+            Space::Spatial => line(&q.into(), &d.into()),
             Space::Planar => {
                 let d2 = if d.x.abs() + d.y.abs() < 1e-9 {
                     Vector3::new(1.0, 0.0, 0.0)
                 } else {
                     d
                 };
-                v3b(q.x * d2.y - q.y * d2.x, d2.x, d2.y)
+                short(q.x * d2.y - q.y * d2.x, d2.x, d2.y)
             }
             Space::Spherical => {
                 let m = q.cross(&d);
                 if m.norm() > 1e-9 {
-                    v3b(m.x, m.y, m.z)
+                    short(m.x, m.y, m.z)
                 } else {
                     let r = random_unit(&mut rng);
-                    v3b(r.x, r.y, r.z)
+                    short(r.x, r.y, r.z)
                 }
             }
         };

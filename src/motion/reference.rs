@@ -6,9 +6,7 @@
 
 use super::gram::{CANDIDATE_GAP, MAX_B, Vb, Vecs};
 use super::model::{MIX_SALT, StackModel, mix_seed, random_unit};
-use super::twists::{
-    in_plane, need, perpendicular_pair, spatial_rot, spatial_trans, unit, v3, v3b, world_turns,
-};
+use super::twists::{in_plane, need, unit, v3};
 use super::{MotionError, is_contact, modelled};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Space};
@@ -462,4 +460,38 @@ pub(crate) fn fallback_model(kind: JointType, space: Space, driven: u32, seed: u
     let twists = kept_twists(&all, driven as usize, seed, b);
     let rows = complement(twists.as_slice(), b);
     StackModel { b, rows, twists }
+}
+
+/// Two unit vectors perpendicular to unit `u` and to each other, chosen deterministically:
+/// `e1 = normalize(u × a)` with `a` the world axis least aligned with `u`, `e2 = u × e1`.
+pub(crate) fn perpendicular_pair(u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let a = if u.x.abs() <= u.y.abs() && u.x.abs() <= u.z.abs() {
+        Vector3::x()
+    } else if u.y.abs() <= u.z.abs() {
+        Vector3::y()
+    } else {
+        Vector3::z()
+    };
+    let e1 = u.cross(&a).normalize();
+    let e2 = u.cross(&e1);
+    (e1, e2)
+}
+
+pub(super) fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vb {
+    let m = p.cross(u);
+    [u.x, u.y, u.z, m.x, m.y, m.z]
+}
+
+pub(super) fn spatial_trans(u: &Vector3<f64>) -> Vb {
+    [0.0, 0.0, 0.0, u.x, u.y, u.z]
+}
+
+/// A vector of a 3-dimensional motion space (the rest zero).
+pub(super) fn v3b(a: f64, b: f64, c: f64) -> Vb {
+    [a, b, c, 0.0, 0.0, 0.0]
+}
+
+/// The rotations about the world x, y, z axes through `c` (the turns of a ball).
+pub(super) fn world_turns(c: &Vector3<f64>) -> [Vb; 3] {
+    [Vector3::x(), Vector3::y(), Vector3::z()].map(|e| spatial_rot(&e, c))
 }

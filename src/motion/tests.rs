@@ -511,7 +511,7 @@ fn ss_bar_has_one_isolated_spin() {
     assert_eq!(nullity, 1);
     // The spin: rotation about the line through both centres.
     let u = Vector3::new(0.9, -0.7, 0.4).normalize();
-    let t = DVector::from_vec(spatial_rot(&u, &Vector3::new(0.1, 0.2, 0.3)).to_vec());
+    let t = DVector::from_vec(super::kinds::turn(&u.into(), &[0.1, 0.2, 0.3]).to_vec());
     assert!((&stacked * t).norm() < 1e-12);
 }
 

@@ -4,6 +4,7 @@
 use super::MotionError;
 use super::gram::{Vb, Vecs, complement};
 use super::is_contact;
+use super::kinds::{self, Allowed, Features};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Space};
 use nalgebra::Vector3;
@@ -39,40 +40,6 @@ pub(super) fn need<T: Copy>(
     })
 }
 
-/// Two unit vectors perpendicular to unit `u` and to each other, chosen deterministically:
-/// `e1 = normalize(u × a)` with `a` the world axis least aligned with `u`, `e2 = u × e1`.
-pub fn perpendicular_pair(u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
-    let a = if u.x.abs() <= u.y.abs() && u.x.abs() <= u.z.abs() {
-        Vector3::x()
-    } else if u.y.abs() <= u.z.abs() {
-        Vector3::y()
-    } else {
-        Vector3::z()
-    };
-    let e1 = u.cross(&a).normalize();
-    let e2 = u.cross(&e1);
-    (e1, e2)
-}
-
-pub(super) fn spatial_rot(u: &Vector3<f64>, p: &Vector3<f64>) -> Vb {
-    let m = p.cross(u);
-    [u.x, u.y, u.z, m.x, m.y, m.z]
-}
-
-pub(super) fn spatial_trans(u: &Vector3<f64>) -> Vb {
-    [0.0, 0.0, 0.0, u.x, u.y, u.z]
-}
-
-/// A vector of a 3-dimensional motion space (the rest zero).
-pub(super) fn v3b(a: f64, b: f64, c: f64) -> Vb {
-    [a, b, c, 0.0, 0.0, 0.0]
-}
-
-/// The rotations about the world x, y, z axes through `c` (the turns of a ball).
-pub(super) fn world_turns(c: &Vector3<f64>) -> [Vb; 3] {
-    [Vector3::x(), Vector3::y(), Vector3::z()].map(|e| spatial_rot(&e, c))
-}
-
 /// The unit component of `v` perpendicular to unit `n` (geometry written to a few decimals is
 /// not exactly perpendicular); an error when `v` is (nearly) parallel to `n`.
 pub(super) fn in_plane(
@@ -91,6 +58,14 @@ pub(super) fn in_plane(
     Ok(w / w.norm())
 }
 
+/// Two unit vectors perpendicular to unit `u` and to each other, chosen deterministically:
+/// `e1 = normalize(u × a)` with `a` the world axis least aligned with `u`, `e2 = u × e1`
+/// ([`kinds::perpendicular_pair`] in floating point).
+pub fn perpendicular_pair(u: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let (e1, e2) = kinds::perpendicular_pair(&(*u).into(), &[0.0; 3]);
+    (e1.into(), e2.into())
+}
+
 /// All allowed twists of `kind` in driven-DOF order (before removing driven ones).
 #[inline]
 pub(super) fn full_twists(
@@ -105,7 +80,7 @@ pub(super) fn full_twists(
 }
 
 /// A joint's allowed twists ([`full_twists`]) before any Gram-Schmidt: listed, or the
-/// annihilator of one line (SPSP, spatial only), which [`batch`] builds in lanes.
+/// annihilator of one line (SPSP, spatial only), which [`super::batch`] builds in lanes.
 #[allow(clippy::large_enum_variant)] // On the stack, returned once per joint: no box.
 pub(super) enum TwistSpec {
     /// The twists themselves.
@@ -114,162 +89,129 @@ pub(super) enum TwistSpec {
     AnnihilatorOf(Vb),
 }
 
-/// [`full_twists`] up to the Gram-Schmidt it may need.
+/// [`full_twists`] up to the Gram-Schmidt it may need: [`kinds::allowed`] at the features
+/// [`file_features`] reads from `g` (no twist for a count-only kind).
 #[inline]
 pub(super) fn twist_spec(
     kind: JointType,
     g: &Geometry,
     space: Space,
 ) -> Result<TwistSpec, MotionError> {
+    let spec = file_features(kind, g, space)?.and_then(|f| kinds::allowed(kind, space, &f));
+    Ok(match spec {
+        Some(Allowed::Listed(list, n)) => TwistSpec::Listed(Vecs::from_parts(list, n)),
+        Some(Allowed::AnnihilatorOf(line)) => TwistSpec::AnnihilatorOf(line),
+        None => TwistSpec::Listed(Vecs::EMPTY),
+    })
+}
+
+/// The features of a joint of `kind` read from the file's geometry `g`, in the order its
+/// fields are checked (the first missing or degenerate one is the error): directions made
+/// unit, PC's axis and CR's normal made perpendicular to the other direction, optional
+/// fields defaulted ([`kinds::features`]). `None` for a count-only kind; an error for a kind
+/// invalid in `space`.
+fn file_features(
+    kind: JointType,
+    g: &Geometry,
+    space: Space,
+) -> Result<Option<Features<f64>>, MotionError> {
     use JointType::*;
-    let code = kind.code();
-    let origin = |g: &Geometry| need(kind, "origin", g.origin).map(v3);
-    let axis = |g: &Geometry| need(kind, "axis", g.axis).and_then(|a| unit(kind, "axis", a));
-    let normal =
-        |g: &Geometry| need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
-    match space {
-        Space::Spatial => Ok(TwistSpec::Listed(match kind {
-            R => Vecs::of(&[spatial_rot(&axis(g)?, &origin(g)?)]),
-            P => Vecs::of(&[spatial_trans(&axis(g)?)]),
-            H => {
-                let (u, p) = (axis(g)?, origin(g)?);
-                let h = need(kind, "pitch", g.pitch)?;
-                if !h.is_finite() {
-                    return Err(MotionError::ZeroVector {
-                        kind: code,
-                        field: "pitch",
-                    });
-                }
-                let m = p.cross(&u) + u * h;
-                Vecs::of(&[[u.x, u.y, u.z, m.x, m.y, m.z]])
+    let origin = || need(kind, "origin", g.origin).map(v3);
+    let axis = || need(kind, "axis", g.axis).and_then(|a| unit(kind, "axis", a));
+    let normal = || need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
+    let or_zero = |p: Option<[f64; 3]>| p.map(v3).unwrap_or_else(Vector3::zeros);
+    let z = Vector3::zeros();
+    let mut f = Features {
+        origin: [0.0; 3],
+        origin2: [0.0; 3],
+        axis: [0.0; 3],
+        axis2: [0.0; 3],
+        normal: [0.0; 3],
+        pitch: 0.0,
+        hint: [0.0; 3],
+    };
+    let mut set = |p: Vector3<f64>, u: Vector3<f64>, n: Vector3<f64>| {
+        (f.origin, f.axis, f.normal) = (p.into(), u.into(), n.into());
+    };
+    match (space, kind) {
+        (Space::Spatial, R | C | ER) => {
+            let u = axis()?;
+            set(origin()?, u, z);
+        }
+        (Space::Spatial, P) | (Space::Spherical, R) => set(z, axis()?, z),
+        (Space::Spatial, H) => {
+            let (u, p) = (axis()?, origin()?);
+            let h = need(kind, "pitch", g.pitch)?;
+            if !h.is_finite() {
+                return Err(MotionError::ZeroVector {
+                    kind: kind.code(),
+                    field: "pitch",
+                });
             }
-            C => {
-                let (u, p) = (axis(g)?, origin(g)?);
-                Vecs::of(&[spatial_trans(&u), spatial_rot(&u, &p)])
-            }
-            ER => {
-                let (u, p) = (axis(g)?, origin(g)?);
-                let (e1, e2) = perpendicular_pair(&u);
-                Vecs::of(&[spatial_rot(&e1, &p), spatial_rot(&e2, &p)])
-            }
-            U => {
-                let (u, p) = (axis(g)?, origin(g)?);
-                let u2 = unit(kind, "axis2", need(kind, "axis2", g.axis2)?)?;
-                Vecs::of(&[spatial_rot(&u, &p), spatial_rot(&u2, &p)])
-            }
-            S => Vecs::of(&world_turns(&origin(g)?)),
-            PL | FP => {
-                let n = match (kind, g.normal) {
-                    (_, Some(n)) => unit(kind, "normal", n)?,
-                    (FP, None) => Vector3::z(),
-                    _ => need(kind, "normal", g.normal).map(v3)?,
-                };
-                let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
-                let (e1, e2) = perpendicular_pair(&n);
-                Vecs::of(&[spatial_trans(&e1), spatial_trans(&e2), spatial_rot(&n, &p)])
-            }
-            SP => {
-                // Sphere (second body) on a plane (first body): slides in the plane, then the
-                // three turns about the centre.
-                let (c, n) = (origin(g)?, normal(g)?);
-                let (e1, e2) = perpendicular_pair(&n);
-                let mut out = Vecs::of(&[spatial_trans(&e1), spatial_trans(&e2)]);
-                world_turns(&c).into_iter().for_each(|t| out.push(t));
-                out
-            }
-            SC => {
-                // Sphere centre kept on the cylinder axis: the slide, then the three turns.
-                let (c, u) = (origin(g)?, axis(g)?);
-                let mut out = Vecs::of(&[spatial_trans(&u)]);
-                world_turns(&c).into_iter().for_each(|t| out.push(t));
-                out
-            }
-            PC => {
-                // Cylinder on a plane: two slides in the plane, turn about the normal, turn
-                // about the cylinder axis (its component in the plane).
-                let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
+            set(p, u, z);
+            f.pitch = h;
+        }
+        (Space::Spatial, U) => {
+            let (u, p) = (axis()?, origin()?);
+            let u2 = unit(kind, "axis2", need(kind, "axis2", g.axis2)?)?;
+            set(p, u, z);
+            f.axis2 = u2.into();
+        }
+        (Space::Spatial, S) => set(origin()?, z, z),
+        (Space::Spatial, PL | FP) => {
+            let n = match (kind, g.normal) {
+                (_, Some(n)) => unit(kind, "normal", n)?,
+                (FP, None) => Vector3::z(),
+                _ => need(kind, "normal", g.normal).map(v3)?,
+            };
+            set(or_zero(g.origin), z, n);
+        }
+        (Space::Spatial, SP) => {
+            let p = origin()?;
+            set(p, z, normal()?);
+        }
+        (Space::Spatial, SC) => {
+            let p = origin()?;
+            set(p, axis()?, z);
+        }
+        (Space::Spatial, PC | CR) => {
+            let (p, u, n) = (origin()?, axis()?, normal()?);
+            if kind == PC {
                 let u = in_plane(kind, &u, &n, "`axis` must not be parallel to `normal`")?;
-                let (e1, e2) = perpendicular_pair(&n);
-                Vecs::of(&[
-                    spatial_trans(&e1),
-                    spatial_trans(&e2),
-                    spatial_rot(&n, &p),
-                    spatial_rot(&u, &p),
-                ])
-            }
-            CR => {
-                // Cylinder in a slot: slide along the axis, slide across the slot, turn about
-                // the axis.
-                let (p, u, n) = (origin(g)?, axis(g)?, normal(g)?);
+                set(p, u, n);
+            } else {
                 let n = in_plane(kind, &n, &u, "`normal` must not be parallel to `axis`")?;
-                Vecs::of(&[
-                    spatial_trans(&u),
-                    spatial_trans(&n.cross(&u)),
-                    spatial_rot(&u, &p),
-                ])
+                set(p, u, n);
             }
-            SPSP => {
-                // One force along the line of centres; the allowed motions are its annihilator.
-                let c1 = origin(g)?;
-                let c2 = v3(need(kind, "origin2", g.origin2)?);
-                let d = c2 - c1;
-                if d.norm().is_nan() || d.norm() <= 1e-12 {
-                    return Err(MotionError::Degenerate {
-                        kind: code,
-                        reason: "`origin` and `origin2` (the two centres) coincide",
-                    });
-                }
-                let d = d / d.norm();
-                let m = c1.cross(&d);
-                return Ok(TwistSpec::AnnihilatorOf([m.x, m.y, m.z, d.x, d.y, d.z]));
-            }
-            F => {
-                let mut out = Vecs::EMPTY;
-                for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
-                    out.push(spatial_trans(&e));
-                }
-                for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
-                    out.push(spatial_rot(&e, &Vector3::zeros()));
-                }
-                out
-            }
-            _ => Vecs::EMPTY,
-        })),
-        Space::Planar => Ok(TwistSpec::Listed(match kind {
-            R => {
-                let p = origin(g)?;
-                Vecs::of(&[v3b(1.0, p.y, -p.x)])
-            }
-            P => {
-                let a = need(kind, "axis", g.axis)?;
-                let u = unit(kind, "axis", [a[0], a[1], 0.0])?;
-                Vecs::of(&[v3b(0.0, u.x, u.y)])
-            }
-            FP => {
-                let p = g.origin.map(v3).unwrap_or_else(Vector3::zeros);
-                Vecs::of(&[v3b(0.0, 1.0, 0.0), v3b(0.0, 0.0, 1.0), v3b(1.0, p.y, -p.x)])
-            }
-            k if is_contact(k) => Vecs::EMPTY,
-            _ => {
-                return Err(MotionError::InvalidInSpace {
-                    kind: code,
-                    space: "planar",
+        }
+        (Space::Spatial, SPSP) => {
+            let c1 = origin()?;
+            let c2 = v3(need(kind, "origin2", g.origin2)?);
+            let d = c2 - c1;
+            if d.norm().is_nan() || d.norm() <= 1e-12 {
+                return Err(MotionError::Degenerate {
+                    kind: kind.code(),
+                    reason: "`origin` and `origin2` (the two centres) coincide",
                 });
             }
-        })),
-        Space::Spherical => Ok(TwistSpec::Listed(match kind {
-            R => {
-                let u = axis(g)?;
-                Vecs::of(&[v3b(u.x, u.y, u.z)])
-            }
-            FP => Vecs::of(&[v3b(1.0, 0.0, 0.0), v3b(0.0, 1.0, 0.0), v3b(0.0, 0.0, 1.0)]),
-            k if is_contact(k) => Vecs::EMPTY,
-            _ => {
-                return Err(MotionError::InvalidInSpace {
-                    kind: code,
-                    space: "spherical",
-                });
-            }
-        })),
+            set(c1, z, z);
+            f.origin2 = c2.into();
+        }
+        (Space::Spatial, F) | (Space::Spherical, FP) => {}
+        (Space::Spatial, _) => return Ok(None),
+        (Space::Planar, R) => set(origin()?, z, z),
+        (Space::Planar, P) => {
+            let a = need(kind, "axis", g.axis)?;
+            set(z, unit(kind, "axis", [a[0], a[1], 0.0])?, z);
+        }
+        (Space::Planar, FP) => set(or_zero(g.origin), z, z),
+        (_, k) if is_contact(k) => return Ok(None),
+        _ => {
+            return Err(MotionError::InvalidInSpace {
+                kind: kind.code(),
+                space: space.name(),
+            });
+        }
     }
+    Ok(Some(f))
 }
