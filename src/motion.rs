@@ -47,6 +47,7 @@ use nalgebra::DMatrix;
 pub use crate::rng::SplitMix64;
 
 mod batch;
+pub mod exact;
 mod gram;
 pub mod kinds;
 mod lacking;
