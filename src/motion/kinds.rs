@@ -128,6 +128,15 @@ pub fn features(kind: JointType, space: Space) -> Option<&'static [Feature]> {
     })
 }
 
+/// Whether `feature` of `kind` may be left out: PL's and FP's `origin` (the world origin) and
+/// FP's `normal` (the z axis).
+pub fn optional(kind: JointType, feature: Feature) -> bool {
+    matches!(
+        (kind, feature),
+        (JointType::PL | JointType::FP, Feature::Origin) | (JointType::FP, Feature::Normal)
+    )
+}
+
 /// A joint's allowed twists: listed, or the annihilator of one line (SPSP, whose one
 /// constraint is a force along the line of centres; each scalar takes the annihilator its
 /// own way).
