@@ -53,8 +53,6 @@ pub mod kinds;
 mod lacking;
 mod model;
 mod realize;
-#[cfg(test)]
-mod reference;
 mod scale;
 mod twists;
 

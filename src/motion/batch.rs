@@ -5,7 +5,7 @@
 //! several joints (eight lanes are four two-wide chains at once: four left the core waiting on
 //! the sums' latency more often). Every lane does
 //! the same operations in the same order as the one-joint code, so the rows are bit for bit
-//! those of [`super::pair_stack_model`] (tested against it and against `reference.rs`); a
+//! those of [`super::pair_stack_model`] (tested against it); a
 //! lane that leaves the common path (a vector dropped, a non-finite value) is computed again
 //! by the one-joint code.
 

@@ -697,4 +697,68 @@ mod tests {
         // Generic spatial 4R: 20 rows, 18 unknowns, rank 18.
         assert_eq!(jacobian_rank(&m, 3), (18, 20, 18));
     }
+
+    /// The rank of the floating-point constraint Jacobian of `m` at its random realization
+    /// `seed` ([`crate::motion::realize`]), by SVD: every binary pair hub→other, frame fixed.
+    fn float_rank(m: &Mechanism, seed: u64) -> usize {
+        let b = m.b() as usize;
+        let models = crate::motion::realize(m, seed);
+        let col = |x: usize| (x != m.frame).then(|| if x < m.frame { x } else { x - 1 } * b);
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        for (j, model) in m.joints.iter().zip(&models) {
+            let Some((&hub, others)) = j.bodies.split_first() else {
+                continue;
+            };
+            for &o in others {
+                for r in 0..model.rows.nrows() {
+                    let mut row = vec![0.0; b * (m.bodies.len() - 1)];
+                    for (x, sign) in [(hub, -1.0), (o, 1.0)] {
+                        if let Some(c) = col(x) {
+                            (0..b).for_each(|k| row[c + k] += sign * model.rows[(r, k)]);
+                        }
+                    }
+                    rows.push(row);
+                }
+            }
+        }
+        let a = DMatrix::from_fn(rows.len(), b * (m.bodies.len() - 1), |i, c| rows[i][c]);
+        if a.nrows() == 0 { 0 } else { a.rank(1e-8) }
+    }
+
+    /// The exact models and the floating-point ones describe the same joints: at random
+    /// geometry their Jacobians have the same rank, for closed loops of three joints of
+    /// every kind in every space (driven or not) and for random mechanisms.
+    #[test]
+    fn exact_rank_is_the_floating_point_rank() {
+        let mut compared = 0;
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                if kind.grade() as usize > b || !kind.valid_in(space) {
+                    continue;
+                }
+                for driven in [0, 1] {
+                    let j = |a, c| JointSpec::new(kind, a, c, driven);
+                    let m = Mechanism::from_parts(
+                        "loop",
+                        space,
+                        BodyId::Int(1),
+                        vec![],
+                        vec![j(1, 2), j(2, 3), j(3, 1)],
+                    );
+                    for seed in 0..3 {
+                        let (exact, _, _) = jacobian_rank(&m, seed);
+                        assert_eq!(exact, float_rank(&m, seed), "{kind:?} {space:?} {driven}");
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        for (n, planar, seed) in [(12, false, 1), (15, true, 2), (20, false, 3)] {
+            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            assert_eq!(jacobian_rank(&m, 5).0, float_rank(&m, 5), "{n} {planar}");
+            compared += 1;
+        }
+        assert!(compared > 100, "{compared}");
+    }
 }

@@ -68,7 +68,7 @@ impl Vecs {
 // The helpers below take the dimension as a constant `N` (3 or 6, [`Space::b`]; the entry
 // points dispatch once per joint): their loops unroll. Every sum is still taken in index
 // order from 0, so the results are bit for bit those of the loops up to a runtime dimension
-// they replaced (`reference.rs`, compared in the tests).
+// they replaced.
 
 pub(super) fn dot<const N: usize>(a: &Vb, b: &Vb) -> f64 {
     let mut r = 0.0;
