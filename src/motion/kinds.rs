@@ -91,6 +91,22 @@ pub struct Features<T> {
     pub hint: V3<T>,
 }
 
+impl<T: Scalar> Features<T> {
+    /// Every feature zero.
+    pub fn zeros() -> Features<T> {
+        let z = [T::ZERO; 3];
+        Features {
+            origin: z,
+            origin2: z,
+            axis: z,
+            axis2: z,
+            normal: z,
+            pitch: T::ZERO,
+            hint: z,
+        }
+    }
+}
+
 /// One feature of a joint, named as its geometry field.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Feature {
@@ -215,72 +231,9 @@ fn world_turns<T: Scalar>(c: &V3<T>) -> [Twist<T>; 3] {
 /// translations then rotations). `None` when the kind has no model there ([`features`]).
 pub fn allowed<T: Scalar>(kind: JointType, space: Space, f: &Features<T>) -> Option<Allowed<T>> {
     use JointType::*;
-    let (p, u, n) = (&f.origin, &f.axis, &f.normal);
-    let pair = |d: &V3<T>| perpendicular_pair(d, &f.hint);
+    let (p, u) = (&f.origin, &f.axis);
     Some(match space {
-        Space::Spatial => match kind {
-            R => Allowed::of(&[turn(u, p)]),
-            P => Allowed::of(&[slide(u)]),
-            H => {
-                let m = cross(p, u);
-                let h = f.pitch;
-                let t = [
-                    u[0],
-                    u[1],
-                    u[2],
-                    m[0] + u[0] * h,
-                    m[1] + u[1] * h,
-                    m[2] + u[2] * h,
-                ];
-                Allowed::of(&[t])
-            }
-            C => Allowed::of(&[slide(u), turn(u, p)]),
-            ER => {
-                // A ball whose turn about `axis` is blocked.
-                let (e1, e2) = pair(u);
-                Allowed::of(&[turn(&e1, p), turn(&e2, p)])
-            }
-            U => Allowed::of(&[turn(u, p), turn(&f.axis2, p)]),
-            S => Allowed::of(&world_turns(p)),
-            PL | FP => {
-                let (e1, e2) = pair(n);
-                Allowed::of(&[slide(&e1), slide(&e2), turn(n, p)])
-            }
-            SP => {
-                // Sphere (second body) on a plane (first body): slides in the plane, then the
-                // three turns about the centre.
-                let (e1, e2) = pair(n);
-                let [t1, t2, t3] = world_turns(p);
-                Allowed::of(&[slide(&e1), slide(&e2), t1, t2, t3])
-            }
-            SC => {
-                // Sphere centre kept on the cylinder axis: the slide, then the three turns.
-                let [t1, t2, t3] = world_turns(p);
-                Allowed::of(&[slide(u), t1, t2, t3])
-            }
-            PC => {
-                // Cylinder on a plane: two slides in the plane, turn about the normal, turn
-                // about the cylinder axis (in the plane).
-                let (e1, e2) = pair(n);
-                Allowed::of(&[slide(&e1), slide(&e2), turn(n, p), turn(u, p)])
-            }
-            CR => {
-                // Cylinder in a slot: slide along the axis, slide across the slot, turn about
-                // the axis.
-                Allowed::of(&[slide(u), slide(&cross(n, u)), turn(u, p)])
-            }
-            SPSP => {
-                let q = &f.origin2;
-                let d = T::normalize([q[0] - p[0], q[1] - p[1], q[2] - p[2]]);
-                Allowed::AnnihilatorOf(line(p, &d))
-            }
-            F => {
-                let [s1, s2, s3] = [0, 1, 2].map(|i| slide(&unit(i)));
-                let [t1, t2, t3] = world_turns(&[T::ZERO; 3]);
-                Allowed::of(&[s1, s2, s3, t1, t2, t3])
-            }
-            _ => return None,
-        },
+        Space::Spatial => return spatial(kind, f),
         Space::Planar => {
             let (o, z) = (T::ONE, T::ZERO);
             match kind {
@@ -298,5 +251,75 @@ pub fn allowed<T: Scalar>(kind: JointType, space: Space, f: &Features<T>) -> Opt
             })),
             _ => return None,
         },
+    })
+}
+
+/// [`allowed`] in a spatial mechanism.
+fn spatial<T: Scalar>(kind: JointType, f: &Features<T>) -> Option<Allowed<T>> {
+    use JointType::*;
+    let (p, u, n) = (&f.origin, &f.axis, &f.normal);
+    let pair = |d: &V3<T>| perpendicular_pair(d, &f.hint);
+    Some(match kind {
+        R => Allowed::of(&[turn(u, p)]),
+        P => Allowed::of(&[slide(u)]),
+        H => {
+            let m = cross(p, u);
+            let h = f.pitch;
+            let t = [
+                u[0],
+                u[1],
+                u[2],
+                m[0] + u[0] * h,
+                m[1] + u[1] * h,
+                m[2] + u[2] * h,
+            ];
+            Allowed::of(&[t])
+        }
+        C => Allowed::of(&[slide(u), turn(u, p)]),
+        ER => {
+            // A ball whose turn about `axis` is blocked.
+            let (e1, e2) = pair(u);
+            Allowed::of(&[turn(&e1, p), turn(&e2, p)])
+        }
+        U => Allowed::of(&[turn(u, p), turn(&f.axis2, p)]),
+        S => Allowed::of(&world_turns(p)),
+        PL | FP => {
+            let (e1, e2) = pair(n);
+            Allowed::of(&[slide(&e1), slide(&e2), turn(n, p)])
+        }
+        SP => {
+            // Sphere (second body) on a plane (first body): slides in the plane, then the
+            // three turns about the centre.
+            let (e1, e2) = pair(n);
+            let [t1, t2, t3] = world_turns(p);
+            Allowed::of(&[slide(&e1), slide(&e2), t1, t2, t3])
+        }
+        SC => {
+            // Sphere centre kept on the cylinder axis: the slide, then the three turns.
+            let [t1, t2, t3] = world_turns(p);
+            Allowed::of(&[slide(u), t1, t2, t3])
+        }
+        PC => {
+            // Cylinder on a plane: two slides in the plane, turn about the normal, turn
+            // about the cylinder axis (in the plane).
+            let (e1, e2) = pair(n);
+            Allowed::of(&[slide(&e1), slide(&e2), turn(n, p), turn(u, p)])
+        }
+        CR => {
+            // Cylinder in a slot: slide along the axis, slide across the slot, turn about
+            // the axis.
+            Allowed::of(&[slide(u), slide(&cross(n, u)), turn(u, p)])
+        }
+        SPSP => {
+            let q = &f.origin2;
+            let d = T::normalize([q[0] - p[0], q[1] - p[1], q[2] - p[2]]);
+            Allowed::AnnihilatorOf(line(p, &d))
+        }
+        F => {
+            let [s1, s2, s3] = [0, 1, 2].map(|i| slide(&unit(i)));
+            let [t1, t2, t3] = world_turns(&[T::ZERO; 3]);
+            Allowed::of(&[s1, s2, s3, t1, t2, t3])
+        }
+        _ => return None,
     })
 }

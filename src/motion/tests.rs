@@ -250,6 +250,88 @@ fn models_in_lanes_are_the_one_joint_models() {
     );
 }
 
+/// The closed form of the motions a joint of `kind` at geometry `g` allows, written with
+/// nalgebra from the geometry's fields (`None` for count-only kinds: a generic contact).
+fn closed_form(kind: JointType, space: Space, g: &Geometry) -> Option<Vec<Vec<f64>>> {
+    let turn = |u: Vector3<f64>, p: Vector3<f64>| {
+        let m = p.cross(&u);
+        vec![u.x, u.y, u.z, m.x, m.y, m.z]
+    };
+    let slide = |u: Vector3<f64>| vec![0.0, 0.0, 0.0, u.x, u.y, u.z];
+    let xyz = [Vector3::x(), Vector3::y(), Vector3::z()];
+    let v = |a: Option<[f64; 3]>| Vector3::from(a.expect("drawn"));
+    let (p, u, n) = (v(g.origin), v(g.axis).normalize(), v(g.normal).normalize());
+    let across = |a: Vector3<f64>, n: Vector3<f64>| (a - n * n.dot(&a)).normalize();
+    let (e1, e2) = (across(u, n), n.cross(&across(u, n)));
+    Some(match (space, kind) {
+        (Space::Spatial, JointType::R) => vec![turn(u, p)],
+        (Space::Spatial, JointType::P) => vec![slide(u)],
+        (Space::Spatial, JointType::H) => {
+            let h = g.pitch.expect("drawn");
+            let mut t = turn(u, p);
+            (3..6).for_each(|i| t[i] += h * u[i - 3]);
+            vec![t]
+        }
+        (Space::Spatial, JointType::C) => vec![slide(u), turn(u, p)],
+        (Space::Spatial, JointType::ER) => {
+            let a = across(Vector3::new(0.3, -0.8, 0.5), u);
+            vec![turn(a, p), turn(u.cross(&a), p)]
+        }
+        (Space::Spatial, JointType::U) => vec![turn(u, p), turn(v(g.axis2), p)],
+        (Space::Spatial, JointType::S) => xyz.map(|e| turn(e, p)).to_vec(),
+        (Space::Spatial, JointType::PL | JointType::FP) => {
+            vec![slide(e1), slide(e2), turn(n, p)]
+        }
+        (Space::Spatial, JointType::F) => xyz
+            .iter()
+            .map(|&e| slide(e))
+            .chain(xyz.map(|e| turn(e, p)))
+            .collect(),
+        (Space::Spatial, JointType::SP) => [slide(e1), slide(e2)]
+            .into_iter()
+            .chain(xyz.map(|e| turn(e, p)))
+            .collect(),
+        (Space::Spatial, JointType::SC) => [slide(u)]
+            .into_iter()
+            .chain(xyz.map(|e| turn(e, p)))
+            .collect(),
+        (Space::Spatial, JointType::PC) => {
+            vec![slide(e1), slide(e2), turn(n, p), turn(e1, p)]
+        }
+        (Space::Spatial, JointType::CR) => {
+            // The slot's face normal is `normal` across the axis; the slides are
+            // along the axis and along the slot (across both).
+            let w = across(n, u);
+            vec![slide(u), slide(w.cross(&u)), turn(u, p)]
+        }
+        (Space::Spatial, JointType::SPSP) => {
+            // Every motion but the stretch of the line of centres: the turns about
+            // the first centre, and the slides across the line.
+            let d = (v(g.origin2) - p).normalize();
+            let (a, c) = (across(Vector3::x(), d), d.cross(&across(Vector3::x(), d)));
+            let mut t = xyz.map(|e| turn(e, p)).to_vec();
+            t.extend([slide(a), slide(c)]);
+            t
+        }
+        (Space::Planar, JointType::R) => vec![vec![1.0, p.y, -p.x]],
+        (Space::Planar, JointType::P) => {
+            let a = Vector3::new(u.x, u.y, 0.0).normalize();
+            vec![vec![0.0, a.x, a.y]]
+        }
+        (Space::Planar, JointType::FP) => {
+            vec![
+                vec![0.0, 1.0, 0.0],
+                vec![0.0, 0.0, 1.0],
+                vec![1.0, p.y, -p.x],
+            ]
+        }
+        (Space::Spherical, JointType::R) => vec![vec![u.x, u.y, u.z]],
+        (Space::Spherical, JointType::FP) => xyz.iter().map(|e| vec![e.x, e.y, e.z]).collect(),
+        // Count-only kinds: a generic contact, no closed form.
+        _ => return None,
+    })
+}
+
 /// The twists of every spatial kind with a model span the closed form of its motions, written
 /// here with nalgebra from the geometry's fields: a revolute about `u` through `p` allows
 /// `(u; p × u)`, a slide `(0; u)`, a helix `(u; p × u + h u)`, a ball every `(ω; p × ω)`, a
@@ -257,13 +339,8 @@ fn models_in_lanes_are_the_one_joint_models() {
 /// planar and spherical ones likewise. Rows annihilate the closed forms.
 #[test]
 fn twists_are_the_closed_forms() {
-    let turn = |u: Vector3<f64>, p: Vector3<f64>| {
-        let m = p.cross(&u);
-        vec![u.x, u.y, u.z, m.x, m.y, m.z]
-    };
-    let slide = |u: Vector3<f64>| vec![0.0, 0.0, 0.0, u.x, u.y, u.z];
-    let xyz = [Vector3::x(), Vector3::y(), Vector3::z()];
     let mut rng = SplitMix64::new(77);
+    let mut checked = 0;
     for space in [Space::Spatial, Space::Planar, Space::Spherical] {
         let b = space.b() as usize;
         for kind in JointType::all() {
@@ -276,78 +353,8 @@ fn twists_are_the_closed_forms() {
                     );
                     continue;
                 };
-                let v = |a: Option<[f64; 3]>| Vector3::from(a.expect("drawn"));
-                let (p, u, n) = (v(g.origin), v(g.axis).normalize(), v(g.normal).normalize());
-                let across = |a: Vector3<f64>, n: Vector3<f64>| (a - n * n.dot(&a)).normalize();
-                let (e1, e2) = (across(u, n), n.cross(&across(u, n)));
-                let closed: Vec<Vec<f64>> = match (space, kind) {
-                    (Space::Spatial, JointType::R) => vec![turn(u, p)],
-                    (Space::Spatial, JointType::P) => vec![slide(u)],
-                    (Space::Spatial, JointType::H) => {
-                        let h = g.pitch.expect("drawn");
-                        let mut t = turn(u, p);
-                        (3..6).for_each(|i| t[i] += h * u[i - 3]);
-                        vec![t]
-                    }
-                    (Space::Spatial, JointType::C) => vec![slide(u), turn(u, p)],
-                    (Space::Spatial, JointType::ER) => {
-                        let a = across(Vector3::new(0.3, -0.8, 0.5), u);
-                        vec![turn(a, p), turn(u.cross(&a), p)]
-                    }
-                    (Space::Spatial, JointType::U) => vec![turn(u, p), turn(v(g.axis2), p)],
-                    (Space::Spatial, JointType::S) => xyz.map(|e| turn(e, p)).to_vec(),
-                    (Space::Spatial, JointType::PL | JointType::FP) => {
-                        vec![slide(e1), slide(e2), turn(n, p)]
-                    }
-                    (Space::Spatial, JointType::F) => xyz
-                        .iter()
-                        .map(|&e| slide(e))
-                        .chain(xyz.map(|e| turn(e, p)))
-                        .collect(),
-                    (Space::Spatial, JointType::SP) => [slide(e1), slide(e2)]
-                        .into_iter()
-                        .chain(xyz.map(|e| turn(e, p)))
-                        .collect(),
-                    (Space::Spatial, JointType::SC) => [slide(u)]
-                        .into_iter()
-                        .chain(xyz.map(|e| turn(e, p)))
-                        .collect(),
-                    (Space::Spatial, JointType::PC) => {
-                        vec![slide(e1), slide(e2), turn(n, p), turn(e1, p)]
-                    }
-                    (Space::Spatial, JointType::CR) => {
-                        // The slot's face normal is `normal` across the axis; the slides are
-                        // along the axis and along the slot (across both).
-                        let w = across(n, u);
-                        vec![slide(u), slide(w.cross(&u)), turn(u, p)]
-                    }
-                    (Space::Spatial, JointType::SPSP) => {
-                        // Every motion but the stretch of the line of centres: the turns about
-                        // the first centre, and the slides across the line.
-                        let d = (v(g.origin2) - p).normalize();
-                        let (a, c) = (across(Vector3::x(), d), d.cross(&across(Vector3::x(), d)));
-                        let mut t = xyz.map(|e| turn(e, p)).to_vec();
-                        t.extend([slide(a), slide(c)]);
-                        t
-                    }
-                    (Space::Planar, JointType::R) => vec![vec![1.0, p.y, -p.x]],
-                    (Space::Planar, JointType::P) => {
-                        let a = Vector3::new(u.x, u.y, 0.0).normalize();
-                        vec![vec![0.0, a.x, a.y]]
-                    }
-                    (Space::Planar, JointType::FP) => {
-                        vec![
-                            vec![0.0, 1.0, 0.0],
-                            vec![0.0, 0.0, 1.0],
-                            vec![1.0, p.y, -p.x],
-                        ]
-                    }
-                    (Space::Spherical, JointType::R) => vec![vec![u.x, u.y, u.z]],
-                    (Space::Spherical, JointType::FP) => {
-                        xyz.iter().map(|e| vec![e.x, e.y, e.z]).collect()
-                    }
-                    // Count-only kinds: a generic contact, no closed form.
-                    _ => continue,
+                let Some(closed) = closed_form(kind, space, &g) else {
+                    continue;
                 };
                 let c = DMatrix::from_fn(b, closed.len(), |i, j| closed[j][i]);
                 let what = format!("{kind:?} {space:?}");
@@ -362,9 +369,12 @@ fn twists_are_the_closed_forms() {
                 });
                 assert_eq!(both.rank(1e-9), closed.len(), "{what}: the same span");
                 assert!((&m.rows * &c).norm() < 1e-9, "{what}: rows · closed form");
+                checked += 1;
             }
         }
     }
+    // Every kind with a model: 15 spatial, 3 planar, 2 spherical.
+    assert_eq!(checked, 20 * 20);
 }
 
 /// [`random_pair_geometry`] draws only the fields a model reads: its models are bit

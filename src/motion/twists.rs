@@ -121,15 +121,7 @@ fn file_features(
     let normal = || need(kind, "normal", g.normal).and_then(|a| unit(kind, "normal", a));
     let or_zero = |p: Option<[f64; 3]>| p.map(v3).unwrap_or_else(Vector3::zeros);
     let z = Vector3::zeros();
-    let mut f = Features {
-        origin: [0.0; 3],
-        origin2: [0.0; 3],
-        axis: [0.0; 3],
-        axis2: [0.0; 3],
-        normal: [0.0; 3],
-        pitch: 0.0,
-        hint: [0.0; 3],
-    };
+    let mut f = Features::zeros();
     let mut set = |p: Vector3<f64>, u: Vector3<f64>, n: Vector3<f64>| {
         (f.origin, f.axis, f.normal) = (p.into(), u.into(), n.into());
     };
@@ -141,15 +133,8 @@ fn file_features(
         (Space::Spatial, P) | (Space::Spherical, R) => set(z, axis()?, z),
         (Space::Spatial, H) => {
             let (u, p) = (axis()?, origin()?);
-            let h = need(kind, "pitch", g.pitch)?;
-            if !h.is_finite() {
-                return Err(MotionError::ZeroVector {
-                    kind: kind.code(),
-                    field: "pitch",
-                });
-            }
+            f.pitch = pitch(kind, g)?;
             set(p, u, z);
-            f.pitch = h;
         }
         (Space::Spatial, U) => {
             let (u, p) = (axis()?, origin()?);
@@ -186,14 +171,7 @@ fn file_features(
         }
         (Space::Spatial, SPSP) => {
             let c1 = origin()?;
-            let c2 = v3(need(kind, "origin2", g.origin2)?);
-            let d = c2 - c1;
-            if d.norm().is_nan() || d.norm() <= 1e-12 {
-                return Err(MotionError::Degenerate {
-                    kind: kind.code(),
-                    reason: "`origin` and `origin2` (the two centres) coincide",
-                });
-            }
+            let c2 = second_centre(kind, g, &c1)?;
             set(c1, z, z);
             f.origin2 = c2.into();
         }
@@ -214,4 +192,33 @@ fn file_features(
         }
     }
     Ok(Some(f))
+}
+
+/// The pitch of an H, finite.
+fn pitch(kind: JointType, g: &Geometry) -> Result<f64, MotionError> {
+    let h = need(kind, "pitch", g.pitch)?;
+    if !h.is_finite() {
+        return Err(MotionError::ZeroVector {
+            kind: kind.code(),
+            field: "pitch",
+        });
+    }
+    Ok(h)
+}
+
+/// The second centre of an SPSP, apart from the first `c1`.
+fn second_centre(
+    kind: JointType,
+    g: &Geometry,
+    c1: &Vector3<f64>,
+) -> Result<Vector3<f64>, MotionError> {
+    let c2 = v3(need(kind, "origin2", g.origin2)?);
+    let d = c2 - c1;
+    if d.norm().is_nan() || d.norm() <= 1e-12 {
+        return Err(MotionError::Degenerate {
+            kind: kind.code(),
+            reason: "`origin` and `origin2` (the two centres) coincide",
+        });
+    }
+    Ok(c2)
 }
