@@ -10,7 +10,6 @@
 
 pub mod dense;
 pub mod field;
-pub mod models;
 pub mod sparse;
 
 pub use field::{Fp, P};

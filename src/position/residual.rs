@@ -16,13 +16,15 @@ use super::pose::{Pose, embed_columns};
 use super::track::{TS, TV};
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Mechanism, Space};
+use crate::motion::kinds::{self, Feature};
 use crate::motion::perpendicular_pair;
 use nalgebra::{DMatrix, Rotation3, Vector3};
 use std::f64::consts::PI;
 
 pub use crate::motion::ModelError;
 
-/// The features of one joint, lengths scaled.
+/// The features of one joint, lengths scaled: those [`kinds::features`] lists for its kind
+/// (the ones its twists are functions of), and a P's origin.
 #[derive(Clone, Debug)]
 struct Features {
     o: Vector3<f64>,
@@ -211,7 +213,6 @@ fn features(
         }
         None => default.ok_or_else(|| missing(field)),
     };
-    let z = Some(Vector3::z());
     let mut f = Features {
         o: Vector3::zeros(),
         o2: Vector3::zeros(),
@@ -220,82 +221,39 @@ fn features(
         n: Vector3::z(),
         h: 0.0,
     };
-    match space {
-        Space::Spatial => match kind {
-            R | C | ER | SC => {
-                f.o = point(g.origin, "origin", true)?;
-                f.u = dir(g.axis, "axis", None)?;
+    let list = kinds::features(kind, space).ok_or_else(no_model)?;
+    if kind == P {
+        // The equations keep a slide on its line, which needs a point of it (the twist does
+        // not): the world origin when none is given.
+        f.o = point(g.origin, "origin", false)?;
+    }
+    for &feature in list {
+        let optional = kinds::optional(kind, feature);
+        match feature {
+            Feature::Origin => f.o = point(g.origin, "origin", !optional)?,
+            Feature::Origin2 => f.o2 = point(g.origin2, "origin2", true)?,
+            Feature::Axis if space == Space::Planar => {
+                let a = g.axis.ok_or_else(|| missing("axis"))?;
+                f.u = dir(Some([a[0], a[1], 0.0]), "axis", None)?;
             }
-            P => {
-                f.o = point(g.origin, "origin", false)?;
-                f.u = dir(g.axis, "axis", None)?;
-            }
-            H => {
-                f.o = point(g.origin, "origin", true)?;
-                f.u = dir(g.axis, "axis", None)?;
+            Feature::Axis => f.u = dir(g.axis, "axis", None)?,
+            Feature::Axis2 => f.w = dir(g.axis2, "axis2", None)?,
+            Feature::Normal => f.n = dir(g.normal, "normal", optional.then(Vector3::z))?,
+            Feature::Pitch => {
                 let h = g.pitch.ok_or_else(|| missing("pitch"))?;
                 if !h.is_finite() {
                     return Err(bad("pitch"));
                 }
                 f.h = h / scale;
             }
-            U => {
-                f.o = point(g.origin, "origin", true)?;
-                f.u = dir(g.axis, "axis", None)?;
-                f.w = dir(g.axis2, "axis2", None)?;
-                if f.u.cross(&f.w).norm() < 1e-9 {
-                    return Err(bad("axis2"));
-                }
-            }
-            S => f.o = point(g.origin, "origin", true)?,
-            PL => {
-                f.o = point(g.origin, "origin", false)?;
-                f.n = dir(g.normal, "normal", None)?;
-            }
-            FP => {
-                f.o = point(g.origin, "origin", false)?;
-                f.n = dir(g.normal, "normal", z)?;
-            }
-            F => {}
-            SP => {
-                f.o = point(g.origin, "origin", true)?;
-                f.n = dir(g.normal, "normal", None)?;
-            }
-            SPSP => {
-                f.o = point(g.origin, "origin", true)?;
-                f.o2 = point(origin2(g), "origin2", true)?;
-                if (f.o2 - f.o).norm() < 1e-12 {
-                    return Err(bad("origin2"));
-                }
-            }
-            PC | CR => {
-                f.o = point(g.origin, "origin", true)?;
-                f.u = dir(g.axis, "axis", None)?;
-                f.n = dir(g.normal, "normal", None)?;
-                if f.u.cross(&f.n).norm() < 1e-9 {
-                    return Err(bad("normal"));
-                }
-            }
-            _ => return Err(no_model()),
-        },
-        Space::Planar => match kind {
-            R => f.o = point(g.origin, "origin", true)?,
-            P => {
-                f.o = point(g.origin, "origin", false)?;
-                let a = g.axis.ok_or_else(|| missing("axis"))?;
-                f.u = dir(Some([a[0], a[1], 0.0]), "axis", None)?;
-            }
-            FP => {
-                f.o = point(g.origin, "origin", false)?;
-                f.u = Vector3::x();
-            }
-            _ => return Err(no_model()),
-        },
-        Space::Spherical => match kind {
-            R => f.u = dir(g.axis, "axis", None)?,
-            FP => f.u = Vector3::x(),
-            _ => return Err(no_model()),
-        },
+        }
+    }
+    match kind {
+        U if f.u.cross(&f.w).norm() < 1e-9 => return Err(bad("axis2")),
+        PC | CR if f.u.cross(&f.n).norm() < 1e-9 => return Err(bad("normal")),
+        SPSP if (f.o2 - f.o).norm() < 1e-12 => return Err(bad("origin2")),
+        FP if space != Space::Spatial => f.u = Vector3::x(),
+        _ => {}
     }
     if space == Space::Planar {
         f.o.z = 0.0;
@@ -384,11 +342,6 @@ pub fn second_offset_of(m: &Mechanism, j: usize) -> Option<Pose> {
         rotation: p.rotation,
         translation: p.translation * scale,
     })
-}
-
-/// The second centre of a sphere-sphere joint (on the second body).
-fn origin2(g: &Geometry) -> Option<[f64; 3]> {
-    g.origin2
 }
 
 /// The angle of B about `u` relative to A (right-hand rule), from a perpendicular pair.
@@ -690,5 +643,103 @@ impl PositionModel {
         self.pair_equations(p, &Pose::identity(), &Pose::identity(), &[])
             .residual
             .len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::motion::kinds::Allowed;
+    use crate::motion::{SplitMix64, random_geometry};
+
+    /// The shared definition's features at the position model's (PC's axis and CR's normal
+    /// are not made perpendicular here: the span of the twists does not depend on it).
+    fn shared(f: &Features) -> kinds::Features<f64> {
+        kinds::Features {
+            origin: f.o.into(),
+            origin2: f.o2.into(),
+            axis: f.u.into(),
+            axis2: f.w.into(),
+            normal: f.n.into(),
+            pitch: f.h,
+            hint: [0.0; 3],
+        }
+    }
+
+    /// The equations of one joint of `kind` with features `f`, at the reference
+    /// configuration.
+    fn equations(space: Space, kind: JointType, f: Features) -> PairEquations {
+        let pair = Pair {
+            joint: 0,
+            index: 0,
+            a: 0,
+            b: 1,
+            kind,
+            driven: 0,
+            f,
+            offset: Pose::identity(),
+        };
+        let model = PositionModel {
+            space,
+            scale: 1.0,
+            pairs: vec![pair],
+            bodies: 2,
+            frame: 0,
+        };
+        model.pair_equations(0, &Pose::identity(), &Pose::identity(), &[])
+    }
+
+    /// At random geometry, every kind with a position model: its residual vanishes at the
+    /// reference configuration, its Jacobian acts on `t_B − t_A`, and its rows span exactly
+    /// the annihilator of the twists [`kinds::allowed`] gives at the same features (B − k
+    /// independent rows annihilating k independent twists; SPSP's one row along its line).
+    #[test]
+    fn jacobian_spans_the_annihilator_of_the_kinds_twists() {
+        let mut checked = 0;
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                if kinds::features(kind, space).is_none() {
+                    continue;
+                }
+                let mut rng = SplitMix64::new(kind as u64 * 31 + space as u64);
+                for trial in 0..20 {
+                    let what = format!("{kind:?} {space:?} trial {trial}");
+                    let mut g = random_geometry(kind, space, &mut rng);
+                    if kind == JointType::CR {
+                        // A slot's normal as written, across the axis: the residual keeps the
+                        // slot's face along `normal` itself, where the twists use its part
+                        // across the axis.
+                        let (u, n) = (v3(g.axis.expect("drawn")), v3(g.normal.expect("drawn")));
+                        g.normal = Some((n - u * u.dot(&n)).into());
+                    }
+                    let f = features(space, kind, &g, 1.0, "j").expect("a position model");
+                    let e = equations(space, kind, f.clone());
+                    assert!(e.residual.iter().all(|r| r.abs() < 1e-12), "{what}");
+                    let (ja, jb) = (e.jacobian.columns(0, b), e.jacobian.columns(b, b));
+                    assert!((ja + jb).norm() < 1e-12, "{what}");
+                    let rank = |m: &DMatrix<f64>| if m.nrows() == 0 { 0 } else { m.rank(1e-9) };
+                    let jb = jb.into_owned();
+                    match kinds::allowed(kind, space, &shared(&f)).expect("a model") {
+                        Allowed::Listed(list, k) => {
+                            let t = DMatrix::from_fn(b, k, |i, c| list[c][i]);
+                            assert_eq!(rank(&t.transpose()), k, "{what}: twists");
+                            assert_eq!(jb.nrows(), b - k, "{what}: rows");
+                            assert_eq!(rank(&jb), b - k, "{what}: independent rows");
+                            assert!((&jb * &t).norm() < 1e-9, "{what}: rows · twists");
+                        }
+                        Allowed::AnnihilatorOf(line) => {
+                            let both = jb.clone().insert_row(jb.nrows(), 0.0);
+                            let both = DMatrix::from_fn(both.nrows(), b, |i, c| {
+                                if i < jb.nrows() { jb[(i, c)] } else { line[c] }
+                            });
+                            assert_eq!((jb.nrows(), rank(&both)), (1, 1), "{what}");
+                        }
+                    }
+                    checked += 1;
+                }
+            }
+        }
+        assert_eq!(checked, 20 * (15 + 3 + 2));
     }
 }

@@ -356,7 +356,7 @@ impl Blocks<'_> {
     /// The rows routed into the block's bodies: their entries on its unknowns, and those on
     /// the bodies of blocks solved before moved to the right-hand sides. The rows filled.
     fn constraint_rows(&mut self, comp: &[usize], d: usize, w_all: usize) -> Option<usize> {
-        use crate::exact::models;
+        use crate::motion::exact as models;
         let (pairs, b) = (self.pairs, self.pairs.b);
         let mut r = 0usize;
         for &x in comp {
@@ -461,7 +461,8 @@ fn gauss_jordan(a: &mut [Fp], d: usize, w_all: usize) -> Option<()> {
 /// realization `seed`, one column group per movable body, and each body's first column
 /// (`usize::MAX`: the frame).
 pub(super) fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>) {
-    use crate::exact::{Fp, SparseMatrix, models};
+    use crate::exact::{Fp, SparseMatrix};
+    use crate::motion::exact as models;
     let b = m.b() as usize;
     let mut col = vec![usize::MAX; m.bodies.len()];
     let mut c = 0;
@@ -519,7 +520,7 @@ impl JacobianRows {
     /// [`jacobian`]'s rows of `m` at `seed`; `None` where its indices (columns, rows,
     /// joints) do not fit in `u32`, or a joint's rows are narrower than B.
     pub(super) fn of(m: &Mechanism, seed: u64) -> Option<JacobianRows> {
-        use crate::exact::models;
+        use crate::motion::exact as models;
         let b = m.b() as usize;
         let ngroups = m.bodies.len().saturating_sub(1);
         let small = |x: usize| u32::try_from(x).ok().filter(|&x| x != NO_GROUP);
@@ -619,7 +620,8 @@ mod tests {
 
     /// `J v` for the null vectors `v` of [`block_null_vectors`], through [`jacobian`]'s rows.
     fn j_times(m: &Mechanism, seed: u64, v: &[crate::exact::Fp]) -> Vec<crate::exact::Fp> {
-        use crate::exact::{Fp, models};
+        use crate::exact::Fp;
+        use crate::motion::exact as models;
         let (_, col) = jacobian(m, seed);
         let b = m.b() as usize;
         let mut out = Vec::new();

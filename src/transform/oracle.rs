@@ -181,7 +181,8 @@ impl Oracle {
     /// `Some(false)`: placement `w` (units per pair of `m`) is not determined; `Some(true)`:
     /// its whole system has full row rank; `None`: the analysis decides.
     pub(super) fn decide(&self, m: &Mechanism, w: &[(usize, u32)]) -> Option<bool> {
-        use crate::exact::{Fp, dense, models};
+        use crate::exact::{Fp, dense};
+        use crate::motion::exact as models;
         match self {
             Oracle::Undecided | Oracle::Later { .. } => None,
             Oracle::Reject => Some(false),
@@ -239,7 +240,7 @@ fn named_dependency(
     seed: u64,
     meter: &mut Meter,
 ) -> Result<bool, BudgetExceeded> {
-    use crate::exact::models;
+    use crate::motion::exact as models;
     let b = m.b() as usize;
     let pair = |q: usize| match m.joints[q].bodies[..] {
         [x, y] => Some((x, y)),

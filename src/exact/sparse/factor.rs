@@ -54,7 +54,7 @@ impl Factor {
     /// tier the greedy minimum-front order) instead of found from the matrix's block
     /// triangular form ([`elimination_tiers`]); `tiers` has one entry per column group.
     /// For a matrix whose own structure says little about a good order, such as the
-    /// transpose of a mechanism's Jacobian (see [`crate::exact::models::pairs_stress_support`]).
+    /// transpose of a mechanism's Jacobian (see [`crate::motion::exact::pairs_stress_support`]).
     pub fn new_ordered_within(
         a: &SparseMatrix,
         tiers: &[u32],

@@ -171,7 +171,7 @@ pub struct FpBlock {
 
 /// Rows read one at a time, by index: what [`split_rows`] needs of a matrix. A
 /// [`SparseMatrix`] lends its rows; a compact description of the rows (the joints of a
-/// mechanism's pairs, [`crate::exact::models::pairs_factor`]) makes each when asked, so
+/// mechanism's pairs, [`crate::motion::exact::pairs_factor`]) makes each when asked, so
 /// that the rows never exist all at once as a vector each (about 230 bytes a row, more than
 /// the blocks made from them).
 pub(crate) trait Rows {

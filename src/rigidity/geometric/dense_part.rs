@@ -171,7 +171,7 @@ impl Analysis<'_> {
                 ng += 1;
             }
         }
-        let r = crate::exact::models::pairs_rank(
+        let r = crate::motion::exact::pairs_rank(
             b,
             ng,
             rows,

@@ -105,7 +105,7 @@ impl ExactPart<'_> {
     /// The rank, the part's local union-find (a parent per body of `part.bodies`, each
     /// pointing to its cluster's smallest member) and, when its rows are dependent, the flags
     /// of its pairs carrying its self-stresses (from the same factorization,
-    /// [`crate::exact::models::pairs_stress_support_from`]); locked DOF are added to
+    /// [`crate::motion::exact::pairs_stress_support_from`]); locked DOF are added to
     /// `locked`.
     pub(super) fn run(
         &self,
@@ -172,7 +172,7 @@ impl ExactPart<'_> {
             .iter()
             .map(|&pi| (pairs[pi].joint, pairs[pi].hub, pairs[pi].other))
             .collect();
-        let factor = crate::exact::models::pairs_factor(
+        let factor = crate::motion::exact::pairs_factor(
             b,
             ng,
             self.rows,
@@ -193,7 +193,7 @@ impl ExactPart<'_> {
             .map(|&(j, _, _)| self.models[j].rows.nrows())
             .sum();
         let support = if prow > rank {
-            crate::exact::models::pairs_stress_support_from(
+            crate::motion::exact::pairs_stress_support_from(
                 factor.as_ref(),
                 self.rows,
                 &list,

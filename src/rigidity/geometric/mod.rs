@@ -138,7 +138,7 @@ fn analyze_split(
         m.joints
             .iter()
             .enumerate()
-            .map(|(ji, j)| crate::exact::models::joint_rows(m, ji, seed, j.driven))
+            .map(|(ji, j)| crate::motion::exact::joint_rows(m, ji, seed, j.driven))
             .collect()
     });
     let mut meter = budget.meter("the geometric rigidity analysis");

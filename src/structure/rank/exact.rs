@@ -24,7 +24,8 @@ pub(super) fn exact_rank(
     seed: u64,
     work: &mut u64,
 ) -> usize {
-    use crate::exact::{Fp, SparseMatrix, dense, models};
+    use crate::exact::{Fp, SparseMatrix, dense};
+    use crate::motion::exact as models;
     let b = m.b() as usize;
     let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
     let mut a = SparseMatrix::with_groups(vec![b; bodies.len()]);

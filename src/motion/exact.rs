@@ -1,37 +1,27 @@
 //! Joint models over GF(p) at a random realization: the exact counterpart of
 //! [`crate::motion::realize`], for rank decisions that do not depend on size or conditioning.
 //!
-//! Each joint gets random field elements for its points and directions (drawn per (seed,
-//! joint index)), and the same twist structure as [`crate::motion`]: a revolute about `u`
-//! through `p` allows `(u; p × u)`, a slide `(0; u)`, and so on; directions need no
-//! normalization (twist spaces are spans). Its constraint rows are an exact basis of the
-//! annihilator of the twists left once its driven DOF are fixed. Count-only kinds get `B − k`
-//! random rows (generic contact lines in general position); a driven DOF of theirs, or of
-//! SPSP, keeps `k − driven` random combinations of the allowed twists (their echelon basis has
-//! no named DOF, as in [`crate::motion`]). With p = 2^61 − 1 a random
-//! realization has the generic rank except with probability below (degree)/p.
+//! Each joint gets random field elements for its features (drawn per (seed, joint index))
+//! and the twists of its kind ([`kinds::allowed`], the definition the floating-point models
+//! use); directions need no normalization (twist spaces are spans). Its constraint rows are
+//! an exact basis of the annihilator of the twists left once its driven DOF are fixed.
+//! Count-only kinds get `B − k` random rows (generic contact lines in general position); a
+//! driven DOF of theirs, or of SPSP, keeps `k − driven` random combinations of the allowed
+//! twists (their echelon basis has no named DOF, as in [`crate::motion`]). With p = 2^61 − 1
+//! a random realization has the generic rank except with probability below (degree)/p.
 
-use super::dense::{complement_rows, rank};
-use super::field::Fp;
-use super::sparse::{Factor, Limits, Rows, SparseMatrix, SparseRow};
+use super::kinds::{self, Allowed, Features, V3};
 use crate::budget::BudgetExceeded;
+use crate::exact::dense::{complement_rows, rank};
+use crate::exact::field::Fp;
+use crate::exact::sparse::{Factor, Limits, Rows, SparseMatrix, SparseRow};
 use crate::joint::JointType;
 use crate::mechanism::{Mechanism, Space};
 use crate::rng::SplitMix64;
 use crate::rng::indexed_seed;
 use nalgebra::DMatrix;
 
-type V3 = [Fp; 3];
-
-fn cross(a: &V3, b: &V3) -> V3 {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn rand3(rng: &mut SplitMix64) -> V3 {
+fn rand3(rng: &mut SplitMix64) -> V3<Fp> {
     [
         Fp::random_nonzero(rng),
         Fp::random_nonzero(rng),
@@ -39,109 +29,51 @@ fn rand3(rng: &mut SplitMix64) -> V3 {
     ]
 }
 
-fn rot(u: &V3, p: &V3) -> Vec<Fp> {
-    let m = cross(p, u);
-    vec![u[0], u[1], u[2], m[0], m[1], m[2]]
-}
-
-fn trans(u: &V3) -> Vec<Fp> {
-    let z = Fp::from_u64(0);
-    vec![z, z, z, u[0], u[1], u[2]]
-}
-
-fn unit(i: usize) -> V3 {
-    let (z, o) = (Fp::from_u64(0), Fp::from_u64(1));
-    let mut v = [z, z, z];
-    v[i] = o;
-    v
-}
-
-/// The allowed twists of `kind` in driven-DOF order, or `None` for a kind without a model
-/// (it gets random constraint rows).
-fn twists(kind: JointType, space: Space, rng: &mut SplitMix64) -> Option<Vec<Vec<Fp>>> {
-    use JointType::*;
+/// Random features for a joint of `kind`: point `p`, directions `u`, `v`, `n` (in this order
+/// from `rng`), then the pitch of a spatial H or the second centre of a spatial SPSP (drawn
+/// only where the kind has a model, as the rows that replace it draw from the same stream). `v` is the second axis of
+/// U and the start of every perpendicular pair; PC's axis is the random direction `n × v` of
+/// the plane and CR's slot normal is `−v` (only its part across the axis counts).
+fn random_features(kind: JointType, space: Space, rng: &mut SplitMix64) -> Features<Fp> {
     let (p, u, v, n) = (rand3(rng), rand3(rng), rand3(rng), rand3(rng));
-    let (z, o) = (Fp::from_u64(0), Fp::from_u64(1));
-    // Two directions perpendicular to n (and to each other up to a scale).
-    let e1 = cross(&n, &v);
-    let e2 = cross(&n, &e1);
-    let turns = |c: &V3| (0..3).map(|i| rot(&unit(i), c)).collect::<Vec<_>>();
-    match space {
-        Space::Spatial => Some(match kind {
-            R => vec![rot(&u, &p)],
-            P => vec![trans(&u)],
-            H => {
-                let h = Fp::random_nonzero(rng);
-                let m = cross(&p, &u);
-                vec![vec![
-                    u[0],
-                    u[1],
-                    u[2],
-                    m[0] + h * u[0],
-                    m[1] + h * u[1],
-                    m[2] + h * u[2],
-                ]]
-            }
-            C => vec![trans(&u), rot(&u, &p)],
-            ER => {
-                let a = cross(&u, &v);
-                let b = cross(&u, &a);
-                vec![rot(&a, &p), rot(&b, &p)]
-            }
-            U => vec![rot(&u, &p), rot(&v, &p)],
-            S => turns(&p),
-            PL | FP => vec![trans(&e1), trans(&e2), rot(&n, &p)],
-            F => {
-                let mut t: Vec<Vec<Fp>> = (0..3).map(|i| trans(&unit(i))).collect();
-                t.extend((0..3).map(|i| rot(&unit(i), &[z, z, z])));
-                t
-            }
-            SP => {
-                let mut t = vec![trans(&e1), trans(&e2)];
-                t.extend(turns(&p));
-                t
-            }
-            SC => {
-                let mut t = vec![trans(&u)];
-                t.extend(turns(&p));
-                t
-            }
-            PC => {
-                // The cylinder axis in the plane perpendicular to n.
-                let a = e1;
-                vec![trans(&e1), trans(&e2), rot(&n, &p), rot(&a, &p)]
-            }
-            CR => {
-                let w = cross(&u, &v);
-                vec![trans(&u), trans(&w), rot(&u, &p)]
-            }
-            SPSP => {
-                // One force along the line of centres p → q; the rest is allowed.
-                let q = rand3(rng);
-                let d = [q[0] - p[0], q[1] - p[1], q[2] - p[2]];
-                let m = cross(&p, &d);
-                let row = DMatrix::from_row_slice(1, 6, &[m[0], m[1], m[2], d[0], d[1], d[2]]);
-                let t = complement_rows(&row.transpose());
-                return Some(
-                    (0..t.nrows())
-                        .map(|i| t.row(i).iter().copied().collect())
-                        .collect(),
-                );
-            }
-            _ => return None,
-        }),
-        Space::Planar => Some(match kind {
-            // (ω; v_x, v_y) with v the velocity of the point at the origin.
-            R => vec![vec![o, p[1], z - p[0]]],
-            P => vec![vec![z, u[0], u[1]]],
-            FP => vec![vec![z, o, z], vec![z, z, o], vec![o, p[1], z - p[0]]],
-            _ => return None,
-        }),
-        Space::Spherical => Some(match kind {
-            R => vec![u.to_vec()],
-            FP => (0..3).map(|i| unit(i).to_vec()).collect(),
-            _ => return None,
-        }),
+    let mut f = Features {
+        origin: p,
+        origin2: p,
+        axis: u,
+        axis2: v,
+        normal: n,
+        pitch: Fp::ZERO,
+        hint: v,
+    };
+    if space != Space::Spatial {
+        return f;
+    }
+    match kind {
+        JointType::H => f.pitch = Fp::random_nonzero(rng),
+        JointType::SPSP => f.origin2 = rand3(rng),
+        JointType::PC => f.axis = kinds::cross(&n, &v),
+        JointType::CR => f.normal = v.map(|x| -x),
+        _ => {}
+    }
+    f
+}
+
+/// The allowed twists of `kind` in driven-DOF order (B coordinates each), or `None` for a
+/// kind without a model (it gets random constraint rows).
+fn twists(kind: JointType, space: Space, rng: &mut SplitMix64) -> Option<Vec<Vec<Fp>>> {
+    let b = space.b() as usize;
+    let f = random_features(kind, space, rng);
+    match kinds::allowed(kind, space, &f)? {
+        Allowed::Listed(list, n) => Some(list[..n].iter().map(|t| t[..b].to_vec()).collect()),
+        Allowed::AnnihilatorOf(line) => {
+            let row = DMatrix::from_row_slice(1, 6, &line);
+            let t = complement_rows(&row.transpose());
+            Some(
+                (0..t.nrows())
+                    .map(|i| t.row(i).iter().copied().collect())
+                    .collect(),
+            )
+        }
     }
 }
 
@@ -605,7 +537,7 @@ mod tests {
                 // One DOF left: the twist kept (the null space of the rows) has no zero
                 // coordinate.
                 let rows = joint_rows(&m, 0, seed, k as u32 - 1);
-                let t = super::super::dense::complement_rows(&rows.transpose());
+                let t = complement_rows(&rows.transpose());
                 assert_eq!(t.nrows(), 1);
                 assert!(
                     t.iter().all(|x| !x.is_zero()),
@@ -764,5 +696,69 @@ mod tests {
         );
         // Generic spatial 4R: 20 rows, 18 unknowns, rank 18.
         assert_eq!(jacobian_rank(&m, 3), (18, 20, 18));
+    }
+
+    /// The rank of the floating-point constraint Jacobian of `m` at its random realization
+    /// `seed` ([`crate::motion::realize`]), by SVD: every binary pair hub→other, frame fixed.
+    fn float_rank(m: &Mechanism, seed: u64) -> usize {
+        let b = m.b() as usize;
+        let models = crate::motion::realize(m, seed);
+        let col = |x: usize| (x != m.frame).then(|| if x < m.frame { x } else { x - 1 } * b);
+        let mut rows: Vec<Vec<f64>> = Vec::new();
+        for (j, model) in m.joints.iter().zip(&models) {
+            let Some((&hub, others)) = j.bodies.split_first() else {
+                continue;
+            };
+            for &o in others {
+                for r in 0..model.rows.nrows() {
+                    let mut row = vec![0.0; b * (m.bodies.len() - 1)];
+                    for (x, sign) in [(hub, -1.0), (o, 1.0)] {
+                        if let Some(c) = col(x) {
+                            (0..b).for_each(|k| row[c + k] += sign * model.rows[(r, k)]);
+                        }
+                    }
+                    rows.push(row);
+                }
+            }
+        }
+        let a = DMatrix::from_fn(rows.len(), b * (m.bodies.len() - 1), |i, c| rows[i][c]);
+        if a.nrows() == 0 { 0 } else { a.rank(1e-8) }
+    }
+
+    /// The exact models and the floating-point ones describe the same joints: at random
+    /// geometry their Jacobians have the same rank, for closed loops of three joints of
+    /// every kind in every space (driven or not) and for random mechanisms.
+    #[test]
+    fn exact_rank_is_the_floating_point_rank() {
+        let mut compared = 0;
+        for space in [Space::Spatial, Space::Planar, Space::Spherical] {
+            let b = space.b() as usize;
+            for kind in JointType::all() {
+                if kind.grade() as usize > b || !kind.valid_in(space) {
+                    continue;
+                }
+                for driven in [0, 1] {
+                    let j = |a, c| JointSpec::new(kind, a, c, driven);
+                    let m = Mechanism::from_parts(
+                        "loop",
+                        space,
+                        BodyId::Int(1),
+                        vec![],
+                        vec![j(1, 2), j(2, 3), j(3, 1)],
+                    );
+                    for seed in 0..3 {
+                        let (exact, _, _) = jacobian_rank(&m, seed);
+                        assert_eq!(exact, float_rank(&m, seed), "{kind:?} {space:?} {driven}");
+                        compared += 1;
+                    }
+                }
+            }
+        }
+        for (n, planar, seed) in [(12, false, 1), (15, true, 2), (20, false, 3)] {
+            let (m, _) = crate::generate::random(n, planar, seed).expect("generates");
+            assert_eq!(jacobian_rank(&m, 5).0, float_rank(&m, 5), "{n} {planar}");
+            compared += 1;
+        }
+        assert!(compared > 100, "{compared}");
     }
 }
