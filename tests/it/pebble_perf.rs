@@ -14,7 +14,7 @@ use mbsa::rigidity::pebble::{PebbleOptions, PebbleReport, analyze};
 use mbsa::{BodyId, JointSpec, Mechanism, Space};
 use std::time::Instant;
 
-mod common;
+use crate::common;
 use common::laman;
 
 /// An open serial chain of `n` bodies after the frame on revolutes (planar or spatial).

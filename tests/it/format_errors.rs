@@ -14,7 +14,7 @@ fn check(name: &str, file: &str, text: &str, kind: ErrorKind) {
     };
     assert_eq!(err.kind(), kind, "{name}: {err}");
     let shown = mbsa::diagnostic::render(&err, false);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!(format!("format_error__{name}"), shown);
     });
 }
@@ -79,7 +79,7 @@ fn not_utf8() {
     )
     .unwrap_err();
     assert_eq!(err.kind(), ErrorKind::NotUtf8);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("format_error__not_utf8", mbsa::diagnostic::render(&err, false));
     });
 }

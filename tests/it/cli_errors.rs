@@ -87,7 +87,7 @@ fn run(case: &Case) {
         case.name,
         case.location
     );
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!(format!("cli_error__{}", case.name), stderr);
     });
 }

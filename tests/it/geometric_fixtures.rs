@@ -126,7 +126,7 @@ fn random(m: &Mechanism, seed: u64) -> GeometricReport {
 }
 
 fn snap(name: &str, r: &GeometricReport) {
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!(format!("geometric_{name}"), mbsa::report::rigid_geometric::table(r));
     });
 }

@@ -39,7 +39,7 @@ fn stacked_four_bars() -> Mechanism {
 fn stacked_four_bars_report() {
     let r = analyze(&stacked_four_bars(), &PebbleOptions::default());
     assert_eq!((r.dof, r.redundant, r.count), (1, 1, 0));
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("pebble_stacked_four_bars_table", mbsa::report::rigid_pebble::table(&r));
         insta::assert_snapshot!("pebble_stacked_four_bars_json", mbsa::report::json(&r));
     });

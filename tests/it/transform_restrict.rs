@@ -211,7 +211,7 @@ fn multiple_joints_are_expanded_into_spanning_trees() {
             .any(|n| n.contains("--max-expansions"))
     );
     let text = mbsa::report::transform::table(&t, 10);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("transform_ternary_table", text);
     });
 }

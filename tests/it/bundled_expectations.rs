@@ -1,12 +1,11 @@
-//! The bundled mechanisms added for issue 13 ("Analyse the mechanism as written"): each one
-//! passes `mbsa check` through the real binary, i.e. the corrected analyses give the numbers
-//! its `[expect]` table states (derived in each file's header comment). Ignored until issue 13
-//! lands: today's code fails most of them, and the failures are the issue's bug list.
+//! Bundled mechanisms that state their numbers in an `[expect]` table (derived in each file's
+//! header comment): each one passes `mbsa check` through the real binary, i.e. the analyses of
+//! the mechanism as written give those numbers.
 
 use assert_cmd::Command;
 
-/// The files of issue 13's "Done when" list, by bundled name.
-const ISSUE13: [&str; 18] = [
+/// The checked files, by bundled name.
+const CHECKED: [&str; 18] = [
     "four-bar-3d-driven",
     "slider-crank-3d-driven",
     "bricard",
@@ -42,9 +41,9 @@ fn mbsa(args: &[&str]) -> (i32, String, String) {
 
 /// Every file is bundled (so `@name` works) and states its numbers in `[expect]`.
 #[test]
-fn issue13_files_are_bundled_with_expectations() {
+fn checked_files_are_bundled_with_expectations() {
     let names: Vec<&str> = mbsa::examples::names().collect();
-    for name in ISSUE13 {
+    for name in CHECKED {
         assert!(names.contains(&name), "@{name} is not bundled");
         let (code, out, err) = mbsa(&["check", &format!("@{name}")]);
         // Exit 0 (met) or 1 (mismatch) but never a read error: the file parses and has a table.
@@ -57,9 +56,9 @@ fn issue13_files_are_bundled_with_expectations() {
 }
 
 #[test]
-fn issue13_files_meet_their_expectations() {
+fn checked_files_meet_their_expectations() {
     let mut failed = Vec::new();
-    for name in ISSUE13 {
+    for name in CHECKED {
         let (code, out, err) = mbsa(&["check", &format!("@{name}")]);
         if code != 0 || !out.starts_with("ok") {
             failed.push(format!("@{name} (exit {code}):\n{out}{err}"));
@@ -68,7 +67,7 @@ fn issue13_files_meet_their_expectations() {
     assert!(failed.is_empty(), "{}", failed.join("\n"));
 }
 
-/// The two listings of the issue's multiple-joint example give the same groups.
+/// The two listings of the multiple-joint example give the same groups.
 #[test]
 fn multiple_joint_listing_order_does_not_change_the_groups() {
     let groups = |name: &str| {

@@ -1,6 +1,5 @@
-//! Generators shared by the pebble-game tests (`tests/pebble_*.rs`) and
-//! `tests/geometric_exact.rs` (separate test crates): the local SplitMix64 stream and the planar
-//! bar-joint frameworks written as mechanisms. Each crate uses part of it.
+//! Generators shared by the pebble-game tests (`pebble_*`) and `geometric_exact`: the local
+//! SplitMix64 stream and the planar bar-joint frameworks written as mechanisms.
 #![allow(dead_code)]
 
 use mbsa::joint::JointType;

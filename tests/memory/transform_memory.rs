@@ -1,17 +1,13 @@
 //! `transform --limit 100 --format json` holds O(bodies) plus each listed placement's inputs
 //! and scores, not each placement's partition (issue 16: 100 partitions of a 10^6-body
 //! linkage, their bookkeeping and each family's copy were over 1 GB, and the command 3.4 GB).
-//! A counting allocator around the system one records the peak of live bytes; one test in
-//! this binary, so that no other test's allocations are counted.
+//! A counting allocator around the system one records the peak of live bytes
+//! (the tests of this binary run one at a time: none counts another's allocations).
 
+use crate::peak_alloc;
 use mbsa::generate::{self, Variant};
 use mbsa::structure::Library;
 use mbsa::transform::{self, TransformOptions};
-#[path = "common/peak_alloc.rs"]
-mod peak_alloc;
-
-#[global_allocator]
-static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
 
 /// Live bytes above those live at the start once `f` has made its value, and the peak
 /// while `write` runs on it.
@@ -34,6 +30,7 @@ fn held_by<T>(f: impl FnOnce() -> T, write: impl FnOnce(&T)) -> (usize, usize) {
 /// body, growing with the limit) is more than twice that. The same bytes either way.
 #[test]
 fn limit_100_json_does_not_hold_every_partition() {
+    let _serial = crate::serial();
     let m = generate::assur(2, 5_000, 364, Variant::A).unwrap();
     let lib = Library::builtin();
     let o = TransformOptions {

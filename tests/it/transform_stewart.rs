@@ -52,7 +52,7 @@ fn inverse_kinematics_among_actuator_and_pose_inputs() {
     assert_eq!(top.scores.groups, 7);
     assert!(top.scores.all_covered);
     let text = mbsa::report::transform::table(&t, 5);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("transform_stewart_pf", text);
     });
 }

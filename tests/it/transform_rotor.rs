@@ -138,7 +138,7 @@ fn inputs_comparison_shows_what_changed() {
     assert_eq!(c.changes.covered, 9 - 5);
     assert_eq!(c.changes.verdict, "better");
     let text = mbsa::report::transform::comparison(&c);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("transform_rotor_compare", text);
     });
 }
@@ -148,7 +148,7 @@ fn top_table_snapshot() {
     let m = example("rotor");
     let t = transform(&m, &TransformOptions::default(), &Library::builtin(), None).unwrap();
     let text = mbsa::report::transform::table(&t, 10);
-    insta::with_settings!({snapshot_path => "../snapshots", prepend_module_to_snapshot => false}, {
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
         insta::assert_snapshot!("transform_rotor_top", text);
     });
 }

@@ -4,7 +4,7 @@
 //! with floating point and a size-scaled tolerance it came out with mobility 1 and one
 //! redundant bar at some seeds.
 
-mod common;
+use crate::common;
 
 use mbsa::mechanism::Mechanism;
 use mbsa::rigidity::geometric::{GeometricOptions, GeometrySource, analyze};

@@ -1,23 +1,17 @@
 //! `mbsa analyze` writes its table as it renders it (issue 16: at 10^6 bodies the table is
 //! 280 MB, and held whole with its rows of cells it was the peak of `analyze --count-only`).
-//! A counting allocator around the system one measures the bytes live at once; one test in
-//! this binary, so that no other test's allocations are counted.
+//! A counting allocator around the system one measures the bytes live at once
+//! (the tests of this binary run one at a time: none counts another's allocations).
 
-#[path = "common/peak_alloc.rs"]
-mod peak_alloc;
-
-#[global_allocator]
-static ALLOCATOR: peak_alloc::Peak = peak_alloc::Peak;
-
-#[path = "common/digest.rs"]
-mod digest;
-use digest::Digest;
+use crate::digest::Digest;
+use crate::peak_alloc;
 
 /// The table of a 20,000-body random spatial mechanism (count only: 13,000 groups, 5 MB of
 /// text) is written with under 1 MB live beyond the analysis, and is byte for byte the table
 /// `table` returns. Rendered whole, with its rows of cells, it held about 10 MB.
 #[test]
 fn the_table_streams_in_bounded_memory() {
+    let _serial = crate::serial();
     let (m, _) = mbsa::generate::random(20_000, false, 1).expect("a random mechanism");
     let opts = mbsa::structure::Options {
         count_only: true,

@@ -10,7 +10,7 @@ use mbsa::joint::JointType;
 use mbsa::rigidity::pebble::{PebbleOptions, analyze, analyze_reference, analyze_within};
 use mbsa::{BodyId, Geometry, JointSpec, Mechanism, Space};
 
-mod common;
+use crate::common;
 use common::Rng;
 
 fn joint(kind: JointType, bodies: &[usize], driven: u32, id: usize) -> JointSpec {

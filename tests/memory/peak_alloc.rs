@@ -1,21 +1,34 @@
-//! A counting allocator around the system one: the bytes live now and the most live at once.
-//! Shared by the memory-bound tests (`tests/*_memory.rs`, `tests/table_streaming.rs`); each
-//! includes it with `#[path]`, installs [`Peak`] as its global allocator and holds one test, so
-//! that no other test's allocations are counted.
-#![allow(dead_code)]
+//! A counting allocator around the system one: the bytes live now and the most live at once,
+//! and the allocations made and the bytes they asked for. This binary's global allocator; its
+//! tests run one at a time ([`crate::serial`]), so that no test counts another's allocations.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// The system allocator, keeping the bytes live and their peak.
+/// The system allocator, keeping the bytes live and their peak, and counting allocations (a
+/// `realloc` counts as one) and the bytes they ask for (a `realloc` its new size).
 pub struct Peak;
 
 static LIVE: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+static ASKED: AtomicUsize = AtomicUsize::new(0);
 
 fn grow(n: usize) {
+    ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+    ASKED.fetch_add(n, Ordering::Relaxed);
     let now = LIVE.fetch_add(n, Ordering::Relaxed) + n;
     PEAK.fetch_max(now, Ordering::Relaxed);
+}
+
+/// Allocations made so far (a `realloc` counts as one).
+pub fn allocations() -> usize {
+    ALLOCATIONS.load(Ordering::Relaxed)
+}
+
+/// Bytes asked for so far (a `realloc` its new size).
+pub fn asked() -> usize {
+    ASKED.load(Ordering::Relaxed)
 }
 
 /// Bytes live now.

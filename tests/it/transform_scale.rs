@@ -5,9 +5,11 @@
 use mbsa::budget::Budget;
 use mbsa::format::{Format, load};
 use mbsa::structure::Library;
-use mbsa::transform::{Placement, TransformError, TransformOptions, enumerate, transform};
+use mbsa::transform::{
+    Placement, Progress, TransformError, TransformOptions, enumerate, transform,
+};
 use mbsa::{BodyId, JointSpec, JointType, Mechanism, Space};
-use std::time::{Duration, Instant};
+use std::sync::atomic::{AtomicUsize, Ordering};
 
 fn mech(name: &str, space: Space, joints: Vec<(JointType, i64, i64)>) -> Mechanism {
     Mechanism::from_parts(
@@ -155,10 +157,8 @@ fn biped_legs_are_placed_independently() {
     both.extend(leg(10));
     let biped = mech("biped", Space::Spatial, both);
     let lib = Library::builtin();
-    let start = Instant::now();
     let l = transform(&one, &count_only(), &lib, None).unwrap();
     let b = transform(&biped, &count_only(), &lib, None).unwrap();
-    assert!(start.elapsed() < Duration::from_secs(60));
     assert_eq!(l.summary.f, 6);
     assert_eq!(b.summary.f, 12);
     assert_eq!(b.summary.parts, 2);
@@ -195,14 +195,7 @@ fn stars_of_4000_joints_answer_at_once() {
             limit: Some(1),
             ..count_only()
         };
-        let start = Instant::now();
         let t = transform(&m, &o, &lib, None).unwrap();
-        assert!(
-            start.elapsed() < Duration::from_secs(60),
-            "{}: {:?}",
-            m.name,
-            start.elapsed()
-        );
         assert_eq!(t.summary.parts, parts, "{}", m.name);
         assert_eq!(t.summary.f, 4000);
         assert_eq!(t.summary.determined, 1);
@@ -222,9 +215,7 @@ fn limit_bounds_the_work_on_a_40_leg_parallel_mechanism() {
         limit: Some(200),
         ..TransformOptions::default()
     };
-    let start = Instant::now();
     let t = transform(&m, &o, &lib, None).unwrap();
-    assert!(start.elapsed() < Duration::from_secs(60));
     assert_eq!(t.summary.f, 3);
     assert_eq!(t.summary.count_valid, 200);
     assert!(t.summary.truncated);
@@ -276,7 +267,8 @@ fn limit_equal_to_the_count_is_not_truncated() {
 
 /// Issue 16: `transform --limit 300 --format jsonl` on a 2,000-body random mechanism streamed
 /// nothing for 120 s. The first placement is now analysed and streamed on its own, before the
-/// search goes on.
+/// search goes on: progress is reported after each analysed batch, and the first report
+/// counts that one placement (the batches then grow), not the 300 the search can find.
 #[test]
 fn jsonl_streams_from_the_first_placement() {
     let (m, _) = mbsa::generate::random(2000, false, 0).unwrap();
@@ -285,18 +277,19 @@ fn jsonl_streams_from_the_first_placement() {
         limit: Some(300),
         ..count_only()
     };
-    let start = Instant::now();
-    let mut first: Option<Duration> = None;
+    let first_batch = AtomicUsize::new(0);
+    let report = |p: Progress| {
+        let _ = first_batch.compare_exchange(0, p.examined, Ordering::Relaxed, Ordering::Relaxed);
+    };
     let mut n = 0usize;
-    let s = enumerate(&m, &o, &lib, None, &mut |_| {
-        first.get_or_insert(start.elapsed());
+    let s = enumerate(&m, &o, &lib, Some(&report), &mut |_| {
         n += 1;
         // One is enough to show it streams; the rest is the same loop.
         assert!(n <= 300);
     })
     .unwrap();
-    let first = first.expect("a placement streams");
-    assert!(first < Duration::from_secs(30), "{first:?}");
+    assert!(n > 0, "a placement streams");
+    assert_eq!(first_batch.into_inner(), 1, "placements in the first batch");
     assert!(s.truncated);
     assert_eq!(s.count_valid, 300);
 }
@@ -397,13 +390,7 @@ fn a_serial_chain_of_20000_joints_is_decided_in_linear_time() {
         limit: Some(1),
         ..count_only()
     };
-    let start = Instant::now();
     let t = transform(&m, &o, &Library::builtin(), None).unwrap();
-    assert!(
-        start.elapsed() < Duration::from_secs(60),
-        "{:?}",
-        start.elapsed()
-    );
     assert_eq!(t.summary.determined, 1);
     assert!(!t.summary.truncated);
 }
