@@ -214,7 +214,7 @@ fn loop_spatiality() {
     assert_eq!(r.locked, 3);
 }
 
-/// `cargo test --release --test geometric_fixtures timing -- --ignored --nocapture`
+/// `cargo test --release --test it -- --ignored --nocapture geometric_fixtures::timing`
 #[test]
 #[ignore]
 fn timing_double_banana() {

@@ -29,7 +29,7 @@ fn random_framework_is_rigid_with_spins() {
     }
 }
 
-/// `cargo test --release --test geometric_scale -- --ignored --nocapture`
+/// `cargo test --release --test it -- --ignored --nocapture geometric_scale::`
 #[test]
 #[ignore]
 fn timing_thousand_bars() {

@@ -156,7 +156,7 @@ fn dot_views_of_a_shared_joint() {
 
 /// Release only: the 10^5-body families through the command line (seconds each when quiet).
 #[test]
-#[ignore = "release only: cargo test --release --test georigid_scale -- --ignored"]
+#[ignore = "release only: cargo test --release --test it -- --ignored georigid_scale::"]
 fn hundred_thousand_bodies_in_seconds() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("georigid");
     std::fs::create_dir_all(&dir).expect("writable");

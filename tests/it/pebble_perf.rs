@@ -4,7 +4,7 @@
 //! stars. The default test runs them at 10^4 and checks the answers that the construction
 //! knows (a Laman framework is minimally rigid: dof 0, redundant 0, one component of every
 //! bar); timings are printed, never asserted. The ignored test runs 10^3 to 10^5
-//! (`cargo test --release --test pebble_perf -- --ignored --nocapture`); with
+//! (`cargo test --release --test it -- --ignored --nocapture pebble_perf::`); with
 //! `MBSA_PEBBLE_WRITE=DIR` it also writes the inputs as TOML files for `/usr/bin/time -v mbsa
 //! rigid` (docs/benchmarks.md).
 

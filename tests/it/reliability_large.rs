@@ -1,6 +1,6 @@
 //! Large and hostile inputs through the real binary: analysed or refused cleanly (exit 2, a
 //! short message with the location), never a crash. docs/reliability.md has the measurements;
-//! the 10^6-joint run is `cargo test --release --test reliability_large -- --ignored`.
+//! the 10^6-joint run is `cargo test --release --test it -- --ignored reliability_large::`.
 
 use assert_cmd::Command;
 use std::path::PathBuf;

@@ -3,7 +3,7 @@
 //! or exit 1) or stop with a clear message (exit 2); a timeout, a signal (failed allocation,
 //! abort) or a panic fails the test.
 //!
-//! Release only (`.ci/run`): `cargo test --release --test scale_smoke -- --ignored`.
+//! Release only (`.ci/run`): `cargo test --release --test it -- --ignored scale_smoke::`.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -90,7 +90,7 @@ fn generated(name: &str, args: &[&str]) -> PathBuf {
 }
 
 #[test]
-#[ignore = "release only: cargo test --release --test scale_smoke -- --ignored"]
+#[ignore = "release only: cargo test --release --test it -- --ignored scale_smoke::"]
 fn every_command_on_a_hundred_thousand_bodies() {
     let files = [
         generated(
