@@ -86,10 +86,13 @@ fn rigid_snapshots() {
     }
 }
 
-/// Run Graphviz on `dot`: its warnings when it succeeds, the error otherwise.
+/// Run Graphviz on `dot`: its warnings when it succeeds, the error otherwise. The whole
+/// layout and the SVG rendering run, with the network-simplex passes (rank and coordinate
+/// optimisation) cut to one iteration: they only make the drawing tidier, and on the large
+/// bundled mechanisms they were most of this file's time.
 fn graphviz(dot: &str) -> Result<String, String> {
     let mut child = std::process::Command::new("dot")
-        .arg("-Tsvg")
+        .args(["-Tsvg", "-Gnslimit=1", "-Gnslimit1=1"])
         .stdin(Stdio::piped())
         .stdout(Stdio::null())
         .stderr(Stdio::piped())
