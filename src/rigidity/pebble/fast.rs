@@ -27,7 +27,7 @@ use crate::budget::{BudgetExceeded, Meter};
 ///   earlier game grew with exponent 1.76 on Assur linkages).
 ///
 /// The answers (which bars are independent, the rigid components) are those of the plain game;
-/// `tests/pebble_props.rs` compares them on random graphs.
+/// `tests/it/pebble_props.rs` compares them on random graphs.
 pub(super) struct Fast {
     pub(super) l: u8,
     pub(super) n_bodies: usize,

@@ -183,7 +183,7 @@ fn analyze_metered(
 
 /// The same analysis by the plain pebble game (no component bookkeeping, components found
 /// after the game, a search per bar): quadratic on large rigid frameworks. Kept as the test
-/// oracle of [`analyze`] (`tests/pebble_props.rs`).
+/// oracle of [`analyze`] (`tests/it/pebble_props.rs`).
 #[doc(hidden)]
 pub fn analyze_reference(m: &Mechanism, opts: &PebbleOptions) -> PebbleReport {
     let l = m.b() as u8;

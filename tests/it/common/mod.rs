@@ -1,0 +1,64 @@
+//! Generators shared by the pebble-game tests (`pebble_*`) and `geometric_exact`: the local
+//! SplitMix64 stream and the planar bar-joint frameworks written as mechanisms.
+#![allow(dead_code)]
+
+use mbsa::joint::JointType;
+use mbsa::{BodyId, Geometry, JointSpec, Mechanism, Space};
+
+/// SplitMix64, local so that the fixtures do not move when the library's generator does.
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// A bar-joint framework as a planar mechanism: bar k (1-based) is body k, point p the
+/// revolute `p<p>` joining the bars that meet there; bar 1 is the frame.
+pub fn bar_framework(name: &str, points: usize, bars: &[(usize, usize)]) -> Mechanism {
+    let mut at: Vec<Vec<i64>> = vec![Vec::new(); points];
+    for (k, &(a, b)) in bars.iter().enumerate() {
+        at[a].push(k as i64 + 1);
+        at[b].push(k as i64 + 1);
+    }
+    let joints = at
+        .into_iter()
+        .enumerate()
+        .filter(|(_, bs)| bs.len() >= 2)
+        .map(|(p, bs)| JointSpec {
+            id: Some(format!("p{p}")),
+            kind: JointType::R,
+            bodies: bs.into_iter().map(BodyId::Int).collect(),
+            driven: 0,
+            geometry: Geometry::default(),
+        })
+        .collect();
+    Mechanism::from_parts(name, Space::Planar, BodyId::Int(1), vec![], joints)
+}
+
+/// A planar Laman framework of `points` points by Henneberg type I steps: each new point is
+/// joined to two distinct earlier points, chosen uniformly (`local` = false) or among the 8
+/// previous points (`local` = true). 2·points − 3 bars, minimally rigid.
+pub fn laman(points: usize, local: bool, seed: u64) -> Mechanism {
+    let mut rng = Rng(seed);
+    let mut bars = vec![(0, 1)];
+    for i in 2..points {
+        let lo = if local { i.saturating_sub(8) } else { 0 };
+        let a = lo + rng.below(i - lo);
+        let mut b = lo + rng.below(i - lo);
+        while b == a {
+            b = lo + rng.below(i - lo);
+        }
+        bars.push((a, i));
+        bars.push((b, i));
+    }
+    bar_framework("laman", points, &bars)
+}

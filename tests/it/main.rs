@@ -1,0 +1,49 @@
+//! The integration tests as one binary, so that the library is linked once, not once a file.
+//! The tests that count allocations are in `tests/memory/`, under their own global allocator.
+
+mod common;
+
+mod analyze_finite;
+mod bundled_expectations;
+mod cli_errors;
+mod cli_examples;
+mod cli_exit_codes;
+mod cli_position;
+mod closure;
+mod exact;
+mod format_errors;
+mod generate_families;
+mod generate_table16;
+mod geometric_exact;
+mod geometric_file_sparse;
+mod geometric_file_units;
+mod geometric_fixtures;
+mod geometric_property;
+mod geometric_scale;
+mod georigid_budget;
+mod georigid_exact_scale;
+mod georigid_scale;
+mod hostile_input;
+mod import;
+mod pebble_parity;
+mod pebble_perf;
+mod pebble_props;
+mod pebble_report;
+mod pebble_scale;
+mod position;
+mod rank_seed_independence;
+mod reader_scale;
+mod reliability_determinism;
+mod reliability_large;
+mod reliability_smoke;
+mod scale_smoke;
+mod structure_cases;
+mod structure_multiple_order;
+mod structure_props;
+mod transform_limit;
+mod transform_parts;
+mod transform_perf;
+mod transform_restrict;
+mod transform_rotor;
+mod transform_scale;
+mod transform_stewart;

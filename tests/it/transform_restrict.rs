@@ -1,0 +1,334 @@
+//! Restrictions, limits, streaming and multiple-joint expansions of `mbsa transform`.
+
+use mbsa::format::{Format, load};
+use mbsa::structure::Library;
+use mbsa::transform::{
+    Placement, Progress, TransformError, TransformOptions, enumerate, transform,
+};
+use mbsa::{BodyId, InputSpec, JointSpec, JointType, Mechanism, Space};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+fn rotor() -> Mechanism {
+    let (file, text) = mbsa::examples::find("rotor").expect("bundled example");
+    load(file, text, Format::Toml).expect("bundled example loads")
+}
+
+/// Count-only keeps these tests fast; restrictions do not depend on the rank check.
+fn opts() -> TransformOptions {
+    let mut o = TransformOptions::default();
+    o.analysis.count_only = true;
+    o
+}
+
+fn specs(ps: &[Placement]) -> Vec<String> {
+    let mut v: Vec<String> = ps.iter().map(|p| p.spec()).collect();
+    v.sort();
+    v
+}
+
+/// A restriction is exactly a filter on the unrestricted placements.
+fn check_filter(restricted: &TransformOptions, keep: impl Fn(&Placement) -> bool) -> usize {
+    let m = rotor();
+    let lib = Library::builtin();
+    let all = transform(&m, &opts(), &lib, None).unwrap();
+    let some = transform(&m, restricted, &lib, None).unwrap();
+    let expected: Vec<Placement> = all.placements.iter().filter(|p| keep(p)).cloned().collect();
+    assert!(!expected.is_empty());
+    assert!(expected.len() < all.placements.len());
+    assert_eq!(specs(&some.placements), specs(&expected));
+    assert!(!some.summary.notes.is_empty());
+    expected.len()
+}
+
+fn kind_of(m: &Mechanism, joint: &str) -> JointType {
+    m.joints.iter().find(|j| j.id == joint).unwrap().kind
+}
+
+#[test]
+fn on_restricts_joint_types() {
+    let m = rotor();
+    let mut o = opts();
+    o.on = Some(TransformOptions::parse_on("R,P").unwrap());
+    check_filter(&o, |p| {
+        p.inputs
+            .iter()
+            .all(|i| matches!(kind_of(&m, &i.joint), JointType::R | JointType::P))
+    });
+}
+
+#[test]
+fn grounded_restricts_to_frame_joints() {
+    let mut o = opts();
+    o.grounded = true;
+    check_filter(&o, |p| p.inputs.iter().all(|i| i.pair.starts_with("1-")));
+}
+
+#[test]
+fn keep_holds_inputs() {
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15,1-13").unwrap());
+    let n = check_filter(&o, |p| {
+        p.inputs.iter().any(|i| i.joint == "13-15") && p.inputs.iter().any(|i| i.joint == "1-13")
+    });
+    assert!(n >= 1);
+}
+
+#[test]
+fn exclude_forbids_joints() {
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("13-15,11-14").unwrap());
+    check_filter(&o, |p| {
+        p.inputs
+            .iter()
+            .all(|i| i.joint != "13-15" && i.joint != "11-14")
+    });
+}
+
+#[test]
+fn bad_restrictions_are_errors() {
+    let m = rotor();
+    let lib = Library::builtin();
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15").unwrap());
+    o.exclude = Some(InputSpec::parse("13-15").unwrap());
+    assert!(matches!(
+        transform(&m, &o, &lib, None),
+        Err(TransformError::KeepExcluded { .. })
+    ));
+    let mut o = opts();
+    o.keep = Some(InputSpec::parse("13-15:2").unwrap());
+    assert!(matches!(
+        transform(&m, &o, &lib, None),
+        Err(TransformError::Spec(_))
+    ));
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("99-100").unwrap());
+    assert!(transform(&m, &o, &lib, None).is_err());
+}
+
+#[test]
+fn limit_cuts_the_search_with_a_note() {
+    let m = rotor();
+    let mut o = opts();
+    o.limit = Some(10);
+    let t = transform(&m, &o, &Library::builtin(), None).unwrap();
+    assert!(t.summary.truncated);
+    assert_eq!(t.summary.count_valid, 10);
+    assert!(t.summary.notes.iter().any(|n| n.contains("--limit 10")));
+    let text = mbsa::report::transform::table(&t, 3);
+    assert!(text.contains("--limit 10"));
+}
+
+#[test]
+fn streaming_matches_ranking_and_reports_progress() {
+    let m = rotor();
+    let lib = Library::builtin();
+    let calls = AtomicUsize::new(0);
+    let last = AtomicUsize::new(0);
+    let progress = |p: Progress| {
+        calls.fetch_add(1, Ordering::Relaxed);
+        assert!(p.examined <= p.total);
+        last.store(p.examined, Ordering::Relaxed);
+    };
+    let mut lines = Vec::new();
+    let s = enumerate(&m, &opts(), &lib, Some(&progress), &mut |p| {
+        lines.push(mbsa::report::transform::jsonl(&p));
+    })
+    .unwrap();
+    assert_eq!(lines.len() as u128, s.determined);
+    assert!(
+        lines
+            .iter()
+            .all(|l| l.ends_with('\n') && !l[..l.len() - 1].contains('\n'))
+    );
+    assert!(calls.load(Ordering::Relaxed) >= 1);
+    assert_eq!(last.load(Ordering::Relaxed) as u128, s.count_valid);
+    let t = transform(&m, &opts(), &lib, None).unwrap();
+    assert_eq!(t.placements.len(), lines.len());
+    let json: serde_json::Value = serde_json::from_str(&mbsa::report::json(&t)).unwrap();
+    assert_eq!(
+        json["placements"].as_array().unwrap().len() as u128,
+        s.determined
+    );
+}
+
+/// Planar: bodies 2 and 3 pinned to the frame and joined with 4 by one ternary pin.
+fn ternary() -> Mechanism {
+    let mut j = JointSpec::new(JointType::R, 2, 3, 0);
+    j.id = Some("C".into());
+    j.bodies.push(BodyId::Int(4));
+    Mechanism::from_parts(
+        "ternary",
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        vec![
+            JointSpec::new(JointType::R, 1, 2, 0),
+            JointSpec::new(JointType::R, 1, 3, 0),
+            j,
+        ],
+    )
+}
+
+#[test]
+fn multiple_joints_are_expanded_into_spanning_trees() {
+    let m = ternary();
+    let lib = Library::builtin();
+    let t = transform(&m, &TransformOptions::default(), &lib, None).unwrap();
+    assert_eq!(t.summary.f, 1);
+    assert_eq!(t.summary.expansions, 3);
+    assert_eq!(t.summary.expansions_total, 3);
+    let got: Vec<(String, String)> = t
+        .placements
+        .iter()
+        .map(|p| (p.spec(), p.expansion.clone().unwrap()))
+        .collect();
+    // Star on 2 (the default): a triangle 1-2-3 and body 4 on pair 2-4, driven there; star
+    // on 3: likewise with 3-4; star on 4: a four-bar 1-2-4-3, driven at any of its joints
+    // (one group of three bodies, so ranked last).
+    let s = |a: &str, b: &str| (a.to_string(), b.to_string());
+    assert_eq!(
+        got,
+        vec![
+            s("C[2-4]", "C: 2-3, 2-4"),
+            s("C[3-4]", "C: 2-3, 3-4"),
+            s("1-2", "C: 2-4, 3-4"),
+            s("1-3", "C: 2-4, 3-4"),
+            s("C[2-4]", "C: 2-4, 3-4"),
+            s("C[3-4]", "C: 2-4, 3-4"),
+        ]
+    );
+    let o = TransformOptions {
+        max_expansions: 1,
+        ..TransformOptions::default()
+    };
+    let t = transform(&m, &o, &lib, None).unwrap();
+    assert_eq!(t.placements.len(), 1);
+    assert!(
+        t.summary
+            .notes
+            .iter()
+            .any(|n| n.contains("--max-expansions"))
+    );
+    let text = mbsa::report::transform::table(&t, 10);
+    insta::with_settings!({snapshot_path => "../../snapshots", prepend_module_to_snapshot => false}, {
+        insta::assert_snapshot!("transform_ternary_table", text);
+    });
+}
+
+/// Zero placements always come with a reason. Too few drivable DOF (no S joint in the slider
+/// crank for `--on S`, at the file's geometry and by count alone): the note says how many DOF
+/// the allowed joints carry against the inputs to place.
+#[test]
+fn no_placement_for_want_of_drivable_dof_says_so() {
+    let (file, text) = mbsa::examples::find("slider-crank-geometry").expect("bundled example");
+    let m = load(file, text, Format::Toml).expect("bundled example loads");
+    let lib = Library::builtin();
+    for count_only in [false, true] {
+        let mut o = TransformOptions::default();
+        o.analysis.count_only = count_only;
+        o.analysis.geometry = mbsa::geometry::GeometrySource::File;
+        o.on = Some(TransformOptions::parse_on("S").unwrap());
+        let r = transform(&m, &o, &lib, None).unwrap();
+        assert_eq!((r.summary.count_valid, r.summary.determined), (0, 0));
+        assert!(
+            r.summary.notes.iter().any(|n| n.contains("no placement")),
+            "count_only {count_only}: {:?}",
+            r.summary.notes
+        );
+        if !count_only {
+            assert!(
+                r.summary
+                    .notes
+                    .iter()
+                    .any(|n| n.contains("carry 0 DOF in all, fewer than the 1 input(s)")),
+                "{:?}",
+                r.summary.notes
+            );
+        }
+    }
+}
+
+/// Enough drivable DOF, yet every placement fails the count: a planar four-bar (A, C, D, E)
+/// with a pendant bar on B, and B excluded. Two inputs are needed, and the only joints left are
+/// in the four-bar's loop, which takes one: the note says nothing passes the count.
+#[test]
+fn no_placement_by_count_says_so() {
+    let text = r#"
+name = "four-bar with a pendant bar"
+space = "planar"
+frame = 0
+"#
+    .to_string()
+        + &[
+            ("A", 0, 1),
+            ("B", 1, 2),
+            ("C", 1, 3),
+            ("D", 3, 4),
+            ("E", 4, 0),
+        ]
+        .iter()
+        .map(|(id, a, b)| format!("[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\n"))
+        .collect::<String>();
+    let m = load("pendant.toml", &text, Format::Toml).expect("valid");
+    let lib = Library::builtin();
+    let mut o = opts();
+    o.exclude = Some(InputSpec::parse("B").unwrap());
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert_eq!((r.summary.f, r.summary.count_valid), (2, 0));
+    let why: Vec<&String> = r
+        .summary
+        .notes
+        .iter()
+        .filter(|n| n.contains("no placement"))
+        .collect();
+    assert_eq!(why.len(), 1, "{:?}", r.summary.notes);
+    assert!(
+        why[0].contains("no placement of the 2 input(s) on the 4 joint(s)"),
+        "{}",
+        why[0]
+    );
+    // Without the exclusion there are placements and no such note.
+    let r = transform(&m, &opts(), &lib, None).unwrap();
+    assert!(r.summary.determined > 0);
+    assert!(r.summary.notes.iter().all(|n| !n.contains("no placement")));
+}
+
+/// `--limit` reached before any determined placement: besides "more placements exist" the note
+/// says none examined is determined and how to go on (a Delta robot at `--limit 20`: every
+/// placement examined drove a rod's spin). Here: the micro-manipulator at `--limit 1`, whose
+/// first placement the rank check excludes.
+#[test]
+fn a_limit_reached_with_nothing_determined_says_how_to_go_on() {
+    let (file, text) = mbsa::examples::find("micro-manipulator").expect("bundled example");
+    let m = load(file, text, Format::Toml).expect("bundled example loads");
+    let lib = Library::builtin();
+    let mut o = TransformOptions {
+        limit: Some(1),
+        ..Default::default()
+    };
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert!(
+        r.summary.truncated && r.summary.determined == 0,
+        "{:?}",
+        r.summary
+    );
+    assert!(
+        r.summary
+            .notes
+            .iter()
+            .any(|n| n.starts_with("none of the 1 placement(s) examined is determined")),
+        "{:?}",
+        r.summary.notes
+    );
+    // With room to find one, no such note.
+    o.limit = Some(100_000);
+    let r = transform(&m, &o, &lib, None).unwrap();
+    assert!(r.summary.determined > 0);
+    assert!(
+        r.summary
+            .notes
+            .iter()
+            .all(|n| !n.starts_with("none of the"))
+    );
+}
