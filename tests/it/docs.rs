@@ -7,7 +7,7 @@
 //! `? 2` or `? failed` line after the command states the exit code (success otherwise), and an
 //! output that ends with a newline is followed by a blank line before the next `$` or the
 //! closing fence. Blocks shown but not run use another fence (```sh, ```text).
-//! `TRYCMD=overwrite cargo test --test docs` rewrites the expected outputs from the binary
+//! `TRYCMD=overwrite cargo test --test it docs::` rewrites the expected outputs from the binary
 //! (check the diff: it may also rewrite lines around a `...`).
 
 #[test]

@@ -176,7 +176,7 @@ fn every_module_has_a_layer() {
         .collect();
     assert!(
         unknown.is_empty(),
-        "modules with no layer in tests/layers.rs (and ARCHITECTURE.md): {unknown:?}"
+        "modules with no layer in tests/it/layers.rs (and ARCHITECTURE.md): {unknown:?}"
     );
 }
 
