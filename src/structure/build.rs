@@ -583,7 +583,7 @@ fn free_bodies(m: &Mechanism, disconnected: &[String], diag: &mut Diagnosis) {
     diag.notes.push(format!(
         "bodies {{{}}} are named by no joint: each moves freely ({b} DOF that no input \
          controls); join them to the mechanism or remove them",
-        disconnected.join(", ")
+        super::capped(disconnected)
     ));
 }
 
