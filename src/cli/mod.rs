@@ -396,7 +396,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             emit(&text)
         }
         Command::Joints => emit(&mbsa::report::joints_table()),
-        Command::Schema => emit(&mbsa::report::json(&mbsa::format::schema())),
+        Command::Schema => emit(&mbsa::report::json::plain(&mbsa::format::schema())),
     }
 }
 
