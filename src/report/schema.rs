@@ -275,11 +275,7 @@ fn diagnosis() -> Value {
             (
                 "unsaturated",
                 array(obj(
-                    &[
-                        ("joint", string()),
-                        ("pair", string()),
-                        ("excess", count()),
-                    ],
+                    &[("joint", string()), ("pair", string()), ("excess", count())],
                     &[],
                 )),
             ),
@@ -569,11 +565,7 @@ fn criteria() -> Value {
 
 fn inputs() -> Value {
     array(obj(
-        &[
-            ("joint", string()),
-            ("pair", string()),
-            ("driven", count()),
-        ],
+        &[("joint", string()), ("pair", string()), ("driven", count())],
         &[],
     ))
 }
