@@ -20,7 +20,7 @@ pub use input::{FileArg, load};
 /// Structural analysis of multibody systems: mobility, structural groups, input placements
 /// and rigid subsystems of mechanisms written as TOML, YAML or JSON files.
 #[derive(Parser, Debug)]
-#[command(name = "mbsa", version, about, long_about = None, propagate_version = true)]
+#[command(name = "mbsa", version = env!("MBSA_VERSION"), about, long_about = None, propagate_version = true)]
 #[command(
     after_help = "Examples:\n  mbsa examples\n  mbsa mobility @rotor\n  mbsa check mechanisms/*.toml\n\nFILE is a path, `-` for standard input, or `@name` for a bundled example."
 )]
