@@ -4,6 +4,7 @@
 
 mod analysis;
 mod check;
+mod completions;
 mod generate;
 mod input;
 mod position;
@@ -245,6 +246,24 @@ enum Command {
         after_help = "Examples:\n  mbsa check @rotor\n  mbsa check mechanisms/*.toml\n  git ls-files '*.toml' | mbsa check --files-from -\n  mbsa check @all --format jsonl"
     )]
     Check(check::CheckArgs),
+    /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
+    #[command(
+        after_help = "Examples:\n  mbsa completions bash > ~/.local/share/bash-completion/completions/mbsa\n  mbsa completions zsh > ~/.zfunc/_mbsa\n  mbsa completions fish > ~/.config/fish/completions/mbsa.fish"
+    )]
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) of mbsa or of one command.
+    #[command(
+        after_help = "Examples:\n  mbsa man | man -l -\n  mbsa man check > ~/.local/share/man/man1/mbsa-check.1"
+    )]
+    Man {
+        /// The command (default: mbsa itself).
+        #[arg(value_name = "COMMAND")]
+        command: Option<String>,
+    },
     /// List the bundled example mechanisms (use them as `@name`).
     #[command(after_help = "Example:\n  mbsa examples\n  mbsa mobility @stewart")]
     Examples,
@@ -392,6 +411,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
             text.push_str("\nUse one as FILE, e.g. `mbsa analyze @rotor`.\n");
             emit(&text)
         }
+        Command::Completions { shell } => completions::completions(shell),
+        Command::Man { command } => completions::man(command.as_deref()),
         Command::Joints => emit(&mbsa::report::joints_table()),
         Command::Schema { output } => schema::run(output),
     }

@@ -6,6 +6,7 @@ mod common;
 mod analyze_finite;
 mod bundled_expectations;
 mod cli_check;
+mod cli_completions;
 mod cli_errors;
 mod cli_examples;
 mod cli_exit_codes;
