@@ -166,7 +166,7 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
 /// after the analysis (with the copies of its growth).
 fn emit_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
     emit_with(|out| {
-        serde_json::to_writer_pretty(&mut *out, value)
+        serde_json::to_writer_pretty(&mut *out, &mbsa::report::Versioned::new(value))
             .map_err(std::io::Error::from)
             .and_then(|()| out.write_all(b"\n"))
     })

@@ -477,12 +477,8 @@ fn comparison_table(c: &Comparison, wrap: bool) -> String {
     t.to_string()
 }
 
-/// One value as a single JSON line with a trailing newline, for `--format jsonl`.
+/// One record as a single JSON line with a trailing newline, `format_version` first, for
+/// `--format jsonl`.
 pub fn jsonl<T: serde::Serialize>(value: &T) -> String {
-    let mut s = serde_json::to_string(value).unwrap_or_else(|e| {
-        // Serializing our own types cannot fail (no maps with non-string keys, no I/O).
-        format!("{{\"error\": {:?}}}", e.to_string())
-    });
-    s.push('\n');
-    s
+    super::json::jsonl(value)
 }

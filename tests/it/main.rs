@@ -5,6 +5,8 @@ mod common;
 
 mod analyze_finite;
 mod bundled_expectations;
+mod cli_check;
+mod cli_completions;
 mod cli_errors;
 mod cli_examples;
 mod cli_exit_codes;
@@ -38,6 +40,7 @@ mod reader_scale;
 mod reliability_determinism;
 mod reliability_large;
 mod reliability_smoke;
+mod report_schema;
 mod scale_smoke;
 mod structure_cases;
 mod structure_multiple_order;
