@@ -175,7 +175,7 @@ enum Command {
     /// mechanism at the solved configuration. `--inputs` replaces the file's driven inputs
     /// (as for `analyze`); a joint given a value with `--set` is driven too.
     #[command(
-        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set A=30\n  mbsa solve @slider-crank-geometry --sweep A=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml\n  mbsa solve gripper.xml --inputs left_driver_joint,right_driver_joint --set left_driver_joint=10"
+        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set O=30\n  mbsa solve @slider-crank-geometry --sweep O=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml\n  mbsa solve gripper.xml --inputs left_driver_joint,right_driver_joint --set left_driver_joint=10"
     )]
     Solve {
         #[command(flatten)]

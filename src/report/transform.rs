@@ -290,7 +290,7 @@ fn family_table(
         };
         let mut row = vec![ranks, lines.join("\n")];
         if expansions {
-            let e = best.expansion.clone().unwrap_or_default();
+            let e = best.expansion_brief().unwrap_or_default().to_string();
             // One multiple joint's pairs a line.
             row.push(if wrap == Wrap::All {
                 e.replace("; ", ";\n")

@@ -4,12 +4,15 @@
 mod common;
 
 mod analyze_finite;
+mod bounded_work;
 mod bundled_expectations;
+mod cli_arguments;
 mod cli_check;
 mod cli_completions;
 mod cli_errors;
 mod cli_examples;
 mod cli_exit_codes;
+mod cli_help_examples;
 mod cli_position;
 mod closure;
 mod docs;
@@ -36,6 +39,7 @@ mod pebble_report;
 mod pebble_scale;
 mod position;
 mod rank_seed_independence;
+mod reader_linear;
 mod reader_scale;
 mod reliability_determinism;
 mod reliability_large;
