@@ -33,7 +33,8 @@ pub struct Evaluation {
     pub scores: Scores,
     /// Group types.
     pub types: Vec<TypeCount>,
-    /// The groups in canonical order.
+    /// The groups in canonical order (`group_list` in JSON: `groups` is the scores' count).
+    #[serde(rename = "group_list")]
     pub groups: Vec<GroupBrief>,
 }
 

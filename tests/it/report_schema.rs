@@ -138,6 +138,58 @@ fn validate(schema: &Value, v: &Value, path: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// A JSON document read only to refuse an object that names a key twice (`Value` keeps the
+/// last and hides it; readers differ on which one they keep).
+struct UniqueKeys;
+
+impl<'de> serde::Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_any(UniqueKeysVisitor)
+    }
+}
+
+struct UniqueKeysVisitor;
+
+impl<'de> serde::de::Visitor<'de> for UniqueKeysVisitor {
+    type Value = UniqueKeys;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("any JSON value")
+    }
+    fn visit_bool<E>(self, _: bool) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_i64<E>(self, _: i64) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_u64<E>(self, _: u64) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_f64<E>(self, _: f64) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_str<E>(self, _: &str) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_unit<E>(self) -> Result<UniqueKeys, E> {
+        Ok(UniqueKeys)
+    }
+    fn visit_seq<A: serde::de::SeqAccess<'de>>(self, mut a: A) -> Result<UniqueKeys, A::Error> {
+        while a.next_element::<UniqueKeys>()?.is_some() {}
+        Ok(UniqueKeys)
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> Result<UniqueKeys, A::Error> {
+        let mut seen = std::collections::HashSet::new();
+        while let Some(k) = a.next_key::<String>()? {
+            a.next_value::<UniqueKeys>()?;
+            if !seen.insert(k.clone()) {
+                return Err(serde::de::Error::custom(format!("key `{k}` written twice")));
+            }
+        }
+        Ok(UniqueKeys)
+    }
+}
+
 /// Run `args`, and validate its output (one document, or each line with `lines`) against
 /// the schema of `report`. Runs that fail with no output (`solve` of a file without
 /// geometry) are skipped; the number of documents checked is returned.
@@ -153,6 +205,9 @@ fn check(report: &Value, args: &[&str], lines: bool) -> usize {
         vec![&out]
     };
     for d in &docs {
+        if let Err(e) = serde_json::from_str::<UniqueKeys>(d) {
+            panic!("{args:?}: {e}");
+        }
         let v: Value = serde_json::from_str(d).unwrap_or_else(|e| panic!("{args:?}: {e}"));
         assert_eq!(v["format_version"], 1, "{args:?}");
         if let Err(e) = validate(report, &v, "$") {
@@ -242,6 +297,12 @@ fn the_validator_rejects_what_the_schema_excludes() {
     let (_, out) = mbsa(&["mobility", "@four-bar", "--format", "json"]);
     let good: Value = serde_json::from_str(&out).expect("JSON");
     assert_eq!(validate(&schema, &good, "$"), Ok(()));
+    assert!(serde_json::from_str::<UniqueKeys>(&out).is_ok());
+    let twice = r#"{"a": [{"b": 1, "c": {"d": 2, "d": 3}}], "e": 4}"#;
+    let e = serde_json::from_str::<UniqueKeys>(twice)
+        .err()
+        .expect("a key twice is refused");
+    assert!(e.to_string().contains("key `d` written twice"), "{e}");
     let mut extra = good.clone();
     extra["surprise"] = Value::from(1);
     assert!(

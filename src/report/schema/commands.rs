@@ -102,12 +102,10 @@ fn group_brief() -> Value {
 }
 
 pub(super) fn comparison() -> Value {
-    // The scores' `groups` (a count) is written before the list of groups under the same
-    // key; a JSON reader keeps the later one, the list.
     let mut keys = vec![("inputs", inputs()), ("status", status())];
     keys.extend(scores());
     keys.push(("types", array(type_count())));
-    keys.push(("groups", array(group_brief())));
+    keys.push(("group_list", array(group_brief())));
     let evaluation = obj(&keys, &[]);
     let changes = obj(
         &[
