@@ -182,7 +182,7 @@ fn ten_thousand_window_n_four_bar_within_a_small_work_cap() {
     assert!(matches!(e, Err(geometric::GeometricError::Budget(_))));
 }
 
-/// The sparse path's self-stresses carry the residual check the dense path's have (issue 16):
+/// The sparse path's self-stresses carry the residual check the dense path's have:
 /// an N-four-bar 10^-7 off its flat pose, taken as exact, is decided flat by the rank
 /// threshold (its 40 near-redundant rows dropped), so the self-stresses its weights come from
 /// leave |yᵀA| of about 10^-8 σ_max, over the 10^-9 accepted: both paths say the weights are

@@ -314,7 +314,7 @@ fn n_four_bar_m(n: usize) -> String {
 
 /// `analyze` on a long row of windows agrees with `rigid`: mobility 1, under-determined, no
 /// isolated freedom and no equation too many, in metres and in millimetres, from 10 to 1,000
-/// windows. Before session 9 the 1,000-window files got about 1,000 isolated freedoms and
+/// windows. With the earlier rank check the 1,000-window files got about 1,000 isolated freedoms and
 /// "over-determined" (twists about the centre, 500 link lengths away).
 #[test]
 fn analyze_agrees_with_rigid_on_long_rows_of_windows() {
@@ -357,7 +357,7 @@ fn n_four_bar_mm_in_space(n: usize) -> String {
 
 /// A long row of windows written in space: `analyze` sets aside the constraints its
 /// configuration satisfies (three per window) and answers as `rigid` does, one DOF no input
-/// fixes, at 100 and 1,000 windows too. Before session 10 the set-aside was dense only (blocks
+/// fixes, at 100 and 1,000 windows too. The earlier set-aside was dense only (blocks
 /// of at most 1,200 unknowns): from 100 windows (1,206 unknowns) `analyze` said "299
 /// equation(s) too many" and over-determined, and the block after the set-aside was left to
 /// the count unchecked.

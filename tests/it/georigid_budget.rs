@@ -64,7 +64,7 @@ fn the_factorization_charges_its_work() {
     }
 }
 
-/// Issue 16, "no cliffs": the floating-point self-stresses of a square random mechanism (its
+/// No cliffs: the floating-point self-stresses of a square random mechanism (its
 /// driven DOF kept, as `rigid --with-inputs`) factor the transpose of their support, an
 /// over-determined elimination whose fronts mix the rows of two bodies and fill in, and
 /// re-run it while its float rank differs from the exact one. That elimination charges every

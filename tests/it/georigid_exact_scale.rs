@@ -73,9 +73,9 @@ fn spatial_assur_in_linear_work() {
 /// Random planar and spatial mechanisms (hundreds of motions in one block): the old path
 /// charged 2.2·10^4 and 2.0·10^5 units per body at 10^3 bodies and stopped on the memory
 /// budget at 10^4; here 10,000 (planar, 3·10^3 bodies) and 50,000 (spatial, 10^3 bodies)
-/// units per body (debug-sized; the release growth is in docs/benchmarks.md). Session 6:
+/// units per body (debug-sized; the release growth is in docs/benchmarks.md). These were
 /// raised from 3,000 and 15,000, since the factorization now charges its real work (every
-/// front's rows × width per pivot), which was not charged before. Session 16: raised to
+/// front's rows × width per pivot), which was not charged before; then raised to
 /// 700,000 and 25,000,000 (about twice what they now charge: 1.07·10^9 and 1.21·10^10
 /// units), since these mechanisms keep their driven DOF (square Jacobians, as `rigid
 /// --with-inputs`) and the floating-point self-stresses' elimination of the transposed
@@ -129,7 +129,7 @@ fn random_spatial_self_stresses_from_the_jacobian_factorization() {
         String::from_utf8_lossy(&out.stderr)
     );
     // The redundant rows and the joints carrying them, as the old path found them (the same
-    // 18 joints; equal printed weights are listed in joint order since session 8).
+    // 18 joints; equal printed weights are listed in joint order).
     assert!(
         text.contains("9 redundant constraints (rows 55569, rank 55560, unknowns 59994)"),
         "{text:.2000}"

@@ -1,4 +1,4 @@
-//! Issue 16, hostile input and budgets: every finding, run through the real `mbsa` binary.
+//! Hostile input and budgets: every finding, run through the real `mbsa` binary.
 //! Each must exit with code 2 and a clear message, quickly and without a panic or an abort
 //! (docs/reliability.md lists the findings with these tests).
 

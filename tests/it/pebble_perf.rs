@@ -1,4 +1,4 @@
-//! Scale check of the pebble game (issue 16 item 3): planar Laman frameworks (Henneberg steps,
+//! Scale check of the pebble game: planar Laman frameworks (Henneberg steps,
 //! each bar a body, each point a multiple revolute), random planar bar-joint frameworks around
 //! the rigidity threshold, the generated Assur families, random mechanisms, serial chains and
 //! stars. The default test runs them at 10^4 and checks the answers that the construction

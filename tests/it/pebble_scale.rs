@@ -1,21 +1,21 @@
-//! Scale regression of the pebble game (issue 16 item 3), by work units (deterministic, unlike
+//! Scale regression of the pebble game, by work units (deterministic, unlike
 //! time): a uniform planar Laman framework of 20,000 points (39,997 bars as bodies) and a star
-//! of 50,000 bodies on one shared spherical joint must fit in budgets that the previous game
-//! (session 4) overran many times over. Measured with the release CLI (`--max-work`): Laman,
+//! of 50,000 bodies on one shared spherical joint must fit in budgets that an earlier game
+//! overran many times over. Measured with the release CLI (`--max-work`): Laman,
 //! new < 5·10^6 units, old > 2·10^7 (its whole-rigid `degenerate` check ran the game again,
 //! quadratic on the flexible remainder); shared S, new < 2·10^6, old > 2·10^7 (each body's
 //! pin was contracted by a reverse search over every bar into the shared node). The budgets
 //! below leave the new game twice its need and stay below the old one's.
 //!
-//! Session 6: the planar Assur linkage of 10^5 bodies (99,998) (`mbsa generate assur --class 2 --groups
+//! The planar Assur linkage of 10^5 bodies (99,998) (`mbsa generate assur --class 2 --groups
 //! 24999`, the growth.py family): one flexible piece, no rigid component to contract. Measured
-//! with `--max-work` on the release CLI: the new game fits 4·10^7 units, the session-5 game
+//! with `--max-work` on the release CLI: the new game fits 4·10^7 units, an earlier game
 //! needs more than 1.6·10^8 (each bar fetched its B + 1 pebbles from wherever the few free ones
 //! had wandered).
 //!
-//! Session 7: a searched bar gathers B + 2 pebbles once (independent, and not tight after it)
+//! A searched bar gathers B + 2 pebbles once (independent, and not tight after it)
 //! instead of B + 1 before the bar and B + 1 again after it. The same planar Assur linkage:
-//! 2.01·10^7 units (session 6's game: 3.12·10^7), so a budget of 2.5·10^7 fails the old game.
+//! 2.01·10^7 units (gathering B + 1 twice: 3.12·10^7), so a budget of 2.5·10^7 fails the old game.
 
 use mbsa::budget::Budget;
 use mbsa::generate::{self, Variant};

@@ -1054,7 +1054,7 @@ fn bundled_with_geometry_groups_equal_global() {
     }
 }
 
-/// Issue 13's pin shared by three bodies, listed [2, 3, 4] and [3, 4, 2]: SG-II places bodies
+/// A pin shared by three bodies, listed [2, 3, 4] and [3, 4, 2]: SG-II places bodies
 /// 3 and 4, which meet at the pin, before body 2 (the first listed in one file) is known. The
 /// schedule must tie 3 and 4 together in SG-II (square 6 x 6 steps, no inconsistent
 /// leftover in SG-III), and both listings give the same poses, group by group and globally,
@@ -1322,7 +1322,7 @@ fn random_geometry_away_from_folds_has_room_in_every_group() {
     }
 }
 
-/// The flat pose is non-reduced (every window has a double root there). Session 5's offset
+/// The flat pose is non-reduced (every window has a double root there). The former offset
 /// slices gave 2 at seed 1 for the planar file and 0 at seeds 2 and 5 for the 3D twin; the
 /// curve test on slices through the configuration must give 1 at every seed 0..=5, for both
 /// files (release, CPU: about 0.4 s a seed planar, 4.4 s a seed 3D).
@@ -1431,7 +1431,7 @@ fn doubled_chain(n: i64) -> Mechanism {
     )
 }
 
-/// Issue 16 item 1: the finite-mobility test charges its solves to the work budget
+/// The finite-mobility test charges its solves to the work budget
 /// (deterministic units): a row-deficient chain with many freedoms stops with the budget
 /// error under a small cap, and the same chain gives the same answer unbudgeted.
 #[test]

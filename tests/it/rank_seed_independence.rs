@@ -1,6 +1,6 @@
 //! A verdict of the rank check must not depend on the random realization (`--seed`): a generic
 //! rank is the largest over realizations, so a deficit is real only if it persists at another
-//! draw. On main (session 9 start) 13 of the 480 small random mechanisms below got a verdict
+//! draw. Before this rule, 13 of the 480 small random mechanisms below got a verdict
 //! that changed with `--seed` (a redundant equation or an isolated DOF at some draws).
 
 use mbsa::geometry::GeometrySource;

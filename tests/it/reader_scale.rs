@@ -1,4 +1,4 @@
-//! Reader at scale (issue 16 item 3): one joint shared by a million bodies reads in linear
+//! Reader at scale: one joint shared by a million bodies reads in linear
 //! time, in the three formats.
 //!
 //! The repeated-body check scanned the bodies read so far for each body: n²/2 comparisons,

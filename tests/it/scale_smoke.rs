@@ -1,4 +1,4 @@
-//! CI-sized scale smoke test (issue 16 item 6): every command on a generated 10^5-body
+//! CI-sized scale smoke test: every command on a generated 10^5-body
 //! mechanism under a memory cap (`ulimit -v`) and a time cap. A command must answer (exit 0
 //! or exit 1) or stop with a clear message (exit 2); a timeout, a signal (failed allocation,
 //! abort) or a panic fails the test.

@@ -1,4 +1,4 @@
-//! Property test of issue 13 item 4: the structural decomposition does not depend on the order
+//! Property test: the structural decomposition does not depend on the order
 //! in which a multiple joint lists its bodies. Random planar and spatial mechanisms with
 //! multiple joints (3 or 4 bodies) are analysed as generated and with the bodies of every
 //! multiple joint permuted; groups (as body-id sets with their levels), the number of levels
@@ -9,7 +9,7 @@
 //! joint is permuted fully; a driven one keeps its first listed body and the bodies of its
 //! driven pairs (the first ceil(driven / k) after it) in place, and the rest are permuted.
 //!
-//! Ignored until issue 13 lands (today the groups depend on the order: see
+//! Ignored while the groups depend on the order (see
 //! @multiple-joint-order and @multiple-joint-order-b).
 
 use mbsa::joint::JointType::{self, *};

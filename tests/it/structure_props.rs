@@ -214,7 +214,7 @@ fn rank_check_case(n: usize, planar: bool, seed: u64) -> Result<(), TestCaseErro
 }
 
 proptest! {
-    // A random stream again since session 10 (session 9 fixed it: a driven DOF of a contact
+    // A random stream (a fixed stream once hid it: a driven DOF of a contact
     // kind dropped a direction fixed by the model's construction, degenerate at a fixed
     // fraction of draws, and the rank check could keep a deficit every confirming draw
     // repeated). With the generic input model 220,000 cases at 110 fixed seeds passed, where
@@ -227,7 +227,7 @@ proptest! {
     }
 }
 
-/// Cases the property met with the fixed input model of session 9 (proptest seeds 2, 3, 11
+/// Cases the property met with the former fixed input model (proptest seeds 2, 3, 11
 /// and 17, 2,000 cases each): planar mechanisms of P, RP and R joints with driven RP joints,
 /// where the rank check kept a deficit that the generic rank does not have.
 #[test]
@@ -244,7 +244,7 @@ fn rank_check_cases_the_fixed_input_model_failed() {
     }
 }
 
-/// Session 9's known issue, fixed by the generic input model (session 10): a planar 9-body
+/// A case the generic input model fixed: a planar 9-body
 /// mechanism (P, RP and R joints, one RP joint driven) whose generic answer is one redundant
 /// equation; at the analysis seed below the rank check kept a second one in the loop 2-3,
 /// 3-8, 8-9, 9-2 (at 2 of 12 nearby seeds), which every confirming draw repeated. Found by

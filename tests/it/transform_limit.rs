@@ -1,4 +1,4 @@
-//! `transform --limit` at scale (issue 16, items 1 and 2): the work of a limited run is one
+//! `transform --limit` at scale: the work of a limited run is one
 //! analysis of the mechanism, a search whose cost grows with the placements found (not with
 //! the candidates times the bodies), and one analysis per placement that reuses what earlier
 //! ones factorized. Work units are deterministic: each budget below is one the linear search

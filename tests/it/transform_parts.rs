@@ -1,4 +1,4 @@
-//! Independent parts placed once per structure (issue 16 item 2, session 9): the binary
+//! Independent parts placed once per structure: the binary
 //! expansions of a shared joint placed part by part, with each part's placements kept across
 //! expansions, and the parts of a star placed once for every part of the same structure. The
 //! results equal placing the whole (`split: false`, the former path) field for field; the

@@ -1,4 +1,4 @@
-//! Transform at scale (issue 16, items 2, 5 and 6): independent parts placed one by one,
+//! Transform at scale: independent parts placed one by one,
 //! `--limit` bounding the work, `truncated` only when placements were left out, JSON lines
 //! streamed from the first placement found. The large mechanisms are generated here.
 
@@ -148,7 +148,7 @@ fn parts_combine_to_exactly_the_whole() {
     assert_eq!(best.types, same.types);
 }
 
-/// Issue 16: a biped of two independent legs (12 inputs) printed nothing in 120 s. Its
+/// A biped of two independent legs (12 inputs) printed nothing in 120 s. Its
 /// placements are the pairs of the legs' placements.
 #[test]
 fn biped_legs_are_placed_independently() {
@@ -176,7 +176,7 @@ fn biped_legs_are_placed_independently() {
     );
 }
 
-/// Issue 16: `--limit 1 --count-only` on a star of 4,000 R joints ran past 100 s. On the
+/// `--limit 1 --count-only` on a star of 4,000 R joints ran past 100 s. On the
 /// frame (4,000 parts) and on a hub body (one part, every joint forced): one placement,
 /// found at once, and the search knows there is no other.
 #[test]
@@ -204,7 +204,7 @@ fn stars_of_4000_joints_answer_at_once() {
     }
 }
 
-/// Issue 16: the 40-leg planar parallel mechanism (3.9 KB) ran 101 s and aborted at 3.5 GB.
+/// The 40-leg planar parallel mechanism (3.9 KB) ran 101 s and aborted at 3.5 GB.
 /// `--limit` now bounds the work: the first placements come at once and `truncated` says
 /// more exist.
 #[test]
@@ -238,7 +238,7 @@ fn every_placement_of_the_40_leg_mechanism_is_counted() {
     assert!(t.summary.notes.iter().any(|n| n.contains("are listed")));
 }
 
-/// Issue 16: `--limit N` with exactly N placements said `truncated` and "more placements
+/// `--limit N` with exactly N placements said `truncated` and "more placements
 /// exist". Now only when one more exists.
 #[test]
 fn limit_equal_to_the_count_is_not_truncated() {
@@ -265,7 +265,7 @@ fn limit_equal_to_the_count_is_not_truncated() {
     }
 }
 
-/// Issue 16: `transform --limit 300 --format jsonl` on a 2,000-body random mechanism streamed
+/// `transform --limit 300 --format jsonl` on a 2,000-body random mechanism streamed
 /// nothing for 120 s. The first placement is now analysed and streamed on its own, before the
 /// search goes on: progress is reported after each analysed batch, and the first report
 /// counts that one placement (the batches then grow), not the 300 the search can find.

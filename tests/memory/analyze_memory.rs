@@ -1,4 +1,4 @@
-//! `mbsa analyze` (rank check included) holds less at its peak (issue 16: 10^6 bodies in
+//! `mbsa analyze` (rank check included) holds less at its peak (10^6 bodies in
 //! under 2 GB; the binary keeps freed memory, so every byte of the peak is a page faulted in
 //! and zeroed). The peak is in the count's decomposition inside the rank check, with the
 //! pairs' rows, the bodies' reduced unknowns and the maximum-flow network all live: the parts'
@@ -15,7 +15,7 @@ use crate::peak_alloc;
 
 /// A 50,000-body random spatial mechanism: the analysis with its rank check peaks at under
 /// 800 bytes a body above the mechanism (776 now; 817 with the flow network's source edges
-/// explicit, 899 before session 14), and its structural diagram
+/// explicit, 899 with the earlier flow network), and its structural diagram
 /// written as it is made is byte for byte the text `diagram` returns.
 #[test]
 fn analyze_peak_and_streamed_diagram() {

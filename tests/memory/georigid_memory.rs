@@ -1,5 +1,5 @@
 //! Peak memory of `rigid --method geometric` on a planar Assur linkage at a random realization
-//! (issue 16: 3.1 GB at 10^6 bodies, over the 2 GB the issue asks for). A counting allocator
+//! (3.1 GB at 10^6 bodies, over the 2 GB target). A counting allocator
 //! around the system one records the peak of the bytes held (the tests of this binary run one
 //! at a time: none counts another's allocations).
 

@@ -1,5 +1,5 @@
 //! Reading a large TOML file allocates about once per joint (its id string), not once per
-//! joint table, array and id (issue 16: reading was a quarter of `analyze` at 10^6 bodies,
+//! joint table, array and id (reading was a quarter of `analyze` at 10^6 bodies,
 //! much of it allocations and frees). A counting allocator around the system one (the tests of
 //! this binary run one at a time: none counts another's allocations).
 
@@ -15,14 +15,14 @@ const BYTES_PER_JOINT: usize = 180;
 /// allocations a joint. The reader before this bound built a vector for every joint table
 /// and every `bodies` array: over 3 a joint.
 ///
-/// And with at most BYTES_PER_JOINT bytes allocated a joint (session 13): the joint itself
+/// And with at most BYTES_PER_JOINT bytes allocated a joint: the joint itself
 /// (64 bytes), its id (24), the body-list sort of the defaults and its order (about 21), the
 /// explicit ids' map. Before, a 32-byte natural-order key a joint (the ids parsed back into
 /// numbers and sorted, where the default ids are in natural order already) and a 16-byte
 /// span a joint kept for an error the fast reader throws away.
 ///
 /// Also at 30,000 bodies (about 77,000 joints), above the count from which the joint tables
-/// are read on a second thread (session 18): its batches of table nodes, handed back and
+/// are read on a second thread: its batches of table nodes, handed back and
 /// forth, are allocated once, not per table.
 #[test]
 fn a_large_toml_file_reads_with_about_one_allocation_per_joint() {

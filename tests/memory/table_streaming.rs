@@ -1,4 +1,4 @@
-//! `mbsa analyze` writes its table as it renders it (issue 16: at 10^6 bodies the table is
+//! `mbsa analyze` writes its table as it renders it (at 10^6 bodies the table is
 //! 280 MB, and held whole with its rows of cells it was the peak of `analyze --count-only`).
 //! A counting allocator around the system one measures the bytes live at once
 //! (the tests of this binary run one at a time: none counts another's allocations).

@@ -1,5 +1,5 @@
 //! `transform --limit 100 --format json` holds O(bodies) plus each listed placement's inputs
-//! and scores, not each placement's partition (issue 16: 100 partitions of a 10^6-body
+//! and scores, not each placement's partition (100 partitions of a 10^6-body
 //! linkage, their bookkeeping and each family's copy were over 1 GB, and the command 3.4 GB).
 //! A counting allocator around the system one records the peak of live bytes
 //! (the tests of this binary run one at a time: none counts another's allocations).
