@@ -103,15 +103,23 @@ fn every_help_example_runs() {
         bin.parent().expect("bin dir").display(),
         std::env::var("PATH").unwrap_or_default()
     );
+    let home = dir.join("home");
     let mut ran = 0;
     let mut failures = Vec::new();
     for (cmd, examples) in examples() {
         for ex in examples {
             let own = ex.split(" | ").next().expect("a command");
+            // An example that writes a file under `~` (completions, man pages) writes it
+            // under a scratch home whose folders exist, as on a user's machine.
+            if let Some((_, target)) = own.split_once(" > ") {
+                let file = home.join(target.trim().trim_start_matches("~/"));
+                std::fs::create_dir_all(file.parent().expect("a folder")).expect("mkdir");
+            }
             let out = Command::new("sh")
                 .args(["-c", &format!("{own} > /dev/null")])
                 .current_dir(&dir)
                 .env("PATH", &path)
+                .env("HOME", &home)
                 .output()
                 .expect("sh runs");
             ran += 1;
