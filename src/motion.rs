@@ -28,8 +28,9 @@
 //! - ER (slotted spherical) is defined here as a ball at `origin` whose rotation about `axis`
 //!   is blocked: it allows the two rotations through `origin` about the axes perpendicular to
 //!   `axis` (in the order of [`perpendicular_pair`]), and no translation.
-//! - Count-only kinds (CPEP, L, EO, EPI, CTEP, RP, RD, CR, CTRP, SC, PC, CBIP, SP, SPSP) get the
-//!   generic realization of a contact joint: `B − k` pure forces (lines). The first line passes
+//! - Count-only kinds (CPEP, L, EO, EPI, CTEP, RP, RD, CTRP, CBIP; and SP, SPSP, SC, PC, CR
+//!   outside spatial mechanisms, which have a model in space: [`modelled`]) get the generic
+//!   realization of a contact joint: `B − k` pure forces (lines). The first line passes
 //!   through `origin` along `axis` when they are given; the other points and directions are
 //!   pseudo-random, drawn from a generator seeded by the geometry's bits, so the same geometry
 //!   always gives the same model. Such a joint has the right number of constraints in general

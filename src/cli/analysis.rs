@@ -145,7 +145,7 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
     if !args.count_only {
         args.geometry.closure_check(&file.file, &m)?;
     }
-    let mut a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
+    let mut a = structure_within(file, &m, args, &lib)?;
     structure::check_finite(
         &m,
         &mut a,
@@ -166,7 +166,7 @@ pub fn analyze(file: &FileArg, args: &StructureArgs, format: OutputFormat) -> Re
 /// after the analysis (with the copies of its growth).
 fn emit_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
     emit_with(|out| {
-        serde_json::to_writer_pretty(&mut *out, value)
+        serde_json::to_writer_pretty(&mut *out, &mbsa::report::Versioned::new(value))
             .map_err(std::io::Error::from)
             .and_then(|()| out.write_all(b"\n"))
     })
@@ -220,7 +220,7 @@ pub fn dot(file: &FileArg, args: &StructureArgs, view: ViewArg) -> Result<(), Fa
         return emit(&mbsa::report::dot::rigid(&m, &r));
     }
     let lib = args.library()?;
-    let a = structure::analyze(&m, &args.options()?, &lib).map_err(|e| input_error(file, e))?;
+    let a = structure_within(file, &m, args, &lib)?;
     let view = match view {
         ViewArg::Diagram => View::Diagram,
         ViewArg::Structure => View::Structure,
@@ -307,6 +307,20 @@ pub enum GeometryArg {
 /// A joint-model error of FILE, rendered (exit 2).
 pub fn input_error(file: &FileArg, e: mbsa::motion::MotionError) -> Failure {
     Failure::Input(mbsa::diagnostic::render_plain(&file.file, &e))
+}
+
+/// The structural analysis within this run's budget (the exhaustive search stops at the work
+/// limit, exit code 2).
+fn structure_within(
+    file: &FileArg,
+    m: &mbsa::mechanism::Mechanism,
+    args: &StructureArgs,
+    lib: &Library,
+) -> Result<structure::Analysis, Failure> {
+    structure::analyze_within(m, &args.options()?, lib, &super::budget()).map_err(|e| match e {
+        structure::AnalyzeError::Motion(e) => input_error(file, e),
+        structure::AnalyzeError::Budget(e) => super::budget_failure(&e),
+    })
 }
 
 /// The geometric analysis within this run's budget (a budget error exits with code 2).

@@ -105,7 +105,7 @@ pub fn load(arg: &FileArg) -> Result<mbsa::Mechanism, Failure> {
 /// error as one block.
 pub fn import(file: &str, args: &ImportArgs) -> Result<mbsa::import::Import, Failure> {
     let (name, bytes, _) = read(file, None)?;
-    import_read(file, &name, &bytes, args)
+    import_read(file, &name, &bytes, args).map_err(Failure::from)
 }
 
 /// Write `text` to `path` (`-o` of `import`): refused when `path` is the input `file` (it
@@ -159,12 +159,12 @@ fn import_read(
     name: &str,
     bytes: &[u8],
     args: &ImportArgs,
-) -> Result<mbsa::import::Import, Failure> {
+) -> Result<mbsa::import::Import, Unreadable> {
     let base = (file != "-" && !file.starts_with('@'))
         .then(|| Path::new(file).parent())
         .flatten();
     let result = mbsa::import::import_bytes(name, bytes, base, &args.options())
-        .map_err(|e| Failure::Input(mbsa::diagnostic::render(&e, super::color_stderr())))?;
+        .map_err(|e| Unreadable::of(&e))?;
     let block = result.warning_block();
     if !block.is_empty() {
         eprint!("{block}");
@@ -172,11 +172,80 @@ fn import_read(
     Ok(result)
 }
 
+/// A file that could not be read or parsed: the diagnostic for people, and where it points
+/// for `mbsa check --format json`.
+pub struct Unreadable {
+    /// The rendered diagnostic (what standard error shows).
+    pub rendered: String,
+    /// The message alone.
+    pub message: String,
+    /// The hint, if any.
+    pub help: Option<String>,
+    /// The source name, 1-based line and column the diagnostic points at, if it has a location.
+    pub at: Option<(String, usize, usize)>,
+}
+
+impl Unreadable {
+    /// A diagnostic with its location (its first label).
+    pub fn of(diag: &dyn miette::Diagnostic) -> Self {
+        let at = diag.source_code().and_then(|src| {
+            let label = diag.labels()?.next()?;
+            let span = src.read_span(label.inner(), 0, 0).ok()?;
+            let name = span.name().unwrap_or("<input>").to_string();
+            Some((name, span.line() + 1, span.column() + 1))
+        });
+        Unreadable {
+            rendered: mbsa::diagnostic::render(diag, super::color_stderr()),
+            message: diag.to_string(),
+            help: diag.help().map(|h| h.to_string()),
+            at,
+        }
+    }
+
+    /// An error already rendered as `error: message` (and `  help: hint` lines), without a
+    /// location.
+    pub fn rendered(text: String) -> Self {
+        let mut lines = text.lines();
+        let first = lines.next().unwrap_or_default();
+        let message = first.strip_prefix("error: ").unwrap_or(first).to_string();
+        let help = lines.find_map(|l| l.trim_start().strip_prefix("help: ").map(String::from));
+        Unreadable {
+            rendered: text,
+            message,
+            help,
+            at: None,
+        }
+    }
+}
+
+impl From<Unreadable> for Failure {
+    fn from(u: Unreadable) -> Failure {
+        Failure::Input(u.rendered)
+    }
+}
+
+impl From<Failure> for Unreadable {
+    fn from(f: Failure) -> Unreadable {
+        match f {
+            Failure::Input(text) => Unreadable::rendered(text),
+            Failure::Check => Unreadable::rendered("error: check failed".into()),
+        }
+    }
+}
+
 /// Read and parse `file` (path, `-` or `@name`).
 pub fn load_path(
     file: &str,
     input_format: Option<InputFormat>,
 ) -> Result<mbsa::Mechanism, Failure> {
+    load_path_located(file, input_format).map_err(Failure::from)
+}
+
+/// [`load_path`], its errors with their location.
+pub fn load_path_located(
+    file: &str,
+    input_format: Option<InputFormat>,
+) -> Result<mbsa::Mechanism, Unreadable> {
     let (name, bytes, format) = read(file, input_format)?;
     // Simulator models (MJCF, SDFormat, URDF, OpenSim) sniffed by their root element.
     let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]);
@@ -192,7 +261,7 @@ pub fn load_path(
         Format::sniff(valid)
     });
     mbsa::format::load_bytes_within(&name, &bytes, format, &super::budget())
-        .map_err(|e| Failure::Input(mbsa::diagnostic::render(&e, super::color_stderr())))
+        .map_err(|e| Unreadable::of(&e))
 }
 
 /// The display name, raw bytes and format (if known) of a FILE argument.

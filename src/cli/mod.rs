@@ -4,9 +4,11 @@
 
 mod analysis;
 mod check;
+mod completions;
 mod generate;
 mod input;
 mod position;
+mod schema;
 mod transform;
 
 use clap::{Parser, Subcommand, ValueEnum};
@@ -19,7 +21,7 @@ pub use input::{FileArg, load};
 /// Structural analysis of multibody systems: mobility, structural groups, input placements
 /// and rigid subsystems of mechanisms written as TOML, YAML or JSON files.
 #[derive(Parser, Debug)]
-#[command(name = "mbsa", version, about, long_about = None, propagate_version = true)]
+#[command(name = "mbsa", version = env!("MBSA_VERSION"), about, long_about = None, propagate_version = true)]
 #[command(
     after_help = "Examples:\n  mbsa examples\n  mbsa mobility @rotor\n  mbsa check mechanisms/*.toml\n\nFILE is a path, `-` for standard input, or `@name` for a bundled example."
 )]
@@ -173,7 +175,7 @@ enum Command {
     /// mechanism at the solved configuration. `--inputs` replaces the file's driven inputs
     /// (as for `analyze`); a joint given a value with `--set` is driven too.
     #[command(
-        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set A=30\n  mbsa solve @slider-crank-geometry --sweep A=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml\n  mbsa solve gripper.xml --inputs left_driver_joint,right_driver_joint --set left_driver_joint=10"
+        after_help = "Examples:\n  mbsa solve @slider-crank-geometry --set O=30\n  mbsa solve @slider-crank-geometry --sweep O=0..360:30\n  mbsa solve @rig-bennett --set A=20 --format json\n  mbsa solve @rig-bennett --set A=20 --format toml > moved.toml\n  mbsa solve gripper.xml --inputs left_driver_joint,right_driver_joint --set left_driver_joint=10"
     )]
     Solve {
         #[command(flatten)]
@@ -240,16 +242,27 @@ enum Command {
     ///
     /// Exit code 0 when every file is valid and meets its expectations, 1 when an expectation
     /// fails (expected and actual values are printed), 2 when a file cannot be read.
-    #[command(after_help = "Examples:\n  mbsa check @rotor\n  mbsa check mechanisms/*.toml")]
-    Check {
-        /// Files to check (paths, `-`, or `@name`; `@all` checks every bundled example).
-        #[arg(required = true, value_name = "FILE")]
-        files: Vec<String>,
-        /// Format of standard input (default: sniffed).
-        #[arg(long, value_enum)]
-        input_format: Option<input::InputFormat>,
-        #[command(flatten)]
-        geometry: analysis::GeometryArgs,
+    #[command(
+        after_help = "Examples:\n  mbsa check @rotor\n  mbsa check mechanisms/*.toml\n  git ls-files '*.toml' | mbsa check --files-from -\n  mbsa check @all --format jsonl"
+    )]
+    Check(check::CheckArgs),
+    /// Print a shell completion script (bash, zsh, fish, powershell, elvish).
+    #[command(
+        after_help = "Examples:\n  mbsa completions bash > ~/.local/share/bash-completion/completions/mbsa\n  mbsa completions zsh > ~/.zfunc/_mbsa\n  mbsa completions fish > ~/.config/fish/completions/mbsa.fish"
+    )]
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
+    },
+    /// Print the manual page (roff) of mbsa or of one command.
+    #[command(
+        after_help = "Examples:\n  mbsa man | man -l -\n  mbsa man check > ~/.local/share/man/man1/mbsa-check.1"
+    )]
+    Man {
+        /// The command (default: mbsa itself).
+        #[arg(value_name = "COMMAND")]
+        command: Option<String>,
     },
     /// List the bundled example mechanisms (use them as `@name`).
     #[command(after_help = "Example:\n  mbsa examples\n  mbsa mobility @stewart")]
@@ -257,12 +270,19 @@ enum Command {
     /// List the joint catalogue: codes, long names, grades, where each is valid.
     #[command(after_help = "Example:\n  mbsa joints")]
     Joints,
-    /// Print the JSON Schema of the mechanism file format (for editor completion).
+    /// Print the JSON Schema of the mechanism file format (for editor completion) or of a report.
     ///
     /// Save it and point your editor at it: in TOML with a `#:schema ./mbsa.schema.json` first
     /// line (taplo, Even Better TOML); in YAML with `# yaml-language-server: $schema=./mbsa.schema.json`.
-    #[command(after_help = "Example:\n  mbsa schema > mbsa.schema.json")]
-    Schema,
+    /// `--output REPORT` prints the schema of that command's `--format json` output instead.
+    #[command(
+        after_help = "Examples:\n  mbsa schema > mbsa.schema.json\n  mbsa schema --output analyze > analyze.schema.json"
+    )]
+    Schema {
+        /// Which schema: the input file format, or a report.
+        #[arg(long, value_enum, value_name = "WHAT", default_value_t = schema::Output::Input)]
+        output: schema::Output,
+    },
 }
 
 /// Output format of the reports.
@@ -378,11 +398,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             keep_until_exit((m, r));
             out
         }
-        Command::Check {
-            files,
-            input_format,
-            geometry,
-        } => check::run(&files, input_format, &geometry),
+        Command::Check(args) => check::run(&args),
         Command::Examples => {
             let width = mbsa::examples::names().map(str::len).max().unwrap_or(0) + 1;
             let mut text = String::new();
@@ -393,8 +409,10 @@ fn run(cli: Cli) -> Result<(), Failure> {
             text.push_str("\nUse one as FILE, e.g. `mbsa analyze @rotor`.\n");
             emit(&text)
         }
+        Command::Completions { shell } => completions::completions(shell),
+        Command::Man { command } => completions::man(command.as_deref()),
         Command::Joints => emit(&mbsa::report::joints_table()),
-        Command::Schema => emit(&mbsa::report::json(&mbsa::format::schema())),
+        Command::Schema { output } => schema::run(output),
     }
 }
 

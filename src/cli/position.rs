@@ -216,10 +216,19 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
     let name = file.file.as_str();
     let mut m = original.clone();
     let mut sets: Vec<(usize, Vec<Value>)> = Vec::new();
+    let mut written: Vec<&str> = Vec::new();
     for s in &args.set {
         let (j, v) = inputs::parse_set(&m, s).map_err(|e| input_err("--set", &e))?;
-        sets.retain(|(k, _)| *k != j);
+        // Two values for one joint (by id or by body pair) cannot both hold: refused, not
+        // the last silently kept.
+        if let Some(k) = sets.iter().position(|(k, _)| *k == j) {
+            return Err(Failure::Input(format!(
+                "error: --set: joint `{}` is given twice (`{}` and `{s}`)\n  help: give each joint one value; `--sweep` traces a range",
+                m.joints[j].id, written[k]
+            )));
+        }
         sets.push((j, v));
+        written.push(s);
     }
     let sweep = match &args.sweep {
         Some(s) => Some(inputs::parse_sweep(&m, s).map_err(|e| input_err("--sweep", &e))?),

@@ -165,7 +165,7 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
 fn emit_json<T: serde::Serialize>(value: &T) -> Result<(), Failure> {
     use std::io::Write;
     let mut out = std::io::BufWriter::with_capacity(1 << 16, std::io::stdout().lock());
-    let r = serde_json::to_writer_pretty(&mut out, value)
+    let r = serde_json::to_writer_pretty(&mut out, &mbsa::report::Versioned::new(value))
         .map_err(|e| match e.io_error_kind() {
             Some(kind) => std::io::Error::from(kind),
             None => std::io::Error::other(e),

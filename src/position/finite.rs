@@ -195,19 +195,37 @@ pub fn finite_mobility_of_file(
 /// Largest mechanism (bodies) the dense test handles.
 pub const MAX_BODIES: usize = 400;
 
-/// [`null_basis`] charged to `meter` (an SVD: about `max(rows, n) · n²` units).
+/// Work units of one [`null_basis`] SVD per `max(rows, n) · n²`: nalgebra's SVD with `V`
+/// takes about 23 ns per such step at 1,200 unknowns (40 s), where a unit is about 1 ns;
+/// charged as 1, a 2,400-unknown loop ran for minutes inside its first SVD before the meter
+/// could stop it.
+const SVD_UNITS: u64 = 24;
+
+/// The units of [`null_basis`] on a `rows × n` matrix.
+fn svd_units(rows: usize, n: usize) -> u64 {
+    let n = n as u64;
+    (rows as u64)
+        .max(n)
+        .saturating_mul(n)
+        .saturating_mul(n)
+        .saturating_mul(SVD_UNITS)
+}
+
+/// The units of one Gauss–Newton step of [`solve_sliced`] on `rows × n`.
+fn step_units(rows: usize, n: usize) -> u64 {
+    let (rows, n) = (rows as u64, n as u64);
+    rows.saturating_mul(n)
+        .saturating_mul(n)
+        .saturating_add(n.saturating_mul(n).saturating_mul(n))
+}
+
+/// [`null_basis`] charged to `meter` ([`svd_units`]).
 fn null_basis_within(
     j: &DMatrix<f64>,
     rel: f64,
     meter: &mut Meter,
 ) -> Result<DMatrix<f64>, BudgetExceeded> {
-    let n = j.ncols() as u64;
-    meter.charge(
-        (j.nrows() as u64)
-            .max(n)
-            .saturating_mul(n)
-            .saturating_mul(n),
-    )?;
+    meter.charge(svd_units(j.nrows(), j.ncols()))?;
     Ok(null_basis(j, rel))
 }
 
@@ -421,12 +439,8 @@ fn solve_sliced(
     };
     let inf = |r: &DVector<f64>| r.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let (mut r, mut j) = eval(&x);
-    let (rows, cols) = (j.nrows() as u64, n as u64);
-    let eval_units = rows.saturating_mul(cols).max(1);
-    let step_units = rows
-        .saturating_mul(cols)
-        .saturating_mul(cols)
-        .saturating_add(cols.saturating_mul(cols).saturating_mul(cols));
+    let eval_units = (j.nrows() as u64).saturating_mul(n as u64).max(1);
+    let step_units = step_units(j.nrows(), n);
     meter.charge(eval_units)?;
     let mut slow = 0;
     let mut polish_steps = 0;
@@ -614,12 +628,21 @@ pub fn finite_mobility(
         bodies: (0..m.bodies.len()).filter(|&x| x != m.frame).collect(),
     };
     let targets: Targets = vec![Vec::new(); model.pairs.len()];
-    let count = b as i64 * sys.bodies.len() as i64
-        - model
-            .pairs
-            .iter()
-            .map(|p| (b - m.joints[p.joint].grade().min(b as u32) as usize) as i64)
-            .sum::<i64>();
+    // Each pair's constraints: at least as many rows of the Jacobian.
+    let rows: usize = model
+        .pairs
+        .iter()
+        .map(|p| b - m.joints[p.joint].grade().min(b as u32) as usize)
+        .sum();
+    let count = b as i64 * sys.bodies.len() as i64 - rows as i64;
+    // The least the test does, from the sizes alone: the first SVD and one Gauss–Newton step
+    // per start of the first level. Over the budget, refused before any of it.
+    let n = sys.bodies.len() * b;
+    let least = svd_units(rows, n)
+        .saturating_add(step_units(rows, n).saturating_mul(TRIES.max(opts.samples) as u64));
+    opts.budget.check_work(least, || {
+        format!("the finite-mobility test on {n} unknowns and {rows} constraint rows")
+    })?;
     let (_, j0, _) = sys.evaluate(&model, &targets, config);
     let n0 = null_basis_within(&j0, opts.rank_tolerance, meter)?;
     let first_order = n0.ncols();

@@ -53,11 +53,17 @@ pub fn table(r: &MobilityReport, file_geometry: bool) -> String {
         t.add_row(row.to_vec());
     }
     let mut out = String::new();
-    let _ = writeln!(out, "{}: mobility {}", r.name, r.mobility.count);
+    // Every line here is the count (topology only): worded so, since the joint geometry can
+    // make the true mobility larger (`rigid`, `analyze`).
+    let _ = writeln!(
+        out,
+        "{}: mobility {} by the count",
+        r.name, r.mobility.count
+    );
     let _ = writeln!(out, "{t}");
     let verdict = match r.mobility.verdict {
         Verdict::Equal => format!(
-            "inputs = count ({}): the mechanism can be kinematically determined (`mbsa analyze` checks where the inputs are)",
+            "inputs = count ({}): enough to determine the mechanism if the geometry is generic (`mbsa analyze` checks where they are, at the geometry)",
             r.mobility.count
         ),
         Verdict::Fewer => format!(
@@ -67,11 +73,11 @@ pub fn table(r: &MobilityReport, file_geometry: bool) -> String {
             r.mobility.count - r.mobility.inputs as i64
         ),
         Verdict::More => format!(
-            "more inputs ({}) than the count ({}): by the count the inputs over-determine the mechanism",
+            "more inputs ({}) than the count ({}): they over-determine the mechanism if the geometry is generic",
             r.mobility.inputs, r.mobility.count
         ),
     };
-    let _ = writeln!(out, "verdict: {verdict}");
+    let _ = writeln!(out, "count verdict: {verdict}");
     // The count ignores geometry; with the file's geometry at hand, say where the true
     // mobility comes from rather than let the count's verdict stand for the mechanism.
     if file_geometry {

@@ -2,12 +2,16 @@
 //! library types only; nothing here analyses.
 
 pub mod dot;
+pub mod json;
 pub mod mobility;
 pub mod position;
 pub mod rigid_geometric;
 pub mod rigid_pebble;
+pub mod schema;
 pub mod structure;
 pub mod transform;
+
+pub use json::{FORMAT_VERSION, Versioned, json};
 
 use comfy_table::{LineStyle, Table, TableStyle};
 
@@ -43,16 +47,6 @@ pub fn geometry_line(g: &crate::geometry::GeometryUsed) -> String {
         s.push('\n');
         s.push_str(&position::closure_lines(c));
     }
-    s
-}
-
-/// Pretty JSON with a trailing newline, for `--format json`.
-pub fn json<T: serde::Serialize>(value: &T) -> String {
-    let mut s = serde_json::to_string_pretty(value).unwrap_or_else(|e| {
-        // Serializing our own types cannot fail (no maps with non-string keys, no I/O).
-        format!("{{\"error\": {:?}}}", e.to_string())
-    });
-    s.push('\n');
     s
 }
 

@@ -290,7 +290,7 @@ fn family_table(
         };
         let mut row = vec![ranks, lines.join("\n")];
         if expansions {
-            let e = best.expansion.clone().unwrap_or_default();
+            let e = best.expansion_brief().unwrap_or_default().to_string();
             // One multiple joint's pairs a line.
             row.push(if wrap == Wrap::All {
                 e.replace("; ", ";\n")
@@ -477,12 +477,8 @@ fn comparison_table(c: &Comparison, wrap: bool) -> String {
     t.to_string()
 }
 
-/// One value as a single JSON line with a trailing newline, for `--format jsonl`.
+/// One record as a single JSON line with a trailing newline, `format_version` first, for
+/// `--format jsonl`.
 pub fn jsonl<T: serde::Serialize>(value: &T) -> String {
-    let mut s = serde_json::to_string(value).unwrap_or_else(|e| {
-        // Serializing our own types cannot fail (no maps with non-string keys, no I/O).
-        format!("{{\"error\": {:?}}}", e.to_string())
-    });
-    s.push('\n');
-    s
+    super::json::jsonl(value)
 }

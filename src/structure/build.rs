@@ -4,8 +4,8 @@
 use super::count::{Decomposition, Equations, Part, RawGroup};
 use super::diagnose::diagnose;
 use super::{
-    Analysis, CountSummary, Diagnosis, Group, Isolated, Library, Near, Options, Redundancy, Status,
-    TypeCount, locked_planar, push_id, roman, spatiality,
+    Analysis, CountSummary, Diagnosis, Group, Isolated, Library, Missing, Near, Options,
+    Redundancy, Status, TypeCount, UnderPart, locked_planar, push_id, roman, spatiality,
 };
 use crate::joint::JointType;
 use crate::mechanism::{BodyId, Mechanism};
@@ -48,16 +48,11 @@ pub(super) fn build(
     drop(key);
     let (groups, types) = shown_groups(eqs, &raw, rendered, lib, &ids);
     let mut diag = diagnose(m, eqs, dec, unsolved, &redundant, &isolated);
+    let disconnected = disconnected(m, &ids);
+    free_bodies(m, &disconnected, &mut diag);
     let status = status_of(m, &diag, &redundant);
     let mob = crate::mobility::mobility(m);
     let uncontrolled = diag.underdetermined.as_ref().map_or(0, |u| u.missing);
-    let disconnected = disconnected(m, &ids);
-    if !disconnected.is_empty() {
-        diag.notes.push(format!(
-            "bodies {{{}}} are named by no joint: not part of the mechanism",
-            disconnected.join(", ")
-        ));
-    }
     // Notes for a determined mechanism: the redundant constraints set aside.
     let notes = if status == Status::Determined {
         std::mem::take(&mut diag.notes)
@@ -561,6 +556,35 @@ fn status_of(m: &Mechanism, diag: &Diagnosis, redundant: &[Redundancy]) -> Statu
     } else {
         Status::Determined
     }
+}
+
+/// A declared body that no joint names moves freely: its B DOF are uncontrolled, as the
+/// mobility count and `rigid` have them, so the status says under-determined and a note names
+/// the bodies.
+fn free_bodies(m: &Mechanism, disconnected: &[String], diag: &mut Diagnosis) {
+    if disconnected.is_empty() {
+        return;
+    }
+    let b = m.b();
+    let part = diag.underdetermined.get_or_insert_with(|| UnderPart {
+        missing: 0,
+        short: Vec::new(),
+        bodies: Vec::new(),
+        input_candidates: Vec::new(),
+    });
+    for body in disconnected {
+        part.missing += u64::from(b);
+        part.short.push(Missing {
+            body: body.clone(),
+            missing: b,
+        });
+        part.bodies.push(body.clone());
+    }
+    diag.notes.push(format!(
+        "bodies {{{}}} are named by no joint: each moves freely ({b} DOF that no input \
+         controls); join them to the mechanism or remove them",
+        super::capped(disconnected)
+    ));
 }
 
 /// The bodies no joint names (the frame left out).

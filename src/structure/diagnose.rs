@@ -2,7 +2,9 @@
 //! joints that could take one more input, and the redundancies found by the rank check.
 
 use super::count::{Decomposition, Equations, Part};
-use super::{Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart};
+use super::{
+    Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart, capped,
+};
 use crate::mechanism::Mechanism;
 
 /// The over- and under-determined parts in words and lists.
@@ -80,12 +82,13 @@ fn over_part(m: &Mechanism, eqs: &Equations, dec: &Decomposition) -> Option<(Ove
         } else {
             "joints"
         },
-        unsaturated
-            .iter()
-            .map(|x| format!("{} (+{})", x.joint, x.excess))
-            .collect::<Vec<_>>()
-            .join(", "),
-        bodies.join(", ")
+        capped(
+            &unsaturated
+                .iter()
+                .map(|x| format!("{} (+{})", x.joint, x.excess))
+                .collect::<Vec<_>>()
+        ),
+        capped(&bodies)
     );
     let part = OverPart {
         excess,
@@ -129,8 +132,8 @@ fn under_part(
     let note = format!(
         "{missing} DOF not fixed by any input: bodies {{{}}} can move; one more input on \
          one of the joints {} would fix one DOF{caveat}",
-        bodies.join(", "),
-        input_candidates.join(", ")
+        capped(&bodies),
+        capped(&input_candidates)
     );
     let part = UnderPart {
         missing,
@@ -208,16 +211,16 @@ fn redundancy_note(r: &Redundancy) -> String {
     if r.configuration {
         format!(
             "bodies {{{}}}: {} redundant constraint(s) set aside (lowered on {}); {}",
-            r.bodies.join(", "),
+            capped(&r.bodies),
             r.count,
-            r.lowered,
+            capped(&r.lowered.split(", ").collect::<Vec<_>>()),
             r.freedom
         )
     } else {
         format!(
             "group {{{}}}: joints {} carry {} redundant equation(s); {}",
-            r.bodies.join(", "),
-            r.joints.join(", "),
+            capped(&r.bodies),
+            capped(&r.joints),
             r.count,
             r.freedom
         )

@@ -5,8 +5,11 @@
 //! The search is exponential in the number of bodies (the paper's Table 16 reports 70,940 s for
 //! a 26-body case); it is kept as an independent check of the flow method
 //! ([`super::Method::Exhaustive`]) and is only practical for small mechanisms (say ≤ 20 bodies).
+//! Every candidate set and every neighbour scanned is charged to a work [`Meter`], so a larger
+//! mechanism stops with the budget's error instead of running for hours.
 
 use super::count::{Equations, RawGroup, canonical};
+use crate::budget::{BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 
 /// Groups found by the search, in canonical order, and the bodies it could not place.
@@ -17,8 +20,15 @@ pub(crate) struct Search {
     pub unsolved: Vec<usize>,
 }
 
-/// Run the smallest-first search with equation counts `eqs.cap` and body unknowns `u`.
-pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
+/// Run the smallest-first search with equation counts `eqs.cap` and body unknowns `u`,
+/// charging `meter` a unit per candidate set, per body and pair it reads and per neighbour it
+/// scans; the budget's error once the meter runs out.
+pub(crate) fn search(
+    m: &Mechanism,
+    eqs: &Equations,
+    u: &[u32],
+    meter: &mut Meter,
+) -> Result<Search, BudgetExceeded> {
     let nb = eqs.nodes;
     let mut nbrs: Vec<Vec<usize>> = vec![Vec::new(); nb];
     for e in 0..eqs.len() {
@@ -57,17 +67,20 @@ pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
         if unsolved.is_empty() {
             break;
         }
+        meter.charge(nb as u64)?;
         let mut hit: Option<Vec<usize>> = None;
         for size in 1..=unsolved.len() {
-            let mut check = |set: &[usize]| {
+            let mut check = |set: &[usize], meter: &mut Meter| {
+                let reads: usize = set.iter().map(|&b| touching[b].len()).sum();
+                meter.charge((set.len() + reads) as u64)?;
                 if satisfies(set, eqs, u, &solved, &touching) {
                     hit = Some(set.to_vec());
-                    true
+                    Ok(true)
                 } else {
-                    false
+                    Ok(false)
                 }
             };
-            if connected_sets(&unsolved, &nbrs, &solved, size, &mut check) {
+            if connected_sets(&unsolved, &nbrs, &solved, size, meter, &mut check)? {
                 break;
             }
         }
@@ -99,11 +112,14 @@ pub(crate) fn search(m: &Mechanism, eqs: &Equations, u: &[u32]) -> Search {
         let base = usize::from(found[g].iter().any(|&x| !eqs.is_element(x)));
         level[g] = base + deps[g].iter().map(|&d| level[d]).max().unwrap_or(0);
     }
-    Search {
+    Ok(Search {
         groups: canonical(found, level, deps),
         unsolved: (0..nb).filter(|&b| !solved[b]).collect(),
-    }
+    })
 }
+
+/// What [`connected_sets`] calls on each set: `Ok(true)` stops the enumeration.
+type Visit<'a> = dyn FnMut(&[usize], &mut Meter) -> Result<bool, BudgetExceeded> + 'a;
 
 /// Whether the active pairs of `set` carry exactly as many equations as it has unknowns.
 fn satisfies(
@@ -135,54 +151,75 @@ fn connected_sets(
     nbrs: &[Vec<usize>],
     solved: &[bool],
     size: usize,
-    visit: &mut dyn FnMut(&[usize]) -> bool,
-) -> bool {
+    meter: &mut Meter,
+    visit: &mut Visit<'_>,
+) -> Result<bool, BudgetExceeded> {
     for &v in unsolved {
+        meter.charge(1 + nbrs[v].len() as u64)?;
         let ext: Vec<usize> = nbrs[v]
             .iter()
             .copied()
             .filter(|&w| w > v && !solved[w])
             .collect();
         let mut sub = vec![v];
-        if extend(&mut sub, ext, v, size, nbrs, solved, visit) {
-            return true;
+        let mut walk = Walk {
+            v,
+            size,
+            nbrs,
+            solved,
+            meter: &mut *meter,
+        };
+        if walk.extend(&mut sub, ext, visit)? {
+            return Ok(true);
         }
     }
-    false
+    Ok(false)
 }
 
-fn extend(
-    sub: &mut Vec<usize>,
-    mut ext: Vec<usize>,
+/// One root's enumeration in [`connected_sets`]: the sets whose smallest body is `v`.
+struct Walk<'a> {
     v: usize,
     size: usize,
-    nbrs: &[Vec<usize>],
-    solved: &[bool],
-    visit: &mut dyn FnMut(&[usize]) -> bool,
-) -> bool {
-    if sub.len() == size {
-        return visit(sub);
-    }
-    while let Some(w) = ext.pop() {
-        // Exclusive neighbours of w: not in sub and not adjacent to sub.
-        let mut next = ext.clone();
-        for &x in &nbrs[w] {
-            if x > v
-                && !solved[x]
-                && !sub.contains(&x)
-                && !next.contains(&x)
-                && x != w
-                && !sub.iter().any(|&s| nbrs[s].binary_search(&x).is_ok())
-            {
-                next.push(x);
+    nbrs: &'a [Vec<usize>],
+    solved: &'a [bool],
+    meter: &'a mut Meter,
+}
+
+impl Walk<'_> {
+    fn extend(
+        &mut self,
+        sub: &mut Vec<usize>,
+        mut ext: Vec<usize>,
+        visit: &mut Visit<'_>,
+    ) -> Result<bool, BudgetExceeded> {
+        let (v, nbrs, solved) = (self.v, self.nbrs, self.solved);
+        if sub.len() == self.size {
+            return visit(sub, self.meter);
+        }
+        while let Some(w) = ext.pop() {
+            // The scan below reads each neighbour of w against sub and the extension.
+            self.meter
+                .charge(1 + (nbrs[w].len() * (sub.len() + ext.len() + 1)) as u64)?;
+            // Exclusive neighbours of w: not in sub and not adjacent to sub.
+            let mut next = ext.clone();
+            for &x in &nbrs[w] {
+                if x > v
+                    && !solved[x]
+                    && !sub.contains(&x)
+                    && !next.contains(&x)
+                    && x != w
+                    && !sub.iter().any(|&s| nbrs[s].binary_search(&x).is_ok())
+                {
+                    next.push(x);
+                }
+            }
+            sub.push(w);
+            let stop = self.extend(sub, next, visit);
+            sub.pop();
+            if stop? {
+                return Ok(true);
             }
         }
-        sub.push(w);
-        let stop = extend(sub, next, v, size, nbrs, solved, visit);
-        sub.pop();
-        if stop {
-            return true;
-        }
+        Ok(false)
     }
-    false
 }

@@ -31,7 +31,26 @@ pub enum LibraryError {
         /// Its column in the line (1-based, in characters).
         column: usize,
     },
+    /// An SG type string with a count of pairs that no group has (zero, a leading zero, or
+    /// past [`MAX_COUNT`]).
+    #[error(
+        "line {line}, column {column}: `{text}` has the pair count `{count}`: a count is a whole number from 1 to {MAX_COUNT}, written without leading zeros"
+    )]
+    BadCount {
+        /// The offending entry.
+        text: String,
+        /// The count as written.
+        count: String,
+        /// Its line in the file (1-based).
+        line: usize,
+        /// Its column in the line (1-based, in characters).
+        column: usize,
+    },
 }
+
+/// The largest pair count of one kind an SG type string may give (a group's pairs are joints
+/// of the mechanism, which the loader numbers in `u32`).
+pub const MAX_COUNT: u32 = u32::MAX;
 
 #[derive(serde::Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -78,14 +97,23 @@ impl Library {
         for t in file.types {
             let start = t.span().start;
             let t = t.into_inner().trim().to_string();
-            if !valid_type(&t) {
+            let checked = check_type(&t);
+            if checked != Ok(()) {
                 let before = text.get(..start).unwrap_or(text);
                 let line = before.matches('\n').count() + 1;
                 let column = before.rsplit('\n').next().unwrap_or("").chars().count() + 1;
-                return Err(LibraryError::BadType {
-                    text: t,
-                    line,
-                    column,
+                return Err(match checked {
+                    Err(Some(count)) => LibraryError::BadCount {
+                        text: t,
+                        count,
+                        line,
+                        column,
+                    },
+                    _ => LibraryError::BadType {
+                        text: t,
+                        line,
+                        column,
+                    },
                 });
             }
             types.insert(t);
@@ -108,19 +136,26 @@ impl Default for Library {
     }
 }
 
-/// `<count><code>...` followed by `2D` or `3D`, codes from the joint catalogue.
-fn valid_type(t: &str) -> bool {
+/// Whether `t` is `<count><code>...` followed by `2D` or `3D`, codes from the joint
+/// catalogue: `Err(None)` when not, `Err(Some(count))` for a count that is not from 1 to
+/// [`MAX_COUNT`] in its plain decimal form (`0R3D`, `01R3D`, `99999999999R3D`).
+fn check_type(t: &str) -> Result<(), Option<String>> {
     let Some(body) = t.strip_suffix("2D").or_else(|| t.strip_suffix("3D")) else {
-        return false;
+        return Err(None);
     };
     let mut rest = body;
     if rest.is_empty() {
-        return false;
+        return Err(None);
     }
     while !rest.is_empty() {
         let digits = rest.chars().take_while(|c| c.is_ascii_digit()).count();
         if digits == 0 {
-            return false;
+            return Err(None);
+        }
+        let count = &rest[..digits];
+        let plain = !count.starts_with('0') && count.parse::<u32>().is_ok();
+        if !plain {
+            return Err(Some(count.to_string()));
         }
         rest = &rest[digits..];
         let letters = rest.chars().take_while(|c| c.is_ascii_uppercase()).count();
@@ -130,10 +165,10 @@ fn valid_type(t: &str) -> bool {
             .find(|&n| crate::joint::JointType::all().any(|k| k.code() == &rest[..n]));
         match code {
             Some(n) => rest = &rest[n..],
-            None => return false,
+            None => return Err(None),
         }
     }
-    true
+    Ok(())
 }
 
 #[cfg(test)]
@@ -172,5 +207,30 @@ mod tests {
             }
         );
         assert!(e.to_string().starts_with("line 4, column 3: `XYZ`"));
+    }
+
+    /// A pair count is 1 or more, plain decimal, and fits the joint numbering.
+    #[test]
+    fn counts_are_positive_and_bounded() {
+        for (t, count) in [
+            ("0R3D", "0"),
+            ("01R3D", "01"),
+            ("1R0P2D", "0"),
+            ("99999999999999999999999R3D", "99999999999999999999999"),
+            ("4294967296R3D", "4294967296"),
+        ] {
+            let e = Library::from_toml(&format!("types = [\"{t}\"]")).unwrap_err();
+            assert_eq!(
+                e,
+                LibraryError::BadCount {
+                    text: t.into(),
+                    count: count.into(),
+                    line: 1,
+                    column: 10
+                }
+            );
+            assert!(e.to_string().contains("from 1 to 4294967295"), "{e}");
+        }
+        assert!(Library::from_toml("types = [\"4294967295R3D\", \"10R2D\"]").is_ok());
     }
 }

@@ -22,6 +22,7 @@ pub(crate) use crate::graph::scc::tarjan;
 pub(crate) use count::canonical;
 pub use library::{Library, LibraryError};
 
+use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::geometry::{GeometrySource, GeometryUsed};
 use crate::joint::JointType;
 use crate::mechanism::Mechanism;
@@ -310,6 +311,20 @@ pub const FINITE_CHECK_WORK: u64 = 200_000_000;
 /// Joints the note of [`check_finite`] names at most (the JSON lists them all).
 const NOTE_JOINTS: usize = 8;
 
+/// Names a diagnosis note lists at most; the JSON's own fields (`bodies`, `joints`, ...) list
+/// them all. A note on a whole robot (20 bodies, 40 joints) stays a line a person reads.
+const NOTE_NAMES: usize = 12;
+
+/// `names` joined with commas, at most [`NOTE_NAMES`] of them, then "and N more".
+pub(crate) fn capped<S: AsRef<str>>(names: &[S]) -> String {
+    let shown: Vec<&str> = names.iter().take(NOTE_NAMES).map(AsRef::as_ref).collect();
+    if names.len() <= NOTE_NAMES {
+        shown.join(", ")
+    } else {
+        format!("{} and {} more", shown.join(", "), names.len() - NOTE_NAMES)
+    }
+}
+
 /// Whether the first-order verdict of `a` (an analysis of `m`) holds for finite motion at the
 /// file's configuration, and a note (and [`Analysis::finite`]) when it does not.
 ///
@@ -422,6 +437,57 @@ pub fn analyze(m: &Mechanism, opts: &Options, lib: &Library) -> Result<Analysis,
     analyze_cached(m, opts, lib, None, None)
 }
 
+/// Why [`analyze_within`] gave no analysis.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum AnalyzeError {
+    /// As [`analyze`].
+    #[error(transparent)]
+    Motion(#[from] MotionError),
+    /// The exhaustive search ([`Method::Exhaustive`]) ran out of the work budget.
+    #[error(transparent)]
+    Budget(#[from] BudgetExceeded),
+}
+
+/// [`analyze`] with the exhaustive search ([`Method::Exhaustive`], exponential) charged to
+/// `budget`'s work limit: past it, [`AnalyzeError::Budget`]. The flow method's answer is
+/// [`analyze`]'s.
+pub fn analyze_within(
+    m: &Mechanism,
+    opts: &Options,
+    lib: &Library,
+    budget: &Budget,
+) -> Result<Analysis, AnalyzeError> {
+    let mut meter = budget.meter("the exhaustive search");
+    let spend = &mut Spend {
+        rank: 0,
+        search: &mut meter,
+    };
+    analyze_at(m, opts, lib, None, None, rank::Shortcut::None, spend)?.ok_or(AnalyzeError::Motion(
+        MotionError::Degenerate {
+            kind: "any",
+            reason: "the rank check stopped early",
+        },
+    ))
+}
+
+/// The work one analysis spends: the rank decisions' units (counted, for `mbsa transform`)
+/// and the exhaustive search's meter (which stops it).
+struct Spend<'a> {
+    rank: u64,
+    search: &'a mut Meter,
+}
+
+/// An error of an analysis with an unlimited search meter, which cannot run out.
+fn unlimited(e: AnalyzeError) -> MotionError {
+    match e {
+        AnalyzeError::Motion(e) => e,
+        AnalyzeError::Budget(_) => MotionError::Degenerate {
+            kind: "any",
+            reason: "the exhaustive search ran out of work units",
+        },
+    }
+}
+
 /// What [`analyze_cached`] keeps between analyses of one mechanism under different inputs.
 pub type AnalysisCache = rank::Cache;
 
@@ -440,13 +506,18 @@ pub fn analyze_cached(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
 ) -> Result<Analysis, MotionError> {
+    let mut meter = Budget::UNLIMITED.meter("the exhaustive search");
+    let spend = &mut Spend {
+        rank: 0,
+        search: &mut meter,
+    };
     // The plain check always answers (`None` comes only from `Shortcut::Determined`).
-    analyze_at(m, opts, lib, cache, flow, rank::Shortcut::None, &mut 0)?.ok_or(
-        MotionError::Degenerate {
+    analyze_at(m, opts, lib, cache, flow, rank::Shortcut::None, spend)
+        .map_err(unlimited)?
+        .ok_or(MotionError::Degenerate {
             kind: "any",
             reason: "the rank check stopped early",
-        },
-    )
+        })
 }
 
 /// [`analyze_cached`] for `mbsa transform`, which keeps a placement only when it is
@@ -465,7 +536,8 @@ pub fn analyze_cached(
 ///
 /// Also returns the work units of the rank decisions made (a dense factorization of `n`
 /// unknowns costs `n^3`, an exact sparse one its factor's entries; cached and certified blocks
-/// nothing), for `mbsa transform`'s work budget.
+/// nothing) and of the exhaustive search ([`Method::Exhaustive`]), for `mbsa transform`'s work
+/// budget.
 pub fn analyze_placement(
     m: &Mechanism,
     opts: &Options,
@@ -479,8 +551,13 @@ pub fn analyze_placement(
     } else {
         rank::Shortcut::Determined
     };
-    let mut work = 0;
-    let a = analyze_at(m, opts, lib, cache, flow, shortcut, &mut work)?;
+    let mut meter = Budget::UNLIMITED.meter("the exhaustive search");
+    let mut spend = Spend {
+        rank: 0,
+        search: &mut meter,
+    };
+    let a = analyze_at(m, opts, lib, cache, flow, shortcut, &mut spend).map_err(unlimited)?;
+    let work = spend.rank.saturating_add(meter.used());
     Ok((a, work))
 }
 
@@ -491,9 +568,9 @@ fn analyze_at(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
     shortcut: rank::Shortcut,
-    work: &mut u64,
-) -> Result<Option<Analysis>, MotionError> {
-    let Some(mut a) = analyze_once(m, opts, lib, cache, flow, shortcut, work)? else {
+    spend: &mut Spend<'_>,
+) -> Result<Option<Analysis>, AnalyzeError> {
+    let Some(mut a) = analyze_once(m, opts, lib, cache, flow, shortcut, spend)? else {
         return Ok(None);
     };
     // At the file's configuration, say what generic geometry would give when it differs.
@@ -505,7 +582,7 @@ fn analyze_at(
             geometry: GeometrySource::Random { seed: 0 },
             ..*opts
         };
-        let Some(g) = analyze_once(m, &generic, lib, cache, flow, rank::Shortcut::None, work)?
+        let Some(g) = analyze_once(m, &generic, lib, cache, flow, rank::Shortcut::None, spend)?
         else {
             return Ok(Some(a));
         };
@@ -526,7 +603,7 @@ fn analyze_at(
                 format!(
                     "at the file's configuration joints {} carry {n} redundant constraint(s) that \
                      generic geometry would not have",
-                    joints.join(", ")
+                    capped(&joints)
                 )
             };
             a.generic = Some(GenericAnswer {
@@ -577,8 +654,8 @@ fn analyze_once(
     cache: Option<&AnalysisCache>,
     flow: Option<&[[u8; 2]]>,
     shortcut: rank::Shortcut,
-    work: &mut u64,
-) -> Result<Option<Analysis>, MotionError> {
+    spend: &mut Spend<'_>,
+) -> Result<Option<Analysis>, AnalyzeError> {
     let mut eqs = Equations::of(m);
     if let Some(f) = flow {
         eqs.hint = (0..eqs.len())
@@ -621,7 +698,7 @@ fn analyze_once(
             s => s,
         };
         let r = rank::check(m, &geoms, &used, &mut eqs, &mut u, cache, shortcut);
-        *work = work.saturating_add(r.work);
+        spend.rank = spend.rank.saturating_add(r.work);
         if r.deficient {
             return Ok(None);
         }
@@ -637,7 +714,7 @@ fn analyze_once(
         // `build` reads the parts only, so the groups can move out.
         Method::Flow => std::mem::take(&mut dec.groups),
         Method::Exhaustive => {
-            let s = exhaustive::search(m, &eqs, &u);
+            let s = exhaustive::search(m, &eqs, &u, spend.search)?;
             unsolved = s.unsolved;
             s.groups
         }

@@ -22,7 +22,8 @@ use std::sync::Arc;
 /// of each joint of an expansion, then the pair), groups in canonical order (level, size,
 /// smallest body), types in order of first appearance. A member with `rebuild[i]` was placed
 /// on another part of the same structure: its inputs are named by `names` (joint `q`'s id and
-/// bodies' label; the part's joints are binary). `None` if a member names a joint or body the part lacks (never
+/// bodies' label; the part's joints are binary); `expansion`: the label and the brief label
+/// ([`Placement::expansion_brief`]). `None` if a member names a joint or body the part lacks (never
 /// expected).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn join_parts(
@@ -32,7 +33,7 @@ pub(super) fn join_parts(
     members: &[&Placement],
     rebuild: &[bool],
     ids: &Arc<Vec<String>>,
-    expansion: Option<String>,
+    (expansion, brief): (Option<String>, Option<String>),
     exp: usize,
 ) -> Option<Placement> {
     // (original joint, joint, order within the part, input)
@@ -73,6 +74,7 @@ pub(super) fn join_parts(
         inputs_at: inputs.iter().map(|i| i.0).collect(),
         inputs: inputs.into_iter().map(|i| i.3).collect(),
         expansion,
+        brief,
         types,
         partition,
         seq: 0,
@@ -540,6 +542,8 @@ impl Whole<'_> {
             meter.charge(n as u64)?;
             let members: Vec<&Placement> = (0..n).map(|p| &lists[p][digit[p]]).collect();
             let labels: Vec<String> = members.iter().filter_map(|p| p.expansion.clone()).collect();
+            let briefs: Vec<&str> = members.iter().filter_map(|p| p.expansion_brief()).collect();
+            let cut = members.iter().any(|p| p.brief.is_some());
             let names = |q: usize| {
                 let j = m.joints.get(q)?;
                 Some((j.id.clone(), m.joint_bodies_label(j)))
@@ -551,7 +555,10 @@ impl Whole<'_> {
                 &members,
                 &self.rebuild,
                 &self.ids,
-                (!labels.is_empty()).then(|| labels.join("; ")),
+                (
+                    (!labels.is_empty()).then(|| labels.join("; ")),
+                    cut.then(|| briefs.join("; ")),
+                ),
                 members.iter().map(|p| p.exp).max().unwrap_or(0),
             ) else {
                 return Ok(false);

@@ -10,12 +10,42 @@ use crate::mechanism::{Joint, Mechanism};
 /// appended after the last joint.
 pub(super) struct Expansion<'a> {
     pub(super) label: Option<String>,
+    /// [`Expansion::label`] with each joint's pairs cut to [`BRIEF_PAIRS`] and a count, for
+    /// the table; `None` when no joint has more.
+    pub(super) brief: Option<String>,
     /// The file's mechanism itself when it has no multiple joint and no driven joint: a
     /// 10^6-body mechanism was held three times (the file's, a copy without inputs, and the
     /// expansion's copy of that).
     pub(super) mech: std::borrow::Cow<'a, Mechanism>,
     /// Original joint of each joint of `mech`.
     pub(super) origin: Vec<usize>,
+}
+
+/// Pairs of one multiple joint the brief label of an expansion lists (the table's): the rest
+/// are counted. In full, a joint of n bodies gave an n-character-wide column in every line of
+/// the table, whose inputs take n lines: n^2 bytes, 6.5 GB at 10^4 bodies.
+pub(super) const BRIEF_PAIRS: usize = 8;
+
+/// An expansion's label, `id: a-b, c-d; id2: ...`, from each multiple joint's id and pair
+/// labels, and its brief form ([`BRIEF_PAIRS`]; `None` when it is the same).
+fn labels<'x>(joints: impl Iterator<Item = (&'x str, Vec<String>)>) -> (String, Option<String>) {
+    let mut full = Vec::new();
+    let mut brief = Vec::new();
+    let mut cut = false;
+    for (id, pairs) in joints {
+        full.push(format!("{id}: {}", pairs.join(", ")));
+        if pairs.len() > BRIEF_PAIRS {
+            cut = true;
+            brief.push(format!(
+                "{id}: {} (+{} more pairs)",
+                pairs[..BRIEF_PAIRS].join(", "),
+                pairs.len() - BRIEF_PAIRS
+            ));
+        } else {
+            brief.push(full[full.len() - 1].clone());
+        }
+    }
+    (full.join("; "), cut.then(|| brief.join("; ")))
 }
 
 /// `n^(n−2)`, saturating.
@@ -165,6 +195,7 @@ impl<'a> Expansions<'a> {
         if self.multi.is_empty() && m.joints.iter().all(|j| j.driven == 0) {
             return Expansion {
                 label: None,
+                brief: None,
                 mech: std::borrow::Cow::Borrowed(m),
                 origin: (0..m.joints.len()).collect(),
             };
@@ -177,13 +208,14 @@ impl<'a> Expansions<'a> {
         if self.multi.is_empty() {
             return Expansion {
                 label: None,
+                brief: None,
                 mech: std::borrow::Cow::Owned(mech),
                 origin: (0..m.joints.len()).collect(),
             };
         }
         let digits = self.digits(k);
         let mut origin: Vec<usize> = (0..m.joints.len()).collect();
-        let mut labels = Vec::new();
+        let mut named: Vec<(&str, Vec<String>)> = Vec::new();
         let mut appended: Vec<Joint> = Vec::new();
         for (&j, &d) in self.multi.iter().zip(&digits) {
             let joint = &m.joints[j];
@@ -207,11 +239,13 @@ impl<'a> Expansions<'a> {
                     origin.push(j);
                 }
             }
-            labels.push(format!("{}: {}", joint.id, pairs.join(", ")));
+            named.push((&joint.id, pairs));
         }
         mech.joints.extend(appended);
+        let (label, brief) = labels(named.into_iter());
         Expansion {
-            label: Some(labels.join("; ")),
+            label: Some(label),
+            brief,
             mech: std::borrow::Cow::Owned(mech),
             origin,
         }
@@ -269,20 +303,16 @@ impl Skeleton<'_> {
         }
     }
 
-    /// The expansion's label, as [`Expansions::get`] writes it.
-    pub(super) fn expansion_label(&self) -> Option<String> {
+    /// The expansion's label and brief label, as [`Expansions::get`] writes them.
+    pub(super) fn expansion_label(&self) -> (Option<String>, Option<String>) {
         if self.multi.is_empty() {
-            return None;
+            return (None, None);
         }
-        let labels: Vec<String> = self
-            .multi
-            .iter()
-            .map(|(j, pairs)| {
-                let pairs: Vec<String> = pairs.iter().map(|&q| self.label(q)).collect();
-                format!("{}: {}", self.m.joints[*j].id, pairs.join(", "))
-            })
-            .collect();
-        Some(labels.join("; "))
+        let (label, brief) = labels(self.multi.iter().map(|(j, pairs)| {
+            let pairs: Vec<String> = pairs.iter().map(|&q| self.label(q)).collect();
+            (self.m.joints[*j].id.as_str(), pairs)
+        }));
+        (Some(label), brief)
     }
 }
 

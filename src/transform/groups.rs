@@ -104,6 +104,7 @@ pub(super) fn placement_of(
         family: None,
         inputs: inputs_of(mech, e, w),
         expansion: e.label.clone(),
+        brief: e.brief.clone(),
         scores: g.scores,
         types: g.types,
         partition: g.partition,

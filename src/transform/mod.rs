@@ -263,6 +263,10 @@ pub struct Placement {
     /// The binary expansion of the multiple joints (absent when there are none).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub expansion: Option<String>,
+    /// `expansion` with each multiple joint's pairs cut to a few and counted, when a joint has
+    /// more (the table's; JSON lists them all).
+    #[serde(skip)]
+    brief: Option<String>,
     /// The scores.
     #[serde(flatten)]
     pub scores: Scores,
@@ -296,6 +300,12 @@ pub struct Placement {
 }
 
 impl Placement {
+    /// The expansion's label for the table: each multiple joint's first pairs and a count of
+    /// the rest, so that a joint of many bodies keeps the table's width bounded.
+    pub fn expansion_brief(&self) -> Option<&str> {
+        self.brief.as_deref().or(self.expansion.as_deref())
+    }
+
     /// The placement as an `--inputs` spec (`1-2,1-13,13-15`, `:n` for n > 1).
     pub fn spec(&self) -> String {
         self.inputs

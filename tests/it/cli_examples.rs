@@ -213,7 +213,7 @@ fn mobility_on_a_file_with_geometry_points_to_the_true_mobility() {
     let (code, out, err) = mbsa(&["mobility", "@four-bar-3d-driven"]);
     assert_eq!(code, 0, "{err}");
     assert!(
-        out.contains("by the count the inputs over-determine the mechanism"),
+        out.contains("count verdict: more inputs (1) than the count (-2): they over-determine the mechanism if the geometry is generic"),
         "{out}"
     );
     assert!(
@@ -226,4 +226,20 @@ fn mobility_on_a_file_with_geometry_points_to_the_true_mobility() {
     let (code, out, err) = mbsa(&["mobility", "@four-bar"]);
     assert_eq!(code, 0, "{err}");
     assert!(!out.contains("note:"), "{out}");
+}
+
+/// `mobility` is the count only, and says so: on the Bricard linkage (count 0, true mobility 1)
+/// it must not present the count's verdict as the mechanism's.
+#[test]
+fn mobility_words_its_verdict_as_the_counts() {
+    let (code, out, _) = mbsa(&["mobility", "@bricard"]);
+    assert_eq!(code, 0);
+    assert!(
+        out.starts_with("Bricard linkage: mobility 0 by the count\n"),
+        "{out}"
+    );
+    assert!(out.contains("\ncount verdict: inputs = count (0): enough to determine the mechanism if the geometry is generic"), "{out}");
+    assert!(!out.contains("can be kinematically determined"), "{out}");
+    let (_, rigid, _) = mbsa(&["rigid", "@bricard", "--method", "geometric"]);
+    assert!(rigid.contains("true mobility 1"), "{rigid}");
 }

@@ -257,3 +257,30 @@ fn an_error_far_along_one_long_line_is_located_without_a_panic() {
     assert!(stderr.contains("minified.json:1:"), "{stderr}");
     assert!(stderr.contains("drivn"), "{stderr}");
 }
+
+#[test]
+fn version_names_the_commit_of_a_git_checkout() {
+    let out = mbsa().arg("--version").output().expect("runs");
+    let text = String::from_utf8(out.stdout).expect("UTF-8");
+    let version = concat!("mbsa ", env!("CARGO_PKG_VERSION"));
+    let rest = text
+        .strip_prefix(version)
+        .unwrap_or_else(|| panic!("{text:?} starts with {version:?}"));
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    match (
+        git(&["rev-parse", "--short", "HEAD"]),
+        git(&["log", "-1", "--format=%cs"]),
+    ) {
+        (Some(commit), Some(date)) => assert_eq!(rest, format!(" ({commit} {date})\n")),
+        // Not a checkout (a packaged crate) or no git: the version alone.
+        _ => assert_eq!(rest, "\n"),
+    }
+}

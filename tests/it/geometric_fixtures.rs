@@ -263,3 +263,50 @@ fn fixtures_load_with_the_reader() {
         assert_eq!(r, mine, "{name}: reader and minimal loader agree");
     }
 }
+
+/// One body between two S joints to the frame: the body spins about the line through the
+/// joints' centres, and seen with the frame fixed that is the frame's own spin too. It is one
+/// motion: 1 fully isolated, none structurally, proper mobility 0, at the file's geometry and
+/// at every random realization (a closed form: 12 - 6 - 6 = 0 counted, 1 spin).
+#[test]
+fn a_spin_shared_with_the_frame_is_counted_once() {
+    let text = r#"
+name = "one body on two balls"
+space = "spatial"
+frame = "0"
+[[joint]]
+id = "A"
+type = "S"
+bodies = ["0", "1"]
+origin = [0, 0, 0]
+[[joint]]
+id = "B"
+type = "S"
+bodies = ["0", "1"]
+origin = [1, 0, 0]
+"#;
+    let m = mbsa::format::load("two-balls.toml", text, mbsa::format::Format::Toml).unwrap();
+    let mut reports = vec![("file".to_string(), {
+        let opts = GeometricOptions {
+            geometry: GeometrySource::File,
+            check_finite: false,
+            precision: None,
+        };
+        analyze(&m, &opts).unwrap()
+    })];
+    for seed in 0..20 {
+        reports.push((format!("seed {seed}"), random(&m, seed)));
+    }
+    for (what, r) in &reports {
+        assert_eq!(
+            (
+                r.mobility,
+                r.fully_isolated,
+                r.structurally_isolated,
+                r.proper_mobility
+            ),
+            (1, 1, 0, 0),
+            "{what}"
+        );
+    }
+}

@@ -4,10 +4,15 @@
 mod common;
 
 mod analyze_finite;
+mod bounded_work;
 mod bundled_expectations;
+mod cli_arguments;
+mod cli_check;
+mod cli_completions;
 mod cli_errors;
 mod cli_examples;
 mod cli_exit_codes;
+mod cli_help_examples;
 mod cli_position;
 mod closure;
 mod docs;
@@ -35,10 +40,12 @@ mod pebble_report;
 mod pebble_scale;
 mod position;
 mod rank_seed_independence;
+mod reader_linear;
 mod reader_scale;
 mod reliability_determinism;
 mod reliability_large;
 mod reliability_smoke;
+mod report_schema;
 mod scale_smoke;
 mod structure_cases;
 mod structure_multiple_order;

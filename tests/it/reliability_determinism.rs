@@ -217,7 +217,9 @@ fn strict(args: &[&str]) {
             seed % 2 == 1,
             seed / 2,
             seed + 1,
-            &format!("strict-{seed}"),
+            // One directory per command: the strict tests run in parallel and must not
+            // rewrite each other's files while one reads them.
+            &format!("strict-{}-{seed}", args.join("-")),
         );
         let (x, y) = (run(args, &a), run(args, &b));
         if x != y {

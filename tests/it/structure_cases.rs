@@ -358,3 +358,36 @@ fn badly_placed_inputs_are_mixed() {
         mbsa::report::structure::table(&full),
     );
 }
+
+/// A declared body that no joint names moves freely, with one meaning in every analysis: the
+/// count (3·4 - 8 = 4 for a driven four-bar plus a lone planar body), the structural analysis
+/// (under-determined, the lone body's 3 DOF uncontrolled) and the pebble game (4 DOF).
+#[test]
+fn a_body_no_joint_names_is_a_free_body_everywhere() {
+    let text = r#"
+name = "four-bar and a lone body"
+space = "planar"
+frame = 1
+body = [{ id = 1 }, { id = 2 }, { id = 3 }, { id = 4 }, { id = 9 }]
+joint = [
+  { type = "R", bodies = [1, 2], driven = 1 },
+  { type = "R", bodies = [2, 3] },
+  { type = "R", bodies = [3, 4] },
+  { type = "R", bodies = [1, 4] },
+]
+"#;
+    let m = mbsa::format::load("lone.toml", text, mbsa::format::Format::Toml).unwrap();
+    assert_eq!(mbsa::mobility::mobility(&m).mobility.count, 4);
+    let a = analyze(&m, &Options::default(), &Library::builtin()).unwrap();
+    assert_eq!(a.status, Status::Underdetermined);
+    assert_eq!(a.uncontrolled, 3);
+    assert_eq!(a.disconnected, vec!["9".to_string()]);
+    let diagnosis = a.diagnosis.as_ref().expect("a diagnosis");
+    let under = diagnosis
+        .underdetermined
+        .as_ref()
+        .expect("an uncontrolled part");
+    assert!(under.bodies.contains(&"9".to_string()), "{under:?}");
+    let pebble = mbsa::rigidity::pebble::analyze(&m, &Default::default());
+    assert_eq!(pebble.dof, 4);
+}

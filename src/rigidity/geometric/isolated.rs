@@ -160,15 +160,19 @@ impl Analysis<'_> {
         sizes: &[usize],
         cols: usize,
     ) -> usize {
+        // A frame motion that the other bodies' own isolated motions already make (one body
+        // between the same two S joints as the frame spins about the same line) projects to
+        // rounding noise: measured against the motion itself, not against the noise's own
+        // norm, or the same spin is counted twice.
         let frame_motions: Vec<DVector<f64>> = self.iso[self.frame]
             .column_iter()
-            .map(|s| {
+            .filter_map(|s| {
                 let mut z = DVector::zeros(cols);
                 for (g, &body) in gbody.iter().enumerate() {
                     z.rows_mut(offsets[g], sizes[g])
                         .copy_from(&(self.comp[body].transpose() * s));
                 }
-                z
+                (z.norm() > ZERO_TOL * s.norm()).then_some(z)
             })
             .collect();
         orthonormalize(frame_motions).len()

@@ -154,6 +154,6 @@ pub(super) fn describe(
     }
     format!(
         "bodies {{{}}} keep {count} freedom(s) that no input controls",
-        ids.join(", ")
+        crate::structure::capped(&ids)
     )
 }

@@ -190,7 +190,7 @@ impl Configuration<'_> {
                  equations independently (special geometry: parallel or concurrent axes, a \
                  planar or spherical loop written in space); the configuration satisfies the \
                  other {dropped}, so they fix nothing",
-                ids(&joints).join(", "),
+                crate::structure::capped(&ids(&joints)),
                 nrows - dropped,
                 nrows
             ),
