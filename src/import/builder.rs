@@ -164,6 +164,10 @@ impl Builder {
         }
         self.warn_unlinked(&joints, frame);
         check_magnitudes(&joints)?;
+        // A 10 MB name is quoted by its start only (the written joints keep it whole).
+        for w in self.warnings.iter_mut().chain(self.notes.iter_mut()) {
+            *w = super::names::cap_quoted(std::mem::take(w));
+        }
         let toml = self.write_toml(source_name, format, &joints, frame);
         let mechanism = crate::format::load(source_name, &toml, crate::format::Format::Toml)
             .map_err(|e| {
@@ -343,7 +347,7 @@ fn check_magnitudes(joints: &[JointRec]) -> Result<(), ImportError> {
             .chain(g.pitch);
         if let Some(x) = vectors
             .into_iter()
-            .find(|x| !(x.abs() < super::xml::MAX_MAGNITUDE))
+            .find(|x| x.is_nan() || x.abs() >= super::xml::MAX_MAGNITUDE)
         {
             let at = j.comments.first().map(String::as_str).unwrap_or("");
             return Err(ImportError::new(format!(

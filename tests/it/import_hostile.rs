@@ -332,6 +332,17 @@ fn includes_of_devices_fifos_and_files_over_the_limit_are_refused() {
     assert!(err.contains("--max-input-bytes"), "{err}");
     let (code, _, err) = mbsa(&["import", &p, "--max-input-bytes", "4000"]);
     assert_eq!(code, 0, "{err}");
+    // A file's size is checked before it is read: a sparse terabyte is refused at once, its
+    // size said (read first, it would take up to the limit and say "more than").
+    let sparse = std::fs::File::create(d.join("sparse.xml")).expect("sparse file");
+    sparse.set_len(1 << 40).expect("sparse length");
+    let p = write(&d, "s.xml", &including("sparse.xml"));
+    let (code, _, err) = mbsa(&["import", &p]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("needs 1 TiB") || err.contains("1099511627"),
+        "{err}"
+    );
     // The library honours its own limit on the main file, before reading it.
     let small = ImportOptions {
         max_input_bytes: Some(100),
@@ -370,6 +381,20 @@ fn long_names_are_cut_in_errors() {
     assert_eq!(code, 2, "{}", &err[..err.len().min(2000)]);
     assert!(err.len() < 5000, "{} bytes of error", err.len());
     assert!(err.contains(&format!("`{}…`", "n".repeat(60))), "{err}");
+}
+
+#[test]
+fn long_names_are_cut_in_warnings() {
+    let name = "e".repeat(100_000);
+    let m = osim3(&format!(
+        "{}{}",
+        osim3_body("a", "PinJoint", "p", "ground", &coord("q", "")),
+        osim3_body("b", "EllipsoidJoint", &name, "a", &coord("q2", ""))
+    ));
+    let (code, _, err) = import("long_warning", "m.osim", &m);
+    assert_eq!(code, 0, "{}", &err[..err.len().min(2000)]);
+    assert!(err.len() < 5000, "{} bytes of warnings", err.len());
+    assert!(err.contains(&format!("`{}…`", "e".repeat(60))), "{err}");
 }
 
 #[test]

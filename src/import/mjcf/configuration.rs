@@ -16,10 +16,10 @@ impl<'d> Ctx<'d> {
         let mut names = Unique::new("keyframe");
         for sec in top.iter().filter(|e| e.n.has_tag_name("keyframe")) {
             for k in self.kids(*sec, docs) {
-                if let Some(n) = k.n.attribute("name").filter(|n| !n.is_empty()) {
-                    if k.n.has_tag_name("key") {
-                        names.add(self.src(k), k.n, "name", n)?;
-                    }
+                if let Some(n) = k.n.attribute("name").filter(|n| !n.is_empty())
+                    && k.n.has_tag_name("key")
+                {
+                    names.add(self.src(k), k.n, "name", n)?;
                 }
             }
         }
@@ -117,10 +117,10 @@ impl<'d> Ctx<'d> {
                         }
                     }
                     Kind::Ball => {
-                        if let (Some(w), Some(x), Some(y), Some(z)) = (q(0), q(1), q(2), q(3)) {
-                            if let Some(r) = unit_quat(w, x, y, z) {
-                                p = about(p, r);
-                            }
+                        if let (Some(w), Some(x), Some(y), Some(z)) = (q(0), q(1), q(2), q(3))
+                            && let Some(r) = unit_quat(w, x, y, z)
+                        {
+                            p = about(p, r);
                         }
                     }
                     Kind::Free => {

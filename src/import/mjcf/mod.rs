@@ -271,33 +271,41 @@ fn read_include(
     };
     // The kind first, from the path (opening a FIFO would wait for a writer), then again from
     // the open file.
-    let regular = |m: std::fs::Metadata| m.is_file();
     let not_regular = || {
         fail(
             "not a regular file",
             format!("included file `{shown}` is not a regular file (a directory, device or FIFO)"),
         )
     };
-    if !regular(std::fs::metadata(path).map_err(cannot)?) {
+    if !std::fs::metadata(path).map_err(cannot)?.is_file() {
         return Err(not_regular());
     }
     let file = std::fs::File::open(path).map_err(cannot)?;
-    if !regular(file.metadata().map_err(cannot)?) {
+    let meta = file.metadata().map_err(cannot)?;
+    if !meta.is_file() {
         return Err(not_regular());
     }
-    let mut bytes = Vec::new();
+    let over = |needed: u64, at_least: bool| {
+        let e = super::too_large(
+            format!("reading `{shown}` (included; with the files before it)"),
+            needed,
+            at_least,
+            limit,
+        );
+        fail("over the input limit", e.message().to_string())
+            .with_help(e.hint().unwrap_or_default())
+    };
+    // Its size before reading it; then at most what is left (it may grow meanwhile).
+    let used = limit - room;
+    if meta.len() > room {
+        return Err(over(used.saturating_add(meta.len()), false));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
     file.take(room.saturating_add(1))
         .read_to_end(&mut bytes)
         .map_err(cannot)?;
     if bytes.len() as u64 > room {
-        let e = super::too_large(
-            format!("reading `{shown}` (included; with the files before it)"),
-            limit,
-            true,
-            limit,
-        );
-        return Err(fail("over the input limit", e.message().to_string())
-            .with_help(e.hint().unwrap_or_default()));
+        return Err(over(used.saturating_add(bytes.len() as u64), true));
     }
     let text = String::from_utf8(bytes).map_err(|_| {
         cannot(std::io::Error::new(
@@ -467,8 +475,8 @@ impl<'d> Ctx<'d> {
         let mut ids: Vec<usize> = vec![0; self.bodies.len()];
         ids[0] = b.frame;
         // Every body first, so that the virtual bodies' names avoid all of theirs.
-        for i in 1..self.bodies.len() {
-            ids[i] = b.body(&self.bodies[i].name, "");
+        for (id, body) in ids.iter_mut().zip(&self.bodies).skip(1) {
+            *id = b.body(&body.name, "");
         }
         for i in 1..self.bodies.len() {
             let body = &self.bodies[i];
