@@ -40,6 +40,7 @@ impl ImportArgs {
             format: self.from.map(Into::into),
             keyframe: self.keyframe.clone(),
             merge_pins: self.merge_pins,
+            max_input_bytes: Some(super::budget().max_input_bytes),
         }
     }
 }
@@ -105,6 +106,51 @@ pub fn load(arg: &FileArg) -> Result<mbsa::Mechanism, Failure> {
 pub fn import(file: &str, args: &ImportArgs) -> Result<mbsa::import::Import, Failure> {
     let (name, bytes, _) = read(file, None)?;
     import_read(file, &name, &bytes, args).map_err(Failure::from)
+}
+
+/// Write `text` to `path` (`-o` of `import`): refused when `path` is the input `file` (it
+/// would be lost); written to a new file beside it, then renamed over it, so that a reader or
+/// another writer never sees a half-written file.
+pub fn write_output(file: &str, path: &Path, text: &str) -> Result<(), Failure> {
+    let fail = |e: std::io::Error| {
+        Failure::Input(format!("error: cannot write `{}`: {e}", path.display()))
+    };
+    let same = match (std::fs::canonicalize(file), std::fs::canonicalize(path)) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        return Err(Failure::Input(format!(
+            "error: `-o {}` is the input file: writing it would overwrite the model\n  help: \
+             write the imported model to another file",
+            path.display()
+        )));
+    }
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    let stem = path
+        .file_name()
+        .map_or("out".into(), |n| n.to_string_lossy());
+    static COUNT: std::sync::atomic::AtomicU32 = std::sync::atomic::AtomicU32::new(0);
+    let n = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let tmp = dir.join(format!(".{stem}.{}-{n}.tmp", std::process::id()));
+    let written = (|| {
+        use std::io::Write as _;
+        let mut f = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&tmp)?;
+        f.write_all(text.as_bytes())?;
+        f.sync_all()?;
+        std::fs::rename(&tmp, path)
+    })();
+    if let Err(e) = written {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(fail(e));
+    }
+    Ok(())
 }
 
 /// Import bytes already read from FILE.

@@ -372,9 +372,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             }
             match output {
                 Some(path) => {
-                    std::fs::write(&path, &result.toml).map_err(|e| {
-                        Failure::Input(format!("error: cannot write `{}`: {e}", path.display()))
-                    })?;
+                    input::write_output(&file, &path, &result.toml)?;
                     eprintln!("{summary}; written to {}", path.display());
                     Ok(())
                 }

@@ -163,6 +163,11 @@ impl Builder {
             .with_help("the analyses need at least one joint between two bodies"));
         }
         self.warn_unlinked(&joints, frame);
+        check_magnitudes(&joints)?;
+        // A 10 MB name is quoted by its start only (the written joints keep it whole).
+        for w in self.warnings.iter_mut().chain(self.notes.iter_mut()) {
+            *w = super::names::cap_quoted(std::mem::take(w));
+        }
         let toml = self.write_toml(source_name, format, &joints, frame);
         let mechanism = crate::format::load(source_name, &toml, crate::format::Format::Toml)
             .map_err(|e| {
@@ -326,6 +331,35 @@ impl Builder {
             let _ = writeln!(t, "second = {{ {} }}", fields.join(", "));
         }
     }
+}
+
+/// Every geometry number below [`super::xml::MAX_MAGNITUDE`] in magnitude: poses composed of
+/// numbers each in range can still sum past it, and the written file could not be read back.
+fn check_magnitudes(joints: &[JointRec]) -> Result<(), ImportError> {
+    for j in joints {
+        let g = &j.geometry;
+        let second = g.second.as_ref().map(|s| s.vectors()).unwrap_or_default();
+        let vectors = [g.origin, g.origin2, g.axis, g.axis2, g.normal]
+            .into_iter()
+            .chain(second.into_iter().map(|(_, v)| v))
+            .flatten()
+            .flatten()
+            .chain(g.pitch);
+        if let Some(x) = vectors
+            .into_iter()
+            .find(|x| x.is_nan() || x.abs() >= super::xml::MAX_MAGNITUDE)
+        {
+            let at = j.comments.first().map(String::as_str).unwrap_or("");
+            return Err(ImportError::new(format!(
+                "joint `{}` ({at}): its geometry has the number {x:e}, beyond 1e18 in magnitude",
+                j.id
+            ))
+            .with_help(
+                "the poses in the file place this joint too far away: check their numbers",
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Unique joint ids: an empty id becomes `joint`, a repeated one is suffixed `#2`, `#3`...

@@ -24,7 +24,7 @@ impl ImportError {
     /// An error without a location.
     pub fn new(message: impl Into<String>) -> ImportError {
         ImportError(Box::new(Inner {
-            message: message.into(),
+            message: super::names::cap_quoted(message.into()),
             help: None,
             label: None,
             line_col: None,
@@ -45,7 +45,7 @@ impl ImportError {
         let end = floor_boundary(text, span.end.clamp(start, text.len()));
         let mut e = ImportError::new(message);
         e.0.line_col = Some(line_col(text, start));
-        e.0.label = Some((start..end, label.into()));
+        e.0.label = Some((start..end, super::names::cap_quoted(label.into())));
         e.0.file = Some(name.to_string());
         e.0.source = Some(NamedSource::new(name, text.to_string()));
         e
@@ -53,7 +53,7 @@ impl ImportError {
 
     /// The same error with a hint.
     pub fn with_help(mut self, help: impl Into<String>) -> ImportError {
-        self.0.help = Some(help.into());
+        self.0.help = Some(super::names::cap_quoted(help.into()));
         self
     }
 

@@ -11,6 +11,7 @@
 mod builder;
 mod error;
 mod mjcf;
+mod names;
 mod osim;
 mod pins;
 mod pose;
@@ -22,7 +23,8 @@ mod xml;
 pub use error::ImportError;
 
 pub(crate) use builder::{Builder, JointRec};
-pub(crate) use pose::{Pose, arr, point_closure, pose, rpy, unit};
+pub(crate) use names::Unique;
+pub(crate) use pose::{Pose, arr, point_closure, pose, rpy, tame, unit, unit_quat};
 pub(crate) use xml::{Node, Src, child, children, tolerate_spaced_declarations};
 
 #[cfg(test)]
@@ -33,7 +35,8 @@ use std::path::Path;
 #[cfg(test)]
 use toml_text::{num, precision_text};
 
-/// Largest source file accepted, in bytes.
+/// Largest source accepted by default, in bytes: the main file and the files it includes
+/// together ([`ImportOptions::max_input_bytes`] sets another limit).
 pub const MAX_SOURCE_BYTES: usize = 64 * 1024 * 1024;
 
 /// A source format the importer reads.
@@ -125,6 +128,28 @@ pub struct ImportOptions {
     pub keyframe: Option<String>,
     /// Merge coincident coaxial revolute joints that share a body into multiple joints.
     pub merge_pins: bool,
+    /// Largest input accepted, in bytes: the main file and every file it includes together
+    /// (default [`MAX_SOURCE_BYTES`]; the command line gives its `--max-input-bytes`).
+    pub max_input_bytes: Option<u64>,
+}
+
+impl ImportOptions {
+    /// The input limit in force ([`ImportOptions::max_input_bytes`]).
+    pub fn byte_limit(&self) -> u64 {
+        self.max_input_bytes.unwrap_or(MAX_SOURCE_BYTES as u64)
+    }
+}
+
+/// The error of an input over the limit `allowed` (`needed` bytes, or more when `at_least`).
+pub(crate) fn too_large(what: String, needed: u64, at_least: bool, allowed: u64) -> ImportError {
+    let e = crate::budget::BudgetExceeded {
+        limit: crate::budget::Limit::InputBytes,
+        what,
+        needed,
+        at_least,
+        allowed,
+    };
+    ImportError::new(e.to_string()).with_help(e.help())
 }
 
 /// The result of an import.
@@ -164,11 +189,18 @@ impl Import {
     }
 }
 
-/// Import a file from disk. Files it includes are read relative to its directory.
+/// Import a file from disk. Files it includes are read relative to its directory. A regular
+/// file over the input limit is refused before it is read, any other file read up to it.
 pub fn import_file(path: &Path, options: &ImportOptions) -> Result<Import, ImportError> {
     let name = path.display().to_string();
-    let bytes =
-        std::fs::read(path).map_err(|e| ImportError::new(format!("cannot read `{name}`: {e}")))?;
+    let budget = crate::budget::Budget {
+        max_input_bytes: options.byte_limit(),
+        ..crate::budget::Budget::UNLIMITED
+    };
+    let bytes = budget.read_file(path).map_err(|e| match e {
+        crate::budget::ReadError::Io(e) => ImportError::new(format!("cannot read `{name}`: {e}")),
+        crate::budget::ReadError::TooLarge(e) => too_large(e.what, e.needed, e.at_least, e.allowed),
+    })?;
     import_bytes(&name, &bytes, path.parent(), options)
 }
 
@@ -180,12 +212,13 @@ pub fn import_bytes(
     base_dir: Option<&Path>,
     options: &ImportOptions,
 ) -> Result<Import, ImportError> {
-    if bytes.len() > MAX_SOURCE_BYTES {
-        return Err(ImportError::new(format!(
-            "`{name}` is {} MiB; the importer accepts at most {} MiB",
-            bytes.len() / (1024 * 1024),
-            MAX_SOURCE_BYTES / (1024 * 1024)
-        )));
+    if bytes.len() as u64 > options.byte_limit() {
+        return Err(too_large(
+            format!("reading `{name}`"),
+            bytes.len() as u64,
+            false,
+            options.byte_limit(),
+        ));
     }
     let bytes = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
     let text = std::str::from_utf8(bytes).map_err(|e| {

@@ -3,7 +3,7 @@
 
 use super::toml_text::num;
 use crate::mechanism::Geometry;
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion, Vector3};
 
 /// A pose: rotation then translation (maps body coordinates to world coordinates).
 pub(crate) type Pose = Isometry3<f64>;
@@ -18,11 +18,35 @@ pub(crate) fn rpy(r: f64, p: f64, y: f64) -> UnitQuaternion<f64> {
     UnitQuaternion::from_euler_angles(r, p, y)
 }
 
-/// A unit vector from three numbers, `None` if it is zero.
+/// A unit vector from three numbers, `None` if it is zero (or not finite).
 pub(crate) fn unit(v: &[f64]) -> Option<Vector3<f64>> {
-    let v = Vector3::new(v[0], v[1], v[2]);
+    let v = tame(Vector3::new(v[0], v[1], v[2]));
     let n = v.norm();
     (n > 1e-12 && n.is_finite()).then(|| v / n)
+}
+
+/// `v` as it is when its norm is finite, else divided by its largest component first (a
+/// vector of 1e200s overflows the sum of squares; scaled it keeps its direction).
+pub(crate) fn tame(v: Vector3<f64>) -> Vector3<f64> {
+    if v.norm().is_finite() {
+        return v;
+    }
+    let m = v.amax();
+    if m.is_finite() && m > 0.0 { v / m } else { v }
+}
+
+/// The rotation of a quaternion `w x y z`, `None` if it is zero (norm below 1e-12) or not
+/// finite; one whose norm overflows is scaled by its largest component first.
+pub(crate) fn unit_quat(w: f64, x: f64, y: f64, z: f64) -> Option<UnitQuaternion<f64>> {
+    let mut q = Quaternion::new(w, x, y, z);
+    if !q.norm().is_finite() {
+        let m = q.coords.amax();
+        if !m.is_finite() {
+            return None;
+        }
+        q /= m;
+    }
+    (q.norm() >= 1e-12).then(|| UnitQuaternion::from_quaternion(q))
 }
 
 pub(crate) fn arr(v: Vector3<f64>) -> [f64; 3] {

@@ -6,11 +6,12 @@
 //! joints, joint for axes).
 
 use super::{
-    Builder, ImportError, JointRec, Node, Pose, Src, arr, child, children, pose, rpy, unit,
+    Builder, ImportError, JointRec, Node, Pose, Src, Unique, arr, child, children, pose, rpy, unit,
+    unit_quat,
 };
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
 /// Read an SDFormat document.
@@ -50,11 +51,32 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
         for m in children(w, "model") {
             models.push((m, Pose::identity()));
         }
-        for inc in children(w, "include") {
-            let _ = inc;
-        }
+    }
+    // Models by URI are not resolved: said, also when nothing else is there to read.
+    let includes: Vec<String> = root
+        .descendants()
+        .filter(|n| n.has_tag_name("include"))
+        .map(|inc| {
+            let uri = child(inc, "uri")
+                .and_then(|u| u.text())
+                .unwrap_or("")
+                .trim();
+            format!(
+                "{}: <include> of a model by URI (`{uri}`) not resolved: not imported",
+                src.loc(inc)
+            )
+        })
+        .collect();
+    let mut model_names = Unique::new("model");
+    for (m, _) in &models {
+        model_names.add(src, *m, "name", m.attribute("name").unwrap_or("model"))?;
     }
     let Some(first) = models.first() else {
+        if !includes.is_empty() {
+            return Err(src
+                .err(root, "no model", "no <model> in the file: its models are <include>d by URI, which the importer does not resolve")
+                .with_help(format!("{} (write the included models into the file)", includes.join("; "))));
+        }
         return Err(src
             .err(root, "no model", "no <model> in the file")
             .with_help("the importer reads the <model> elements of <sdf> or of its <world>"));
@@ -74,13 +96,8 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     for (m, _) in &models {
         read_model(src, *m, version, scoped, &mut b)?;
     }
-    for w in children(root, "world") {
-        for inc in children(w, "include") {
-            let loc = src.loc(inc);
-            b.warn(format!(
-                "{loc}: <include> of a model by URI not resolved: not imported"
-            ));
-        }
+    for w in includes {
+        b.warn(w);
     }
     b.notes.push(format!("SDFormat 1.{version} frame rules"));
     // SDFormat has no actuator element: what drives a model's joints is plugin code (a Gazebo
@@ -107,13 +124,12 @@ fn parse_pose(src: &Src, p: Node) -> Result<Pose, ImportError> {
     }
     if p.attribute("rotation_format") == Some("quat_xyzw") {
         let v = src.nums_text(p, 7)?;
-        let q = Quaternion::new(v[6], v[3], v[4], v[5]);
-        if q.norm() < 1e-12 {
+        let Some(q) = unit_quat(v[6], v[3], v[4], v[5]) else {
             return Err(src
                 .err_text(p, "zero quaternion", "a zero quaternion")
                 .with_help("quat_xyzw poses are x y z qx qy qz qw"));
-        }
-        return Ok(pose([v[0], v[1], v[2]], UnitQuaternion::from_quaternion(q)));
+        };
+        return Ok(pose([v[0], v[1], v[2]], q));
     }
     let v = src.nums_text_unnoted(p, 6)?;
     let k = if p.attribute("degrees") == Some("true") {
@@ -329,6 +345,7 @@ impl<'a> ModelRead<'a, '_> {
 
     /// The `<link>` elements, each a frame relative to the model by default.
     fn read_links(&mut self) -> Result<(), ImportError> {
+        let mut names = Unique::new("link");
         for l in children(self.m, "link") {
             let Some(name) = l.attribute("name") else {
                 return Err(self
@@ -336,6 +353,13 @@ impl<'a> ModelRead<'a, '_> {
                     .err(l, "no name", "<link> without a `name`")
                     .with_help("every link has a unique name"));
             };
+            if name.is_empty() || name == "world" || name == "__model__" {
+                return Err(self
+                    .src
+                    .err_attr(l, "name", "reserved", format!("a link named `{name}`"))
+                    .with_help("`world` and `__model__` are frames of SDFormat, and a link needs a name: rename this one"));
+            }
+            names.add(self.src, l, "name", name)?;
             self.links.push((name.to_string(), l));
             let def = FrameDef {
                 pose: self.own_pose(l)?,
@@ -378,6 +402,7 @@ impl<'a> ModelRead<'a, '_> {
     /// The `<joint>` elements, each a frame relative to its child link by default.
     fn read_joints(&mut self) -> Result<Vec<SJoint<'a>>, ImportError> {
         let mut joints: Vec<SJoint> = Vec::new();
+        let mut names = Unique::new("joint");
         for j in children(self.m, "joint") {
             let Some(name) = j.attribute("name") else {
                 return Err(self
@@ -385,6 +410,7 @@ impl<'a> ModelRead<'a, '_> {
                     .err(j, "no name", "<joint> without a `name`")
                     .with_help("every joint has a unique name"));
             };
+            names.add(self.src, j, "name", name)?;
             let kind = j.attribute("type").unwrap_or("").to_string();
             let parent = self.joint_link(j, name, "parent")?;
             let child_link = self.joint_link(j, name, "child")?;

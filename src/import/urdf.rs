@@ -4,12 +4,12 @@
 //! `<gazebo><joint>` extension.
 
 use super::{
-    Builder, ImportError, JointRec, Node, Pose, Src, arr, child, children, pose, rpy, unit,
+    Builder, ImportError, JointRec, Node, Pose, Src, Unique, arr, child, children, pose, rpy, unit,
 };
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
 use nalgebra::{Point3, Vector3};
-use std::collections::HashMap;
+use std::collections::{HashMap, HashSet};
 
 /// A joint of the file.
 struct UJoint<'a> {
@@ -25,16 +25,25 @@ struct UJoint<'a> {
 /// A link of the file: its name and element, in file order.
 type Link<'a> = (String, Node<'a>);
 
+/// The links of the file in file order, and their names (for lookups in constant time).
+struct Links<'a> {
+    list: Vec<Link<'a>>,
+    names: HashSet<String>,
+}
+
 /// Read a URDF document.
 pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, ImportError> {
     let root = doc.root_element();
     let robot = root.attribute("name").unwrap_or("robot");
     let links = read_links(src, root)?;
     let mut joints: Vec<UJoint> = Vec::new();
+    let mut joint_names = Unique::new("joint");
     for j in children(root, "joint") {
-        joints.push(parse_joint(src, j, &links, false)?);
+        let uj = parse_joint(src, j, &links, false)?;
+        joint_names.add(src, j, "name", &uj.name)?;
+        joints.push(uj);
     }
-    let roots = tree_roots(src, &joints, &links)?;
+    let roots = tree_roots(src, &joints, &links.list)?;
     let Some(&frame) = roots.first() else {
         return Err(src
             .err(
@@ -47,7 +56,7 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     let mut b = Builder::new(robot, frame, "the URDF root link");
     b.configuration = "every joint at position 0 (URDF has no default positions)".into();
     let (world, joint_world) = world_poses(src, &joints, &roots)?;
-    for (name, _) in &links {
+    for (name, _) in &links.list {
         b.body(name, "");
     }
     for extra in roots.iter().skip(1) {
@@ -71,28 +80,26 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     Ok(b)
 }
 
-/// The `<link>` elements, names unique.
-fn read_links<'a>(src: &Src, root: Node<'a>) -> Result<Vec<Link<'a>>, ImportError> {
-    let mut links: Vec<Link> = Vec::new();
+/// The `<link>` elements, names unique and not empty.
+fn read_links<'a>(src: &Src, root: Node<'a>) -> Result<Links<'a>, ImportError> {
+    let mut list: Vec<Link> = Vec::new();
+    let mut unique = Unique::new("link");
     for l in children(root, "link") {
         let Some(name) = l.attribute("name") else {
             return Err(src
                 .err(l, "no name", "<link> without a `name`")
                 .with_help("every URDF link has a unique name"));
         };
-        if links.iter().any(|(n, _)| n == name) {
+        if name.is_empty() {
             return Err(src
-                .err_attr(
-                    l,
-                    "name",
-                    "repeated",
-                    format!("link `{name}` is defined twice"),
-                )
-                .with_help("link names must be unique"));
+                .err_attr(l, "name", "empty", "<link> with an empty `name`")
+                .with_help("every URDF link has a unique, non-empty name"));
         }
-        links.push((name.to_string(), l));
+        unique.add(src, l, "name", name)?;
+        list.push((name.to_string(), l));
     }
-    Ok(links)
+    let names = list.iter().map(|(n, _)| n.clone()).collect();
+    Ok(Links { list, names })
 }
 
 /// The links that are the child of no joint, in link order; each link is the child of at most
@@ -131,19 +138,20 @@ fn world_poses(
         world.insert(r.to_string(), Pose::identity());
     }
     let mut joint_world: Vec<Option<Pose>> = vec![None; joints.len()];
-    let mut changed = true;
-    while changed {
-        changed = false;
-        for (k, j) in joints.iter().enumerate() {
-            if joint_world[k].is_some() {
-                continue;
-            }
-            if let Some(p) = world.get(&j.parent).copied() {
-                let jw = p * j.origin;
-                joint_world[k] = Some(jw);
-                world.insert(j.child.clone(), jw);
-                changed = true;
-            }
+    // Joints by parent link, then down from the roots (each link is the child of one joint).
+    let mut by_parent: HashMap<&str, Vec<usize>> = HashMap::new();
+    for (k, j) in joints.iter().enumerate() {
+        by_parent.entry(j.parent.as_str()).or_default().push(k);
+    }
+    let mut stack: Vec<&str> = roots.iter().rev().copied().collect();
+    while let Some(link) = stack.pop() {
+        let Some(&p) = world.get(link) else { continue };
+        for &k in by_parent.get(link).map(Vec::as_slice).unwrap_or(&[]) {
+            let j = &joints[k];
+            let jw = p * j.origin;
+            joint_world[k] = Some(jw);
+            world.insert(j.child.clone(), jw);
+            stack.push(j.child.as_str());
         }
     }
     for (k, j) in joints.iter().enumerate() {
@@ -223,7 +231,7 @@ fn read_closures(
     src: &Src,
     root: Node,
     b: &mut Builder,
-    links: &[Link],
+    links: &Links,
     world: &HashMap<String, Pose>,
 ) -> Result<(), ImportError> {
     let find = |name: &str| -> Option<Pose> { world.get(name).copied() };
@@ -318,7 +326,7 @@ fn ball_constraint(
 fn parse_joint<'a>(
     src: &Src,
     j: Node<'a>,
-    links: &[Link],
+    links: &Links,
     sdf_style: bool,
 ) -> Result<UJoint<'a>, ImportError> {
     let Some(name) = j.attribute("name") else {
@@ -374,7 +382,7 @@ fn joint_link(
     j: Node,
     name: &str,
     tag: &str,
-    links: &[Link],
+    links: &Links,
     sdf_style: bool,
 ) -> Result<String, ImportError> {
     let Some(n) = child(j, tag) else {
@@ -391,7 +399,7 @@ fn joint_link(
     } else {
         n.attribute("link").unwrap_or("")
     };
-    if !links.iter().any(|(x, _)| x == l) {
+    if !links.names.contains(l) {
         let at = if sdf_style {
             src.err_text(
                 n,

@@ -31,6 +31,7 @@ mod georigid_exact_scale;
 mod georigid_scale;
 mod hostile_input;
 mod import;
+mod import_hostile;
 mod layers;
 mod pebble_parity;
 mod pebble_perf;

@@ -2,7 +2,7 @@
 //! orientations, and the walk that numbers bodies and joints in MuJoCo's order.
 
 use super::{Ctx, E, Kind, MAX_FRAME_DEPTH, MBody, MJoint, Pending};
-use crate::import::{ImportError, Node, Pose, Src, pose, unit};
+use crate::import::{ImportError, Node, Pose, Src, pose, tame, unit, unit_quat};
 use nalgebra::{Rotation3, UnitQuaternion, Vector3};
 
 impl<'d> Ctx<'d> {
@@ -120,13 +120,10 @@ impl<'d> Ctx<'d> {
                 ));
         }
         if let Some(q) = s.nums_attr(n, "quat", 4)? {
-            let v = nalgebra::Quaternion::new(q[0], q[1], q[2], q[3]);
-            if v.norm() < 1e-12 {
-                return Err(s
-                    .err_attr(n, "quat", "zero", "a zero quaternion")
-                    .with_help("quat is w x y z, not all zero"));
-            }
-            return Ok(UnitQuaternion::from_quaternion(v));
+            return unit_quat(q[0], q[1], q[2], q[3]).ok_or_else(|| {
+                s.err_attr(n, "quat", "zero", "a zero quaternion")
+                    .with_help("quat is w x y z, not all zero")
+            });
         }
         if let Some(a) = s.nums_attr_unnoted(n, "axisangle", 4)? {
             s.note(&a[..3], 1.0);
@@ -179,21 +176,23 @@ impl<'d> Ctx<'d> {
             let s = self.src(k);
             let local = rel * self.pose_of(k)?;
             let idx = self.bodies.len();
-            let name = match k.n.attribute("name") {
-                Some(n) if !n.is_empty() => n.to_string(),
-                _ => format!("body{idx}"),
-            };
-            if name == "world" {
+            let name = k.n.attribute("name").filter(|n| !n.is_empty());
+            if name == Some("world") {
                 return Err(s
                     .err_attr(k.n, "name", "reserved", "a body named `world`")
                     .with_help("`world` is MuJoCo's world body; rename this one"));
+            }
+            if let Some(n) = name {
+                let srcs: &'d [Src<'d>] = self.srcs;
+                self.body_names.add(&srcs[k.f], k.n, "name", n)?;
             }
             let cc =
                 k.n.attribute("childclass")
                     .map(str::to_string)
                     .or(childclass);
             self.bodies.push(MBody {
-                name,
+                name: name.unwrap_or_default().to_string(),
+                named: name.is_some(),
                 parent,
                 local,
                 joints: Vec::new(),
@@ -202,6 +201,25 @@ impl<'d> Ctx<'d> {
             stack.extend(found.drain(..).rev());
         }
         Ok(())
+    }
+
+    /// Name the bodies without a name `body<index>` (`#2`, `#3`... appended when a named body
+    /// has that name): the names must not merge an unnamed body with a named one.
+    pub(super) fn name_unnamed_bodies(&mut self) {
+        let mut taken: std::collections::HashSet<String> = std::collections::HashSet::new();
+        for i in 1..self.bodies.len() {
+            if self.bodies[i].named {
+                continue;
+            }
+            let base = format!("body{i}");
+            let free = |n: &String| !self.body_names.contains(n) && !taken.contains(n);
+            let name = std::iter::once(base.clone())
+                .chain((2..).map(|k| format!("{base}#{k}")))
+                .find(free)
+                .unwrap_or(base);
+            taken.insert(name.clone());
+            self.bodies[i].name = name;
+        }
     }
 
     /// The children of a body (or the worldbody, or a frame) `e`: joints and sites go to
@@ -293,6 +311,10 @@ impl<'d> Ctx<'d> {
                     format!("default class `{class}` is not defined"),
                 )
                 .with_help("define it with <default class=\"...\"> inside <default>"));
+        }
+        if let Some(n) = k.n.attribute("name").filter(|n| !n.is_empty()) {
+            let srcs: &'d [Src<'d>] = self.srcs;
+            self.joint_names.add(&srcs[k.f], k.n, "name", n)?;
         }
         let kind = self.joint_kind(k, &class, free)?;
         let (pos, axis) = self.joint_pos_axis(k, &class, free, rel)?;
@@ -438,8 +460,8 @@ impl<'d> Ctx<'d> {
 
 /// The rotation of `xyaxes` (`a`: the x axis then the y axis, made orthonormal).
 fn xyaxes(s: &Src, n: Node, a: &[f64]) -> Result<UnitQuaternion<f64>, ImportError> {
-    let x = Vector3::new(a[0], a[1], a[2]);
-    let y = Vector3::new(a[3], a[4], a[5]);
+    let x = tame(Vector3::new(a[0], a[1], a[2]));
+    let y = tame(Vector3::new(a[3], a[4], a[5]));
     let bad = || {
         s.err_attr(
             n,

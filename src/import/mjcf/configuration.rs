@@ -2,10 +2,30 @@
 //! at it.
 
 use super::{Ctx, E, Fk, Kind};
-use crate::import::{ImportError, ImportOptions, Pose, pose};
+use crate::import::{ImportError, ImportOptions, Pose, Unique, pose, unit_quat};
 use nalgebra::{Translation3, UnitQuaternion};
 
 impl<'d> Ctx<'d> {
+    /// Two keyframes with one name are refused (MuJoCo refuses them; `--keyframe` would pick
+    /// one of them silently).
+    pub(super) fn check_keyframe_names(
+        &self,
+        top: &[E<'d>],
+        docs: &'d [roxmltree::Document<'d>],
+    ) -> Result<(), ImportError> {
+        let mut names = Unique::new("keyframe");
+        for sec in top.iter().filter(|e| e.n.has_tag_name("keyframe")) {
+            for k in self.kids(*sec, docs) {
+                if let Some(n) = k.n.attribute("name").filter(|n| !n.is_empty())
+                    && k.n.has_tag_name("key")
+                {
+                    names.add(self.src(k), k.n, "name", n)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// The keyframe's qpos (`None` = qpos0) and the configuration in words.
     pub(super) fn keyframe(
         &self,
@@ -97,22 +117,17 @@ impl<'d> Ctx<'d> {
                         }
                     }
                     Kind::Ball => {
-                        if let (Some(w), Some(x), Some(y), Some(z)) = (q(0), q(1), q(2), q(3)) {
-                            let v = nalgebra::Quaternion::new(w, x, y, z);
-                            if v.norm() > 1e-12 {
-                                p = about(p, UnitQuaternion::from_quaternion(v));
-                            }
+                        if let (Some(w), Some(x), Some(y), Some(z)) = (q(0), q(1), q(2), q(3))
+                            && let Some(r) = unit_quat(w, x, y, z)
+                        {
+                            p = about(p, r);
                         }
                     }
                     Kind::Free => {
                         if let Some(v) = qpos {
                             let a = &v[j.qposadr..j.qposadr + 7];
-                            let quat = nalgebra::Quaternion::new(a[3], a[4], a[5], a[6]);
-                            let r = if quat.norm() > 1e-12 {
-                                UnitQuaternion::from_quaternion(quat)
-                            } else {
-                                UnitQuaternion::identity()
-                            };
+                            let r = unit_quat(a[3], a[4], a[5], a[6])
+                                .unwrap_or_else(UnitQuaternion::identity);
                             p = pose([a[0], a[1], a[2]], r);
                         }
                     }

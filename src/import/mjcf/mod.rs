@@ -6,7 +6,7 @@ mod body_tree;
 mod configuration;
 mod equality;
 
-use super::{Builder, ImportError, ImportOptions, JointRec, Node, Pose, Src, arr};
+use super::{Builder, ImportError, ImportOptions, JointRec, Node, Pose, Src, Unique, arr};
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
 use nalgebra::Vector3;
@@ -91,7 +91,10 @@ struct MJoint<'d> {
 }
 
 struct MBody<'d> {
+    /// The body's `name`; for one without a name (`named` false) empty until the whole tree
+    /// is read, then a name no named body has.
     name: String,
+    named: bool,
     parent: usize,
     local: Pose,
     joints: Vec<MJoint<'d>>,
@@ -112,6 +115,9 @@ struct Ctx<'d> {
     sites: HashMap<String, Site>,
     nq: usize,
     unsupported: Vec<String>,
+    /// The named bodies and joints so far (each name once).
+    body_names: Unique,
+    joint_names: Unique,
 }
 
 /// The files of a model: (name, text) of the main file then each included one (in scan
@@ -130,7 +136,7 @@ pub(super) fn read(
     base_dir: Option<&Path>,
     options: &ImportOptions,
 ) -> Result<Builder, ImportError> {
-    let (texts, inc_paths, tolerated) = load_files(src, base_dir)?;
+    let (texts, inc_paths, tolerated) = load_files(src, base_dir, options.byte_limit())?;
     // `texts` is in scan order: file i of `inc_paths` refers to texts[i].
     let srcs: Vec<Src> = texts.iter().map(|(n, t)| Src::new(n, t)).collect();
     let docs: Vec<roxmltree::Document> =
@@ -150,6 +156,7 @@ pub(super) fn read(
     }
     cx.bodies.push(MBody {
         name: "world".into(),
+        named: true,
         parent: 0,
         local: Pose::identity(),
         joints: Vec::new(),
@@ -157,6 +164,8 @@ pub(super) fn read(
     for e in top.iter().filter(|e| e.n.has_tag_name("worldbody")) {
         cx.walk(*e, &docs)?;
     }
+    cx.name_unnamed_bodies();
+    cx.check_keyframe_names(&top, &docs)?;
     cx.note_unsupported_sections(&top, &docs);
 
     let model_name = root
@@ -202,28 +211,23 @@ pub(super) fn read(
 }
 
 /// The main file and every file it includes, read first (their texts must outlive the parsed
-/// documents); includes nested at most [`MAX_INCLUDE_DEPTH`] deep, each file once.
-fn load_files(src: &Src, base_dir: Option<&Path>) -> Result<Files, ImportError> {
+/// documents); includes nested at most [`MAX_INCLUDE_DEPTH`] deep, each file once, all of them
+/// together at most `limit` bytes.
+fn load_files(src: &Src, base_dir: Option<&Path>, limit: u64) -> Result<Files, ImportError> {
     let mut texts: Vec<(String, String)> = Vec::new();
     let mut inc_paths: Vec<(usize, usize, PathBuf)> = Vec::new(); // (file, include start, path)
     let mut scan = vec![(src.name.to_string(), src.text.to_string(), 0usize)];
     let mut seen: Vec<PathBuf> = Vec::new();
     let mut file_index = 0usize;
     let mut tolerated: Vec<String> = Vec::new();
+    let mut used = src.text.len() as u64;
     while let Some((name, text, depth)) = scan.pop() {
         let s = Src::new(&name, &text);
         let doc = s.parse()?;
         for n in doc.descendants().filter(|n| n.has_tag_name("include")) {
             let path = include_path(&s, n, depth, base_dir, &seen)?;
-            let text = std::fs::read_to_string(&path).map_err(|e| {
-                s.err_attr(
-                    n,
-                    "file",
-                    "cannot read",
-                    format!("cannot read included file `{}`: {e}", path.display()),
-                )
-                .with_help("include paths are relative to the directory of the main model file")
-            })?;
+            let text = read_include(&s, n, &path, limit.saturating_sub(used), limit)?;
+            used += text.len() as u64;
             // An included file may begin with a spaced `<? xml ...?>` too (as MuJoCo reads it).
             let text = match super::tolerate_spaced_declarations(&path.display().to_string(), &text)
             {
@@ -241,6 +245,83 @@ fn load_files(src: &Src, base_dir: Option<&Path>) -> Result<Files, ImportError> 
         file_index += 1;
     }
     Ok((texts, inc_paths, tolerated))
+}
+
+/// The text of the file an `<include>` `n` names: a regular file (a device or FIFO would be
+/// read without end), of at most `room` bytes (what the input limit `limit` leaves), UTF-8
+/// text that begins like XML (anything else is refused without quoting it).
+fn read_include(
+    s: &Src,
+    n: Node,
+    path: &Path,
+    room: u64,
+    limit: u64,
+) -> Result<String, ImportError> {
+    use std::io::Read as _;
+    let shown = path.display();
+    let fail = |label: &str, message: String| {
+        s.err_attr(n, "file", label, message)
+            .with_help("include paths are relative to the directory of the main model file")
+    };
+    let cannot = |e: std::io::Error| {
+        fail(
+            "cannot read",
+            format!("cannot read included file `{shown}`: {e}"),
+        )
+    };
+    // The kind first, from the path (opening a FIFO would wait for a writer), then again from
+    // the open file.
+    let not_regular = || {
+        fail(
+            "not a regular file",
+            format!("included file `{shown}` is not a regular file (a directory, device or FIFO)"),
+        )
+    };
+    if !std::fs::metadata(path).map_err(cannot)?.is_file() {
+        return Err(not_regular());
+    }
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    let meta = file.metadata().map_err(cannot)?;
+    if !meta.is_file() {
+        return Err(not_regular());
+    }
+    let over = |needed: u64, at_least: bool| {
+        let e = super::too_large(
+            format!("reading `{shown}` (included; with the files before it)"),
+            needed,
+            at_least,
+            limit,
+        );
+        fail("over the input limit", e.message().to_string())
+            .with_help(e.hint().unwrap_or_default())
+    };
+    // Its size before reading it; then at most what is left (it may grow meanwhile).
+    let used = limit - room;
+    if meta.len() > room {
+        return Err(over(used.saturating_add(meta.len()), false));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    file.take(room.saturating_add(1))
+        .read_to_end(&mut bytes)
+        .map_err(cannot)?;
+    if bytes.len() as u64 > room {
+        return Err(over(used.saturating_add(bytes.len() as u64), true));
+    }
+    let text = String::from_utf8(bytes).map_err(|_| {
+        cannot(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        ))
+    })?;
+    let start = text.trim_start_matches('\u{FEFF}').trim_start();
+    if !start.is_empty() && !start.starts_with('<') {
+        return Err(fail(
+            "not XML",
+            format!("included file `{shown}` is not XML (it does not begin with `<`)"),
+        )
+        .with_help("<include file> names an MJCF (XML) file"));
+    }
+    Ok(text)
 }
 
 /// The path an `<include>` at `depth` names, relative to `base_dir`: not too deep, not seen.
@@ -313,6 +394,8 @@ impl<'d> Ctx<'d> {
             sites: HashMap::new(),
             nq: 0,
             unsupported: Vec::new(),
+            body_names: Unique::new("body"),
+            joint_names: Unique::new("joint"),
         }
     }
 
@@ -391,10 +474,13 @@ impl<'d> Ctx<'d> {
         let mut joint_index: HashMap<String, usize> = HashMap::new();
         let mut ids: Vec<usize> = vec![0; self.bodies.len()];
         ids[0] = b.frame;
+        // Every body first, so that the virtual bodies' names avoid all of theirs.
+        for (id, body) in ids.iter_mut().zip(&self.bodies).skip(1) {
+            *id = b.body(&body.name, "");
+        }
         for i in 1..self.bodies.len() {
             let body = &self.bodies[i];
-            let me = b.body(&body.name, "");
-            ids[i] = me;
+            let me = ids[i];
             let parent = ids[body.parent];
             if body.joints.is_empty() {
                 b.weld(parent, me, "MJCF body without joints");

@@ -41,7 +41,7 @@ pub(super) fn read_joint<'a>(
                 .with_help("name a Body of the BodySet, or the ground"));
         }
     }
-    let coords = joint_coords(src, b, j);
+    let coords = joint_coords(src, b, j)?;
     if text_of(j, "reverse") == Some("true") {
         let loc = src.loc(j);
         b.warn(format!(
@@ -128,19 +128,21 @@ fn joint_frames_4(src: &Src, j: Node, name: &str) -> Result<JointFrames, ImportE
     Ok((p, c, x_pf, x_bm))
 }
 
-/// A joint's coordinates and their default values (a locked coordinate warned: imported free).
-fn joint_coords(src: &Src, b: &mut Builder, j: Node) -> Vec<(String, f64)> {
+/// A joint's coordinates and their default values (a locked coordinate warned: imported free;
+/// a default value that is not one finite number refused with its location).
+fn joint_coords(src: &Src, b: &mut Builder, j: Node) -> Result<Vec<(String, f64)>, ImportError> {
     let cset = child(j, "CoordinateSet")
         .and_then(|c| child(c, "objects"))
         .or_else(|| child(j, "coordinates"));
     let mut coords = Vec::new();
     if let Some(cs) = cset {
         for c in children(cs, "Coordinate") {
-            let v = text_of(c, "default_value")
-                .and_then(|v| v.parse::<f64>().ok())
-                .filter(|v| v.is_finite())
-                .unwrap_or(0.0);
-            src.note(&[v], 1.0);
+            let v = match child(c, "default_value") {
+                Some(d) => src.nums_text(d, 1).map_err(|e| {
+                    e.with_help("a coordinate's default_value is one finite number")
+                })?[0],
+                None => 0.0,
+            };
             coords.push((c.attribute("name").unwrap_or("").to_string(), v));
             if text_of(c, "locked") == Some("true") {
                 let loc = src.loc(c);
@@ -151,7 +153,7 @@ fn joint_coords(src: &Src, b: &mut Builder, j: Node) -> Vec<(String, f64)> {
             }
         }
     }
-    coords
+    Ok(coords)
 }
 
 /// The tree at the default coordinates: each body's world pose, each joint's motion, and the
@@ -355,11 +357,24 @@ fn planar_motion(f: Pose, q0: f64, q1: f64, q2: f64) -> Motion {
 }
 
 /// A joint type not representable exactly (`other`): R, U or S by its number of coordinates
-/// (F beyond), warned.
+/// (F beyond; a weld without coordinates: it allows no motion), warned.
 fn approximate_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose, other: &str) -> Motion {
     let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
     let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
     let loc = src.loc(j.n);
+    if j.coords.is_empty() {
+        b.warn(format!(
+            "{loc}: <{other}> `{}` is not a joint type the importer knows and has no \
+             coordinates: imported as a weld (it allows no motion)",
+            j.name
+        ));
+        return (
+            Pose::identity(),
+            JointType::F,
+            Geometry::default(),
+            vec!["weld".into()],
+        );
+    }
     let (kind, geom) = match j.coords.len() {
         1 => (
             JointType::R,

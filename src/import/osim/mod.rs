@@ -7,7 +7,7 @@ mod custom;
 mod forces;
 mod joints;
 
-use super::{Builder, ImportError, Node, Pose, Src, child, children};
+use super::{Builder, ImportError, Node, Pose, Src, Unique, child, children};
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -162,13 +162,24 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
             jnodes.push((k, None));
         }
     }
+    let mut body_names = Unique::new("body");
     for body in &bodies {
         if let Some(n) = body.attribute("name") {
+            if n.is_empty() {
+                return Err(src
+                    .err_attr(*body, "name", "empty", "<Body> with an empty `name`")
+                    .with_help("every body has a unique, non-empty name"));
+            }
+            body_names.add(src, *body, "name", n)?;
             b.body(n, "");
         }
     }
     let mut joints: Vec<OJoint> = Vec::new();
+    let mut joint_names = Unique::new("joint");
     for (j, owner) in &jnodes {
+        if let Some(n) = j.attribute("name").filter(|n| !n.is_empty()) {
+            joint_names.add(src, *j, "name", n)?;
+        }
         joints.push(joints::read_joint(
             src, &mut b, *j, owner, &bodies, &ground,
         )?);
