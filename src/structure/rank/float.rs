@@ -63,6 +63,16 @@ impl Svd {
         }
     }
 
+    /// The singular values and the left basis only (the same values as [`Svd::of`]).
+    pub(super) fn left(a: &DMatrix<f64>, t: &Tol) -> Svd {
+        let (sv, tol, u, _) = svd_parts(a, true, false, t);
+        Svd {
+            sv,
+            u: u.expect("requested U"),
+            tol,
+        }
+    }
+
     pub(super) fn rank(&self) -> usize {
         self.sv.iter().filter(|&&s| s > self.tol).count()
     }
