@@ -320,28 +320,38 @@ pub(super) fn set_aside_spins(
             dimension: taken,
         });
         let words = spin_words(&motion.bodies, &motion.joints, taken);
-        // The group deficit on the part, each one named for one spin only.
-        let deficit = redundant.iter_mut().enumerate().find(|(i, r)| {
-            !r.configuration
-                && !named.contains(i)
-                && r.bodies.iter().any(|b| motion.bodies.contains(b))
-        });
-        let deficit = deficit.map(|(i, r)| {
-            named.push(i);
-            r
-        });
-        match deficit {
-            Some(r) if r.count <= taken => r.freedom = words,
-            Some(r) => {
-                r.freedom = format!(
-                    "{words}; {} more freedom(s) that no input controls",
-                    r.count - taken
-                );
-            }
-            None => out.notes.push(words),
+        if let Some(note) = name_deficit(redundant, &mut named, &motion.bodies, taken, words) {
+            out.notes.push(note);
         }
     }
     out
+}
+
+/// The first group deficit on the part `bodies` not yet `named` says its `taken` DOF are the
+/// part's spin (`words`); without one, `words` are a note of their own.
+fn name_deficit(
+    redundant: &mut [Redundancy],
+    named: &mut Vec<usize>,
+    bodies: &[String],
+    taken: u32,
+    words: String,
+) -> Option<String> {
+    let found = redundant.iter_mut().enumerate().find(|(i, r)| {
+        !r.configuration && !named.contains(i) && r.bodies.iter().any(|b| bodies.contains(b))
+    });
+    let Some((i, r)) = found else {
+        return Some(words);
+    };
+    named.push(i);
+    r.freedom = if r.count <= taken {
+        words
+    } else {
+        format!(
+            "{words}; {} more freedom(s) that no input controls",
+            r.count - taken
+        )
+    };
+    None
 }
 
 /// Spin DOF [`set_aside_spins`] sets aside at most (each one decomposition).
