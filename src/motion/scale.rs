@@ -154,31 +154,71 @@ pub fn written_direction_precision(m: &Mechanism) -> f64 {
 }
 
 pub(super) fn written(m: &Mechanism, directions_only: bool) -> f64 {
+    // A number's digits are judged against the size of what it belongs to, not its own
+    // magnitude: a coordinate against the model's largest coordinate, a direction's component
+    // against the direction's largest. Float noise written where 0 is meant (`1.2246e-17` in
+    // a model of size 1) carries digits far below double precision at that size: exact, not
+    // a model "known to ±5e-22".
+    let size = largest_coordinate(m);
     let mut worst: f64 = 0.0;
+    let mut judge = |x: f64, reference: f64| {
+        let r = rounding_of(x);
+        if r > EXACT_BELOW * reference {
+            worst = worst.max(r);
+        }
+    };
     for j in &m.joints {
         let g = &j.geometry;
-        let points = [g.origin, g.origin2];
-        let directions = [g.axis, g.axis2, g.normal];
-        let second = g.second.as_ref().map(|s| {
-            s.vectors()
-                .into_iter()
-                .filter(|(name, _)| !directions_only || *name != "origin")
-                .map(|(_, v)| v)
-        });
-        let vectors = directions
-            .iter()
-            .chain(points.iter().filter(|_| !directions_only))
-            .copied()
-            .chain(second.into_iter().flatten());
-        let numbers = vectors
-            .flatten()
-            .flat_map(|v| v.into_iter())
-            .chain(g.pitch.filter(|_| !directions_only));
-        for x in numbers {
-            worst = worst.max(rounding_of(x));
+        let second = g.second.iter().flat_map(|s| s.vectors());
+        let fields = [
+            ("origin", g.origin),
+            ("origin2", g.origin2),
+            ("axis", g.axis),
+            ("axis2", g.axis2),
+            ("normal", g.normal),
+        ];
+        for (name, v) in fields.into_iter().chain(second) {
+            let Some(v) = v else { continue };
+            let point = name.starts_with("origin");
+            if directions_only && point {
+                continue;
+            }
+            let reference = if point {
+                size
+            } else {
+                v.iter().fold(0.0f64, |a, x| a.max(x.abs()))
+            };
+            for x in v {
+                judge(x, reference);
+            }
+        }
+        if let Some(h) = g.pitch.filter(|_| !directions_only) {
+            judge(h, size);
         }
     }
     worst
+}
+
+/// A number whose rounding is below this fraction of its reference size is exact: 15
+/// significant digits at that size, as [`rounding_of`] takes a number of 15 digits or more.
+const EXACT_BELOW: f64 = 5e-15;
+
+/// The largest absolute coordinate of a joint point (and pitch), in file units: the size a
+/// point's written digits are judged against.
+fn largest_coordinate(m: &Mechanism) -> f64 {
+    m.joints
+        .iter()
+        .flat_map(|j| {
+            let g = &j.geometry;
+            let second = g.second.as_ref().and_then(|s| s.origin);
+            [g.origin, g.origin2, second]
+                .into_iter()
+                .flatten()
+                .flatten()
+                .chain(g.pitch)
+        })
+        .filter(|x| x.is_finite())
+        .fold(0.0f64, |a, x| a.max(x.abs()))
 }
 
 /// The lever arm of the constraint rows at the dimensionless geometry `scale` gives: the

@@ -78,6 +78,7 @@ pub(super) fn build(
         types,
         library: lib.name.clone(),
         isolated,
+        spins: Vec::new(),
         redundant,
         unchecked: Vec::new(),
         diagnosis: (status != Status::Determined || !diag.unsolved.is_empty()).then_some(diag),

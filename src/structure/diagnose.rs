@@ -6,6 +6,7 @@ use super::{
     Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart, capped,
 };
 use crate::mechanism::Mechanism;
+use serde::Serialize;
 
 /// The over- and under-determined parts in words and lists.
 pub(super) fn diagnose(
@@ -225,4 +226,272 @@ fn redundancy_note(r: &Redundancy) -> String {
             r.freedom
         )
     }
+}
+
+/// A rigid part's own spin: its bodies turning together as one body, moving no other, across
+/// a cut of two or more joints that allow it (a part held by two S joints about the line
+/// through their centres). No input turns it: set aside like a single body's isolated freedom.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct Spin {
+    /// The part's bodies.
+    pub bodies: Vec<String>,
+    /// The joints across the cut.
+    pub joints: Vec<String>,
+    /// The DOF set aside.
+    pub dimension: u32,
+}
+
+/// The spins [`set_aside_spins`] set aside, and the notes of those no group deficit names.
+#[derive(Default)]
+pub(super) struct Spins {
+    parts: Vec<Spin>,
+    notes: Vec<String>,
+}
+
+/// The DOF left missing that are isolated freedoms of a rigid part, set aside as `mbsa rigid
+/// --with-inputs` sets them aside (one rule for both: the structurally isolated motions of
+/// [`crate::rigidity::geometric`], a rigid cluster turning as one body across a cut of two or
+/// more joints that allow it, the rest fixed; a part held by two S joints spins about the line
+/// through their centres). Such a spin moves no other body and no input turns it, so it is not
+/// a freedom the inputs leave uncontrolled: each spin's DOF come off the unknowns `u` of the
+/// part's bodies that miss DOF in `dec` (as a single body's isolated freedom does; an unknown
+/// no equation reaches can go without changing the maximum flow), and `dec` is decomposed
+/// again. A group deficit on the part says so in its words; the other spins are returned as
+/// notes. Runs only where the count cannot see the spin: DOF missing after the rank check found
+/// dependent equations (a spin makes the rows of its part dependent), at the geometry of the
+/// analysis; a mechanism too large for the geometric analysis's default budget keeps the
+/// count's answer.
+pub(super) fn set_aside_spins(
+    m: &Mechanism,
+    opts: &super::Options,
+    eqs: &Equations,
+    dec: &mut Decomposition,
+    u: &mut [u32],
+    redundant: &mut [Redundancy],
+) -> Spins {
+    use crate::rigidity::geometric::{GeometricOptions, analyze_within};
+    let missing = (0..m.bodies.len()).any(|b| b != m.frame && dec.body_missing[b] > 0);
+    if !missing || redundant.is_empty() {
+        return Spins::default();
+    }
+    let gopts = GeometricOptions {
+        geometry: opts.geometry,
+        precision: opts.precision,
+        check_finite: false,
+    };
+    let Ok(report) = analyze_within(m, &gopts, &crate::budget::Budget::DEFAULT) else {
+        return Spins::default();
+    };
+    let index: std::collections::HashMap<String, usize> = (0..m.bodies.len())
+        .map(|b| (m.body_id(b).to_string(), b))
+        .collect();
+    // The smallest parts first: a part inside another (a bipyramid turning inside a banana
+    // that turns as a whole) takes its own missing DOF before the larger part takes any.
+    let mut spins: Vec<_> = report
+        .isolated_motions
+        .iter()
+        .filter(|x| x.kind == "structurally")
+        .collect();
+    spins.sort_by_key(|x| x.bodies.len());
+    let mut out = Spins::default();
+    let mut named: Vec<usize> = Vec::new();
+    let mut units = 0;
+    for motion in spins {
+        let part: Vec<usize> = motion
+            .bodies
+            .iter()
+            .filter_map(|b| index.get(b))
+            .copied()
+            .collect();
+        let mut taken = 0u32;
+        while (taken as usize) < motion.dof && units < MAX_SPIN_UNITS {
+            units += 1;
+            if !take_one(m, eqs, dec, u, &part) {
+                break;
+            }
+            taken += 1;
+        }
+        if taken == 0 {
+            continue;
+        }
+        out.parts.push(Spin {
+            bodies: motion.bodies.clone(),
+            joints: motion.joints.clone(),
+            dimension: taken,
+        });
+        let words = spin_words(&motion.bodies, &motion.joints, taken);
+        if let Some(note) = name_deficit(redundant, &mut named, &motion.bodies, taken, words) {
+            out.notes.push(note);
+        }
+    }
+    out
+}
+
+/// The first group deficit on the part `bodies` not yet `named` says its `taken` DOF are the
+/// part's spin (`words`); without one, `words` are a note of their own.
+fn name_deficit(
+    redundant: &mut [Redundancy],
+    named: &mut Vec<usize>,
+    bodies: &[String],
+    taken: u32,
+    words: String,
+) -> Option<String> {
+    let found = redundant.iter_mut().enumerate().find(|(i, r)| {
+        !r.configuration && !named.contains(i) && r.bodies.iter().any(|b| bodies.contains(b))
+    });
+    let Some((i, r)) = found else {
+        return Some(words);
+    };
+    named.push(i);
+    r.freedom = if r.count <= taken {
+        words
+    } else {
+        format!(
+            "{words}; {} more freedom(s) that no input controls",
+            r.count - taken
+        )
+    };
+    None
+}
+
+/// Spin DOF [`set_aside_spins`] sets aside at most (each one decomposition).
+const MAX_SPIN_UNITS: usize = 64;
+
+/// One unknown off a body of `part` that can miss a DOF (one the decomposition `dec` leaves
+/// short, else one of its under-determined part: a maximum flow leaves it short), and `dec`
+/// decomposed again; kept only when one DOF fewer is missing and no equation is left over.
+fn take_one(
+    m: &Mechanism,
+    eqs: &Equations,
+    dec: &mut Decomposition,
+    u: &mut [u32],
+    part: &[usize],
+) -> bool {
+    let missing = |d: &Decomposition| d.body_missing.iter().map(|&x| u64::from(x)).sum::<u64>();
+    let excess = |d: &Decomposition| d.eq_excess.iter().map(|&x| u64::from(x)).sum::<u64>();
+    let short = part.iter().copied().find(|&b| dec.body_missing[b] > 0);
+    let under = || {
+        part.iter()
+            .copied()
+            .find(|&b| dec.body_part[b] == Part::Under && u[b] > 0)
+    };
+    let Some(b) = short.or_else(under) else {
+        return false;
+    };
+    u[b] -= 1;
+    let next = super::count::decompose(m, eqs, u);
+    if missing(&next) + 1 == missing(dec) && excess(&next) == excess(dec) {
+        *dec = next;
+        true
+    } else {
+        u[b] += 1;
+        false
+    }
+}
+
+/// The words for the spin (`isolated` DOF) of the rigid part `bodies` that its boundary
+/// `joints` allow.
+fn spin_words(bodies: &[String], joints: &[String], isolated: u32) -> String {
+    format!(
+        "bodies {{{}}} turn together as one rigid part, moving no other body, by {isolated} \
+         freedom(s) the joints {} allow (an isolated freedom, as `mbsa rigid --with-inputs` \
+         sets it aside): no input is needed for it",
+        capped(bodies),
+        capped(joints),
+    )
+}
+
+/// The spins of [`set_aside_spins`] in analysis `a`, their notes with the diagnosis's notes or
+/// the notes of a determined mechanism.
+pub(super) fn spin_notes(a: &mut super::Analysis, spins: Spins) {
+    a.spins = spins.parts;
+    match a.diagnosis.as_mut() {
+        Some(d) => d.notes.extend(spins.notes),
+        None => a.notes.extend(spins.notes),
+    }
+}
+
+/// Whether analysis `a` of `m` may stand at a toggle of a driven joint: at the file's
+/// geometry, not determined because a group lost rank (not by count), with an input. Then
+/// [`super::check_finite`] runs the finite-mobility test to find the toggle ([`name_toggle`]).
+pub(super) fn toggle_suspect(m: &Mechanism, a: &super::Analysis) -> bool {
+    a.geometry.as_ref().is_some_and(|g| g.is_file())
+        && a.status != super::Status::Determined
+        && a.redundant.iter().any(|r| !r.configuration)
+        && m.joints.iter().any(|j| j.driven > 0)
+}
+
+/// A driven joint that the finite-mobility test `f` finds locked at a toggle (stationary in
+/// every first-order motion here, moving nearby) is an input that cannot move at this
+/// configuration: its equation is the over-determined part (it fixes nothing the joints do
+/// not already fix), the freedom it drives elsewhere is the under-determined part, and the
+/// remedy is to move the input or leave the pose, not to add one. The diagnosis of `a` says
+/// so, as `mbsa rigid --finite` does; nothing changes when no driven joint is at a toggle.
+pub(super) fn name_toggle(
+    m: &Mechanism,
+    a: &mut super::Analysis,
+    f: &crate::position::finite::FiniteMobility,
+) {
+    let toggles: Vec<usize> = (0..m.joints.len())
+        .filter(|&j| m.joints[j].driven > 0 && f.locked_at_toggle.contains(&m.joints[j].id))
+        .collect();
+    let Some(d) = a.diagnosis.as_mut() else {
+        return;
+    };
+    if toggles.is_empty() || f.assembled || d.overdetermined.is_some() {
+        return;
+    }
+    let pair = |j: usize| {
+        let bs = &m.joints[j].bodies;
+        let names: Vec<String> = bs.iter().map(|&b| m.body_id(b).to_string()).collect();
+        names.join("-")
+    };
+    let ids = joint_ids(m, toggles.clone());
+    let mut bodies: Vec<usize> = toggles
+        .iter()
+        .flat_map(|&j| m.joints[j].bodies.iter().copied())
+        .filter(|&b| b != m.frame)
+        .collect();
+    bodies.sort_unstable();
+    bodies.dedup();
+    let bodies: Vec<String> = bodies.iter().map(|&b| m.body_id(b).to_string()).collect();
+    let excess: u64 = toggles.iter().map(|&j| u64::from(m.joints[j].driven)).sum();
+    d.overdetermined = Some(OverPart {
+        excess,
+        unsaturated: toggles
+            .iter()
+            .map(|&j| Excess {
+                joint: m.joints[j].id.clone(),
+                pair: pair(j),
+                excess: m.joints[j].driven,
+            })
+            .collect(),
+        joints: ids.clone(),
+        bodies: bodies.clone(),
+    });
+    let toggle_note = format!(
+        "toggle: the input on {} cannot move at this configuration: the joint is stationary in \
+         every first-order motion here but moves at nearby configurations (a dead centre), so \
+         its {excess} input(s) fix nothing the joints do not already fix and the bodies {{{}}} \
+         it places are held by the toggle, not by the input; move the input to another joint \
+         or analyse a configuration away from the toggle; `mbsa rigid --finite` gives the \
+         details",
+        capped(&ids),
+        capped(&bodies)
+    );
+    if let Some(u) = d.underdetermined.as_mut() {
+        u.input_candidates.clear();
+        let prefix = format!("{} DOF not fixed by any input:", u.missing);
+        let under_note = format!(
+            "{prefix} bodies {{{}}} can move, left free by the input at the toggle on {}; \
+             moving that input, not adding one, fixes them",
+            capped(&u.bodies),
+            capped(&ids)
+        );
+        match d.notes.iter().position(|n| n.starts_with(&prefix)) {
+            Some(i) => d.notes[i] = under_note,
+            None => d.notes.insert(0, under_note),
+        }
+    }
+    d.notes.insert(0, toggle_note);
 }

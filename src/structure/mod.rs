@@ -20,6 +20,7 @@ pub(crate) use crate::graph::scc::tarjan;
 /// The count decomposition's components and canonical order, for `mbsa transform`'s analysis
 /// of certified placements from its search's flow.
 pub(crate) use count::canonical;
+pub use diagnose::Spin;
 pub use library::{Library, LibraryError};
 
 use crate::budget::{Budget, BudgetExceeded, Meter};
@@ -254,6 +255,10 @@ pub struct Analysis {
     pub library: String,
     /// Isolated freedoms (rank check).
     pub isolated: Vec<Isolated>,
+    /// Rigid parts' own spins, set aside like isolated freedoms (`mbsa rigid`'s structurally
+    /// isolated motions).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub spins: Vec<Spin>,
     /// Redundant equations (rank check).
     pub redundant: Vec<Redundancy>,
     /// Blocks too large for the rank check (their verdict is the count's); empty when every
@@ -357,7 +362,9 @@ pub fn check_finite(m: &Mechanism, a: &mut Analysis, precision: Option<f64>, max
         .as_ref()
         .is_some_and(|g| g.is_file() && g.precision.unwrap_or(0.0) == 0.0);
     let set_aside = a.redundant.iter().any(|r| r.configuration);
-    if a.count_only || !exact_file || !set_aside || m.bodies.len() > FINITE_CHECK_BODIES {
+    let toggle = diagnose::toggle_suspect(m, a);
+    if a.count_only || !(exact_file && set_aside || toggle) || m.bodies.len() > FINITE_CHECK_BODIES
+    {
         return;
     }
     let opts = FiniteOptions {
@@ -374,7 +381,10 @@ pub fn check_finite(m: &Mechanism, a: &mut Analysis, precision: Option<f64>, max
     let Ok(f) = finite_mobility_of_file(m, tolerance, &opts) else {
         return;
     };
-    if f.assembled || f.finite >= f.first_order {
+    if toggle {
+        diagnose::name_toggle(m, a, &f);
+    }
+    if !(exact_file && set_aside) || f.assembled || f.finite >= f.first_order {
         return;
     }
     let inputs = a.mobility.inputs;
@@ -675,6 +685,7 @@ fn analyze_once(
     let mut unchecked = Vec::new();
     let mut geometry = None;
     let mut set_aside = vec![0; m.joints.len()];
+    let mut spins = diagnose::Spins::default();
     // Joint motions at the file's configuration, for the spatiality of group types.
     let mut twists: Option<Vec<nalgebra::DMatrix<f64>>> = None;
     let mut dec = if opts.count_only {
@@ -707,7 +718,9 @@ fn analyze_once(
         redundant = r.redundant;
         unchecked = r.unchecked;
         set_aside = r.set_aside;
-        r.decomposition
+        let mut dec = r.decomposition;
+        spins = diagnose::set_aside_spins(m, opts, &eqs, &mut dec, &mut u, &mut redundant);
+        dec
     };
     let mut unsolved = Vec::new();
     let groups: Vec<RawGroup> = match opts.method {
@@ -731,6 +744,7 @@ fn analyze_once(
         lib,
         twists.as_deref(),
     );
+    diagnose::spin_notes(&mut a, spins);
     a.unchecked = unchecked;
     a.geometry = geometry;
     a.set_aside = set_aside;

@@ -401,8 +401,6 @@ fn redundancy_that_fights_nothing_leaves_the_verdict_under_determined() {
     let cases = [
         ("bricard", "file", "under-determined"),
         ("rig-planar-four-bar-3d", "file", "under-determined"),
-        ("rig-double-banana", "file", "under-determined"),
-        ("rig-double-banana", "random", "under-determined"),
         (
             "micro-manipulator",
             "random",

@@ -3,6 +3,7 @@
 
 mod common;
 
+mod analyses_agree;
 mod analyze_finite;
 mod bounded_work;
 mod bundled_expectations;

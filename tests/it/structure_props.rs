@@ -208,8 +208,10 @@ fn rank_check_case(n: usize, planar: bool, seed: u64) -> Result<(), TestCaseErro
     );
     // Redundant equations: those the rank check found plus the count's surplus.
     prop_assert_eq!(nrows - rank, red + over(&a) as usize);
-    // Uncontrolled freedoms: isolated ones plus the count's missing DOF.
-    prop_assert_eq!(nunk - rank, iso + missing(&a) as usize);
+    // Uncontrolled freedoms: isolated ones (a body's own, a rigid part's spin) plus the
+    // count's missing DOF.
+    let spins: usize = a.spins.iter().map(|s| s.dimension as usize).sum();
+    prop_assert_eq!(nunk - rank, iso + spins + missing(&a) as usize);
     Ok(())
 }
 

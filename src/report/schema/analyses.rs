@@ -136,7 +136,7 @@ fn diagnosis() -> Value {
     )
 }
 
-/// The `analyze` report; a function over 80 lines because it lists the report's 21 keys.
+/// The `analyze` report; a function over 80 lines because it lists the report's 22 keys.
 pub(super) fn analyze() -> Value {
     let redundancy = obj(
         &[
@@ -199,6 +199,17 @@ pub(super) fn analyze() -> Value {
                 "isolated",
                 array(obj(&[("body", string()), ("dimension", count())], &[])),
             ),
+            (
+                "spins",
+                array(obj(
+                    &[
+                        ("bodies", strings()),
+                        ("joints", strings()),
+                        ("dimension", count()),
+                    ],
+                    &[],
+                )),
+            ),
             ("redundant", array(redundancy)),
             ("unchecked", array(unchecked)),
             ("diagnosis", or_null(diagnosis())),
@@ -209,6 +220,7 @@ pub(super) fn analyze() -> Value {
         &[
             "geometry",
             "disconnected",
+            "spins",
             "unchecked",
             "generic",
             "notes",
