@@ -49,7 +49,8 @@ pub struct TransformArgs {
     pub partition: Option<ShardSpec>,
 }
 
-fn parse_partition(text: &str) -> Result<ShardSpec, String> {
+/// Parse `--partition` (clap renders the error, exit code 2).
+pub(super) fn parse_partition(text: &str) -> Result<ShardSpec, String> {
     ShardSpec::parse(text).map_err(|e| e.to_string())
 }
 
