@@ -155,7 +155,7 @@ enum Command {
     /// excluded and counted), groups placements with the same partition into families and
     /// ranks them. `--inputs SPEC` instead compares one placement with the file's own.
     #[command(
-        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl"
+        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl\n  mbsa transform @stewart --partition hash:1/4 --format jsonl > shard1.jsonl"
     )]
     Transform {
         #[command(flatten)]
@@ -172,7 +172,7 @@ enum Command {
     /// shard missing or given twice, and writes what `mbsa transform FILE` writes with the
     /// same options: the same ranking, families and counts, byte for byte. docs/sharding.md.
     #[command(
-        after_help = "Examples:\n  for i in 1 2 3 4; do mbsa transform @stewart --partition hash:$i/4 --format jsonl > shard$i.jsonl; done\n  mbsa merge shard*.jsonl\n  mbsa merge shard*.jsonl --format json"
+        after_help = "Example (four shards, one after the other, then their merge):\n  for i in 1 2 3 4; do mbsa transform @stewart --partition hash:$i/4 --format jsonl > shard$i.jsonl; done\n  mbsa merge shard*.jsonl --format json > ranked.json"
     )]
     Merge(transform::MergeArgs),
     /// Positions: every body's pose for given input values, group by group.

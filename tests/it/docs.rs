@@ -27,7 +27,9 @@ fn shell_session_blocks_of_docs() {
     let bin = std::path::PathBuf::from(trycmd::cargo::cargo_bin!("mbsa"));
     let path = format!(
         "{}:{}",
-        bin.parent().expect("the binary is in a directory").display(),
+        bin.parent()
+            .expect("the binary is in a directory")
+            .display(),
         std::env::var("PATH").unwrap_or_default()
     );
     let has_parallel = std::process::Command::new("parallel")
