@@ -3,6 +3,7 @@
 use super::input::{self, Unreadable};
 use super::{Failure, emit};
 use clap::{Args, ValueEnum};
+use mbsa::transform::shard::{ShardKind, ShardSpec, fnv1a};
 use serde::Serialize;
 use std::fmt::Write;
 
@@ -23,6 +24,10 @@ pub struct CheckArgs {
     input_format: Option<input::InputFormat>,
     #[command(flatten)]
     geometry: super::analysis::GeometryArgs,
+    /// Check only shard M of N of the files: `hash:M/N` (by a hash of each file's content)
+    /// or `slice:M/N` (by its position in the list). docs/sharding.md.
+    #[arg(long, value_name = "hash:M/N|slice:M/N", value_parser = super::transform::parse_partition)]
+    partition: Option<ShardSpec>,
 }
 
 /// Output formats of `mbsa check`.
@@ -86,7 +91,10 @@ pub fn run(args: &CheckArgs) -> Result<(), Failure> {
         precision: args.geometry.precision()?,
         check_finite: false,
     };
-    let names = names(args)?;
+    let mut names = names(args)?;
+    if let Some(spec) = args.partition {
+        names = shard_of(names, spec);
+    }
     let (mut failed, mut broken, mut records) = (0usize, Vec::new(), Vec::new());
     for name in &names {
         let checked = check_one(name, args, &opts);
@@ -160,6 +168,28 @@ fn names(args: &CheckArgs) -> Result<Vec<String>, Failure> {
         }
     }
     Ok(names)
+}
+
+/// The files of shard `spec`: by position, or by the hash of each file's bytes (of its name
+/// where it cannot be read, or is standard input, which is read once).
+fn shard_of(names: Vec<String>, spec: ShardSpec) -> Vec<String> {
+    let hash = |name: &str| {
+        if spec.kind == ShardKind::Slice {
+            return 0;
+        }
+        let bytes = match name.strip_prefix('@') {
+            Some(n) => mbsa::examples::find(n).map(|(_, text)| text.as_bytes().to_vec()),
+            None if name == "-" => None,
+            None => super::budget().read_file(std::path::Path::new(name)).ok(),
+        };
+        fnv1a(bytes.as_deref().unwrap_or(name.as_bytes()))
+    };
+    names
+        .into_iter()
+        .enumerate()
+        .filter(|(i, name)| spec.keeps(hash(name), *i as u64))
+        .map(|(_, name)| name)
+        .collect()
 }
 
 /// The non-empty lines of LIST (a path, or `-` for standard input).

@@ -155,7 +155,7 @@ enum Command {
     /// excluded and counted), groups placements with the same partition into families and
     /// ranks them. `--inputs SPEC` instead compares one placement with the file's own.
     #[command(
-        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl"
+        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl\n  mbsa transform @stewart --partition hash:1/4 --format jsonl > shard1.jsonl"
     )]
     Transform {
         #[command(flatten)]
@@ -165,6 +165,16 @@ enum Command {
         #[command(flatten)]
         transform: transform::TransformArgs,
     },
+    /// Merge the shards of `transform --partition` into the unsharded run's output.
+    ///
+    /// Reads the JSON-lines shards that `mbsa transform FILE --partition hash:M/N --format
+    /// jsonl` wrote (any order), refuses shards of different inputs or a partition with a
+    /// shard missing or given twice, and writes what `mbsa transform FILE` writes with the
+    /// same options: the same ranking, families and counts, byte for byte. docs/sharding.md.
+    #[command(
+        after_help = "Example (four shards, one after the other, then their merge):\n  for i in 1 2 3 4; do mbsa transform @stewart --partition hash:$i/4 --format jsonl > shard$i.jsonl; done\n  mbsa merge shard*.jsonl --format json > ranked.json"
+    )]
+    Merge(transform::MergeArgs),
     /// Positions: every body's pose for given input values, group by group.
     ///
     /// Solves the position equations of the joints (the file's geometry is the reference
@@ -349,6 +359,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             structure,
             transform,
         } => transform::run(&file, &structure, &transform),
+        Command::Merge(args) => transform::merge(&args),
         Command::Solve { file, args } => position::solve(&file, &args),
         Command::Assemble { file, args } => position::assemble(&file, &args),
         Command::Generate(family) => generate::run(&family),

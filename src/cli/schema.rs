@@ -19,6 +19,8 @@ pub enum Output {
     Transform,
     /// One line of `mbsa transform --format jsonl`.
     TransformJsonl,
+    /// One line of a `mbsa transform --partition` shard.
+    TransformShard,
     /// `mbsa solve --format json`.
     Solve,
     /// `mbsa check --format json`.
@@ -36,6 +38,7 @@ pub fn run(output: Output) -> Result<(), Failure> {
         Output::Rigid => Report::Rigid,
         Output::Transform => Report::Transform,
         Output::TransformJsonl => Report::TransformJsonl,
+        Output::TransformShard => Report::TransformShard,
         Output::Solve => Report::Solve,
         Output::Check => Report::Check,
         Output::CheckJsonl => Report::CheckJsonl,

@@ -3,6 +3,7 @@
 use super::analysis::StructureArgs;
 use super::{Failure, FileArg, emit, load_with_inputs};
 use clap::{Args, ValueEnum};
+use mbsa::transform::shard::ShardSpec;
 use mbsa::transform::{self, Criterion, Progress, TransformOptions};
 use std::io::IsTerminal;
 
@@ -42,6 +43,15 @@ pub struct TransformArgs {
     /// Output format: a ranked table, JSON with every placement, or JSON lines streamed one placement per line.
     #[arg(long, value_enum, default_value_t = TransformFormat::Table)]
     pub format: TransformFormat,
+    /// Write only shard M of N of the placements, as JSON lines for `mbsa merge`: `hash:M/N`
+    /// (by a hash of each placement) or `slice:M/N` (by its position). docs/sharding.md.
+    #[arg(long, value_name = "hash:M/N|slice:M/N", value_parser = parse_partition)]
+    pub partition: Option<ShardSpec>,
+}
+
+/// Parse `--partition` (clap renders the error, exit code 2).
+pub(super) fn parse_partition(text: &str) -> Result<ShardSpec, String> {
+    ShardSpec::parse(text).map_err(|e| e.to_string())
 }
 
 /// `--format` values of `transform`.
@@ -68,6 +78,9 @@ fn spec(
 
 /// Run `mbsa transform`.
 pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> Result<(), Failure> {
+    if args.partition.is_some() {
+        shard_usage(file, structure, args)?;
+    }
     // The file's own inputs stay in the model: `--inputs` is compared against them.
     let m = load_with_inputs(file, None)?;
     let lib = structure.library()?;
@@ -101,6 +114,14 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
     };
     if !structure.count_only {
         structure.geometry.closure_check(&file.file, &m)?;
+    }
+    if let Some(spec) = args.partition {
+        let extra = format!(
+            "{:?}|{:?}|{:?}",
+            file.input_format, file.import, structure.library
+        );
+        let digest = transform::shard::digest(&source_bytes(&file.file)?, &opts, &extra);
+        return write_shard(&m, &opts, &lib, spec, digest, failed);
     }
     if let Some(given) = &opts.inputs {
         let c = transform::compare(&m, given, &opts, &lib).map_err(|e| bad("--inputs", &e))?;
@@ -158,6 +179,116 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
             }
         }
     }
+}
+
+/// Write shard `spec` of the placements and its summary line.
+fn write_shard(
+    m: &mbsa::Mechanism,
+    opts: &TransformOptions,
+    lib: &mbsa::structure::Library,
+    spec: ShardSpec,
+    digest: String,
+    failed: impl Fn(transform::TransformError) -> Failure,
+) -> Result<(), Failure> {
+    use mbsa::report::transform::shard;
+    let mut failed_emit = None;
+    let (summary, info) = transform::shard::run_shard(m, opts, lib, spec, digest, &mut |p| {
+        if failed_emit.is_none()
+            && let Err(e) = emit(&shard::placement_line(p))
+        {
+            failed_emit = Some(e);
+        }
+    })
+    .map_err(failed)?;
+    if let Some(e) = failed_emit {
+        return Err(e);
+    }
+    emit(&shard::summary_line(&summary, &info))
+}
+
+/// Options of `mbsa merge`.
+#[derive(Args, Debug, Clone)]
+pub struct MergeArgs {
+    /// The shards' files (`mbsa transform --partition ... --format jsonl`), in any order.
+    #[arg(value_name = "SHARD", required = true)]
+    pub shards: Vec<String>,
+    /// How many families of placements the table shows.
+    #[arg(long, default_value_t = 10)]
+    pub top: usize,
+    /// Output format, as `transform --format` (the unsharded run's output, byte for byte).
+    #[arg(long, value_enum, default_value_t = TransformFormat::Table)]
+    pub format: TransformFormat,
+}
+
+/// Run `mbsa merge`: check that the shards make one whole run and write its output.
+pub fn merge(args: &MergeArgs) -> Result<(), Failure> {
+    let mut shards = Vec::with_capacity(args.shards.len());
+    for name in &args.shards {
+        let bytes = super::budget()
+            .read_file(std::path::Path::new(name))
+            .map_err(|e| super::input::read_failure(&format!("`{name}`"), e))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| Failure::Input(format!("error: `{name}` is not UTF-8: not a shard")))?;
+        let shard = mbsa::report::transform::shard::read_shard(name, &text)
+            .map_err(|e| Failure::Input(format!("error: {e}")))?;
+        shards.push(shard);
+    }
+    let merged = transform::shard::merge(shards).map_err(|e| {
+        Failure::Input(format!(
+            "error: {e}\n  help: merge the N shards of one `transform --partition KIND:M/N` run"
+        ))
+    })?;
+    match args.format {
+        TransformFormat::Jsonl => {
+            for p in &merged.placements {
+                emit(&mbsa::report::transform::jsonl(p))?;
+            }
+            emit(&mbsa::report::transform::jsonl(&merged.summary))
+        }
+        TransformFormat::Table => emit(&mbsa::report::transform::table_of_ranked(
+            &merged.ranked(),
+            args.top,
+        )),
+        TransformFormat::Json => emit_json(&merged.ranked()),
+    }
+}
+
+/// Refuse the options a shard cannot keep, saying why.
+fn shard_usage(
+    file: &FileArg,
+    structure: &StructureArgs,
+    args: &TransformArgs,
+) -> Result<(), Failure> {
+    let refuse = |why: &str| Err(Failure::Input(format!("error: --partition {why}")));
+    if args.format != TransformFormat::Jsonl {
+        return refuse(
+            "writes a shard as JSON lines for `mbsa merge`: add --format jsonl (the merge \
+             writes the table or JSON)",
+        );
+    }
+    if structure.inputs.is_some() {
+        return refuse(
+            "shards the enumeration, and --inputs compares one placement: nothing to shard",
+        );
+    }
+    if file.file == "-" {
+        return refuse(
+            "needs the same input in every shard, and standard input is read once: save it to a file",
+        );
+    }
+    Ok(())
+}
+
+/// The bytes of FILE (a path or `@name`) for a shard's input digest.
+fn source_bytes(file: &str) -> Result<Vec<u8>, Failure> {
+    if let Some(name) = file.strip_prefix('@') {
+        return Ok(mbsa::examples::find(name)
+            .map(|(_, text)| text.as_bytes().to_vec())
+            .unwrap_or_default());
+    }
+    super::budget()
+        .read_file(std::path::Path::new(file))
+        .map_err(|e| super::input::read_failure(&format!("`{file}`"), e))
 }
 
 /// [`mbsa::report::json`] written as it is made: the JSON of 100 placements of a 10^5-body

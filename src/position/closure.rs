@@ -10,7 +10,7 @@ use crate::mechanism::{Mechanism, Space};
 use serde::Serialize;
 
 /// One joint's closure residual.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct JointResidual {
     /// Joint id.
     pub joint: String,
@@ -20,7 +20,7 @@ pub struct JointResidual {
 }
 
 /// Verdict of the closure check.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum ClosureStatus {
     /// Every residual within the tolerance.
@@ -32,7 +32,7 @@ pub enum ClosureStatus {
 }
 
 /// The closure section of a report.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Closure {
     /// Model size (diagonal of the box of the joint points).
     pub model_size: f64,

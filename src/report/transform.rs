@@ -482,3 +482,5 @@ fn comparison_table(c: &Comparison, wrap: bool) -> String {
 pub fn jsonl<T: serde::Serialize>(value: &T) -> String {
     super::json::jsonl(value)
 }
+
+pub mod shard;

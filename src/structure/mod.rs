@@ -110,7 +110,7 @@ pub struct Group {
 }
 
 /// One row of the type table (paper Tables 9, 11, 15).
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, serde::Deserialize)]
 pub struct TypeCount {
     /// SG type string.
     #[serde(rename = "type")]

@@ -30,6 +30,7 @@ mod problem;
 mod ranked;
 mod rules;
 mod search;
+pub mod shard;
 
 pub use compare::{Changes, Comparison, Evaluation, GroupBrief, compare};
 pub use partition::Partition;
@@ -44,10 +45,10 @@ use parts::part_sets;
 use place::place;
 use problem::Problem;
 use rules::Rules;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A ranking criterion (`--rank`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Criterion {
     /// More structural groups first (smaller, simpler groups).
@@ -224,7 +225,7 @@ pub enum TransformError {
 }
 
 /// One driven joint of a placement.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Input {
     /// Joint id (for a pair of an expanded multiple joint: `id[a-b]`).
     pub joint: String,
@@ -235,7 +236,7 @@ pub struct Input {
 }
 
 /// The structural scores of one placement.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Scores {
     /// Number of structural groups.
     pub groups: usize,
@@ -250,7 +251,7 @@ pub struct Scores {
 }
 
 /// A determined placement and the structure it gives.
-#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Placement {
     /// Rank (1 = best) once ranked; absent when streamed.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -334,7 +335,7 @@ pub struct Family {
 }
 
 /// Counts and notes of one run.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Summary {
     /// Mechanism name.
     pub name: String,
@@ -346,7 +347,11 @@ pub struct Summary {
     /// mechanism takes that many more inputs than its count says).
     pub set_aside: u32,
     /// The joint geometry of the analyses (absent with `count_only`).
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(
+        skip_serializing_if = "Option::is_none",
+        default,
+        deserialize_with = "shard::geometry_read"
+    )]
     pub geometry: Option<crate::geometry::GeometryUsed>,
     /// Inputs each placement has: the count plus the equations set aside, minus the isolated
     /// DOF (the true mobility less the isolated DOF).
@@ -364,13 +369,13 @@ pub struct Summary {
     /// Count-valid placements examined by the full analysis (with several parts: the product
     /// of the parts' counts). A count too large to hold (`u128::MAX`) is written in words,
     /// "more than 10^38".
-    #[serde(serialize_with = "ser_count")]
+    #[serde(serialize_with = "ser_count", skip_deserializing)]
     pub count_valid: u128,
     /// Count-valid placements the rank check rejected (not determined).
-    #[serde(serialize_with = "ser_count")]
+    #[serde(serialize_with = "ser_count", skip_deserializing)]
     pub excluded_by_rank: u128,
     /// Determined placements (exact unless `truncated`).
-    #[serde(serialize_with = "ser_count")]
+    #[serde(serialize_with = "ser_count", skip_deserializing)]
     pub determined: u128,
     /// Determined placements listed (the best ones; at most 100,000, fewer for large
     /// mechanisms, and at most `--limit`).

@@ -161,6 +161,13 @@ impl Serialize for Partition {
     }
 }
 
+impl<'de> serde::Deserialize<'de> for Partition {
+    /// The lists of body ids a report wrote (read back from `transform` shards).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Partition, D::Error> {
+        Vec::<Vec<String>>::deserialize(d).map(|v| Partition(Repr::Text(v)))
+    }
+}
+
 /// The body ids of a mechanism as the analysis writes them, shared by its placements'
 /// partitions, and (made on first use, by the full analyses only) the index of each.
 pub(super) struct BodyNames {

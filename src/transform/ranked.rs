@@ -52,71 +52,107 @@ pub fn ranked(
     } else {
         opts.rank.clone()
     };
-    let cap = list_cap(m, None);
-    let order = |a: &(Placement, Fingerprint), b: &(Placement, Fingerprint)| {
-        compare_scores(&a.0.scores, &b.0.scores, &criteria).then(a.0.seq.cmp(&b.0.seq))
-    };
-    let mut placements: Vec<(Placement, Fingerprint)> = Vec::new();
+    let mut listing = Listing::new(criteria, list_cap(m, None));
     let mut problem: Option<Problem> = None;
-    let mut summary = enumerate_kept(
+    let summary = enumerate_kept(
         m,
         opts,
         lib,
         progress,
-        &mut |mut p| {
-            let fp = p.partition.fingerprint();
-            if p.lean.is_some() {
-                p.partition = Partition(Repr::Text(Vec::new()));
-            }
-            // Bookkeeping only the joining of parts reads (a whole's placement is never a
-            // part's): one record a group.
-            p.groups_at = Vec::new();
-            p.kinds = Vec::new();
-            p.in_lib = Vec::new();
-            placements.push((p, fp));
-            // Keep the best `cap` only: memory stays bounded however many there are.
-            if placements.len() >= 2 * cap {
-                placements.sort_by(order);
-                placements.truncate(cap);
-            }
-        },
+        &mut |p| listing.push(p),
         Some(&mut problem),
     )?;
-    placements.sort_by(order);
-    if placements.len() > cap {
-        placements.truncate(cap);
-    }
-    if summary.listed != placements.len() {
-        summary.notes.retain(|n| !n.contains("are listed"));
-        summary.listed = placements.len();
-        finish_listing_note(&mut summary);
-    }
-    let mut index: HashMap<Fingerprint, usize> = HashMap::new();
-    let mut families: Vec<Vec<usize>> = Vec::new();
-    for (i, (p, fp)) in placements.iter_mut().enumerate() {
-        p.rank = Some(i + 1);
-        let f = *index.entry(*fp).or_insert_with(|| {
-            families.push(Vec::new());
-            families.len()
-        });
-        families[f - 1].push(i + 1);
-        p.family = Some(f);
-    }
     let own = exps_default_inputs(m, opts.max_expansions);
-    let original_rank = placements
-        .iter()
-        .find(|(p, _)| p.exp == 0 && p.inputs == own)
-        .and_then(|(p, _)| p.rank);
-    let (placements, fingerprints) = placements.into_iter().unzip();
-    Ok(Ranked {
-        summary,
-        criteria,
-        original_rank,
-        placements,
-        families,
-        fingerprints,
-        problem,
-    })
+    Ok(listing.finish(summary, &own, problem))
+}
+
+/// The best placements of a run as they come, in any order, and their ranking: [`ranked`]
+/// fills it from the search, a merge of shards from their files, so both rank alike.
+pub(super) struct Listing {
+    criteria: Vec<Criterion>,
+    /// The most placements listed ([`list_cap`]).
+    cap: usize,
+    placements: Vec<(Placement, Fingerprint)>,
+}
+
+impl Listing {
+    pub(super) fn new(criteria: Vec<Criterion>, cap: usize) -> Listing {
+        Listing {
+            criteria,
+            cap,
+            placements: Vec::new(),
+        }
+    }
+
+    /// The order of the ranking: the scores by the criteria, then the enumeration order.
+    fn order(&mut self) {
+        let c = &self.criteria;
+        self.placements.sort_by(|a, b| {
+            compare_scores(&a.0.scores, &b.0.scores, c).then(a.0.seq.cmp(&b.0.seq))
+        });
+    }
+
+    /// Take one placement; only the best `cap` are kept, so memory stays bounded however
+    /// many there are.
+    pub(super) fn push(&mut self, mut p: Placement) {
+        let fp = p.partition.fingerprint();
+        if p.lean.is_some() {
+            p.partition = Partition(Repr::Text(Vec::new()));
+        }
+        // Bookkeeping only the joining of parts reads (a whole's placement is never a
+        // part's): one record a group.
+        p.groups_at = Vec::new();
+        p.kinds = Vec::new();
+        p.in_lib = Vec::new();
+        self.placements.push((p, fp));
+        if self.placements.len() >= 2 * self.cap {
+            self.order();
+            self.placements.truncate(self.cap);
+        }
+    }
+
+    /// Rank the best `cap`, group them into families and find the file's own placement
+    /// (`own`: its inputs in the default expansion) among them.
+    pub(super) fn finish(
+        mut self,
+        mut summary: Summary,
+        own: &[super::Input],
+        problem: Option<Problem>,
+    ) -> Ranked {
+        self.order();
+        self.placements.truncate(self.cap);
+        let mut placements = self.placements;
+        if summary.listed != placements.len() {
+            summary.notes.retain(|n| !n.contains("are listed"));
+            summary.listed = placements.len();
+            finish_listing_note(&mut summary);
+        }
+        let mut index: HashMap<Fingerprint, usize> = HashMap::new();
+        let mut families: Vec<Vec<usize>> = Vec::new();
+        for (i, (p, fp)) in placements.iter_mut().enumerate() {
+            p.rank = Some(i + 1);
+            let f = *index.entry(*fp).or_insert_with(|| {
+                families.push(Vec::new());
+                families.len()
+            });
+            families[f - 1].push(i + 1);
+            p.family = Some(f);
+        }
+        let original_rank = placements
+            .iter()
+            .find(|(p, _)| p.exp == 0 && p.inputs == own)
+            .and_then(|(p, _)| p.rank);
+        let (placements, fingerprints) = placements.into_iter().unzip();
+        Ranked {
+            summary,
+            criteria: self.criteria,
+            original_rank,
+            placements,
+            families,
+            fingerprints,
+            problem,
+        }
+    }
 }
 
 impl Ranked {

@@ -48,6 +48,7 @@ mod reliability_large;
 mod reliability_smoke;
 mod report_schema;
 mod scale_smoke;
+mod sharding;
 mod structure_cases;
 mod structure_multiple_order;
 mod structure_props;

@@ -269,6 +269,15 @@ fn every_bundled_report_matches_its_schema() {
         "json",
     ];
     checked += check(&transform, &rotor, false);
+    let shard = [
+        "transform",
+        "@rotor",
+        "--partition",
+        "hash:1/2",
+        "--format",
+        "jsonl",
+    ];
+    checked += check(&s("transform-shard"), &shard, true);
     let sweep = [
         "solve",
         "@slider-crank-geometry",

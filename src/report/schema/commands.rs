@@ -68,6 +68,56 @@ pub(super) fn transform_summary() -> Value {
     )
 }
 
+/// `object` with more keys (`optional` among them may be absent).
+fn with_keys(object: Value, keys: &[(&str, Value)], optional: &[&str]) -> Value {
+    let mut object = object;
+    for (k, v) in keys {
+        if let Some(Value::Object(p)) = object.get_mut("properties") {
+            p.insert((*k).into(), v.clone());
+        }
+        if let (false, Some(Value::Array(r))) = (optional.contains(k), object.get_mut("required")) {
+            r.push(Value::String((*k).into()));
+        }
+    }
+    object
+}
+
+/// A placement line of a shard: the placement and what the merge needs to rank it.
+pub(super) fn shard_placement() -> Value {
+    with_keys(
+        placement(),
+        &[
+            ("index", count()),
+            ("expansion_index", count()),
+            ("expansion_brief", string()),
+        ],
+        &["expansion_brief"],
+    )
+}
+
+/// The summary line of a shard: the run's summary and `shard`.
+pub(super) fn shard_summary() -> Value {
+    let total = string;
+    let shard = obj(
+        &[
+            ("partition", string()),
+            ("digest", string()),
+            ("placements", count()),
+            ("count_valid", total()),
+            ("excluded_by_rank", total()),
+            ("determined", total()),
+            (
+                "criteria",
+                array(one_of(&["groups", "library", "max-size", "levels"])),
+            ),
+            ("list_cap", count()),
+            ("own", inputs()),
+        ],
+        &[],
+    );
+    with_keys(transform_summary(), &[("shard", shard)], &[])
+}
+
 pub(super) fn transform() -> Value {
     let family = obj(
         &[

@@ -10,7 +10,8 @@ mod commands;
 
 use analyses::{analyze, geometric, mobility, pebble, rigid_both};
 use commands::{
-    check, check_record, comparison, placement, solve, sweep, transform, transform_summary,
+    check, check_record, comparison, placement, shard_placement, shard_summary, solve, sweep,
+    transform, transform_summary,
 };
 use serde_json::{Map, Value, json};
 
@@ -27,6 +28,8 @@ pub enum Report {
     Transform,
     /// One line of `mbsa transform --format jsonl` (a placement, or the closing summary).
     TransformJsonl,
+    /// One line of a `mbsa transform --partition` shard (a placement, or the closing summary).
+    TransformShard,
     /// `mbsa solve --format json` (one solution, or a `--sweep`).
     Solve,
     /// `mbsa check --format json`.
@@ -37,12 +40,13 @@ pub enum Report {
 
 impl Report {
     /// Every report, in the order of `mbsa schema --help`.
-    pub const ALL: [Report; 8] = [
+    pub const ALL: [Report; 9] = [
         Report::Mobility,
         Report::Analyze,
         Report::Rigid,
         Report::Transform,
         Report::TransformJsonl,
+        Report::TransformShard,
         Report::Solve,
         Report::Check,
         Report::CheckJsonl,
@@ -56,6 +60,7 @@ impl Report {
             Report::Rigid => "rigid",
             Report::Transform => "transform",
             Report::TransformJsonl => "transform-jsonl",
+            Report::TransformShard => "transform-shard",
             Report::Solve => "solve",
             Report::Check => "check",
             Report::CheckJsonl => "check-jsonl",
@@ -79,6 +84,10 @@ pub fn schema(report: Report) -> Value {
         Report::TransformJsonl => (
             "one line of mbsa transform --format jsonl",
             vec![placement(), transform_summary()],
+        ),
+        Report::TransformShard => (
+            "one line of mbsa transform --partition ... --format jsonl",
+            vec![shard_placement(), shard_summary()],
         ),
         Report::Solve => ("mbsa solve --format json", vec![solve(), sweep()]),
         Report::Check => ("mbsa check --format json", vec![check()]),
