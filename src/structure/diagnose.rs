@@ -259,8 +259,10 @@ pub(super) struct Spins {
 /// again. A group deficit on the part says so in its words; the other spins are returned as
 /// notes. Runs only where the count cannot see the spin: DOF missing after the rank check found
 /// dependent equations (a spin makes the rows of its part dependent), at the geometry of the
-/// analysis; a mechanism too large for the geometric analysis's default budget keeps the
-/// count's answer.
+/// analysis, for at most [`SPIN_CHECK_BODIES`] bodies and within [`SPIN_CHECK_WORK`] work
+/// units and [`SPIN_CHECK_MEMORY`] bytes of the geometric analysis: past any (a large
+/// mechanism: its geometric analysis takes seconds where the count's analysis takes a fraction
+/// of one) the count's answer stays, as `mbsa rigid` gives the spins at any size.
 pub(super) fn set_aside_spins(
     m: &Mechanism,
     opts: &super::Options,
@@ -271,7 +273,7 @@ pub(super) fn set_aside_spins(
 ) -> Spins {
     use crate::rigidity::geometric::{GeometricOptions, analyze_within};
     let missing = (0..m.bodies.len()).any(|b| b != m.frame && dec.body_missing[b] > 0);
-    if !missing || redundant.is_empty() {
+    if !missing || redundant.is_empty() || m.bodies.len() > SPIN_CHECK_BODIES {
         return Spins::default();
     }
     let gopts = GeometricOptions {
@@ -279,7 +281,12 @@ pub(super) fn set_aside_spins(
         precision: opts.precision,
         check_finite: false,
     };
-    let Ok(report) = analyze_within(m, &gopts, &crate::budget::Budget::DEFAULT) else {
+    let budget = crate::budget::Budget {
+        max_work: SPIN_CHECK_WORK,
+        max_memory_bytes: SPIN_CHECK_MEMORY,
+        ..crate::budget::Budget::DEFAULT
+    };
+    let Ok(report) = analyze_within(m, &gopts, &budget) else {
         return Spins::default();
     };
     let index: std::collections::HashMap<String, usize> = (0..m.bodies.len())
@@ -353,6 +360,18 @@ fn name_deficit(
     };
     None
 }
+
+/// Work cap of the geometric analysis [`set_aside_spins`] runs (units of
+/// [`crate::budget::Budget::max_work`]): it keeps `analyze` within a small multiple of its own
+/// time where the count has the answer.
+pub const SPIN_CHECK_WORK: u64 = 200_000_000;
+
+/// Largest mechanism (bodies) whose spins [`set_aside_spins`] looks for: the geometric
+/// analysis costs about 40 ms at 10^3 bodies and 0.4 s at 10^4 (docs/benchmarks.md).
+pub const SPIN_CHECK_BODIES: usize = 2_000;
+
+/// Memory cap of the geometric analysis [`set_aside_spins`] runs, in bytes.
+pub const SPIN_CHECK_MEMORY: u64 = 256 * 1024 * 1024;
 
 /// Spin DOF [`set_aside_spins`] sets aside at most (each one decomposition).
 const MAX_SPIN_UNITS: usize = 64;
