@@ -142,7 +142,7 @@ def machine(bin_path):
     except (OSError, AttributeError):
         pass
     lines.append(f"- OS: {platform.system()} {platform.release()}")
-    lines.append("- " + run(["rustc", "--version"]).strip() + " (release profile, `debug = 1`)")
+    lines.append("- " + run(["rustc", "--version"]).strip() + " (release profile, no debug information)")
     if shutil.which("hyperfine"):
         lines.append("- " + run(["hyperfine", "--version"]).strip())
     lines.append(f"- Run on {time.strftime('%Y-%m-%d')}")

@@ -364,7 +364,7 @@ fn name_deficit(
 /// Work cap of the geometric analysis [`set_aside_spins`] runs (units of
 /// [`crate::budget::Budget::max_work`]): it keeps `analyze` within a small multiple of its own
 /// time where the count has the answer.
-pub const SPIN_CHECK_WORK: u64 = 200_000_000;
+pub const SPIN_CHECK_WORK: u64 = 30_000_000;
 
 /// Largest mechanism (bodies) whose spins [`set_aside_spins`] looks for: the geometric
 /// analysis costs about 40 ms at 10^3 bodies and 0.4 s at 10^4 (docs/benchmarks.md).
