@@ -19,7 +19,7 @@ flags+=" -Cllvm-args=-sanitizer-coverage-stack-depth --cfg fuzzing"
 echo "== building fuzz targets"
 # --target keeps RUSTFLAGS away from build scripts, as cargo fuzz does.
 RUSTFLAGS="$flags" cargo build --release --locked --bins --target "$triple"
-bin=target/$triple/release
+bin=${CARGO_TARGET_DIR:-target}/$triple/release
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 status=0
