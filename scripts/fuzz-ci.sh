@@ -6,6 +6,9 @@
 # unsafe code, and libFuzzer alone catches panics, aborts, timeouts and memory blow-ups.
 # FUZZ_SECONDS per target (default 20). The committed corpus is only read: new inputs go to
 # a scratch directory. Exit 1 on a crash, with the reproducing input's path.
+#   scripts/fuzz-ci.sh          build, then run every target
+#   scripts/fuzz-ci.sh build    build only (CI starts it beside the other steps)
+#   scripts/fuzz-ci.sh run      run only, on an earlier build
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 SECS=${FUZZ_SECONDS:-20}
@@ -16,9 +19,13 @@ flags+=" -Cllvm-args=-sanitizer-coverage-pc-table"
 flags+=" -Cllvm-args=-sanitizer-coverage-trace-compares"
 flags+=" -Cllvm-args=-simplifycfg-branch-fold-threshold=0"
 flags+=" -Cllvm-args=-sanitizer-coverage-stack-depth --cfg fuzzing"
-echo "== building fuzz targets"
-# --target keeps RUSTFLAGS away from build scripts, as cargo fuzz does.
-RUSTFLAGS="$flags" cargo build --release --locked --bins --target "$triple"
+step=${1:-all}
+if [ "$step" != run ]; then
+  echo "== building fuzz targets"
+  # --target keeps RUSTFLAGS away from build scripts, as cargo fuzz does.
+  RUSTFLAGS="$flags" cargo build --release --locked --bins --target "$triple"
+fi
+[ "$step" = build ] && exit 0
 bin=${CARGO_TARGET_DIR:-target}/$triple/release
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
