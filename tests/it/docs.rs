@@ -18,12 +18,12 @@ fn console_blocks_of_readme_and_docs() {
         .case("docs/*.md");
 }
 
-/// The ```shell-session blocks of docs/*.md (shell recipes: loops, redirections, GNU
+/// The ```bash-recipe blocks of docs/*.md (shell recipes: loops, redirections, GNU
 /// parallel) run with bash in a scratch directory, `mbsa` on the PATH: the output of their
 /// `$` lines must be the lines shown. A block that calls `parallel` is skipped where GNU
 /// parallel is not installed.
 #[test]
-fn shell_session_blocks_of_docs() {
+fn bash_recipe_blocks_of_docs() {
     let bin = std::path::PathBuf::from(trycmd::cargo::cargo_bin!("mbsa"));
     let path = format!(
         "{}:{}",
@@ -43,7 +43,7 @@ fn shell_session_blocks_of_docs() {
             continue;
         }
         let text = std::fs::read_to_string(&file).expect("UTF-8");
-        for (k, block) in text.split("```shell-session\n").skip(1).enumerate() {
+        for (k, block) in text.split("```bash-recipe\n").skip(1).enumerate() {
             let block = block.split("```").next().unwrap_or_default();
             let commands: Vec<&str> = block.lines().filter_map(|l| l.strip_prefix("$ ")).collect();
             let shown: String = block
@@ -55,7 +55,7 @@ fn shell_session_blocks_of_docs() {
                 continue;
             }
             let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
-                .join("shell-session")
+                .join("bash-recipe")
                 .join(format!("{}-{k}", file.display()).replace('/', "_"));
             let _ = std::fs::remove_dir_all(&dir);
             std::fs::create_dir_all(&dir).expect("writable");
@@ -72,5 +72,5 @@ fn shell_session_blocks_of_docs() {
             ran += 1;
         }
     }
-    assert!(ran > 0, "no shell-session block ran");
+    assert!(ran > 0, "no bash-recipe block ran");
 }
