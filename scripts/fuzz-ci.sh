@@ -29,13 +29,33 @@ fi
 bin=${CARGO_TARGET_DIR:-target}/$triple/release
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-status=0
-for t in $(sed -n '/^\[\[bin\]\]/,/^path/s/^name = "\(.*\)"/\1/p' Cargo.toml); do
+# One target per core at a time: each gets its SECS of a core.
+jobs=$(nproc 2>/dev/null || echo 2)
+fuzz_one() {
+  local t=$1
   mkdir -p "$work/$t" "artifacts/$t"
-  echo "== fuzz $t for ${SECS}s"
   if ! "$bin/$t" "$work/$t" "corpus/$t" -artifact_prefix="artifacts/$t/" \
       -max_total_time="$SECS" -max_len=8192 -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 >"$work/$t.log" 2>&1; then
+    touch "$work/$t.failed"
+  fi
+}
+targets=$(sed -n '/^\[\[bin\]\]/,/^path/s/^name = "\(.*\)"/\1/p' Cargo.toml)
+echo "== fuzz $(echo $targets | wc -w) targets for ${SECS}s each, $jobs at a time"
+running=0
+for t in $targets; do
+  fuzz_one "$t" &
+  running=$((running + 1))
+  if [ "$running" -ge "$jobs" ]; then
+    wait -n || true
+    running=$((running - 1))
+  fi
+done
+wait
+status=0
+for t in $targets; do
+  echo "== fuzz $t"
+  if [ -e "$work/$t.failed" ]; then
     status=1
     grep -E "panicked|ERROR|SUMMARY|Test unit written|Base64" "$work/$t.log" | head -20 || true
     echo "FAILED: fuzz target $t found a crash (input under fuzz/artifacts/$t/)"

@@ -111,6 +111,8 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         split: true,
         full_analyses: false,
         analysis: structure.options()?,
+        // `run_shard` sets it from `--partition`.
+        shard: None,
     };
     if !structure.count_only {
         structure.geometry.closure_check(&file.file, &m)?;

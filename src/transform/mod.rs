@@ -144,6 +144,9 @@ pub struct TransformOptions {
     pub full_analyses: bool,
     /// Structural analysis options (`--count-only`, `--seed`, method).
     pub analysis: structure::Options,
+    /// Analyse only the placements of this shard ([`shard::run_shard`] sets it; the counts
+    /// of determined and excluded placements are then the shard's).
+    pub shard: Option<shard::ShardSpec>,
 }
 
 impl Default for TransformOptions {
@@ -162,6 +165,7 @@ impl Default for TransformOptions {
             split: true,
             full_analyses: false,
             analysis: structure::Options::default(),
+            shard: None,
         }
     }
 }
@@ -446,6 +450,17 @@ pub fn enumerate(
     enumerate_kept(m, opts, lib, progress, sink, None)
 }
 
+/// [`enumerate`] of a shard (`opts.shard`): without the notes made from the counts when the
+/// counts are the shard's own (a mechanism in one part), which the merge makes from the run's.
+pub(crate) fn enumerate_shard(
+    m: &Mechanism,
+    opts: &TransformOptions,
+    lib: &Library,
+    sink: &mut dyn FnMut(Placement),
+) -> Result<Summary, TransformError> {
+    enumerate_kept(m, opts, lib, None, sink, None)
+}
+
 /// [`enumerate`]; with `keep`, a mechanism placed whole in one expansion keeps its problem
 /// there, and the placements analysed from the search's flow carry their inputs to make
 /// their groups again ([`Placement::lean`]).
@@ -512,26 +527,33 @@ fn enumerate_kept(
         summary.listed = r.determined;
         summary.truncated = r.cut;
         summary.notes.extend(r.notes);
-        finish_notes(&mut summary, opts);
+        if opts.shard.is_none() {
+            finish_notes(&mut summary);
+        }
         return Ok(summary);
     }
+    // The parts are placed whole: a shard keeps its own of the combined placements.
+    let whole = TransformOptions {
+        shard: None,
+        ..opts.clone()
+    };
     combine_parts(
         m,
         &parts,
         &rules,
-        opts,
+        &whole,
         lib,
         &mut meter,
         progress,
         &mut summary,
         sink,
     )?;
-    finish_notes(&mut summary, opts);
+    finish_notes(&mut summary);
     Ok(summary)
 }
 
 /// The notes every run ends with: truncation, rank-check exclusions, a partial listing.
-fn finish_notes(s: &mut Summary, opts: &TransformOptions) {
+pub(crate) fn finish_notes(s: &mut Summary) {
     if s.expansions_total > s.expansions as u64 {
         s.notes.push(format!(
             "explored {} of {} binary expansions of the multiple joints (raise --max-expansions)",
@@ -556,7 +578,7 @@ fn finish_notes(s: &mut Summary, opts: &TransformOptions) {
     if s.truncated {
         s.notes.push(format!(
             "the search stopped at --limit {}: more placements exist and are not ranked here{}",
-            opts.limit.unwrap_or(0),
+            s.limit.unwrap_or(0),
             if s.parts > 1 {
                 " (the counts are lower bounds)"
             } else {

@@ -22,9 +22,9 @@ const BATCH: usize = 512;
 /// Bytes of the search's flows a batch may hold (warm starts of the analyses).
 const BATCH_FLOW_BYTES: usize = 64 << 20;
 
-/// A placement waiting for its analysis: expansion, driven pairs, and the search's flow
-/// (units of each pair into its two bodies).
-type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>);
+/// A placement waiting for its analysis: expansion, driven pairs, the search's flow (units
+/// of each pair into its two bodies) and its number among the count-valid placements.
+type Leaf = (usize, Vec<(usize, u32)>, Vec<[u8; 2]>, usize);
 
 /// Enumerate and analyse the placements of `m` (one part), streaming each determined one to
 /// `sink` in enumeration order (`sink` returns `false` to stop early). `--limit` bounds the
@@ -114,6 +114,8 @@ struct Placing<'a> {
     found: usize,
     /// Whether the sink asked to stop.
     stopped: bool,
+    /// Count-valid placements of other shards found since the last batch (not analysed).
+    skipped: usize,
     /// (expansion, placement, the search's flow for a warm start of the analysis)
     batch: Vec<Leaf>,
     batch_size: usize,
@@ -154,6 +156,7 @@ impl<'a> Placing<'a> {
             limit: opts.limit.unwrap_or(usize::MAX),
             found: 0,
             stopped: false,
+            skipped: 0,
             batch: Vec::new(),
             batch_size: 1,
             // A batch holds each placement's flow (two bytes a pair): at most about 64 MB of them.
@@ -187,9 +190,24 @@ impl Placing<'_> {
                 r.cut = true;
                 return true;
             }
+            let seq = self.found;
             self.found += 1;
-            let seq = r.count_valid;
             r.count_valid += 1;
+            // A shard counts its own: a determined placement by its key, an excluded one
+            // (no key made) by its number.
+            if let Some(spec) = self.cx.opts.shard {
+                let hash = p.as_ref().map_or(0, super::shard::placement_hash);
+                let spec = match p {
+                    Some(_) => spec,
+                    None => super::shard::ShardSpec {
+                        kind: super::shard::ShardKind::Slice,
+                        ..spec
+                    },
+                };
+                if !spec.keeps(hash, seq as u64) {
+                    return false;
+                }
+            }
             match p {
                 Some(mut p) => {
                     p.seq = seq;
@@ -225,16 +243,30 @@ impl Placing<'_> {
                 self.r.cut = true;
                 return false;
             }
+            let seq = self.found;
             self.found += 1;
+            let driven: Vec<(usize, u32)> = (0..w.len())
+                .filter(|&q| w[q] > 0)
+                .map(|q| (q, w[q]))
+                .collect();
+            if let Some(spec) = self.cx.opts.shard {
+                let key = super::shard::key_hash(
+                    &super::expansion::inputs_of(&e.mech, e, &driven),
+                    e.label.as_deref(),
+                );
+                if !spec.keeps(key, seq as u64) {
+                    // Another shard's: counted, not analysed.
+                    self.skipped += 1;
+                    return true;
+                }
+            }
             self.batch.push((
                 x,
-                (0..w.len())
-                    .filter(|&q| w[q] > 0)
-                    .map(|q| (q, w[q]))
-                    .collect(),
+                driven,
                 flow.iter()
                     .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
                     .collect(),
+                seq,
             ));
             if self.batch.len() >= self.batch_size {
                 // Batches grow from one placement: the first ones stream at once.
@@ -291,6 +323,8 @@ impl Placing<'_> {
         lean: Option<&Lean>,
         sink: &mut dyn FnMut(Placement) -> bool,
     ) -> Result<(), BudgetExceeded> {
+        // Another shard's placements are counted, not analysed.
+        self.r.count_valid += std::mem::take(&mut self.skipped);
         if self.batch.is_empty() || self.stopped {
             self.batch.clear();
             return Ok(());
@@ -306,12 +340,11 @@ impl Placing<'_> {
             .charge(results.iter().map(|r| r.1).fold(0u64, u64::saturating_add))?;
         let results = results.into_iter().map(|r| r.0);
         let r = &mut self.r;
-        let done = r.count_valid;
-        for (i, p) in results.enumerate() {
+        for (p, leaf) in results.zip(&self.batch) {
             r.count_valid += 1;
             match p {
                 Some(mut p) => {
-                    p.seq = done + i;
+                    p.seq = leaf.3;
                     r.determined += 1;
                     if !self.stopped && !sink(p) {
                         self.stopped = true;
@@ -361,7 +394,7 @@ impl Analyses<'_> {
             .map_init(
                 // A copy of the expansion only for the placements analysed in full.
                 || None::<Mechanism>,
-                |mech, (x, w, flow)| {
+                |mech, (x, w, flow, _)| {
                     let decided = oracle.work(w);
                     let certified = match oracle.decide(&e.mech, w) {
                         Some(false) => return (None, decided),

@@ -1,16 +1,19 @@
 //! Shards of one enumeration (`--partition hash:i/n | slice:i/n`, as cargo-nextest's) and
 //! their merge.
 //!
-//! Every shard runs the whole enumeration and keeps the placements that are its own: by a
-//! fixed hash (FNV-1a, 64 bits) of the placement's canonical key (`hash:`), which does not
-//! depend on where the placement comes in the enumeration, or by its position in the stream
-//! (`slice:`). Its summary carries the partition, the exact counts and a digest of the input
-//! and of the options that change the enumeration, so that a merge refuses shards of
-//! different runs. [`merge`] ranks the union with the unsharded run's code ([`Listing`]).
+//! Every shard runs the whole search for count-valid placements, and analyses only its own:
+//! by a fixed hash (FNV-1a, 64 bits) of the placement's canonical key (`hash:`), which does
+//! not depend on where the placement comes in the enumeration, or by its number in the
+//! enumeration (`slice:`); both are known before the analysis. Its summary carries the
+//! partition, the counts (the run's count-valid placements, its own determined and excluded
+//! ones) and a digest of the input and of the options that change the enumeration, so that a
+//! merge refuses shards of different runs. [`merge`] adds the counts, says the run's notes
+//! and ranks the union with the unsharded run's code ([`Listing`]).
 
 use super::ranked::{Listing, Ranked};
 use super::{
-    Criterion, Input, Placement, Summary, TransformError, TransformOptions, enumerate, list_cap,
+    Criterion, Input, Placement, Summary, TransformError, TransformOptions, enumerate_shard,
+    finish_notes, list_cap,
 };
 use crate::mechanism::Mechanism;
 use crate::structure::Library;
@@ -148,8 +151,12 @@ pub fn fnv1a(bytes: &[u8]) -> u64 {
 /// The hash of a placement's canonical key: its driven joints with their DOF, sorted, and
 /// its expansion of the multiple joints.
 pub fn placement_hash(p: &Placement) -> u64 {
-    let mut inputs: Vec<String> = p
-        .inputs
+    key_hash(&p.inputs, p.expansion.as_deref())
+}
+
+/// [`placement_hash`] of a placement's inputs and expansion label (known before its analysis).
+pub fn key_hash(inputs: &[Input], expansion: Option<&str>) -> u64 {
+    let mut inputs: Vec<String> = inputs
         .iter()
         .map(|i| format!("{}:{}", i.joint, i.driven))
         .collect();
@@ -158,7 +165,7 @@ pub fn placement_hash(p: &Placement) -> u64 {
     for i in &inputs {
         h.field(i.as_bytes());
     }
-    h.field(p.expansion.as_deref().unwrap_or("").as_bytes());
+    h.field(expansion.unwrap_or("").as_bytes());
     h.finish()
 }
 
@@ -229,11 +236,15 @@ pub struct ShardInfo {
     pub digest: String,
     /// Placements this shard wrote.
     pub placements: usize,
-    /// The whole run's counts, exactly, in decimal ([`Summary`] writes huge ones in words).
+    /// Whose counts `excluded_by_rank` and `determined` are.
+    #[serde(default)]
+    pub counts: Counts,
+    /// The whole run's count-valid placements, exactly, in decimal ([`Summary`] writes huge
+    /// ones in words).
     pub count_valid: String,
-    /// See `count_valid`.
+    /// The placements excluded by the rank check: this shard's own, or the run's ([`Counts`]).
     pub excluded_by_rank: String,
-    /// See `count_valid`.
+    /// The determined placements: this shard's own, or the run's ([`Counts`]).
     pub determined: String,
     /// The ranking criteria.
     pub criteria: Vec<Criterion>,
@@ -241,6 +252,18 @@ pub struct ShardInfo {
     pub list_cap: usize,
     /// The file's own inputs in the default expansion (to find its rank).
     pub own: Vec<Input>,
+}
+
+/// Whose counts a shard's summary carries.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Counts {
+    /// The whole run's (each shard analysed every placement: a mechanism of independent
+    /// parts, placed part by part and combined).
+    #[default]
+    Run,
+    /// The shard's own (it analysed only its placements): the merge adds them up.
+    Shard,
 }
 
 /// The keys a shard's placement line adds to the placement's own: the order and the
@@ -275,8 +298,11 @@ impl PlacementExtra {
     }
 }
 
-/// Run the whole enumeration and hand `sink` the placements of shard `spec`, in enumeration
-/// order. Returns the run's summary and the shard's.
+/// Run the search and hand `sink` the placements of shard `spec`, in enumeration order:
+/// only the shard's own placements are analysed (a mechanism of independent parts is
+/// analysed whole, and the shard keeps its own of the combined placements). Returns the
+/// summary (without the notes made from the counts, which the merge makes: [`merge`]) and
+/// the shard's keys.
 pub fn run_shard(
     m: &Mechanism,
     opts: &TransformOptions,
@@ -285,23 +311,32 @@ pub fn run_shard(
     digest: String,
     sink: &mut dyn FnMut(&Placement),
 ) -> Result<(Summary, ShardInfo), TransformError> {
-    let (mut position, mut kept) = (0u64, 0usize);
-    let summary = enumerate(m, opts, lib, None, &mut |p| {
-        if spec.keeps(placement_hash(&p), position) {
+    let mut kept = 0usize;
+    let opts = TransformOptions {
+        shard: Some(spec),
+        ..opts.clone()
+    };
+    let summary = enumerate_shard(m, &opts, lib, &mut |p| {
+        if spec.keeps(placement_hash(&p), p.seq as u64) {
             sink(&p);
             kept += 1;
         }
-        position += 1;
     })?;
     let criteria = if opts.rank.is_empty() {
         Criterion::DEFAULT.to_vec()
     } else {
         opts.rank.clone()
     };
+    let counts = if summary.parts <= 1 {
+        Counts::Shard
+    } else {
+        Counts::Run
+    };
     let info = ShardInfo {
         partition: spec,
         digest,
         placements: kept,
+        counts,
         count_valid: summary.count_valid.to_string(),
         excluded_by_rank: summary.excluded_by_rank.to_string(),
         determined: summary.determined.to_string(),
@@ -414,6 +449,14 @@ pub fn merge(shards: Vec<Shard>) -> Result<Merged, MergeError> {
                 b: s.info.digest.clone(),
             });
         }
+        if s.info.counts != first.info.counts || s.info.count_valid != first.info.count_valid {
+            return Err(MergeError::Different {
+                first: head,
+                other: s.file.clone(),
+                a: first.info.digest.clone(),
+                b: s.info.digest.clone(),
+            });
+        }
         if p.kind != spec.kind || p.count != spec.count || p.count as usize > seen.len() {
             return Err(MergeError::Mixed {
                 first: head,
@@ -473,11 +516,29 @@ fn join(shards: Vec<Shard>) -> Result<Merged, MergeError> {
     summary.count_valid = count(&first.info.count_valid)?;
     summary.excluded_by_rank = count(&first.info.excluded_by_rank)?;
     summary.determined = count(&first.info.determined)?;
+    let own = first.info.counts == Counts::Shard;
     let mut placements = first.placements;
     for s in iter {
+        if own {
+            // Each shard counted its own placements: the run's are their sum.
+            let add = |total: u128, text: &str| {
+                text.parse::<u128>()
+                    .map(|n| total.saturating_add(n))
+                    .map_err(|_| MergeError::Count {
+                        file: s.file.clone(),
+                        text: text.to_string(),
+                    })
+            };
+            summary.excluded_by_rank = add(summary.excluded_by_rank, &s.info.excluded_by_rank)?;
+            summary.determined = add(summary.determined, &s.info.determined)?;
+        }
         placements.extend(s.placements);
     }
     placements.sort_by_key(|p| p.seq);
+    if own {
+        summary.listed = usize::try_from(summary.determined).unwrap_or(usize::MAX);
+        finish_notes(&mut summary);
+    }
     Ok(Merged {
         summary,
         info: first.info,

@@ -1324,12 +1324,13 @@ fn random_geometry_away_from_folds_has_room_in_every_group() {
 
 /// The flat pose is non-reduced (every window has a double root there). The former offset
 /// slices gave 2 at seed 1 for the planar file and 0 at seeds 2 and 5 for the 3D twin; the
-/// curve test on slices through the configuration must give 1 at every seed 0..=5, for both
-/// files (release, CPU: about 0.4 s a seed planar, 4.4 s a seed 3D).
-fn n_four_bar_40_over_seeds(name: &str) {
+/// curve test on slices through the configuration must give 1 at every seed given: 0..=5
+/// for the planar file, the 3D twin at 0 and its former failures 2 and 5 (release, CPU:
+/// about 0.4 s a seed planar, 4.4 s a seed 3D).
+fn n_four_bar_40_over_seeds(name: &str, seeds: &[u64]) {
     let (m, cfg) = n_four_bar_40_singular(name);
     let mut got = Vec::new();
-    for seed in 0..=5u64 {
+    for &seed in seeds {
         let f = finite_mobility(
             &m,
             &cfg,
@@ -1342,19 +1343,23 @@ fn n_four_bar_40_over_seeds(name: &str) {
         assert_eq!(f.first_order, 41, "{name} seed {seed}: {f:?}");
         got.push(f.finite);
     }
-    assert_eq!(got, vec![1; 6], "{name}: finite mobility per seed 0..=5");
+    assert_eq!(
+        got,
+        vec![1; seeds.len()],
+        "{name}: finite mobility per seed {seeds:?}"
+    );
 }
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "slow in debug: run with --release")]
 fn n_four_bar_40_singular_pose_planar_over_seeds() {
-    n_four_bar_40_over_seeds("n-four-bar-40");
+    n_four_bar_40_over_seeds("n-four-bar-40", &[0, 1, 2, 3, 4, 5]);
 }
 
 #[test]
 #[cfg_attr(debug_assertions, ignore = "slow in debug: run with --release")]
 fn n_four_bar_40_singular_pose_in_space_over_seeds() {
-    n_four_bar_40_over_seeds("n-four-bar-40-3d");
+    n_four_bar_40_over_seeds("n-four-bar-40-3d", &[0, 2, 5]);
 }
 
 /// Measurement, not a check: the finite mobility of the N = 40 singular pose at the seeds in

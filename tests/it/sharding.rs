@@ -43,7 +43,8 @@ fn shard(dir: &Path, file: &str, extra: &[&str], kind: &str, i: usize, n: usize)
 }
 
 /// For n = 1, 2, 7 shards by hash and by slice, `mbsa merge` writes what `mbsa transform`
-/// writes, in every format.
+/// writes: in every format at n = 7, in one format each at n = 1 and 2 (a slice 1/1 is the
+/// whole run, as a hash 1/1 is).
 fn merged_equals_unsharded(file: &str, extra: &[&str]) {
     let dir = scratch(file.trim_start_matches('@'));
     let formats = ["table", "json", "jsonl"];
@@ -57,23 +58,29 @@ fn merged_equals_unsharded(file: &str, extra: &[&str]) {
             out
         })
         .collect();
-    for n in [1, 2, 7] {
-        for kind in ["hash", "slice"] {
-            let mut shards: Vec<String> = (1..=n)
-                .map(|i| shard(&dir, file, extra, kind, i, n))
-                .collect();
-            // The order of the files does not matter.
-            shards.reverse();
-            for (f, expected) in formats.iter().zip(&whole) {
-                let mut args = vec!["merge", "--format", f];
-                args.extend(shards.iter().map(String::as_str));
-                let (code, out, err) = run(&args);
-                assert_eq!(code, 0, "{err}");
-                assert!(
-                    out == *expected,
-                    "{file} {kind} n={n} --format {f}: the merge differs from the unsharded run"
-                );
-            }
+    let cases: [(usize, &str, &[usize]); 5] = [
+        (1, "hash", &[2]),
+        (2, "hash", &[0]),
+        (2, "slice", &[1]),
+        (7, "hash", &[0, 1, 2]),
+        (7, "slice", &[0, 1, 2]),
+    ];
+    for (n, kind, which) in cases {
+        let mut shards: Vec<String> = (1..=n)
+            .map(|i| shard(&dir, file, extra, kind, i, n))
+            .collect();
+        // The order of the files does not matter.
+        shards.reverse();
+        for &k in which {
+            let (f, expected) = (formats[k], &whole[k]);
+            let mut args = vec!["merge", "--format", f];
+            args.extend(shards.iter().map(String::as_str));
+            let (code, out, err) = run(&args);
+            assert_eq!(code, 0, "{err}");
+            assert!(
+                out == *expected,
+                "{file} {kind} n={n} --format {f}: the merge differs from the unsharded run"
+            );
         }
     }
 }
@@ -86,6 +93,41 @@ fn merged_rotor_shards_equal_the_unsharded_run() {
 #[test]
 fn merged_stewart_shards_equal_the_unsharded_run() {
     merged_equals_unsharded("@stewart", &[]);
+}
+
+/// A shard analyses only its own placements: under a work limit the whole run overruns (its
+/// analyses need about 5·10^7 work units), each of four shards answers, and their merge is the
+/// whole run's output.
+#[test]
+fn each_shard_analyses_only_its_own_placements() {
+    let dir = scratch("work");
+    let cap = ["--max-work", "30000000"];
+    let (code, _, err) = run(&["transform", "@stewart", "--format", "jsonl", cap[0], cap[1]]);
+    assert_eq!(code, 2, "the whole run fits the limit: {err}");
+    assert!(err.contains("the analysis of the placements"), "{err}");
+    let shards: Vec<String> = (1..=4)
+        .map(|i| shard(&dir, "@stewart", &cap, "hash", i, 4))
+        .collect();
+    let mut determined = 0u64;
+    for s in &shards {
+        let text = std::fs::read_to_string(s).expect("written");
+        let last: serde_json::Value =
+            serde_json::from_str(text.lines().last().expect("a summary line")).expect("JSON");
+        assert_eq!(last["shard"]["counts"], "shard", "{last}");
+        let own: u64 = last["shard"]["determined"]
+            .as_str()
+            .and_then(|t| t.parse().ok())
+            .expect("a count");
+        assert_eq!(own, last["shard"]["placements"].as_u64().expect("a count"));
+        determined += own;
+    }
+    assert_eq!(determined, 85_115);
+    let (_, whole, _) = run(&["transform", "@stewart", "--top", "3"]);
+    let mut merge = vec!["merge", "--top", "3"];
+    merge.extend(shards.iter().map(String::as_str));
+    let (code, out, err) = run(&merge);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(out, whole);
 }
 
 #[test]

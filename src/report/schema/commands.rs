@@ -103,6 +103,7 @@ pub(super) fn shard_summary() -> Value {
             ("partition", string()),
             ("digest", string()),
             ("placements", count()),
+            ("counts", one_of(&["run", "shard"])),
             ("count_valid", total()),
             ("excluded_by_rank", total()),
             ("determined", total()),
