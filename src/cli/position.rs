@@ -4,6 +4,7 @@ use super::{Failure, FileArg, emit, load, load_with_inputs};
 use clap::{Args, ValueEnum};
 use mbsa::Mechanism;
 use mbsa::position::inputs::{self, Value};
+use mbsa::position::sweep::{self, Method};
 use mbsa::position::{
     ClosureStatus, Configuration, NewtonOptions, Pose, PositionModel, SolveError, SolveReport,
 };
@@ -260,18 +261,15 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
     let a = structure::analyze(&first, &structure::Options::default(), &Library::builtin())
         .map_err(|e| input_err(name, &e))?;
     let sched = mbsa::position::schedule(&m, &a, &model);
-    let run = |sets: &[(usize, Vec<Value>)], from: &Configuration| {
-        let tg = inputs::targets(&m, &model, sets).map_err(|e| input_err("--set", &e))?;
-        let r = if args.global {
-            mbsa::position::solve_global(&m, &model, &tg, from, &opts)
-        } else {
-            mbsa::position::solve_groups(&m, &model, &sched, &tg, from, &opts)
-        };
-        Ok::<_, Failure>(r)
-    };
     let method = if args.global { "global" } else { "groups" };
     let Some(sw) = sweep else {
-        let sol = run(&sets, &config)?.map_err(|e| solve_failure(name, &e))?;
+        let tg = inputs::targets(&m, &model, &sets).map_err(|e| input_err("--set", &e))?;
+        let sol = if args.global {
+            mbsa::position::solve_global(&m, &model, &tg, &config, &opts)
+        } else {
+            mbsa::position::solve_groups(&m, &model, &sched, &tg, &config, &opts)
+        }
+        .map_err(|e| solve_failure(name, &e))?;
         let mut report = SolveReport::new(&m, &model, &sol, method);
         if args.finite {
             report.finite = Some(
@@ -299,146 +297,25 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
             SolveFormat::Toml => toml_of(&original, &sol.config, note.as_deref()),
         });
     };
-    sweep_run(&m, &model, &sched, &sets, &sw, config, args, &run)
-}
-
-#[derive(serde::Serialize)]
-struct SweepStep {
-    value: f64,
-    poses: Vec<mbsa::position::PoseReport>,
-    joint_values: Vec<mbsa::position::JointValues>,
-}
-
-#[derive(serde::Serialize)]
-struct SweepReport {
-    name: String,
-    joint: String,
-    steps: Vec<SweepStep>,
-    stopped: Option<String>,
-}
-
-/// Solves for given values from a configuration (the outer error is an input error).
-type Runner<'a> = dyn Fn(
-        &[(usize, Vec<Value>)],
-        &Configuration,
-    ) -> Result<Result<mbsa::position::Solution, SolveError>, Failure>
-    + 'a;
-
-#[allow(clippy::too_many_arguments)]
-fn sweep_run(
-    m: &Mechanism,
-    model: &PositionModel,
-    sched: &mbsa::position::Schedule,
-    sets: &[(usize, Vec<Value>)],
-    sw: &inputs::Sweep,
-    mut config: Configuration,
-    args: &SolveArgs,
-    run: &Runner<'_>,
-) -> Result<(), Failure> {
-    let joint = m.joints[sw.joint].id.clone();
-    let mut steps: Vec<SweepStep> = Vec::new();
-    let mut stopped = None;
-    let mut last_jump = 0.0f64;
-    let mut prev_value: Option<f64> = None;
-    let mut last_config = config.clone();
-    let mut baseline: std::collections::HashMap<String, usize> = Default::default();
-    for v in sw.values() {
-        let mut s: Vec<(usize, Vec<Value>)> = sets.to_vec();
-        match s.iter_mut().find(|(j, _)| *j == sw.joint) {
-            Some((_, vals)) => vals[0] = v,
-            None => s.push((sw.joint, vec![v])),
-        }
-        let at = |x: f64| format!("{joint}={}", x);
-        let sol = match run(&s, &config)? {
-            Ok(sol) => sol,
-            Err(e) => {
-                stopped = Some(match prev_value {
-                    Some(p) => format!(
-                        "stopped between {} and {}: a dead point or the end of the reachable range: {e}",
-                        at(p),
-                        at(v.number)
-                    ),
-                    None => format!("stopped at {}: {e}", at(v.number)),
-                });
-                break;
-            }
-        };
-        // Singular group: more nullity than at the sweep's start, or nearly so.
-        for st in &sol.steps {
-            baseline.entry(st.name.clone()).or_insert(st.nullity);
-        }
-        if let Some(st) = sol
-            .steps
-            .iter()
-            .filter(|st| st.conditioning < 1e-6 || st.nullity > baseline[&st.name])
-            .min_by(|a, b| a.conditioning.total_cmp(&b.conditioning))
-        {
-            stopped = Some(format!(
-                "dead point at {}: the equations of group {} (bodies {}) became singular (conditioning {:.1e})",
-                at(v.number),
-                st.name,
-                st.bodies.join(", "),
-                st.conditioning
-            ));
-        }
-        // Branch change: a jump far larger than the previous step's.
-        let mut jump = 0.0f64;
-        let mut worst_body = m.frame;
-        for b in 0..m.bodies.len() {
-            let (p, q) = (&last_config.poses[b], &sol.config.poses[b]);
-            let d = (p.rotation - q.rotation).norm() + (p.translation - q.translation).norm();
-            if d > jump {
-                jump = d;
-                worst_body = b;
-            }
-        }
-        if stopped.is_none() && last_jump > 1e-9 && jump > 5.0 * last_jump + 1e-6 {
-            let group = sched
+    let how = if args.global {
+        Method::Global
+    } else {
+        Method::Groups
+    };
+    let r = sweep::sweep(&m, &model, &sched, &sets, &sw, config, how, &opts)
+        .map_err(|e| input_err("--set", &e))?;
+    emit(&match args.format {
+        SolveFormat::Json => mbsa::report::json(&r),
+        _ => {
+            let rows: Vec<_> = r
                 .steps
                 .iter()
-                .find(|st| st.bodies.contains(&worst_body))
-                .map(|st| st.name.clone())
-                .unwrap_or_else(|| "?".into());
-            stopped = Some(format!(
-                "branch change between {} and {}: group {group} (body {}) jumped; the sweep passed a dead point",
-                at(prev_value.unwrap_or(v.number)),
-                at(v.number),
-                m.body_id(worst_body)
-            ));
-            break;
-        }
-        if prev_value.is_some() {
-            last_jump = jump;
-        }
-        steps.push(SweepStep {
-            value: v.number,
-            poses: mbsa::position::solve::pose_reports(m, model, &sol.config),
-            joint_values: mbsa::position::joint_values(m, model, &sol.config),
-        });
-        last_config = sol.config.clone();
-        config = sol.config;
-        prev_value = Some(v.number);
-        if stopped.is_some() {
-            break;
-        }
-    }
-    let text = match args.format {
-        SolveFormat::Json => mbsa::report::json(&SweepReport {
-            name: m.name.clone(),
-            joint: joint.clone(),
-            steps,
-            stopped: stopped.clone(),
-        }),
-        _ => {
-            let rows: Vec<(f64, Vec<mbsa::position::JointValues>)> = steps
-                .into_iter()
-                .map(|s| (s.value, s.joint_values))
+                .map(|s| (s.value, s.joint_values.clone()))
                 .collect();
-            mbsa::report::position::sweep_table(&joint, &rows)
+            mbsa::report::position::sweep_table(&r.joint, &rows)
         }
-    };
-    emit(&text)?;
-    match stopped {
+    })?;
+    match r.stopped {
         Some(msg) => Err(failed(&msg)),
         None => Ok(()),
     }

@@ -14,6 +14,7 @@
 //!   normal equations in a minimum-degree order).
 //! - [`finite`]: the finite-mobility test, [`finite_mobility()`].
 //! - [`inputs`]: input values (`JOINT=30`, `JOINT=0.5rad`, sweeps).
+//! - [`sweep`]: one input stepped through a range, stopped at a dead point or a branch change.
 
 pub mod closure;
 pub mod finite;
@@ -24,6 +25,7 @@ pub mod realize;
 pub mod residual;
 pub mod solve;
 pub mod sparse;
+pub mod sweep;
 mod track;
 
 pub use closure::{
