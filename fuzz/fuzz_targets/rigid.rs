@@ -1,41 +1,9 @@
-//! Rigidity of whatever parses (size-capped): the pebble game with and without inputs, and
-//! the geometric analysis from the file's geometry and from a random realization.
+//! The `rigid` target: the checks of `checks/rigid.rs` on each input (docs/reliability.md).
 
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-use mbsa::rigidity::geometric::{self, GeometricOptions, GeometrySource};
-use mbsa::rigidity::pebble::{self, PebbleOptions};
-
 mod common;
+#[path = "checks/rigid.rs"]
+mod check;
 
-fuzz_target!(|data: &[u8]| {
-    let Some(m) = common::parse(data) else { return };
-    if !common::within(&m, 300, 600) {
-        return;
-    }
-    for with_inputs in [false, true] {
-        let r = pebble::analyze(&m, &PebbleOptions { with_inputs });
-        let _ = mbsa::report::rigid_pebble::table(&r);
-        let _ = mbsa::report::json(&r);
-    }
-    if common::within(&m, 24, 48) {
-        for geometry in [
-            GeometrySource::Auto { seed: 0 },
-            GeometrySource::File,
-            GeometrySource::Random { seed: 7 },
-        ] {
-            if let Ok(r) = geometric::analyze(
-                &m,
-                &GeometricOptions {
-                    geometry,
-                    check_finite: false,
-                    precision: None,
-                },
-            ) {
-                let _ = mbsa::report::rigid_geometric::table(&r);
-                let _ = mbsa::report::json(&r);
-            }
-        }
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| check::run(data));

@@ -1,38 +1,9 @@
-//! Input placement search of whatever parses (small inputs, bounded search): ranking,
-//! grouping into families and the comparison with the file's own placement.
+//! The `transform` target: the checks of `checks/transform.rs` on each input (docs/reliability.md).
 
 #![no_main]
 
-use libfuzzer_sys::fuzz_target;
-use mbsa::structure::Library;
-use mbsa::transform::{TransformOptions, transform};
-
 mod common;
+#[path = "checks/transform.rs"]
+mod check;
 
-fuzz_target!(|data: &[u8]| {
-    let Some(m) = common::parse(data) else { return };
-    if !common::within(&m, 10, 14) {
-        return;
-    }
-    let lib = Library::builtin();
-    let opts = TransformOptions {
-        max_expansions: 4,
-        limit: Some(64),
-        analysis: mbsa::structure::Options {
-            count_only: true,
-            ..Default::default()
-        },
-        ..TransformOptions::default()
-    };
-    if let Ok(t) = transform(&m, &opts, &lib, None) {
-        let _ = mbsa::report::transform::table(&t, 3);
-        let _ = mbsa::report::json(&t);
-    }
-    // The comparison with a one-joint placement (the first joint's id as the spec).
-    if let Some(j) = m.joints.first()
-        && let Ok(spec) = mbsa::InputSpec::parse(&j.id)
-        && let Ok(c) = mbsa::transform::compare(&m, &spec, &opts, &lib)
-    {
-        let _ = mbsa::report::transform::comparison(&c);
-    }
-});
+libfuzzer_sys::fuzz_target!(|data: &[u8]| check::run(data));

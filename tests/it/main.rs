@@ -19,6 +19,7 @@ mod closure;
 mod docs;
 mod exact;
 mod format_errors;
+mod fuzz_corpus;
 mod generate_families;
 mod generate_table16;
 mod geometric_exact;
