@@ -8,6 +8,7 @@ mod completions;
 mod generate;
 mod input;
 mod position;
+mod report;
 mod schema;
 mod transform;
 
@@ -145,6 +146,25 @@ enum Command {
         /// Output format.
         #[arg(long, value_enum, default_value_t = OutputFormat::Table)]
         format: OutputFormat,
+    },
+    /// One self-contained HTML page of the analyses: summary, groups, diagram, rigid parts, motion.
+    ///
+    /// Writes the summary (mobility, true mobility, status, diagnosis), the group table, the
+    /// structural diagram and the rigid parts as inline SVG, and, where the file has joint
+    /// geometry, the mechanism drawn in projection and animated through a sweep of its first
+    /// driven input (slider and play button). No network, no Graphviz: one file to open in a
+    /// browser. The same input gives the same bytes. docs/report.md.
+    #[command(
+        after_help = "Examples:\n  mbsa report @rig-bennett -o bennett.html\n  mbsa report cassie.xml -o cassie.html\n  mbsa report @rotor > rotor.html"
+    )]
+    Report {
+        #[command(flatten)]
+        file: FileArg,
+        /// Write the page here (default: standard output).
+        #[arg(short, long, value_name = "OUT.html")]
+        output: Option<std::path::PathBuf>,
+        #[command(flatten)]
+        structure: analysis::StructureArgs,
     },
     /// Structural transformations: every placement of the driven inputs that determines the mechanism, ranked.
     ///
@@ -354,6 +374,11 @@ fn run(cli: Cli) -> Result<(), Failure> {
             rigid,
             format,
         } => analysis::rigid(&file, &rigid, format),
+        Command::Report {
+            file,
+            output,
+            structure,
+        } => report::run(&file, &structure, output.as_deref()),
         Command::Transform {
             file,
             structure,

@@ -2,6 +2,7 @@
 //! library types only; nothing here analyses.
 
 pub mod dot;
+pub mod html;
 pub mod json;
 pub mod mobility;
 pub mod position;
