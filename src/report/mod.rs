@@ -5,6 +5,7 @@ pub mod dot;
 pub mod json;
 pub mod mobility;
 pub mod position;
+pub mod rigid;
 pub mod rigid_geometric;
 pub mod rigid_pebble;
 pub mod schema;
