@@ -340,6 +340,29 @@ impl RawMechanism {
         })
     }
 
+    /// `mbsa dot --view VIEW`: Graphviz DOT of `diagram`, `structure` or `topology`.
+    #[pyo3(signature = (view="diagram", inputs=None))]
+    fn dot(&self, py: Python<'_>, view: &str, inputs: Option<&str>) -> PyResult<String> {
+        use mbsa::report::dot::View;
+        let view = match view {
+            "diagram" => View::Diagram,
+            "structure" => View::Structure,
+            "topology" => View::Topology,
+            _ => return Err(bad("view", &format!("`{view}` is not diagram, structure or topology"))),
+        };
+        let m = self.with_inputs(inputs)?;
+        let opts = structure::Options::default();
+        self.closure_check(&m, opts.geometry, None)?;
+        py.detach(|| {
+            let a = structure::analyze_within(&m, &opts, &Library::builtin(), &Budget::DEFAULT)
+                .map_err(|e| match e {
+                    structure::AnalyzeError::Motion(e) => errors::plain(&self.source, &e),
+                    structure::AnalyzeError::Budget(e) => errors::budget(&e),
+                })?;
+            Ok(mbsa::report::dot::render(view, &m, &a))
+        })
+    }
+
     /// The mechanism as a format-v1 TOML file.
     fn to_toml(&self) -> String {
         mbsa::generate::to_toml(&self.m)
