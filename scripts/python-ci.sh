@@ -22,7 +22,23 @@ deps)
   touch "$venv/.deps-done"
   ;;
 test)
-  echo "(test step to be written)"
+  if [ ! -e "$venv/.deps-done" ]; then
+    echo "error: run \`scripts/python-ci.sh deps\` first (it writes $venv)" >&2
+    exit 2
+  fi
+  py="$venv/bin/python"
+  # The extension as `cargo test --locked` builds the library: the same profile, flags and
+  # environment (the caller's CARGO_*, RUSTFLAGS, RUSTC_WORKSPACE_WRAPPER), so mbsa and its
+  # dependencies come from that build and only the binding crate and PyO3 are compiled.
+  start=$(date +%s)
+  PYO3_PYTHON="$py" cargo build --locked -p mbsa-python --lib --features extension-module
+  cp "$target/debug/lib_mbsa.so" python/mbsa/_mbsa.abi3.so
+  # The package from the source tree (as `maturin develop` installs a python-source project).
+  site=$("$py" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
+  echo "$PWD/python" > "$site/mbsa.pth"
+  echo "extension built in $(($(date +%s) - start)) s"
+  # The parity tests run the binary `cargo test` built.
+  MBSA_BIN="$target/debug/mbsa" "$py" -m pytest -q python/tests
   ;;
 *)
   echo "usage: scripts/python-ci.sh deps|test" >&2
