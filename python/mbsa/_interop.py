@@ -63,8 +63,9 @@ def from_pyrigi(framework: Any, name: str = "PyRigi framework") -> Mechanism:
     infinitesimal flexes number ``rigid()["geometric"]["mobility"]`` less the number of bars
     in 3D, and that mobility itself in the plane.
     """
-    graph = framework.graph()
-    dim = int(framework.dim())
+    # `graph` and `dim` are properties in PyRigi 1.x, methods before.
+    graph = framework.graph() if callable(framework.graph) else framework.graph
+    dim = int(framework.dim() if callable(framework.dim) else framework.dim)
     realization = framework.realization(as_points=True, numerical=True)
     points = {v: [float(c) for c in realization[v]] for v in graph.nodes}
     bars = [(u, v) for u, v in graph.edges]

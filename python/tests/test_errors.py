@@ -16,13 +16,17 @@ def test_input_error_is_located_as_the_cli_locates_it(cli, tmp_path):
     path.write_text(BAD)
     code, out, _ = cli("check", str(path), "--format", "json")
     assert code == 2
-    record = json.loads(out)["files"][0]
+    record = json.loads(out)["files"][0]["error"]
     with pytest.raises(mbsa.InputError) as e:
         mbsa.load(str(path))
     err = e.value
-    assert (err.file, err.line, err.column) == (record["file"], record["line"], record["column"])
+    assert (err.file, err.line, err.column) == (record["file"], record["line"], record["col"])
     assert err.message == record["message"]
     assert (err.line, err.column) == (7, 8)
+    # The diagnostic on standard error points at the same place.
+    code, _, stderr = cli("analyze", str(path))
+    assert code == 2 and f"[{path}:7:8]" in stderr
+    assert f"[{path}:7:8]" in err.rendered
     assert str(err).startswith(f"{path}:7:8: ")
 
 
