@@ -348,7 +348,12 @@ impl RawMechanism {
             "diagram" => View::Diagram,
             "structure" => View::Structure,
             "topology" => View::Topology,
-            _ => return Err(bad("view", &format!("`{view}` is not diagram, structure or topology"))),
+            _ => {
+                return Err(bad(
+                    "view",
+                    &format!("`{view}` is not diagram, structure or topology"),
+                ));
+            }
         };
         let m = self.with_inputs(inputs)?;
         let opts = structure::Options::default();
