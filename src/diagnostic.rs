@@ -99,6 +99,16 @@ mod tests {
     use super::*;
 
     #[test]
+    fn location_is_the_first_labels_line_and_column() {
+        let text = "name = \"x\"\nspace = \"planar\"\nframe = \"1\"\n\n[[joint]]\nid = \"A\"\ntype = \"Q\"\nbodies = [\"1\", \"2\"]\n";
+        let e = crate::format::load("bad.toml", text, crate::format::Format::Toml)
+            .expect_err("an unknown joint type");
+        let at = location(&e).expect("located");
+        assert_eq!((at.file.as_str(), at.line, at.column), ("bad.toml", 7, 8));
+        assert!(render(&e, false).contains("[bad.toml:7:8]"));
+    }
+
+    #[test]
     fn plain_errors_have_one_line() {
         let e = crate::mechanism::InputSpec::parse("A:x").unwrap_err();
         assert_eq!(

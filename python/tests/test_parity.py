@@ -77,3 +77,13 @@ def test_to_toml_reads_back_to_the_same_analysis():
     m = mbsa.load("@rotor")
     again = mbsa.load(m.to_toml(), format="toml")
     assert again.analyze()["groups"] == m.analyze()["groups"]
+
+
+def test_analyses_run_in_threads_with_the_same_answers():
+    from concurrent.futures import ThreadPoolExecutor
+
+    names = ["rotor", "stewart", "rig-double-banana", "hexapod-rss"]
+    alone = [mbsa.load(f"@{n}").rigid() for n in names]
+    with ThreadPoolExecutor(max_workers=4) as pool:
+        together = list(pool.map(lambda n: mbsa.load(f"@{n}").rigid(), names))
+    assert together == alone
