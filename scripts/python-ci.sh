@@ -28,10 +28,14 @@ test)
   fi
   py="$venv/bin/python"
   # The extension as `cargo test --locked` builds the library: the same profile, flags and
-  # environment (the caller's CARGO_*, RUSTFLAGS, RUSTC_WORKSPACE_WRAPPER), so mbsa and its
-  # dependencies come from that build and only the binding crate and PyO3 are compiled.
+  # environment (the caller's CARGO_*, RUSTFLAGS, RUSTC_WORKSPACE_WRAPPER), and the same
+  # features: `-p mbsa --tests` selects the test targets, so the dependencies' features are
+  # unified with the dev-dependencies' as in `cargo test` (built alone, the Python crate would
+  # get other features and rebuild serde, clap, mbsa, ...; syn's: Cargo.toml,
+  # [build-dependencies]). The tests are fresh: only PyO3 and the binding crate are compiled.
   start=$(date +%s)
-  PYO3_PYTHON="$py" cargo build --locked -p mbsa-python --lib --features extension-module
+  PYO3_PYTHON="$py" cargo build --locked -p mbsa -p mbsa-python --lib --tests \
+    --features mbsa-python/extension-module
   cp "$target/debug/lib_mbsa.so" python/mbsa/_mbsa.abi3.so
   # The package from the source tree (as `maturin develop` installs a python-source project).
   site=$("$py" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
