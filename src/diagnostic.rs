@@ -52,6 +52,31 @@ fn render_long_line(diag: &dyn Diagnostic) -> Option<String> {
     Some(out)
 }
 
+/// Where a diagnostic points: its source's name and the 1-based line and column of its first
+/// label (what `file:line:col` shows, and the `file`, `line`, `column` of `mbsa check --format
+/// json`).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Location {
+    /// The source's name (a path, `<stdin>`, `@name (file.toml)`).
+    pub file: String,
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based column.
+    pub column: usize,
+}
+
+/// The [`Location`] of `diag`, if it has a source and a label.
+pub fn location(diag: &dyn Diagnostic) -> Option<Location> {
+    let src = diag.source_code()?;
+    let label = diag.labels()?.next()?;
+    let span = src.read_span(label.inner(), 0, 0).ok()?;
+    Some(Location {
+        file: span.name().unwrap_or("<input>").to_string(),
+        line: span.line() + 1,
+        column: span.column() + 1,
+    })
+}
+
 /// Render an error without a source location (e.g. [`crate::mechanism::InputSpecError`]) as
 /// `error: <context>: <message>`, one line (plus its causes, if any).
 pub fn render_plain(context: &str, err: &dyn std::error::Error) -> String {
@@ -72,6 +97,16 @@ pub fn render_plain(context: &str, err: &dyn std::error::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn location_is_the_first_labels_line_and_column() {
+        let text = "name = \"x\"\nspace = \"planar\"\nframe = \"1\"\n\n[[joint]]\nid = \"A\"\ntype = \"Q\"\nbodies = [\"1\", \"2\"]\n";
+        let e = crate::format::load("bad.toml", text, crate::format::Format::Toml)
+            .expect_err("an unknown joint type");
+        let at = location(&e).expect("located");
+        assert_eq!((at.file.as_str(), at.line, at.column), ("bad.toml", 7, 8));
+        assert!(render(&e, false).contains("[bad.toml:7:8]"));
+    }
 
     #[test]
     fn plain_errors_have_one_line() {

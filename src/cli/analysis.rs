@@ -3,7 +3,7 @@
 use super::{Failure, FileArg, OutputFormat, emit, keep_until_exit, load_with_inputs};
 use clap::{Args, ValueEnum};
 use mbsa::report::dot::View;
-use mbsa::rigidity::{geometric, pebble};
+use mbsa::rigidity::{both as rigid_both, geometric};
 use mbsa::structure::{self, Library, Method};
 
 /// Options of the structural analysis shared by `analyze`, `dot` and `transform`.
@@ -335,18 +335,6 @@ fn geometric_within(
     })
 }
 
-/// Both rigidity reports, for `--format json` with `--method both` (and the finite
-/// mobility with `--finite`).
-#[derive(serde::Serialize)]
-struct Both<'a> {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    counting: Option<&'a pebble::PebbleReport>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    geometric: Option<&'a geometric::GeometricReport>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    finite: Option<&'a mbsa::position::FiniteMobility>,
-}
-
 /// `mbsa rigid`.
 pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(), Failure> {
     let mut m = load_with_inputs(file, args.inputs.as_deref())?;
@@ -355,117 +343,30 @@ pub fn rigid(file: &FileArg, args: &RigidArgs, format: OutputFormat) -> Result<(
             j.driven = 0;
         }
     }
-    let counting = if matches!(args.method, RigidMethod::Both | RigidMethod::Counting) {
-        let opts = pebble::PebbleOptions {
-            with_inputs: args.with_inputs,
-        };
-        Some(
-            pebble::analyze_within(&m, &opts, &super::budget())
-                .map_err(|e| super::budget_failure(&e))?,
-        )
-    } else {
-        None
-    };
-    let geometric = if matches!(args.method, RigidMethod::Both | RigidMethod::Geometric) {
+    // The closure of the file's configuration, for the geometric analysis or the finite test
+    // (a warning, or an error when grossly open).
+    if args.method != RigidMethod::Counting || args.finite {
         args.geometry.closure_check(&file.file, &m)?;
-        let opts = geometric::GeometricOptions {
-            geometry: args.geometry.source(),
-            precision: args.geometry.precision()?,
-            check_finite: false,
-        };
-        Some(geometric_within(file, &m, &opts)?)
-    } else {
-        None
-    };
-    let finite = if args.finite {
-        let file_geometry = geometric.as_ref().is_none_or(|g| g.geometry_used.is_file())
-            && mbsa::motion::has_geometry(&m);
-        if !file_geometry {
-            return Err(Failure::Input(format!(
-                "error: {}: --finite needs the file's geometry (a configuration to move from); \
-                 some joints lack it or `--geometry random` was asked",
-                file.file
-            )));
-        }
-        if geometric.is_none() {
-            // The geometric analysis checked the closure already.
-            args.geometry.closure_check(&file.file, &m)?;
-        }
-        // An open file is assembled first (the report's first note says so).
-        let scale = mbsa::position::residual::model_size(&m);
-        let tolerance = args
-            .geometry
-            .precision()?
-            .map(|p| mbsa::position::tolerance_for(scale, p));
-        Some(
-            mbsa::position::finite_mobility_of_file(
-                &m,
-                tolerance,
-                &mbsa::position::FiniteOptions {
-                    budget: super::budget(),
-                    ..Default::default()
-                },
-            )
-            .map_err(|e| match e {
-                mbsa::position::SolveError::Budget(b) => super::budget_failure(&b),
-                e => Failure::Input(format!("error: {}: {e}", file.file)),
-            })?,
-        )
-    } else {
-        None
-    };
-    // Rounded numbers: the test takes them as exact, the geometric analysis as known to their
-    // precision; where the two disagree the finite answer is not decided (and says why).
-    let mut finite = finite;
-    if let Some(f) = finite.as_mut() {
-        let precision = args
-            .geometry
-            .precision()?
-            .unwrap_or_else(|| mbsa::motion::written_precision(&m));
-        let at_precision = geometric
-            .as_ref()
-            .filter(|_| !args.with_inputs)
-            .map(|g| g.mobility);
-        mbsa::position::caveat_rounded(f, precision, at_precision);
     }
-    let text = match (format, &counting, &geometric) {
-        (OutputFormat::Json, c, g) if finite.is_some() || (c.is_some() && g.is_some()) => {
-            mbsa::report::json(&Both {
-                counting: c.as_ref(),
-                geometric: g.as_ref(),
-                finite: finite.as_ref(),
-            })
-        }
-        (OutputFormat::Json, Some(c), None) => mbsa::report::json(c),
-        (OutputFormat::Json, None, Some(g)) => mbsa::report::json(g),
-        (OutputFormat::Json, Some(c), Some(g)) => mbsa::report::json(&Both {
-            counting: Some(c),
-            geometric: Some(g),
-            finite: None,
-        }),
-        (OutputFormat::Table, c, g) => {
-            let mut parts = Vec::new();
-            if let Some(c) = c {
-                parts.push(format!(
-                    "Counting (pebble game, topology only)\n\n{}",
-                    mbsa::report::rigid_pebble::table(c)
-                ));
-            }
-            if let Some(g) = g {
-                parts.push(format!(
-                    "Geometry (constraint Jacobian)\n\n{}",
-                    mbsa::report::rigid_geometric::table(g)
-                ));
-            }
-            if let Some(f) = &finite {
-                parts.push(format!(
-                    "Finite mobility (position level)\n\n{}",
-                    mbsa::report::position::finite_section(f)
-                ));
-            }
-            parts.join("\n")
-        }
-        (OutputFormat::Json, None, None) => String::new(),
+    let opts = rigid_both::RigidOptions {
+        methods: match args.method {
+            RigidMethod::Both => rigid_both::Methods::Both,
+            RigidMethod::Counting => rigid_both::Methods::Counting,
+            RigidMethod::Geometric => rigid_both::Methods::Geometric,
+        },
+        with_inputs: args.with_inputs,
+        finite: args.finite,
+        geometry: args.geometry.source(),
+        precision: args.geometry.precision()?,
+        budget: super::budget(),
     };
-    emit(&text)
+    let r = rigid_both::analyze(&m, &opts).map_err(|e| match e {
+        rigid_both::RigidError::Motion(e) => input_error(file, e),
+        rigid_both::RigidError::Budget(e) => super::budget_failure(&e),
+        e => Failure::Input(format!("error: {}: {e}", file.file)),
+    })?;
+    emit(&match format {
+        OutputFormat::Json => mbsa::report::rigid::json(&r),
+        OutputFormat::Table => mbsa::report::rigid::table(&r),
+    })
 }

@@ -188,12 +188,7 @@ pub struct Unreadable {
 impl Unreadable {
     /// A diagnostic with its location (its first label).
     pub fn of(diag: &dyn miette::Diagnostic) -> Self {
-        let at = diag.source_code().and_then(|src| {
-            let label = diag.labels()?.next()?;
-            let span = src.read_span(label.inner(), 0, 0).ok()?;
-            let name = span.name().unwrap_or("<input>").to_string();
-            Some((name, span.line() + 1, span.column() + 1))
-        });
+        let at = mbsa::diagnostic::location(diag).map(|l| (l.file, l.line, l.column));
         Unreadable {
             rendered: mbsa::diagnostic::render(diag, super::color_stderr()),
             message: diag.to_string(),
