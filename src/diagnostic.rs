@@ -100,12 +100,16 @@ mod tests {
 
     #[test]
     fn location_is_the_first_labels_line_and_column() {
-        let text = "name = \"x\"\nspace = \"planar\"\nframe = \"1\"\n\n[[joint]]\nid = \"A\"\ntype = \"Q\"\nbodies = [\"1\", \"2\"]\n";
-        let e = crate::format::load("bad.toml", text, crate::format::Format::Toml)
-            .expect_err("an unknown joint type");
-        let at = location(&e).expect("located");
-        assert_eq!((at.file.as_str(), at.line, at.column), ("bad.toml", 7, 8));
-        assert!(render(&e, false).contains("[bad.toml:7:8]"));
+        // A label on `Q`, the 5th byte of the 3rd line.
+        let diag = miette::MietteDiagnostic::new("unknown joint type")
+            .with_label(miette::LabeledSpan::at(10..11, "here"));
+        let report = miette::Report::new(diag).with_source_code(miette::NamedSource::new(
+            "bad.toml",
+            "a\nbcd\nxyz Q\n".to_string(),
+        ));
+        let at = location(report.as_ref()).expect("located");
+        assert_eq!((at.file.as_str(), at.line, at.column), ("bad.toml", 3, 5));
+        assert!(render(report.as_ref(), false).contains("[bad.toml:3:5]"));
     }
 
     #[test]

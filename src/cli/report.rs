@@ -64,16 +64,24 @@ pub fn run(
     }
 }
 
-/// The joint to sweep: the first driven one, else the first the diagnosis offers for an input.
+/// The joint to sweep: the first driven one, else the first the diagnosis offers for an input,
+/// one of a single DOF first (a floating base's free joint is offered too, but sweeping one of
+/// its six coordinates moves the whole model rather than the mechanism).
 fn swept_joint(m: &Mechanism, a: &structure::Analysis) -> Option<(usize, &'static str)> {
     if let Some(j) = m.joints.iter().position(|j| j.driven > 0) {
         return Some((j, "the first driven input"));
     }
     let candidates = a.diagnosis.as_ref()?.underdetermined.as_ref()?;
-    candidates
+    let offered: Vec<usize> = candidates
         .input_candidates
         .iter()
-        .find_map(|id| m.joints.iter().position(|j| &j.id == id))
+        .filter_map(|id| m.joints.iter().position(|j| &j.id == id))
+        .collect();
+    offered
+        .iter()
+        .copied()
+        .find(|&j| m.joints[j].kind.grade() == 1)
+        .or_else(|| offered.first().copied())
         .map(|j| {
             (
                 j,

@@ -112,7 +112,7 @@ fn place(v: &mut [Node], parents: &[Vec<usize>]) -> f64 {
     let rows = v.iter().map(|n| n.row).max().unwrap_or(0) + 1;
     let mut widest: f64 = 0.0;
     let mut placed: Vec<Vec<usize>> = vec![Vec::new(); rows];
-    for r in 0..rows {
+    for (r, row) in placed.iter_mut().enumerate() {
         let mut members: Vec<(f64, usize)> = (0..v.len())
             .filter(|&i| v[i].row == r)
             .map(|i| {
@@ -130,7 +130,7 @@ fn place(v: &mut [Node], parents: &[Vec<usize>]) -> f64 {
             v[i].x = k as f64 * (W + GAP_X);
         }
         widest = widest.max(members.len() as f64 * (W + GAP_X) - GAP_X);
-        placed[r] = members.into_iter().map(|(_, i)| i).collect();
+        *row = members.into_iter().map(|(_, i)| i).collect();
     }
     // Centre each row under the widest.
     for row in &placed {

@@ -22,12 +22,14 @@ struct Point {
     at: Vector3<f64>,
 }
 
+/// A joint's marker: the joint's index, its point, its axis segment's two points.
+type Marker = (usize, usize, Option<(usize, usize)>);
+
 /// The points, each body's polygon (point indices) and each joint's marker.
 struct Figure {
     points: Vec<Point>,
     links: Vec<(usize, Vec<usize>)>,
-    /// Joint index, its point, its axis segment's two points.
-    joints: Vec<(usize, usize, Option<(usize, usize)>)>,
+    joints: Vec<Marker>,
 }
 
 fn figure(m: &Mechanism, size: f64) -> Figure {
