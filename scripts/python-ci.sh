@@ -12,12 +12,14 @@ step="${1:-}"
 
 case "$step" in
 deps)
+  # --no-compile: no bytecode for the whole of sympy, matplotlib, ... while the Rust build
+  # wants the cores (Python compiles what the tests import when they import it).
   python3 -m venv "$venv"
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check --upgrade pip
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check \
+  "$venv/bin/python" -m pip install --quiet --no-compile --disable-pip-version-check --upgrade pip
+  "$venv/bin/python" -m pip install --quiet --no-compile --disable-pip-version-check \
     'maturin>=1.5,<2' numpy pytest nbclient nbformat ipykernel matplotlib mujoco
   # PyRigi is optional: the interop tests skip, saying so, when it does not install.
-  "$venv/bin/python" -m pip install --quiet --disable-pip-version-check pyrigi ||
+  "$venv/bin/python" -m pip install --quiet --no-compile --disable-pip-version-check pyrigi ||
     echo "warning: pyrigi did not install; its parity tests will be skipped"
   touch "$venv/.deps-done"
   ;;
