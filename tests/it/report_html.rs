@@ -2,24 +2,11 @@
 //! one animation frame per sweep step, byte-identical reruns) and in a real browser (headless
 //! Chromium: the script runs without error, draws the first frame and sets `data-ready`).
 
-use assert_cmd::Command;
+use crate::common::mbsa;
 use std::path::{Path, PathBuf};
 
 const FOUR_BAR: &str = "tests/fixtures/import/four_bar.sdf";
 const CASSIE: &str = "tests/fixtures/import/cassie.xml";
-
-fn mbsa(args: &[&str]) -> (i32, String, String) {
-    let out = Command::cargo_bin("mbsa")
-        .expect("the mbsa binary is built")
-        .args(args)
-        .output()
-        .expect("mbsa runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn report(file: &str) -> String {
     let (code, out, err) = mbsa(&["report", file]);

@@ -1,4 +1,5 @@
-//! Generators shared by the pebble-game tests (`pebble_*`) and `geometric_exact`: the local
+//! Helpers shared by the test modules: the binary run with arguments (`mbsa`), and the
+//! generators of the pebble-game tests (`pebble_*`) and `geometric_exact`: the local
 //! SplitMix64 stream and the planar bar-joint frameworks written as mechanisms.
 #![allow(dead_code)]
 
@@ -61,4 +62,18 @@ pub fn laman(points: usize, local: bool, seed: u64) -> Mechanism {
         bars.push((b, i));
     }
     bar_framework("laman", points, &bars)
+}
+
+/// Runs this crate's `mbsa` binary with `args`: exit code (-1 if killed), stdout, stderr.
+pub fn mbsa(args: &[&str]) -> (i32, String, String) {
+    let out = assert_cmd::Command::cargo_bin("mbsa")
+        .expect("the mbsa binary is built")
+        .args(args)
+        .output()
+        .expect("mbsa runs");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
 }
