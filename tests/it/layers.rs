@@ -23,12 +23,19 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("model", &["joint", "mechanism", "mobility"]),
     (
         "input/output",
-        &["format", "import", "generate", "examples", "diagnostic"],
+        &[
+            "format",
+            "write",
+            "import",
+            "generate",
+            "examples",
+            "diagnostic",
+        ],
     ),
     ("kinematics", &["motion", "position", "geometry"]),
     (
         "analyses",
-        &["structure", "rigidity", "transform", "expect"],
+        &["structure", "rigidity", "transform", "expect", "repair"],
     ),
     ("rendering", &["report"]),
     ("cli", &["cli", "main"]),

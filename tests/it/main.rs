@@ -47,6 +47,7 @@ mod reader_scale;
 mod reliability_determinism;
 mod reliability_large;
 mod reliability_smoke;
+mod repair;
 mod report_html;
 mod report_schema;
 mod scale_smoke;
