@@ -31,6 +31,10 @@ pub struct ImportArgs {
     /// Merge coincident coaxial revolute joints that share a body into multiple joints.
     #[arg(long)]
     pub merge_pins: bool,
+    /// URDF: the Extended-URDF YAML file of loop closures (default: STEM.yaml beside the URDF
+    /// when it has a `closed_loop` key; '' reads none).
+    #[arg(long, value_name = "FILE")]
+    pub closures: Option<std::path::PathBuf>,
 }
 
 impl ImportArgs {
@@ -41,6 +45,7 @@ impl ImportArgs {
             keyframe: self.keyframe.clone(),
             merge_pins: self.merge_pins,
             max_input_bytes: Some(super::budget().max_input_bytes),
+            closures: self.closures.clone(),
         }
     }
 }
