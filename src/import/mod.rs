@@ -134,7 +134,7 @@ pub struct ImportOptions {
     /// URDF: the Extended-URDF YAML file of loop closures (`closed_loop`, `type`, `name_mot`,
     /// `joint_name`, `joint_type`). Default: `STEM.yaml` (or `.yml`) beside the URDF when it
     /// has a `closed_loop` key, as Pinocchio users keep `robot.urdf` and `robot.yaml`
-    /// together. `Some("")` reads none.
+    /// together. An empty path reads none.
     pub closures: Option<std::path::PathBuf>,
 }
 

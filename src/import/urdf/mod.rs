@@ -7,6 +7,8 @@
 
 mod constraint;
 mod sidecar;
+#[cfg(test)]
+mod tests;
 
 use super::{
     Builder, ImportError, ImportOptions, JointRec, Node, Pose, Src, Unique, arr, child, children,
@@ -416,6 +418,9 @@ fn parse_joint<'a>(
             .and_then(|a| child(a, "use_parent_model_frame"))
             .and_then(|u| u.text())
             .is_some_and(|t| matches!(t.trim(), "1" | "true"));
+    // urdfdom reads no axis for fixed and floating joints (nor SDFormat for ball joints): a
+    // zero axis there (CAD exporters write `0 0 0`) is no error.
+    let axis_node = axis_node.filter(|_| !matches!(kind, "fixed" | "floating" | "ball"));
     let axis_v = match axis_node {
         Some(a) if sdf_style => match child(a, "xyz") {
             Some(x) => src.nums_text(x, 3)?,

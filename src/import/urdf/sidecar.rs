@@ -390,7 +390,11 @@ impl Closures {
         self.same_length("joint_name", names.len(), "joint_type", kinds.len())?;
         let mut removed = HashSet::new();
         for ((name, ns), (kind, ks)) in names.iter().zip(&kinds) {
-            let ji = self.tree_joint(index, name, ns, "joint_name")?;
+            let Some(&ji) = index.get(*name) else {
+                // Pinocchio's loader skips the names its model lacks.
+                b.warn(format!("{}: `joint_name` names joint `{name}`, which the URDF does not define (or defines fixed): skipped", self.loc(ns.start)));
+                continue;
+            };
             let pose = frames.joints[*name].1;
             let loc = self.loc(ks.start);
             let j = &mut b.joints[ji];
