@@ -22,7 +22,7 @@ use crate::mechanism::Geometry;
 use nalgebra::Vector3;
 use std::collections::{HashMap, HashSet};
 use std::ops::Range;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// A YAML value with its byte span; every scalar is kept as its text.
 #[derive(Debug)]
@@ -37,6 +37,9 @@ enum V {
     Seq(Vec<Y>),
     Str(String),
 }
+
+/// Names of a list of the file, each with its span.
+type Names<'a> = Vec<(&'a str, Range<usize>)>;
 
 /// Deepest nesting read (the file needs 3 levels).
 const MAX_DEPTH: usize = 16;
@@ -79,7 +82,9 @@ pub(super) fn load(
         return Ok(None);
     };
     for ext in ["yaml", "yml"] {
-        let path = dir.join(stem).with_extension(ext);
+        let mut file = stem.to_os_string();
+        file.push(format!(".{ext}"));
+        let path = dir.join(file);
         if !path.is_file() {
             continue;
         }
@@ -95,7 +100,7 @@ pub(super) fn load(
 }
 
 /// Read a closure file of at most `left` bytes, as UTF-8.
-fn read(path: &PathBuf, left: u64) -> Result<String, ImportError> {
+fn read(path: &Path, left: u64) -> Result<String, ImportError> {
     let name = path.display().to_string();
     let budget = crate::budget::Budget {
         max_input_bytes: left,
@@ -302,7 +307,7 @@ impl Closures {
     }
 
     /// The strings of a sequence key (`None` when the key is absent).
-    fn strings(&self, key: &str) -> Result<Option<Vec<(&str, Range<usize>)>>, ImportError> {
+    fn strings(&self, key: &str) -> Result<Option<Names<'_>>, ImportError> {
         let Some((_, y)) = self.key(key) else {
             return Ok(None);
         };
