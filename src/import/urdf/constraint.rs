@@ -306,3 +306,94 @@ pub(super) fn close(
         comments: vec![format!("{what} (loop closure) at {loc}")],
     });
 }
+
+/// A `drake:distance_constraint` (body_A, p_AP, body_B, p_BQ, distance; its stiffness and
+/// damping are dynamics): a sphere-sphere joint, the two points keeping their distance. The
+/// distance is the points' at the configuration: one that differs from the written
+/// `distance` is warned.
+pub(super) fn drake_distance(
+    src: &Src,
+    e: Node,
+    b: &mut Builder,
+    frames: &Frames,
+) -> Result<(), ImportError> {
+    const TAG: &str = "drake:distance_constraint";
+    let part = |tag: &str| {
+        child(e, &format!("distance_constraint_{tag}")).ok_or_else(|| {
+            src.err(
+                e,
+                "incomplete",
+                format!("{TAG} needs body_A, p_AP, body_B, p_BQ and distance"),
+            )
+            .with_help(format!(
+                "<drake:distance_constraint_{tag}> is missing; see Drake's URDF extension reference"
+            ))
+        })
+    };
+    let point = |body: &str, p: &str| -> Result<(String, Vector3<f64>), ImportError> {
+        let (bn, pn) = (part(body)?, part(p)?);
+        let name = bn.attribute("name").unwrap_or("");
+        let Some(at) = frames.link(name) else {
+            return Err(src
+                .err_attr(
+                    bn,
+                    "name",
+                    "no such link",
+                    format!("link `{name}` is not defined"),
+                )
+                .with_help("name a <link> of the robot"));
+        };
+        let v = src
+            .nums_attr(pn, "value", 3)?
+            .unwrap_or_else(|| vec![0.0; 3]);
+        Ok((
+            name.to_string(),
+            (at * nalgebra::Point3::new(v[0], v[1], v[2])).coords,
+        ))
+    };
+    let (na, p1) = point("body_A", "p_AP")?;
+    let (nb, p2) = point("body_B", "p_BQ")?;
+    let dn = part("distance")?;
+    let written = match src.nums_attr(dn, "value", 1)? {
+        Some(v) if v[0] > 0.0 => v[0],
+        _ => {
+            return Err(src
+                .err_attr(
+                    dn,
+                    "value",
+                    "not positive",
+                    format!(
+                        "{TAG} between `{na}` and `{nb}`: the distance must be a positive number"
+                    ),
+                )
+                .with_help(
+                    "drake:distance_constraint_distance value=\"...\" is the distance in meters",
+                ));
+        }
+    };
+    let loc = src.loc(e);
+    let d = (p1 - p2).norm();
+    if (d - written).abs() > CLOSED * written.max(1.0) {
+        b.warn(format!("{loc}: {TAG} between `{na}` and `{nb}` keeps {written}, but its points are {d:.6e} apart at this configuration: the joint keeps the configuration's distance"));
+    }
+    let (ia, ib) = (b.body(&na, ""), b.body(&nb, ""));
+    let (kind, origin2) = if d > CLOSED {
+        (JointType::SPSP, Some(arr(p2)))
+    } else {
+        b.warn(format!("{loc}: {TAG} between `{na}` and `{nb}`: its points coincide at this configuration: imported as a ball joint"));
+        (JointType::S, None)
+    };
+    b.joint(JointRec {
+        id: format!("distance:{na}-{nb}"),
+        kind,
+        bodies: vec![ia, ib],
+        driven: 0,
+        geometry: Geometry {
+            origin: Some(arr(p1)),
+            origin2,
+            ..Geometry::default()
+        },
+        comments: vec![format!("<{TAG}> (loop closure) at {loc}")],
+    });
+    Ok(())
+}

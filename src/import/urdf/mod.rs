@@ -305,6 +305,7 @@ fn read_closures(
     for e in root.children().filter(|c| c.is_element()) {
         match e.tag_name().name() {
             "ball_constraint" => ball_constraint(src, e, b, &frames.links)?,
+            "distance_constraint" => constraint::drake_distance(src, e, b, frames)?,
             "gazebo" if e.attribute("reference").is_none() => {
                 for gj in children(e, "joint") {
                     let j = parse_joint(src, gj, links, true)?;

@@ -249,3 +249,55 @@ fn an_empty_closure_path_reads_none_and_a_file_without_closed_loop_is_refused() 
     assert!(e.message().contains("aliases are not read"), "{e}");
     assert_eq!(e.location().map(|l| l.1), Some(2));
 }
+
+fn distance(dist: &str, body_b: &str) -> String {
+    format!(
+        r#"<robot name="r" xmlns:drake="http://drake.mit.edu">
+        <link name="base"/><link name="a"/><link name="c"/>
+        <joint name="ja" type="revolute"><parent link="base"/><child link="a"/><axis xyz="0 0 1"/></joint>
+        <joint name="jc" type="revolute"><parent link="base"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>
+        <drake:distance_constraint>
+          <drake:distance_constraint_body_A name="a"/><drake:distance_constraint_p_AP value="0 1 0"/>
+          <drake:distance_constraint_body_B name="{body_b}"/><drake:distance_constraint_p_BQ value="0 1 0"/>
+          <drake:distance_constraint_distance value="{dist}"/>
+          <drake:distance_constraint_stiffness value="1e6"/><drake:distance_constraint_damping value="1"/>
+        </drake:distance_constraint>
+        </robot>"#
+    )
+}
+
+#[test]
+fn a_drake_distance_constraint_is_a_sphere_sphere_joint() {
+    let i = urdf(&distance("1", "c"));
+    let j = i
+        .mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == "distance:a-c")
+        .expect("the joint");
+    assert_eq!(j.kind, JointType::SPSP);
+    assert!(
+        near(j.geometry.origin, [0.0, 1.0, 0.0]) && near(j.geometry.origin2, [1.0, 1.0, 0.0]),
+        "{}",
+        i.toml
+    );
+    assert!(i.warnings.is_empty(), "{:?}", i.warnings);
+    let far = urdf(&distance("1.5", "c"));
+    assert!(
+        far.warnings
+            .iter()
+            .any(|w| w.contains("keeps 1.5, but its points are 1.000000e0 apart")),
+        "{:?}",
+        far.warnings
+    );
+    let err = |t: &str| import_str("t.urdf", t, None, &ImportOptions::default()).unwrap_err();
+    let e = err(&distance("1", "zz"));
+    assert!(e.message().contains("link `zz` is not defined"), "{e}");
+    assert_eq!(e.location().map(|l| l.1), Some(7));
+    let e = err(&distance("0", "c"));
+    assert!(
+        e.message()
+            .contains("the distance must be a positive number"),
+        "{e}"
+    );
+}
