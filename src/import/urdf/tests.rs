@@ -301,3 +301,37 @@ fn a_drake_distance_constraint_is_a_sphere_sphere_joint() {
         "{e}"
     );
 }
+
+fn gazebo_axis(model_frame: &str) -> Import {
+    urdf(&format!(
+        r#"<robot name="r"><link name="base"/><link name="a"/><link name="b"/>
+        <joint name="ja" type="revolute"><parent link="base"/><child link="a"/><origin rpy="0 0 1.5707963267948966"/><axis xyz="0 0 1"/></joint>
+        <joint name="jb" type="revolute"><parent link="a"/><child link="b"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/></joint>
+        <gazebo><joint name="close" type="revolute"><parent>base</parent><child>b</child>
+          <axis><xyz>1 0 0</xyz>{model_frame}</axis></joint></gazebo>
+        </robot>"#
+    ))
+}
+
+#[test]
+fn a_gazebo_joint_axis_is_in_the_joint_frame_or_the_model_frame() {
+    // b is turned a quarter about z: its x is the world's y.
+    let joint = gazebo_axis("");
+    let g = &joint
+        .mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == "close")
+        .expect("close")
+        .geometry;
+    assert!(near(g.axis, [0.0, 1.0, 0.0]), "{}", joint.toml);
+    let model = gazebo_axis("<use_parent_model_frame>1</use_parent_model_frame>");
+    let g = &model
+        .mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == "close")
+        .expect("close")
+        .geometry;
+    assert!(near(g.axis, [1.0, 0.0, 0.0]), "{}", model.toml);
+}
