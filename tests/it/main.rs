@@ -33,6 +33,7 @@ mod georigid_exact_scale;
 mod georigid_scale;
 mod hostile_input;
 mod import;
+mod import_dialects;
 mod import_hostile;
 mod layers;
 mod pebble_parity;
