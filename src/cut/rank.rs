@@ -103,7 +103,7 @@ fn blocks(plan: &Plan, loops: &[Vec<Step>]) -> Vec<Block> {
     }
     let mut index: Vec<Option<usize>> = vec![None; loops.len()];
     let mut out: Vec<Block> = Vec::new();
-    for k in 0..loops.len() {
+    for (k, steps) in loops.iter().enumerate() {
         let r = find(&mut uf, k);
         let bi = *index[r].get_or_insert_with(|| {
             out.push(Block {
@@ -113,7 +113,7 @@ fn blocks(plan: &Plan, loops: &[Vec<Step>]) -> Vec<Block> {
             out.len() - 1
         });
         out[bi].cuts.push(k);
-        out[bi].columns.extend(loops[k].iter().map(|s| s.pair));
+        out[bi].columns.extend(steps.iter().map(|s| s.pair));
     }
     for b in &mut out {
         b.columns.sort_unstable();

@@ -26,7 +26,17 @@ pub(super) fn write(model: &mut Model) -> String {
     let mut out = String::new();
     out.push_str(&header(model));
     let _ = writeln!(out, "<mujoco model=\"{}\">", esc(&model.m.name));
-    out.push_str("  <compiler angle=\"radian\"/>\n  <worldbody>\n");
+    out.push_str("  <compiler angle=\"radian\"/>\n");
+    if let Some(p) = model.precision {
+        let _ = write!(
+            out,
+            "  <custom>\n    <!-- how precisely the numbers are known (the file's `precision`) -->\n    \
+             <numeric name=\"{}\" data=\"{}\"/>\n  </custom>\n",
+            crate::import::PRECISION_NAME,
+            super::xml::num(p)
+        );
+    }
+    out.push_str("  <worldbody>\n");
     let mut s = Sections::default();
     body_tree(model, &mut out, &mut s);
     out.push_str("  </worldbody>\n");

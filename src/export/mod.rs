@@ -169,6 +169,9 @@ pub(crate) struct Model<'a> {
     pub(crate) bodies: xml::Names,
     pub(crate) source: &'a str,
     pub(crate) warnings: &'a [String],
+    /// The mechanism's `precision` key, written where the target has room for it (no
+    /// number's digits carry it): file geometry only.
+    pub(crate) precision: Option<f64>,
 }
 
 /// Write `m` for `opts.target`, within `budget`.
@@ -210,6 +213,7 @@ pub fn export_within(
     let bytes = (m.joints.len() as u64 + m.bodies.len() as u64).saturating_mul(1024);
     budget.check_memory(bytes, || "the exported file".into())?;
     let mut model = build(m, &cuts.plan, &cuts.report, geoms, &opts.source, &warnings);
+    model.precision = m.precision.filter(|p| *p > 0.0 && used.seed.is_none());
     let text = match opts.target {
         Target::Mjcf => mjcf::write(&mut model),
         Target::Sdf => sdf::write(&mut model),
@@ -328,6 +332,7 @@ fn build<'a>(
         bodies,
         source,
         warnings,
+        precision: None,
     }
 }
 

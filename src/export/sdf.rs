@@ -10,11 +10,26 @@ pub(super) fn write(model: &mut Model) -> String {
     let m = model.m;
     let mut out = String::from("<?xml version=\"1.0\"?>\n");
     out.push_str(&header(model));
-    let _ = writeln!(
-        out,
-        "<sdf version=\"1.7\">\n  <model name=\"{}\">",
-        esc(&m.name)
-    );
+    match model.precision {
+        None => {
+            let _ = writeln!(
+                out,
+                "<sdf version=\"1.7\">\n  <model name=\"{}\">",
+                esc(&m.name)
+            );
+        }
+        Some(p) => {
+            let _ = write!(
+                out,
+                "<sdf version=\"1.7\" xmlns:mbsa=\"{}\">\n  <model name=\"{}\">\n    \
+                 <!-- how precisely the numbers are known (the file's `precision`) -->\n    \
+                 <mbsa:precision>{}</mbsa:precision>\n",
+                crate::import::MBSA_NAMESPACE,
+                esc(&m.name),
+                num(p)
+            );
+        }
+    }
     for b in (0..m.bodies.len()).filter(|&b| b != m.frame) {
         let com = centroid(&points_of(model, b));
         let name = model.body_names[b].clone();
