@@ -28,9 +28,9 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("kinematics", &["motion", "position", "geometry"]),
     (
         "analyses",
-        &["structure", "rigidity", "transform", "expect"],
+        &["structure", "rigidity", "transform", "expect", "cut"],
     ),
-    ("rendering", &["report"]),
+    ("rendering", &["report", "export"]),
     ("cli", &["cli", "main"]),
 ];
 
