@@ -8,11 +8,13 @@
 #![warn(missing_docs)]
 
 pub mod budget;
+pub mod cut;
 pub mod diagnostic;
 mod elimination;
 pub mod exact;
 pub mod examples;
 pub mod expect;
+pub mod export;
 pub mod format;
 pub mod generate;
 pub mod geometry;

@@ -5,6 +5,7 @@
 mod analysis;
 mod check;
 mod completions;
+mod export;
 mod generate;
 mod input;
 mod position;
@@ -184,6 +185,32 @@ enum Command {
         #[command(flatten)]
         args: repair::RepairArgs,
     },
+    /// Loop cuts: a spanning tree from the frame and the joints cut to open every loop.
+    ///
+    /// For a tree-based simulator: grows a spanning tree of the joint graph from the frame
+    /// (driven joints first, spherical joints last, the joint order within each), cuts the
+    /// joints that would close loops (at a spherical joint where a loop has one), exchanges a
+    /// cut whose closure rows repeat other loops' when another joint of its loop gives
+    /// independent ones, and prints each cut's loop, its closure rows and how many are
+    /// redundant, at the file's geometry or a random one. The same file gives the same cuts.
+    /// docs/cut.md.
+    #[command(
+        after_help = "Examples:\n  mbsa cut @bricard\n  mbsa cut @stewart --format json\n  mbsa cut cassie.xml"
+    )]
+    Cut(export::CutArgs),
+    /// Write the model for a simulator: MJCF (MuJoCo) or SDFormat (Gazebo).
+    ///
+    /// The tree of `mbsa cut` as nested bodies and the cut joints as closures (MJCF: a ball
+    /// as <connect>, any other joint as a light body with its joints welded to the other
+    /// side; SDFormat: the loop joints directly), the driven inputs as actuators, the file's
+    /// configuration as the reference pose (MJCF keyframe `file`), unit masses. A joint kind
+    /// with several freedoms becomes several joints composed in order; gears, cams, rolling
+    /// and point contacts are refused by name. Redundant closure rows are said on standard
+    /// error and in the file. Reading the file back (`mbsa import`) gives the same analysis.
+    #[command(
+        after_help = "Examples:\n  mbsa export @bricard --to mjcf -o bricard.xml\n  mbsa export four_bar.sdf --to mjcf\n  mbsa export @stewart --to mjcf --geometry random --seed 1 -o stewart.xml\n  mbsa export robot.toml --to sdf -o robot.sdf"
+    )]
+    Export(export::ExportArgs),
     /// Structural transformations: every placement of the driven inputs that determines the mechanism, ranked.
     ///
     /// Enumerates the placements of f driven DOF over the joints' DOF (f = the mobility count
@@ -404,6 +431,8 @@ fn run(cli: Cli) -> Result<(), Failure> {
         } => transform::run(&file, &structure, &transform),
         Command::Merge(args) => transform::merge(&args),
         Command::Repair { file, args } => repair::run(&file, &args),
+        Command::Cut(args) => export::cut(&args),
+        Command::Export(args) => export::export(&args),
         Command::Solve { file, args } => position::solve(&file, &args),
         Command::Assemble { file, args } => position::assemble(&file, &args),
         Command::Generate(family) => generate::run(&family),

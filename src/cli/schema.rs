@@ -27,6 +27,8 @@ pub enum Output {
     Check,
     /// One line of `mbsa check --format jsonl`.
     CheckJsonl,
+    /// `mbsa cut --format json`.
+    Cut,
 }
 
 /// Print the schema of `output`.
@@ -42,6 +44,7 @@ pub fn run(output: Output) -> Result<(), Failure> {
         Output::Solve => Report::Solve,
         Output::Check => Report::Check,
         Output::CheckJsonl => Report::CheckJsonl,
+        Output::Cut => Report::Cut,
     };
     emit(&mbsa::report::json::plain(&mbsa::report::schema::schema(
         report,

@@ -39,6 +39,37 @@ use toml_text::{num, precision_text};
 /// together ([`ImportOptions::max_input_bytes`] sets another limit).
 pub const MAX_SOURCE_BYTES: usize = 64 * 1024 * 1024;
 
+/// The name of the declared precision `mbsa export` writes (a mechanism's `precision` key,
+/// which no number's digits carry): MJCF `<custom><numeric name="mbsa:precision" data=..>`,
+/// SDFormat `<mbsa:precision>` in the model (namespace [`MBSA_NAMESPACE`]). The MJCF and
+/// SDFormat readers take it as the source's rounding.
+pub const PRECISION_NAME: &str = "mbsa:precision";
+
+/// The XML namespace of the elements `mbsa export` adds to SDFormat.
+pub const MBSA_NAMESPACE: &str = "urn:mbsa";
+
+/// A declared precision read from `text` at `n`: a finite number >= 0, noted in `b`.
+pub(crate) fn declared_precision(
+    src: &Src,
+    n: Node,
+    v: &[f64],
+    b: &mut Builder,
+) -> Result<(), ImportError> {
+    match v {
+        [p] if p.is_finite() && *p >= 0.0 => {
+            b.note_rounding(*p);
+            Ok(())
+        }
+        _ => Err(src
+            .err(
+                n,
+                "not a precision",
+                format!("`{PRECISION_NAME}` is not one number >= 0"),
+            )
+            .with_help("it is the mechanism's `precision` (±, file units), e.g. 5e-06")),
+    }
+}
+
 /// A source format the importer reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize)]
 pub enum SourceFormat {

@@ -194,6 +194,13 @@ fn read_model(
         .map(|t| t.trim() == "true" || t.trim() == "1")
         .unwrap_or(false);
     warn_plugins_and_nested(src, m, b);
+    for p in m.children().filter(|c| {
+        c.tag_name().namespace() == Some(super::MBSA_NAMESPACE)
+            && c.tag_name().name() == "precision"
+    }) {
+        let v = src.nums_text_unnoted(p, 0)?;
+        super::declared_precision(src, p, &v, b)?;
+    }
     let mut r = ModelRead {
         src,
         m,

@@ -1,6 +1,7 @@
 //! Rendering of analysis results as tables, JSON and Graphviz DOT. Works from the serializable
 //! library types only; nothing here analyses.
 
+pub mod cut;
 pub mod dot;
 pub mod html;
 pub mod json;

@@ -35,9 +35,9 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("kinematics", &["motion", "position", "geometry"]),
     (
         "analyses",
-        &["structure", "rigidity", "transform", "expect", "repair"],
+        &["structure", "rigidity", "transform", "expect", "repair", "cut"],
     ),
-    ("rendering", &["report"]),
+    ("rendering", &["report", "export"]),
     ("cli", &["cli", "main"]),
 ];
 

@@ -18,6 +18,7 @@ mod cli_position;
 mod closure;
 mod docs;
 mod exact;
+mod export;
 mod format_errors;
 mod fuzz_corpus;
 mod generate_families;

@@ -345,3 +345,19 @@ fn every_report_has_a_schema_and_the_input_schema_stays_the_default() {
     assert_eq!(default, mbsa(&["schema", "--output", "input"]).1);
     assert!(!default.contains("format_version"));
 }
+
+#[test]
+fn every_cut_report_matches_its_schema() {
+    let schema = schema("cut");
+    let mut checked = 0;
+    for n in mbsa::examples::names() {
+        checked += check(
+            &schema,
+            &["cut", &format!("@{n}"), "--format", "json"],
+            false,
+        );
+    }
+    let cassie = "tests/fixtures/import/cassie.xml";
+    checked += check(&schema, &["cut", cassie, "--format", "json"], false);
+    assert!(checked > mbsa::examples::names().count(), "{checked}");
+}

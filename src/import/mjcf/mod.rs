@@ -201,6 +201,17 @@ pub(super) fn read(
             cx.actuator(e, &mut b, &joint_index)?;
         }
     }
+    for sec in top.iter().filter(|e| e.n.has_tag_name("custom")) {
+        for e in cx.kids(*sec, &docs) {
+            if e.n.has_tag_name("numeric") && e.n.attribute("name") == Some(super::PRECISION_NAME) {
+                let v = cx
+                    .src(e)
+                    .nums_attr_unnoted(e.n, "data", 0)?
+                    .unwrap_or_default();
+                super::declared_precision(cx.src(e), e.n, &v, &mut b)?;
+            }
+        }
+    }
     for u in std::mem::take(&mut cx.unsupported) {
         b.warn(u);
     }

@@ -7,6 +7,7 @@
 
 mod analyses;
 mod commands;
+mod cut;
 
 use analyses::{analyze, geometric, mobility, pebble, rigid_both};
 use commands::{
@@ -36,11 +37,13 @@ pub enum Report {
     Check,
     /// One line of `mbsa check --format jsonl` (one file's record).
     CheckJsonl,
+    /// `mbsa cut --format json`.
+    Cut,
 }
 
 impl Report {
     /// Every report, in the order of `mbsa schema --help`.
-    pub const ALL: [Report; 9] = [
+    pub const ALL: [Report; 10] = [
         Report::Mobility,
         Report::Analyze,
         Report::Rigid,
@@ -50,6 +53,7 @@ impl Report {
         Report::Solve,
         Report::Check,
         Report::CheckJsonl,
+        Report::Cut,
     ];
 
     /// The report's name on the command line.
@@ -64,6 +68,7 @@ impl Report {
             Report::Solve => "solve",
             Report::Check => "check",
             Report::CheckJsonl => "check-jsonl",
+            Report::Cut => "cut",
         }
     }
 }
@@ -95,6 +100,7 @@ pub fn schema(report: Report) -> Value {
             "one line of mbsa check --format jsonl",
             vec![check_record()],
         ),
+        Report::Cut => ("mbsa cut --format json", vec![cut::cut()]),
     };
     let mut root = Map::new();
     root.insert(
