@@ -35,7 +35,14 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("kinematics", &["motion", "position", "geometry"]),
     (
         "analyses",
-        &["structure", "rigidity", "transform", "expect", "repair", "cut"],
+        &[
+            "structure",
+            "rigidity",
+            "transform",
+            "expect",
+            "repair",
+            "cut",
+        ],
     ),
     ("rendering", &["report", "export"]),
     ("cli", &["cli", "main"]),
