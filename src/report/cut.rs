@@ -100,12 +100,20 @@ fn cuts_table(r: &CutReport) -> comfy_table::Table {
 /// The words under the tables: the rule's reasons and what redundant rows mean.
 fn footer(r: &CutReport) -> String {
     let mut out = String::new();
-    if !r.cuts.is_empty() {
-        out.push_str(
-            "why: spherical = a ball joint closes the loop (cut first); independent = exchanged \
-             so that its closure is independent; order = the last joint of its loop in the \
-             rule's order (driven, other, spherical; joint order within each). docs/cut.md\n",
-        );
+    let reasons: Vec<String> = [
+        ("spherical", "a ball joint of the loop, cut first"),
+        (
+            "independent",
+            "exchanged so that its closure is independent",
+        ),
+        ("order", "the loop's last joint in the rule's order"),
+    ]
+    .into_iter()
+    .filter(|(why, _)| r.cuts.iter().any(|c| c.why == *why))
+    .map(|(why, text)| format!("{why} = {text}"))
+    .collect();
+    if !reasons.is_empty() {
+        let _ = writeln!(out, "why: {} (docs/cut.md)", reasons.join("; "));
     }
     if r.redundant > 0 {
         let _ = writeln!(
