@@ -178,6 +178,15 @@ pub fn repair(m: &Mechanism, opts: &RepairOptions) -> Result<RepairReport, Repai
         ));
         return Ok(report);
     }
+    if let Some(f) = before.finite.filter(|&f| f < before.mobility) {
+        report.notes.push(format!(
+            "the file's configuration is singular (finite mobility {f}, first order {}): a \
+             relaxation that keeps the first-order motions may turn the singular ones into \
+             finite motions, which the check rejects; repair the model at a regular \
+             configuration",
+            before.mobility
+        ));
+    }
     let stiff = stiffenings(m, &geo, &mut report.notes);
     let sets = relaxation_sets(m, &before, opts, &mut report.notes)?;
     let mut seen: Vec<Vec<(usize, String)>> = Vec::new();
@@ -229,6 +238,7 @@ pub fn repair(m: &Mechanism, opts: &RepairOptions) -> Result<RepairReport, Repai
         };
         report.candidates.push(candidate);
     }
+    report.notes.dedup();
     report
         .candidates
         .sort_by_key(|c| (!c.complete, c.joints_changed, c.freedoms_added));

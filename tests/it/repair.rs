@@ -212,3 +212,18 @@ fn where_no_catalogue_joint_frees_the_rows_it_says_so_and_lists_nothing() {
         "{out}"
     );
 }
+
+/// At a singular configuration (the Gazebo Stewart platform as written: finite mobility 9,
+/// first order 11) a relaxation that keeps the first-order motions frees the singular ones:
+/// the check rejects it, and the report says why instead of offering it.
+#[test]
+fn at_a_singular_configuration_no_candidate_passes_the_check() {
+    let (code, out, err) = mbsa(&["repair", "tests/fixtures/import/stewart_upu.sdf"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("the file's configuration is singular (finite mobility 9"),
+        "{out}"
+    );
+    assert!(out.contains("was rejected when checked"), "{out}");
+    assert!(!out.contains("candidate 1"), "{out}");
+}
