@@ -316,13 +316,16 @@ fn analyses(m: &Mechanism, budget: &Budget) -> Result<(State, GeometricReport), 
     Ok((state, driven))
 }
 
-/// The relaxation sets of the search (changes by joint index, and the redundancy each leaves).
+/// Changes by joint index, and the redundancy they leave.
+type ChangeSet = (Vec<(usize, Change)>, usize);
+
+/// The relaxation sets of the search.
 fn relaxation_sets(
     m: &Mechanism,
     before: &State,
     opts: &RepairOptions,
     notes: &mut Vec<String>,
-) -> Result<Vec<(Vec<(usize, Change)>, usize)>, RepairError> {
+) -> Result<Vec<ChangeSet>, RepairError> {
     if before.redundant == 0 {
         return Ok(vec![(Vec::new(), 0)]);
     }
@@ -416,10 +419,9 @@ fn stiffenings(
                     to: proposal.kind.code().into(),
                     geometry: proposal.geometry,
                     rows_removed: -1,
-                    why: format!(
-                        "blocks only the isolated turn of its rod or rigid part about the line \
-                         through its balls: every other motion stays the same"
-                    ),
+                    why: "blocks only the isolated turn of its rod or rigid part about the line \
+                          through its balls: every other motion stays the same"
+                        .into(),
                 }))
             })
             });
