@@ -10,7 +10,6 @@
 use crate::joint::JointType;
 use crate::mechanism::{BodyId, Geometry, JointSpec, Mechanism, Space};
 use crate::rng::SplitMix64;
-use std::fmt::Write;
 
 /// Which joint carries the single input of an Assur linkage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -451,23 +450,6 @@ pub fn random(bodies: u64, planar: bool, seed: u64) -> Result<(Mechanism, usize)
     Ok((m, groups))
 }
 
-fn toml_string(s: &str) -> String {
-    toml::Value::String(s.to_string()).to_string()
-}
-
-fn toml_body(id: &BodyId) -> String {
-    match id {
-        BodyId::Int(i) => i.to_string(),
-        BodyId::Name(s) => toml_string(s),
-    }
-}
-
-fn toml_vec(v: &[f64; 3], planar: bool) -> String {
-    let n = if planar { 2 } else { 3 };
-    let parts: Vec<String> = v[..n].iter().map(|x| format!("{x:?}")).collect();
-    format!("[{}]", parts.join(", "))
-}
-
 /// A random planar bar-joint framework: `bars` random bars on `points` points (no repeated
 /// pair, no loop), each bar a body, each point a multiple revolute joint, bar 1 the frame.
 /// For the pebble-game benchmarks (mean point degree 2·bars/points; 4 is the rigidity
@@ -560,77 +542,7 @@ pub fn henneberg_framework(points: usize, seed: u64) -> Mechanism {
 
 /// Write a mechanism as a format-v1 TOML file (joints only; bodies declared when labelled).
 pub fn to_toml(m: &Mechanism) -> String {
-    let mut out = String::new();
-    if let Some(d) = &m.description {
-        for line in d.lines() {
-            let _ = writeln!(out, "# {line}");
-        }
-    }
-    let _ = writeln!(out, "name = {}", toml_string(&m.name));
-    if let Some(d) = &m.description {
-        let _ = writeln!(out, "description = {}", toml_string(d));
-    }
-    let _ = writeln!(out, "space = \"{}\"", m.space.name());
-    let _ = writeln!(out, "frame = {}", toml_body(m.body_id(m.frame)));
-    if let Some(p) = m.precision {
-        // Moved numbers are as precise as the file's were (`mbsa assemble` of an import).
-        let _ = writeln!(out, "precision = {p:?}");
-    }
-    if m.bodies.iter().any(|b| b.label.is_some()) {
-        for body in &m.bodies {
-            let _ = write!(out, "\n[[body]]\nid = {}\n", toml_body(&body.id));
-            if let Some(l) = &body.label {
-                let _ = writeln!(out, "label = {}", toml_string(l));
-            }
-        }
-    }
-    let planar = m.space == Space::Planar;
-    for j in &m.joints {
-        let bodies: Vec<String> = j.bodies.iter().map(|&i| toml_body(m.body_id(i))).collect();
-        let default_id = m.joint_bodies_label(j);
-        let _ = write!(out, "\n[[joint]]\n");
-        if j.id != default_id {
-            let _ = writeln!(out, "id = {}", toml_string(&j.id));
-        }
-        let _ = writeln!(out, "type = \"{}\"", j.kind.code());
-        let _ = writeln!(out, "bodies = [{}]", bodies.join(", "));
-        if j.driven > 0 {
-            let _ = writeln!(out, "driven = {}", j.driven);
-        }
-        let Geometry {
-            origin,
-            axis,
-            axis2,
-            origin2,
-            normal,
-            pitch,
-            second,
-        } = &*j.geometry;
-        for (key, v) in [("origin", origin), ("origin2", origin2)] {
-            if let Some(v) = v {
-                let _ = writeln!(out, "{key} = {}", toml_vec(v, planar));
-            }
-        }
-        for (key, v) in [("axis", axis), ("axis2", axis2), ("normal", normal)] {
-            if let Some(v) = v {
-                let _ = writeln!(out, "{key} = {}", toml_vec(v, false));
-            }
-        }
-        if let Some(p) = pitch {
-            let _ = writeln!(out, "pitch = {p:?}");
-        }
-        if let Some(s) = second {
-            let fields: Vec<String> = s
-                .vectors()
-                .into_iter()
-                .filter_map(|(key, v)| {
-                    v.map(|v| format!("{key} = {}", toml_vec(&v, planar && key == "origin")))
-                })
-                .collect();
-            let _ = writeln!(out, "second = {{ {} }}", fields.join(", "));
-        }
-    }
-    out
+    crate::write::write(m, crate::write::TextFormat::Toml, &[])
 }
 
 #[cfg(test)]

@@ -27,11 +27,13 @@ pub mod motion;
 pub mod numbers;
 mod par;
 pub mod position;
+pub mod repair;
 pub mod report;
 pub mod rigidity;
 pub mod rng;
 pub mod structure;
 pub mod transform;
+pub mod write;
 
 pub use joint::JointType;
 pub use mechanism::{Body, BodyId, Geometry, InputSpec, Joint, JointSpec, Mechanism, Space};

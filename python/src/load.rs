@@ -37,6 +37,7 @@ pub fn load(
         keyframe,
         merge_pins,
         max_input_bytes: Some(Budget::DEFAULT.max_input_bytes),
+        ..ImportOptions::default()
     };
     let (name, bytes, known, base) = read(py, &source, is_path, format)?;
     let xml = from.is_some()

@@ -31,6 +31,13 @@ pub struct ImportArgs {
     /// Merge coincident coaxial revolute joints that share a body into multiple joints.
     #[arg(long)]
     pub merge_pins: bool,
+    /// URDF: the Extended-URDF YAML file of loop closures (default: STEM.yaml beside the URDF
+    /// when it has a `closed_loop` key).
+    #[arg(long, value_name = "FILE")]
+    pub closures: Option<std::path::PathBuf>,
+    /// URDF: read no YAML closure file, not even the one beside the URDF.
+    #[arg(long, conflicts_with = "closures")]
+    pub no_closures: bool,
 }
 
 impl ImportArgs {
@@ -41,6 +48,10 @@ impl ImportArgs {
             keyframe: self.keyframe.clone(),
             merge_pins: self.merge_pins,
             max_input_bytes: Some(super::budget().max_input_bytes),
+            closures: match self.no_closures {
+                true => Some(std::path::PathBuf::new()),
+                false => self.closures.clone(),
+            },
         }
     }
 }

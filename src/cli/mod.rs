@@ -9,6 +9,7 @@ mod export;
 mod generate;
 mod input;
 mod position;
+mod repair;
 mod report;
 mod schema;
 mod transform;
@@ -166,6 +167,23 @@ enum Command {
         output: Option<std::path::PathBuf>,
         #[command(flatten)]
         structure: analysis::StructureArgs,
+    },
+    /// Repair: the joint changes that make the model simulate, its motion unchanged.
+    ///
+    /// At the file's configuration: relaxes joints (R -> C, U, S, SC, ...) whose removed
+    /// constraint rows are implied by the others (redundant constraints), and stiffens a ball
+    /// into a universal joint where a rod or part spins about the line through its balls
+    /// (isolated freedoms). Each candidate is checked by analysing the changed model again:
+    /// no redundant constraint, the same proper and finite mobility. `--apply N` writes the
+    /// repaired file, each changed joint with a comment. docs/repair.md.
+    #[command(
+        after_help = "Examples:\n  mbsa repair @rig-planar-four-bar-3d\n  mbsa repair @bricard --format json\n  mbsa repair cassie.xml --apply 1 -o cassie-repaired.toml"
+    )]
+    Repair {
+        #[command(flatten)]
+        file: FileArg,
+        #[command(flatten)]
+        args: repair::RepairArgs,
     },
     /// Loop cuts: a spanning tree from the frame and the joints cut to open every loop.
     ///
@@ -412,6 +430,7 @@ fn run(cli: Cli) -> Result<(), Failure> {
             transform,
         } => transform::run(&file, &structure, &transform),
         Command::Merge(args) => transform::merge(&args),
+        Command::Repair { file, args } => repair::run(&file, &args),
         Command::Cut(args) => export::cut(&args),
         Command::Export(args) => export::export(&args),
         Command::Solve { file, args } => position::solve(&file, &args),

@@ -268,7 +268,7 @@ fn redundant_warning(r: &CutReport, target: Target) -> String {
         "the {} export carries {} redundant constraint row(s), in the closure(s) of {}: the \
          mechanism is overconstrained at this configuration (`mbsa rigid` counts the same), \
          and no choice of cuts removes them; a simulator sees a singular constraint Jacobian \
-         until a joint of those loops is relaxed",
+         until a joint of those loops is relaxed (`mbsa repair` says which, and into what)",
         target.name(),
         r.redundant,
         carriers.join(", ")

@@ -309,6 +309,7 @@ impl Builder {
         let g = &j.geometry;
         for (key, v) in [
             ("origin", g.origin),
+            ("origin2", g.origin2),
             ("axis", g.axis),
             ("axis2", g.axis2),
             ("normal", g.normal),

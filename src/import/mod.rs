@@ -162,6 +162,11 @@ pub struct ImportOptions {
     /// Largest input accepted, in bytes: the main file and every file it includes together
     /// (default [`MAX_SOURCE_BYTES`]; the command line gives its `--max-input-bytes`).
     pub max_input_bytes: Option<u64>,
+    /// URDF: the Extended-URDF YAML file of loop closures (`closed_loop`, `type`, `name_mot`,
+    /// `joint_name`, `joint_type`). Default: `STEM.yaml` (or `.yml`) beside the URDF when it
+    /// has a `closed_loop` key, as Pinocchio users keep `robot.urdf` and `robot.yaml`
+    /// together. An empty path reads none.
+    pub closures: Option<std::path::PathBuf>,
 }
 
 impl ImportOptions {
@@ -320,7 +325,7 @@ pub fn import_str(
     }
     let mut builder = match format {
         SourceFormat::Mjcf => mjcf::read(&src, &doc, base_dir, options)?,
-        SourceFormat::Urdf => urdf::read(&src, &doc)?,
+        SourceFormat::Urdf => urdf::read(&src, &doc, base_dir, options)?,
         SourceFormat::Sdf => sdf::read(&src, &doc)?,
         SourceFormat::Osim => osim::read(&src, &doc)?,
     };

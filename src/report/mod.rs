@@ -7,6 +7,7 @@ pub mod html;
 pub mod json;
 pub mod mobility;
 pub mod position;
+pub mod repair;
 pub mod rigid;
 pub mod rigid_geometric;
 pub mod rigid_pebble;

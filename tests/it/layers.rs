@@ -23,12 +23,26 @@ const LAYERS: &[(&str, &[&str])] = &[
     ("model", &["joint", "mechanism", "mobility"]),
     (
         "input/output",
-        &["format", "import", "generate", "examples", "diagnostic"],
+        &[
+            "format",
+            "write",
+            "import",
+            "generate",
+            "examples",
+            "diagnostic",
+        ],
     ),
     ("kinematics", &["motion", "position", "geometry"]),
     (
         "analyses",
-        &["structure", "rigidity", "transform", "expect", "cut"],
+        &[
+            "structure",
+            "rigidity",
+            "transform",
+            "expect",
+            "repair",
+            "cut",
+        ],
     ),
     ("rendering", &["report", "export"]),
     ("cli", &["cli", "main"]),

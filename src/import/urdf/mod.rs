@@ -1,15 +1,24 @@
 //! URDF reader: the link tree at zero joint positions; revolute/continuous, prismatic,
 //! floating and planar joints; fixed joints merge links; `<transmission>` gives driven DOF;
-//! `mimic` is reported; loop closures from Drake's `drake:ball_constraint` and Gazebo's
-//! `<gazebo><joint>` extension.
+//! `mimic` is reported. Loop closures, in the dialects robot users write: Drake's
+//! `drake:ball_constraint`, Gazebo's `<gazebo><joint>` extension, the `<constraint>` and
+//! `<loop>` elements of the proposed URDF extensions ([`constraint`]), and the Extended-URDF
+//! YAML closure file read by Pinocchio users ([`sidecar`]).
+
+mod constraint;
+mod sidecar;
+#[cfg(test)]
+mod tests;
 
 use super::{
-    Builder, ImportError, JointRec, Node, Pose, Src, Unique, arr, child, children, pose, rpy, unit,
+    Builder, ImportError, ImportOptions, JointRec, Node, Pose, Src, Unique, arr, child, children,
+    pose, rpy, unit,
 };
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
 use nalgebra::{Point3, Vector3};
 use std::collections::{HashMap, HashSet};
+use std::path::Path;
 
 /// A joint of the file.
 struct UJoint<'a> {
@@ -20,6 +29,8 @@ struct UJoint<'a> {
     child: String,
     origin: Pose,
     axis: Vector3<f64>,
+    /// SDFormat's `use_parent_model_frame`: the axis is in the model (root) frame.
+    axis_in_model: bool,
 }
 
 /// A link of the file: its name and element, in file order.
@@ -31,11 +42,34 @@ struct Links<'a> {
     names: HashSet<String>,
 }
 
-/// Read a URDF document.
-pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, ImportError> {
+/// Where the tree puts each link and each joint frame at zero joint positions: what the
+/// loop closures refer to.
+pub(super) struct Frames {
+    /// World pose of each link.
+    links: HashMap<String, Pose>,
+    /// Each joint (fixed ones too): its child link and the world pose of its frame.
+    joints: HashMap<String, (String, Pose)>,
+}
+
+impl Frames {
+    /// The world pose of a link.
+    fn link(&self, name: &str) -> Option<Pose> {
+        self.links.get(name).copied()
+    }
+}
+
+/// Read a URDF document; `base_dir` and `options` locate the YAML closure file, if any.
+pub(super) fn read(
+    src: &Src,
+    doc: &roxmltree::Document,
+    base_dir: Option<&Path>,
+    options: &ImportOptions,
+) -> Result<Builder, ImportError> {
+    let closures = sidecar::load(src, base_dir, options)?;
     let root = doc.root_element();
     let robot = root.attribute("name").unwrap_or("robot");
-    let links = read_links(src, root)?;
+    let mut links = read_links(src, root)?;
+    let implicit_world = add_implicit_world(root, &mut links);
     let mut joints: Vec<UJoint> = Vec::new();
     let mut joint_names = Unique::new("joint");
     for j in children(root, "joint") {
@@ -55,6 +89,13 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     };
     let mut b = Builder::new(robot, frame, "the URDF root link");
     b.configuration = "every joint at position 0 (URDF has no default positions)".into();
+    if implicit_world {
+        b.notes.push(
+            "joints name the link `world`, which the file does not define: it is the world \
+             (Drake's and Gazebo's convention)"
+                .into(),
+        );
+    }
     let (world, joint_world) = world_poses(src, &joints, &roots)?;
     for (name, _) in &links.list {
         b.body(name, "");
@@ -76,8 +117,34 @@ pub(super) fn read(src: &Src, doc: &roxmltree::Document) -> Result<Builder, Impo
     }
     let index = add_tree_joints(src, &mut b, &joints, &joint_world)?;
     read_transmissions(src, root, &mut b, &index);
-    read_closures(src, root, &mut b, &links, &world)?;
+    let frames = Frames {
+        joints: joints
+            .iter()
+            .zip(&joint_world)
+            .filter_map(|(j, w)| Some((j.name.clone(), (j.child.clone(), (*w)?))))
+            .collect(),
+        links: world,
+    };
+    read_closures(src, root, &mut b, &links, &frames)?;
+    if let Some(c) = closures {
+        c.apply(&mut b, &frames, &index)?;
+    }
     Ok(b)
+}
+
+/// Drake and Gazebo read a joint whose parent is `world`, a link the file does not define, as
+/// joined to the world: such a file gets that link, first (so it is the frame).
+fn add_implicit_world<'a>(root: Node<'a>, links: &mut Links<'a>) -> bool {
+    const WORLD: &str = "world";
+    let named = children(root, "joint")
+        .filter_map(|j| child(j, "parent"))
+        .any(|p| p.attribute("link") == Some(WORLD));
+    if !named || links.names.contains(WORLD) {
+        return false;
+    }
+    links.list.insert(0, (WORLD.to_string(), root));
+    links.names.insert(WORLD.to_string());
+    true
 }
 
 /// The `<link>` elements, names unique and not empty.
@@ -226,22 +293,23 @@ fn read_transmissions(src: &Src, root: Node, b: &mut Builder, index: &HashMap<St
     }
 }
 
-/// Loop closures (Drake ball constraints and Gazebo joints); other unknown elements warned.
+/// Loop closures (Drake ball constraints, Gazebo joints, `<constraint>` and `<loop>`
+/// elements); other unknown elements warned.
 fn read_closures(
     src: &Src,
     root: Node,
     b: &mut Builder,
     links: &Links,
-    world: &HashMap<String, Pose>,
+    frames: &Frames,
 ) -> Result<(), ImportError> {
-    let find = |name: &str| -> Option<Pose> { world.get(name).copied() };
     for e in root.children().filter(|c| c.is_element()) {
         match e.tag_name().name() {
-            "ball_constraint" => ball_constraint(src, e, b, world)?,
+            "ball_constraint" => ball_constraint(src, e, b, &frames.links)?,
+            "distance_constraint" => constraint::drake_distance(src, e, b, frames)?,
             "gazebo" if e.attribute("reference").is_none() => {
                 for gj in children(e, "joint") {
                     let j = parse_joint(src, gj, links, true)?;
-                    let Some(child_world) = find(&j.child) else {
+                    let Some(child_world) = frames.link(&j.child) else {
                         continue;
                     };
                     // SDFormat semantics: the joint pose is in the child link's frame.
@@ -249,6 +317,7 @@ fn read_closures(
                     add_joint(src, b, &j, jw, "<gazebo><joint")?;
                 }
             }
+            "constraint" | "loop" | "coupling" => constraint::read(src, e, b, frames)?,
             "joint" | "link" | "transmission" | "material" | "gazebo" => {}
             other => {
                 let loc = src.loc(e);
@@ -345,6 +414,14 @@ fn parse_joint<'a>(
     let child_link = joint_link(src, j, name, "child", links, sdf_style)?;
     let origin = joint_origin(src, j, sdf_style)?;
     let axis_node = child(j, "axis");
+    let axis_in_model = sdf_style
+        && axis_node
+            .and_then(|a| child(a, "use_parent_model_frame"))
+            .and_then(|u| u.text())
+            .is_some_and(|t| matches!(t.trim(), "1" | "true"));
+    // urdfdom reads no axis for fixed and floating joints (nor SDFormat for ball joints): a
+    // zero axis there (CAD exporters write `0 0 0`) is no error.
+    let axis_node = axis_node.filter(|_| !matches!(kind, "fixed" | "floating" | "ball"));
     let axis_v = match axis_node {
         Some(a) if sdf_style => match child(a, "xyz") {
             Some(x) => src.nums_text(x, 3)?,
@@ -373,6 +450,7 @@ fn parse_joint<'a>(
         child: child_link,
         origin,
         axis,
+        axis_in_model,
     })
 }
 
@@ -452,7 +530,12 @@ fn add_joint(
     let p = b.body(&j.parent, "");
     let c = b.body(&j.child, "");
     let origin = arr(jw.translation.vector);
-    let axis = arr(jw.rotation * j.axis);
+    // SDFormat 1.5/1.6 `use_parent_model_frame`: the URDF root link is the model frame.
+    let axis = arr(if j.axis_in_model {
+        j.axis
+    } else {
+        jw.rotation * j.axis
+    });
     let (kind, geometry) = match j.kind {
         "revolute" | "continuous" => (
             JointType::R,
