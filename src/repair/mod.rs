@@ -185,6 +185,9 @@ pub fn repair(m: &Mechanism, opts: &RepairOptions) -> Result<RepairReport, Repai
         let mut changes: Vec<(usize, Change)> = steps;
         changes.extend(stiff.iter().cloned());
         changes.sort_by_key(|(j, _)| *j);
+        if changes.is_empty() {
+            continue;
+        }
         // Different first steps may end in the same set: check each set once.
         let key: Vec<(usize, String)> = changes
             .iter()
@@ -413,7 +416,8 @@ fn stiffenings(
         match found {
             Some(c) => out.push(c),
             None => notes.push(format!(
-                "the isolated motion of {} ({} DOF) has no ball on its axis to stiffen",
+                "the isolated motion of {} ({} DOF) is left as it is: a repair stiffens a turn \
+                 about the line through two balls (a rod's spin), and this motion is not one",
                 motion.bodies.join(", "),
                 motion.dof
             )),

@@ -200,3 +200,15 @@ fn every_bundled_mechanism_written_in_each_format_reads_back() {
         }
     }
 }
+
+#[test]
+fn where_no_catalogue_joint_frees_the_rows_it_says_so_and_lists_nothing() {
+    let (code, out, err) = mbsa(&["repair", "tests/fixtures/repair/parallel-sliders.toml"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("before: 5 redundant constraints"), "{out}");
+    assert!(!out.contains("candidate 1"), "{out}");
+    assert!(
+        out.contains("no catalogue joint at the same geometry frees the last 5 redundant"),
+        "{out}"
+    );
+}
