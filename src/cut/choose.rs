@@ -14,6 +14,9 @@ pub(super) struct Ctx<'a> {
     pub(super) models: &'a [JointModel],
     pub(super) threshold: Threshold,
     pub(super) budget: &'a Budget,
+    /// The mechanism has no redundant constraint (the geometric analysis of the whole
+    /// Jacobian says so): every closure is independent, no rank to take.
+    pub(super) independent: bool,
 }
 
 /// A tree with its loops and ranks.
@@ -78,7 +81,19 @@ fn evaluate(ctx: &Ctx, force: &Force, meter: &mut Meter) -> Result<Eval, BudgetE
         loop_bodies.push(bodies);
         loops.push(steps);
     }
-    let ranks = rank::ranks(&plan, ctx.models, &loops, ctx.threshold, ctx.budget, meter)?;
+    let ranks = if ctx.independent {
+        let rows = |c: usize| ctx.models[plan.pairs[c].joint].rows.nrows();
+        plan.cuts
+            .iter()
+            .map(|&c| Ranks {
+                rows: rows(c),
+                rank: rows(c),
+                alone: rows(c),
+            })
+            .collect()
+    } else {
+        rank::ranks(&plan, ctx.models, &loops, ctx.threshold, ctx.budget, meter)?
+    };
     Ok(Eval {
         plan,
         loop_bodies,

@@ -174,6 +174,18 @@ pub fn cuts_within(m: &Mechanism, opts: &CutOptions, budget: &Budget) -> Result<
     for j in &mut free.joints {
         j.driven = 0;
     }
+    // The whole Jacobian first (sparse, fast at any size): without a redundant constraint,
+    // every closure is independent and no closure rank is taken.
+    let gopts = crate::rigidity::geometric::GeometricOptions {
+        geometry: opts.geometry,
+        precision: opts.precision,
+        check_finite: false,
+    };
+    let whole =
+        crate::rigidity::geometric::analyze_within(&free, &gopts, budget).map_err(|e| match e {
+            crate::rigidity::geometric::GeometricError::Motion(e) => CutError::Motion(e),
+            crate::rigidity::geometric::GeometricError::Budget(e) => CutError::Budget(e),
+        })?;
     let real = crate::geometry::realization(&free, opts.geometry, opts.precision)?;
     let threshold = rank::Threshold {
         file: crate::geometry::file_threshold(&free, &real.used),
@@ -184,6 +196,7 @@ pub fn cuts_within(m: &Mechanism, opts: &CutOptions, budget: &Budget) -> Result<
         models: &real.models,
         threshold,
         budget,
+        independent: whole.redundant == 0,
     };
     let chosen = choose::choose(&ctx, &mut meter)?;
     let report = report(m, &real, &chosen);

@@ -78,3 +78,42 @@ fn a_tiny_budget_stops_the_cuts() {
         Err(CutError::Budget(_))
     ));
 }
+
+#[test]
+fn the_exchange_preferences_move_the_cut_within_its_loop() {
+    let m = bundled("rig-planar-four-bar-3d");
+    let mut meter = Budget::UNLIMITED.meter("test");
+    let plain = tree::plan(&m, &tree::Force::default(), &mut meter).expect("plan");
+    let joint = |p: usize| m.joints[plain.pairs[p].joint].id.as_str();
+    assert_eq!(
+        plain.cuts.iter().map(|&p| joint(p)).collect::<Vec<_>>(),
+        ["D"]
+    );
+    // Keeping D and cutting B (as an exchange does) cuts B, and D joins the tree.
+    let force = tree::Force {
+        keep: [3].into(),
+        cut: [1].into(),
+    };
+    let moved = tree::plan(&m, &force, &mut meter).expect("plan");
+    assert_eq!(
+        moved.cuts.iter().map(|&p| joint(p)).collect::<Vec<_>>(),
+        ["B"]
+    );
+    let (bodies, steps) = tree::closed_loop(&moved, moved.cuts[0], &mut meter).expect("loop");
+    assert_eq!(bodies.len(), 4);
+    // Its closure carries the loop's 3 redundant rows as D's did: a planar loop written in
+    // space is overconstrained wherever it is cut.
+    let real = crate::geometry::realization(&m, GeometrySource::default(), None).expect("models");
+    let threshold = rank::Threshold { file: None };
+    let budget = Budget::UNLIMITED;
+    let ranks = rank::ranks(
+        &moved,
+        &real.models,
+        &[steps],
+        threshold,
+        &budget,
+        &mut meter,
+    );
+    let r = ranks.expect("ranks")[0];
+    assert_eq!((r.rows, r.rank, r.alone), (5, 2, 2));
+}

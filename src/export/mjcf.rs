@@ -6,11 +6,21 @@ use crate::joint::JointType;
 use crate::mechanism::Space;
 use std::fmt::Write;
 
-/// A node of the body tree: a body of the mechanism, or the light body of a cut's closure.
+/// Deepest body nesting written: MuJoCo's XML reader (tinyxml2) refuses elements nested more
+/// than 500 deep, so a deeper tree continues in top-level bodies ([`relinked`]).
+const MAX_NESTING: usize = 400;
+
+/// A node of the body tree: a body of the mechanism, or the light body V of a closure: pair
+/// `pair`'s joints from `parent` (in reverse when `reversed`), V welded to `child`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Node {
     Body(usize),
-    Closure(usize),
+    Closure {
+        pair: usize,
+        parent: usize,
+        child: usize,
+        reversed: bool,
+    },
 }
 
 /// What the body tree leaves for the sections after it.
@@ -23,8 +33,9 @@ struct Sections {
 
 /// The MJCF text of `model`.
 pub(super) fn write(model: &mut Model) -> String {
+    let relinked = relinked(model);
     let mut out = String::new();
-    out.push_str(&header(model));
+    out.push_str(&header(model, relinked.iter().filter(|&&r| r).count()));
     let _ = writeln!(out, "<mujoco model=\"{}\">", esc(&model.m.name));
     out.push_str("  <compiler angle=\"radian\"/>\n");
     if let Some(p) = model.precision {
@@ -38,7 +49,7 @@ pub(super) fn write(model: &mut Model) -> String {
     }
     out.push_str("  <worldbody>\n");
     let mut s = Sections::default();
-    body_tree(model, &mut out, &mut s);
+    body_tree(model, &relinked, &mut out, &mut s);
     out.push_str("  </worldbody>\n");
     for (tag, text) in [("equality", &s.equality), ("actuator", &s.actuator)] {
         if !text.is_empty() {
@@ -56,7 +67,7 @@ pub(super) fn write(model: &mut Model) -> String {
     out
 }
 
-fn header(model: &Model) -> String {
+fn header(model: &Model, relinked: usize) -> String {
     let m = model.m;
     let mut text = format!(
         "{}: written by mbsa export from {} (MJCF). The tree and the cuts are those of `mbsa \
@@ -92,27 +103,76 @@ fn header(model: &Model) -> String {
         );
         out.push_str(&comment_block("", &text));
     }
+    if relinked > 0 {
+        text = format!(
+            "The tree is deeper than {MAX_NESTING} bodies, and MuJoCo reads XML nested at most \
+             500 deep: {relinked} bod(ies) continue the tree at the top level, each with a free \
+             joint, its tree joint written as a closure (a light body on its parent, welded to \
+             it), which leaves the same motion."
+        );
+        out.push_str(&comment_block("", &text));
+    }
     for w in model.warnings {
         out.push_str(&comment_block("", &format!("warning: {w}")));
     }
     out
 }
 
-/// The children of every body: its tree children, then the closure bodies hung on it.
-fn children(model: &Model) -> Vec<Vec<Node>> {
+/// The bodies written at the top level although the tree gives them a parent: every
+/// [`MAX_NESTING`]-th level of a deep tree. Each gets a free joint, and its tree joint is
+/// written as a closure (a light body on the parent, welded to it): exact, as a cut is.
+fn relinked(model: &Model) -> Vec<bool> {
+    let plan = model.plan;
+    let mut level = vec![0usize; model.m.bodies.len()];
+    let mut out = vec![false; model.m.bodies.len()];
+    for &b in &plan.order {
+        level[b] = match plan.links[b] {
+            Some(l) if level[l.parent] + 1 > MAX_NESTING => {
+                out[b] = true;
+                1
+            }
+            Some(l) => level[l.parent] + 1,
+            None => usize::from(b != model.m.frame),
+        };
+    }
+    out
+}
+
+/// The children of every body (its tree children, then the closure bodies hung on it), and
+/// the bodies written at the top level.
+fn children(model: &Model, relinked: &[bool]) -> (Vec<Vec<Node>>, Vec<Node>) {
     let plan = model.plan;
     let mut kids: Vec<Vec<Node>> = vec![Vec::new(); model.m.bodies.len()];
+    let mut later: Vec<Node> = Vec::new();
     for &b in &plan.order {
-        if let Some(l) = plan.links[b] {
+        let Some(l) = plan.links[b] else { continue };
+        if relinked[b] {
+            kids[l.parent].push(Node::Closure {
+                pair: l.pair,
+                parent: l.parent,
+                child: b,
+                reversed: plan.pairs[l.pair].hub != l.parent,
+            });
+            later.push(Node::Body(b));
+        } else {
             kids[l.parent].push(Node::Body(b));
         }
     }
     for &c in &plan.cuts {
         if !connects(model, c) {
-            kids[plan.pairs[c].hub].push(Node::Closure(c));
+            let p = plan.pairs[c];
+            kids[p.hub].push(Node::Closure {
+                pair: c,
+                parent: p.hub,
+                child: p.other,
+                reversed: false,
+            });
         }
     }
-    kids
+    let mut top: Vec<Node> = kids[model.m.frame].clone();
+    top.extend(plan.roots.iter().skip(1).map(|&r| Node::Body(r)));
+    top.extend(later);
+    (kids, top)
 }
 
 /// Whether cut `c` is written as a `<connect>` (a spherical joint, not driven).
@@ -122,11 +182,8 @@ fn connects(model: &Model, c: usize) -> bool {
 }
 
 /// The bodies, depth first, without recursion (a chain may be deep).
-fn body_tree(model: &mut Model, out: &mut String, s: &mut Sections) {
-    let kids = children(model);
-    let frame = model.m.frame;
-    let mut top: Vec<Node> = kids[frame].clone();
-    top.extend(model.plan.roots.iter().skip(1).map(|&r| Node::Body(r)));
+fn body_tree(model: &mut Model, relinked: &[bool], out: &mut String, s: &mut Sections) {
+    let (kids, top) = children(model, relinked);
     // (node, depth, opening?)
     let mut stack: Vec<(Node, usize, bool)> = top.iter().rev().map(|&n| (n, 2, true)).collect();
     while let Some((node, depth, open)) = stack.pop() {
@@ -135,7 +192,7 @@ fn body_tree(model: &mut Model, out: &mut String, s: &mut Sections) {
             let _ = writeln!(out, "{pad}</body>");
             continue;
         }
-        open_node(model, node, &pad, out, s);
+        open_node(model, node, relinked, &pad, out, s);
         stack.push((node, depth, false));
         if let Node::Body(b) = node {
             for &k in kids[b].iter().rev() {
@@ -151,7 +208,14 @@ fn body_tree(model: &mut Model, out: &mut String, s: &mut Sections) {
 }
 
 /// A body's opening tag, inertial and joints.
-fn open_node(model: &mut Model, node: Node, pad: &str, out: &mut String, s: &mut Sections) {
+fn open_node(
+    model: &mut Model,
+    node: Node,
+    relinked: &[bool],
+    pad: &str,
+    out: &mut String,
+    s: &mut Sections,
+) {
     let inner = format!("{pad}  ");
     match node {
         Node::Body(b) => {
@@ -163,7 +227,7 @@ fn open_node(model: &mut Model, node: Node, pad: &str, out: &mut String, s: &mut
                 "{inner}<inertial pos=\"{}\" mass=\"1\" diaginertia=\"1 1 1\"/>",
                 vec3(com)
             );
-            match model.plan.links[b] {
+            match model.plan.links[b].filter(|_| !relinked[b]) {
                 None => {
                     let _ = writeln!(out, "{inner}<freejoint name=\"{}\"/>", esc(&name));
                     s.qpos.extend(["0", "0", "0", "1", "0", "0", "0"]);
@@ -174,7 +238,12 @@ fn open_node(model: &mut Model, node: Node, pad: &str, out: &mut String, s: &mut
                 }
             }
         }
-        Node::Closure(c) => {
+        Node::Closure {
+            pair: c,
+            child: other,
+            reversed,
+            ..
+        } => {
             let label = model.pairs[c].label.clone();
             let v = model.bodies.take(&format!("cut:{label}"));
             let p = &model.pairs[c];
@@ -185,8 +254,7 @@ fn open_node(model: &mut Model, node: Node, pad: &str, out: &mut String, s: &mut
                 "{inner}<inertial pos=\"{}\" mass=\"0.001\" diaginertia=\"1e-6 1e-6 1e-6\"/>",
                 vec3(com)
             );
-            joints(p, false, &inner, out, s);
-            let other = model.plan.pairs[c].other;
+            joints(p, reversed, &inner, out, s);
             let body2 = if other == model.m.frame {
                 String::new()
             } else {

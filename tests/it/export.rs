@@ -249,3 +249,23 @@ fn a_work_limit_stops_the_cuts_with_the_flag_named() {
     assert_eq!(code, 2);
     assert!(err.contains("--max-work"), "{err}");
 }
+
+#[test]
+fn a_tree_deeper_than_mujoco_reads_continues_at_the_top_level() {
+    let m = mbsa::generate::serial_chain(1000, mbsa::JointType::C, false, true).expect("chain");
+    let e = export(&m, Target::Mjcf, GeometrySource::Random { seed: 3 });
+    // Every 400th level continues in a top-level body with a free joint.
+    assert_eq!(e.text.matches("<freejoint").count(), 2);
+    assert!(e.text.contains("The tree is deeper than 400 bodies"));
+    let depth = e
+        .text
+        .lines()
+        .map(|l| l.len() - l.trim_start().len())
+        .max()
+        .unwrap_or(0);
+    assert!(depth <= 2 * 25, "indentation {depth}");
+    let back = read_back(&e.text, Target::Mjcf);
+    assert_eq!(back.inputs(), m.inputs());
+    let g = geometric::analyze(&released(&back), &GeometricOptions::default()).expect("rigid");
+    assert_eq!((g.mobility, g.redundant), (2 * 999, 0));
+}
