@@ -401,18 +401,18 @@ fn stiffenings(
                 let q = Vector3::from(a.point.unwrap_or([0.0; 3]));
                 let d = Vector3::from(a.direction);
                 motion.joints.iter().find_map(|id| {
-                let (ji, j) = m.joints.iter().enumerate().find(|(_, j)| &j.id == id)?;
-                if j.kind != JointType::S || j.driven > 0 || j.bodies.len() != 2 {
-                    return None;
-                }
-                if out.iter().any(|(k, _)| *k == ji) {
-                    return None;
-                }
-                let p = Vector3::from(j.geometry.origin?);
-                let off = (p - q) - d * (p - q).dot(&d);
-                (off.norm() <= 1e-6 * scale.length).then_some(())?;
-                let proposal = changes::stiffening(&j.geometry, d, &scale)?;
-                Some((ji, Change {
+                    let (ji, j) = m.joints.iter().enumerate().find(|(_, j)| &j.id == id)?;
+                    if j.kind != JointType::S || j.driven > 0 || j.bodies.len() != 2 {
+                        return None;
+                    }
+                    if out.iter().any(|(k, _)| *k == ji) {
+                        return None;
+                    }
+                    let p = Vector3::from(j.geometry.origin?);
+                    let off = (p - q) - d * (p - q).dot(&d);
+                    (off.norm() <= 1e-6 * scale.length).then_some(())?;
+                    let proposal = changes::stiffening(&j.geometry, d, &scale)?;
+                    Some((ji, Change {
                     joint: j.id.clone(),
                     bodies: j.bodies.iter().map(|&b| m.body_id(b).to_string()).collect(),
                     from: "S".into(),
@@ -423,7 +423,7 @@ fn stiffenings(
                           through its balls: every other motion stays the same"
                         .into(),
                 }))
-            })
+                })
             });
         match found {
             Some(c) => out.push(c),
