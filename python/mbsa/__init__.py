@@ -188,6 +188,19 @@ class Mechanism:
             self._raw.rigid_json(method, finite, with_inputs, geometry, seed, tolerance, inputs, max_work)
         )
 
+    def repair(self, candidates: int = 4, max_work: Optional[int] = None) -> Report:
+        """The joint changes that make the model simulate with its motion unchanged (``mbsa
+        repair --format json``): ``before``, the checked ``candidates`` (best first) and
+        ``notes``. docs/repair.md."""
+        return _parse(self._raw.repair_json(candidates, max_work))
+
+    def repaired(
+        self, candidate: int = 1, candidates: int = 4, max_work: Optional[int] = None
+    ) -> "Mechanism":
+        """The model repaired by ``candidate`` (1 = the first listed), as a new
+        :class:`Mechanism` (``mbsa repair --apply N``)."""
+        return load(self._raw.repaired_toml(candidate, candidates, max_work), format="toml")
+
     def transform(
         self,
         limit: Optional[int] = None,

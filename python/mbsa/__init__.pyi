@@ -76,6 +76,10 @@ class Mechanism:
         inputs: Optional[str] = None,
         max_work: Optional[int] = None,
     ) -> Report: ...
+    def repair(self, candidates: int = 4, max_work: Optional[int] = None) -> Report: ...
+    def repaired(
+        self, candidate: int = 1, candidates: int = 4, max_work: Optional[int] = None
+    ) -> Mechanism: ...
     def transform(
         self,
         limit: Optional[int] = None,

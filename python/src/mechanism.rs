@@ -368,9 +368,74 @@ impl RawMechanism {
         })
     }
 
+    /// `mbsa repair --format json`: the checked candidates.
+    #[pyo3(signature = (candidates=4, max_work=None))]
+    fn repair_json(
+        &self,
+        py: Python<'_>,
+        candidates: usize,
+        max_work: Option<u64>,
+    ) -> PyResult<String> {
+        let r = self.repair(py, candidates, max_work)?;
+        Ok(mbsa::report::repair::json(&r))
+    }
+
+    /// `mbsa repair --apply N --format toml`: the model repaired by candidate `n` (1-based).
+    #[pyo3(signature = (n=1, candidates=4, max_work=None))]
+    fn repaired_toml(
+        &self,
+        py: Python<'_>,
+        n: usize,
+        candidates: usize,
+        max_work: Option<u64>,
+    ) -> PyResult<String> {
+        let r = self.repair(py, candidates, max_work)?;
+        let Some(c) = n.checked_sub(1).and_then(|i| r.candidates.get(i)) else {
+            return Err(bad(
+                "candidate",
+                &format!("{n}: {} candidate(s) listed", r.candidates.len()),
+            ));
+        };
+        let repaired = mbsa::repair::apply(&self.m, c);
+        let comments: Vec<Option<String>> = repaired
+            .joints
+            .iter()
+            .map(|j| {
+                let change = c.changes.iter().find(|ch| ch.joint == j.id);
+                change.map(mbsa::report::repair::comment)
+            })
+            .collect();
+        Ok(mbsa::write::write(
+            &repaired,
+            mbsa::write::TextFormat::Toml,
+            &comments,
+        ))
+    }
+
     /// The mechanism as a format-v1 TOML file.
     fn to_toml(&self) -> String {
         mbsa::generate::to_toml(&self.m)
+    }
+}
+
+impl RawMechanism {
+    /// The repair of `mbsa repair`, with the interpreter released.
+    fn repair(
+        &self,
+        py: Python<'_>,
+        candidates: usize,
+        max_work: Option<u64>,
+    ) -> PyResult<mbsa::repair::RepairReport> {
+        let opts = mbsa::repair::RepairOptions {
+            candidates: candidates.clamp(1, 64),
+            budget: budget(max_work),
+        };
+        py.detach(|| {
+            mbsa::repair::repair(&self.m, &opts).map_err(|e| match e {
+                mbsa::repair::RepairError::Budget(b) => errors::budget(&b),
+                e => errors::plain(&self.source, &e),
+            })
+        })
     }
 }
 

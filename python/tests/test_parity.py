@@ -87,3 +87,23 @@ def test_analyses_run_in_threads_with_the_same_answers():
     with ThreadPoolExecutor(max_workers=4) as pool:
         together = list(pool.map(lambda n: mbsa.load(f"@{n}").rigid(), names))
     assert together == alone
+
+
+@pytest.mark.parametrize("name", ["rig-planar-four-bar-3d", "bricard", "hexapod-rss", "n-four-bar-40"])
+def test_repair_is_the_clis_and_the_repaired_model_is_well_posed(cli, name):
+    m = mbsa.load(f"@{name}")
+    _same(cli, ["repair", f"@{name}", "--format", "json"], lambda: m.repair())
+    report = None
+    try:
+        report = m.repair()
+    except mbsa.Error:
+        return
+    if not report["candidates"]:
+        return
+    fixed = m.repaired(1)
+    code, out, _ = cli("repair", f"@{name}", "--apply", "1")
+    assert code == 0
+    assert fixed.to_toml() == mbsa.load(out, format="toml").to_toml()
+    rigid = fixed.rigid(method="geometric")
+    assert rigid["redundant"] == 0
+    assert rigid["mobility"] == report["before"]["mobility"]

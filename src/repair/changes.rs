@@ -34,7 +34,8 @@ pub(super) fn preference(kind: JointType) -> usize {
 }
 
 /// The relaxations of a joint of `kind` at `g` (file units), their directions read from
-/// `loads` (`6 × r` wrenches `(m_O; f)` at the scaled geometry).
+/// `loads` (`6 × r` wrenches `(m_O; f)` at the scaled geometry). One arm per kind: the table
+/// of relaxations reads best whole, so the function is longer than most.
 pub(super) fn relaxations(
     kind: JointType,
     g: &Geometry,

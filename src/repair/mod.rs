@@ -206,43 +206,52 @@ pub fn repair(m: &Mechanism, opts: &RepairOptions) -> Result<RepairReport, Repai
             continue;
         }
         seen.push(key);
-        let stiffened = stiff.len();
-        let changed = apply_changes(m, &changes);
-        let (after, _) = analyses(&changed, &opts.budget)?;
-        // Every motion kept but the isolated ones stiffened.
-        let expected_finite = before.finite.map(|f| f.saturating_sub(stiffened));
-        let same_motion = after.mobility + stiffened == before.mobility
-            && after.isolated + stiffened == before.isolated
-            && (expected_finite.is_none() || after.finite == expected_finite);
-        if after.redundant != left || !same_motion {
-            report.notes.push(format!(
-                "a candidate changing {} was rejected when checked: {} redundant, true \
-                 mobility {}, finite mobility {}",
-                changes
-                    .iter()
-                    .map(|(_, c)| c.joint.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                after.redundant,
-                after.mobility,
-                after.finite.map_or("unknown".into(), |f| f.to_string()),
-            ));
-            continue;
+        match check(m, &before, changes, left, stiff.len(), &opts.budget)? {
+            Ok(candidate) => report.candidates.push(candidate),
+            Err(note) => report.notes.push(note),
         }
-        let candidate = Candidate {
-            joints_changed: changes.len(),
-            freedoms_added: changes.iter().map(|(_, c)| c.rows_removed).sum(),
-            complete: after.redundant == 0 && after.isolated == 0,
-            changes: changes.into_iter().map(|(_, c)| c).collect(),
-            after,
-        };
-        report.candidates.push(candidate);
     }
     report.notes.dedup();
     report
         .candidates
         .sort_by_key(|c| (!c.complete, c.joints_changed, c.freedoms_added));
     Ok(report)
+}
+
+/// The changed model analysed again: the candidate when it has the redundancy the search
+/// left (`left`) and every motion of `before` but the `stiffened` isolated ones; else the note
+/// that says why it was rejected.
+fn check(
+    m: &Mechanism,
+    before: &State,
+    changes: Vec<(usize, Change)>,
+    left: usize,
+    stiffened: usize,
+    budget: &Budget,
+) -> Result<Result<Candidate, String>, RepairError> {
+    let (after, _) = analyses(&apply_changes(m, &changes), budget)?;
+    let expected_finite = before.finite.map(|f| f.saturating_sub(stiffened));
+    let same_motion = after.mobility + stiffened == before.mobility
+        && after.isolated + stiffened == before.isolated
+        && (expected_finite.is_none() || after.finite == expected_finite);
+    if after.redundant != left || !same_motion {
+        let joints: Vec<&str> = changes.iter().map(|(_, c)| c.joint.as_str()).collect();
+        return Ok(Err(format!(
+            "a candidate changing {} was rejected when checked: {} redundant, true mobility \
+             {}, finite mobility {}",
+            joints.join(", "),
+            after.redundant,
+            after.mobility,
+            after.finite.map_or("unknown".into(), |f| f.to_string()),
+        )));
+    }
+    Ok(Ok(Candidate {
+        joints_changed: changes.len(),
+        freedoms_added: changes.iter().map(|(_, c)| c.rows_removed).sum(),
+        complete: after.redundant == 0 && after.isolated == 0,
+        changes: changes.into_iter().map(|(_, c)| c).collect(),
+        after,
+    }))
 }
 
 /// The model with the candidate's changes: each changed joint gets its new kind and geometry.
