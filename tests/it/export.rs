@@ -4,7 +4,6 @@
 //! mobility, redundant constraints, isolated freedoms), on every bundled mechanism with
 //! geometry and every import fixture.
 
-use assert_cmd::Command;
 use mbsa::budget::Budget;
 use mbsa::cut::{self, CutOptions};
 use mbsa::export::{ExportOptions, Target, export_within};
@@ -195,18 +194,7 @@ fn the_same_input_gives_the_same_bytes() {
     }
 }
 
-fn mbsa(args: &[&str]) -> (i32, String, String) {
-    let out = Command::cargo_bin("mbsa")
-        .expect("the mbsa binary is built")
-        .args(args)
-        .output()
-        .expect("mbsa runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+use super::common::mbsa;
 
 #[test]
 fn the_command_line_warns_of_redundant_rows_and_refuses_missing_geometry() {
