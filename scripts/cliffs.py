@@ -15,6 +15,7 @@ import argparse
 import os
 import random
 import re
+import subprocess
 import sys
 import tempfile
 
@@ -44,6 +45,33 @@ def n_four_bar(windows, planar=True):
         joint(f"B{k}", 2 * k + 1, 2 * k + 2, k + 0.6, 0.8)
         joint(f"P{k}", 1, 2 * k + 2, k, 0)
     return "\n".join(out)
+
+
+def dyad_strip(bodies):
+    """A strip of planar RRR dyads, each pinned to the two bodies of the one before: dyad k's
+    bodies meet at (k + 0.5, 0.5) and join the previous dyad at (k, 1) and (k, 0) (right angles:
+    far from any fold); the crank, pinned to the frame at (0, 0.5), is driven. Coordinates are
+    exact (`precision`): the file's numbers, not their digits, set the geometry."""
+    dyads = max(1, (bodies - 2) // 2)
+    out = ['name = "Dyad strip"', "precision = 0", 'space = "planar"', "frame = 1", ""]
+
+    def joint(ident, a, b, x, y, driven=0):
+        out.extend(["[[joint]]", f'id = "{ident}"', 'type = "R"', f"bodies = [{a}, {b}]",
+                    f"origin = [{x}, {y}]"] + ([f"driven = {driven}"] if driven else []) + [""])
+
+    joint("A0", 1, 2, 0, 0.5, driven=1)
+    for k in range(1, dyads + 1):
+        a, b = 2 * k + 1, 2 * k + 2
+        joint(f"T{k}", 2 if k == 1 else a - 2, a, k, 1)
+        joint(f"C{k}", a, b, k + 0.5, 0.5)
+        joint(f"B{k}", 1 if k == 1 else b - 2, b, k, 0)
+    return "\n".join(out)
+
+
+def generated(*args):
+    """A file `mbsa generate ARGS` writes."""
+    return lambda n: subprocess.run([BIN, "generate", *args, "--bodies", str(n)], check=True,
+                                    capture_output=True, text=True).stdout
 
 
 def urdf_chain(links):
@@ -81,7 +109,7 @@ def laman(points):
     return 'space = "planar"\nframe = "0-1"\n\n' + "\n".join(out)
 
 
-# (key, label, size unit, sizes, writer, file suffix, command)
+# (key, label, size unit, sizes, writer, file suffix, command: the file's path replaces `{}`)
 FAMILIES = [
     ("n-four-bar", "N-four-bar, planar, file geometry", "bodies", [100, 1_000, 10_000],
      lambda n: n_four_bar((n - 2) // 2), "toml", ["analyze"]),
@@ -93,6 +121,12 @@ FAMILIES = [
      mjcf_chain, "xml", ["mobility"]),
     ("laman", "Laman framework (reading, pebble game)", "points", [1_000, 10_000, 100_000],
      laman, "toml", ["mobility"]),
+    ("solve", "dyad strip, crank +1°, group by group", "bodies", [1_000, 10_000, 100_000],
+     dyad_strip, "toml", ["solve", "{}", "--set", "A0=1"]),
+    ("solve-global", "dyad strip, crank +1°, global (sparse)", "bodies",
+     [1_000, 10_000, 100_000], dyad_strip, "toml", ["solve", "{}", "--set", "A0=1", "--global"]),
+    ("random-spatial", "random spatial (`generate random --seed 1`)", "bodies",
+     [1_000, 100_000, 1_000_000], generated("random", "--seed", "1"), "toml", ["analyze"]),
 ]
 
 
@@ -113,7 +147,8 @@ def main():
             path = os.path.join(work, f"{key}-{n}.{suffix}")
             with open(path, "w") as f:
                 f.write(write(n))
-            runs = sorted((run([BIN] + cmd + [path], a.cap_seconds, a.memory_cap_gb)
+            args = [path if c == "{}" else c for c in cmd] if "{}" in cmd else cmd + [path]
+            runs = sorted((run([BIN] + args, a.cap_seconds, a.memory_cap_gb)
                            for _ in range(a.repeat)), key=lambda r: r[1] or 0)
             wall, cpu, rss, code = runs[len(runs) // 2]
             os.remove(path)
@@ -123,7 +158,9 @@ def main():
                 cells.append(f"> {a.cap_seconds:.0f} s")
                 worst = None
                 break
-            cells.append(f"{fmt_time(cpu)}, {rss:.0f} MB" if code in (0, 1)
+            # Exit 1 is an answer for a check, a failure for a solve.
+            ok = code == 0 or (code == 1 and cmd[0] != "solve")
+            cells.append(f"{fmt_time(cpu)}, {rss:.0f} MB" if ok
                          else f"exit {code}, {fmt_time(cpu)}")
             if first is None:
                 first = (n, max(cpu, 0.01))
@@ -132,7 +169,8 @@ def main():
                 worst = r if worst is None else max(worst, r)
         cells += ["not run"] * (len(sizes) - len(cells))
         ratio = "–" if worst is None else f"{worst:.2f}"
-        rows.append(f"| {label} | `{' '.join(cmd)}` | {unit} "
+        shown = " ".join(c for c in cmd if c != "{}")
+        rows.append(f"| {label} | `{shown}` | {unit} "
                     + " ".join(f"{n:,}" for n in sizes) + " | " + " | ".join(cells)
                     + f" | {ratio} |")
     table = "\n".join(["| family | command | sizes | small | middle | large | "

@@ -4,7 +4,7 @@
 use super::newton::{NewtonOptions, NewtonOutcome, System, Targets};
 use super::pose::{Configuration, Pose};
 use super::residual::{ModelError, PositionModel};
-use super::solve::SolveError;
+use super::solve::{SolveError, joints_of};
 use crate::joint::JointType;
 use crate::mechanism::{Mechanism, Space};
 use serde::Serialize;
@@ -222,17 +222,10 @@ pub fn assemble(
         out.converged = true;
     }
     if !out.converged {
-        let mut ids: Vec<&str> = Vec::new();
-        for (i, &p) in sys.pairs.iter().enumerate() {
-            let id = m.joints[model.pairs[p].joint].id.as_str();
-            if out.pair_residuals[i] > opts.tolerance && !ids.contains(&id) {
-                ids.push(id);
-            }
-        }
         return Err(SolveError::Unreachable {
             group: "assembly".into(),
             bodies: "(all)".into(),
-            joints: ids.join(", "),
+            joints: joints_of(m, &model, &sys.pairs, &out.pair_residuals, opts.tolerance),
             residual: out.residual * model.scale,
         });
     }

@@ -317,32 +317,33 @@ pub struct Solution {
     pub max_residual: f64,
 }
 
-fn joints_of(
+/// The joints of `pairs` whose residual exceeds `tol`, in pair order, each once; at most
+/// [`capped`](crate::structure::capped)'s count named.
+pub(super) fn joints_of(
     m: &Mechanism,
     model: &PositionModel,
     pairs: &[usize],
     res: &[f64],
     tol: f64,
 ) -> String {
-    let mut ids: Vec<&str> = Vec::new();
-    for (i, &p) in pairs.iter().enumerate() {
-        if res.get(i).is_some_and(|&r| r > tol) {
-            let id = m.joints[model.pairs[p].joint].id.as_str();
-            if !ids.contains(&id) {
-                ids.push(id);
-            }
-        }
-    }
+    let mut seen = std::collections::HashSet::new();
+    let ids: Vec<&str> = pairs
+        .iter()
+        .enumerate()
+        .filter(|&(i, _)| res.get(i).is_some_and(|&r| r > tol))
+        .map(|(_, &p)| m.joints[model.pairs[p].joint].id.as_str())
+        .filter(|id| seen.insert(*id))
+        .collect();
     if ids.is_empty() {
         "(none)".into()
     } else {
-        ids.join(", ")
+        crate::structure::capped(&ids)
     }
 }
 
 fn body_list(m: &Mechanism, bodies: &[usize]) -> String {
     let ids: Vec<String> = bodies.iter().map(|&b| m.body_id(b).to_string()).collect();
-    format!("{{{}}}", ids.join(", "))
+    format!("{{{}}}", crate::structure::capped(&ids))
 }
 
 fn outcome_error(

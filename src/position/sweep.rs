@@ -149,7 +149,7 @@ impl Tracker {
         Some(format!(
             "dead point at {at}: the equations of group {} (bodies {}) became singular (conditioning {:.1e})",
             st.name,
-            st.bodies.join(", "),
+            crate::structure::capped(&st.bodies),
             st.conditioning
         ))
     }

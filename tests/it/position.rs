@@ -447,6 +447,64 @@ fn unreachable_input_is_an_error_naming_the_group() {
     assert!(g.is_err());
 }
 
+/// A strip of `dyads` planar RRR dyads at right angles, each pinned to the two bodies of the
+/// one before; the crank `A0` driven.
+fn dyad_strip(dyads: usize) -> Mechanism {
+    let mut t = String::from("space = \"planar\"\nframe = 1\n");
+    let mut joint = |id: &str, a: usize, b: usize, x: f64, y: f64, driven: u32| {
+        t += &format!(
+            "[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}]\ndriven = {driven}\n"
+        );
+    };
+    joint("A0", 1, 2, 0.0, 0.5, 1);
+    for k in 1..=dyads {
+        let (a, b) = (2 * k + 1, 2 * k + 2);
+        let x = k as f64;
+        joint(
+            &format!("T{k}"),
+            if k == 1 { 2 } else { a - 2 },
+            a,
+            x,
+            1.0,
+            0,
+        );
+        joint(&format!("C{k}"), a, b, x + 0.5, 0.5, 0);
+        joint(
+            &format!("B{k}"),
+            if k == 1 { 1 } else { b - 2 },
+            b,
+            x,
+            0.0,
+            0,
+        );
+    }
+    mbsa::format::load("strip", &t, mbsa::format::Format::Toml).unwrap()
+}
+
+#[test]
+fn a_failed_global_solve_names_a_few_bodies_and_joints() {
+    // Half a turn of the crank takes the first dyad out of reach: the global solve leaves a
+    // residual on most of the strip's 91 joints, and its error names 12 of each, then a count.
+    let m = dyad_strip(30);
+    let model = PositionModel::new(&m).unwrap();
+    let start = Configuration::reference(m.bodies.len());
+    let tg = targets(&m, &model, &[(0, vec![deg(180.0)])]).unwrap();
+    let e = solve_global(&m, &model, &tg, &start, &NewtonOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("group global (bodies {2, 3,"), "{e}");
+    assert!(e.matches(" more").count() == 2, "{e}");
+    assert!(e.len() < 400, "{} characters: {e}", e.len());
+    let sched = schedule(&m, &analysis(&m), &model);
+    let e = solve_groups(&m, &model, &sched, &tg, &start, &NewtonOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("group SG-II (bodies {3, 4}) cannot be closed"),
+        "{e}"
+    );
+}
+
 #[test]
 fn bennett_moves_with_finite_mobility_one() {
     let (_, text) = mbsa::examples::find("rig-bennett").unwrap();

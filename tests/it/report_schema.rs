@@ -245,9 +245,9 @@ fn every_bundled_report_matches_its_schema() {
             let args = ["rigid", f, "--method", method, "--format", "json"];
             checked += check(&rigid, &args, false);
         }
-        let args = ["transform", f, "--limit", "30", "--format", "json"];
+        let args = ["transform", f, "--limit", "5", "--format", "json"];
         checked += check(&transform, &args, false);
-        let args = ["transform", f, "--limit", "30", "--format", "jsonl"];
+        let args = ["transform", f, "--limit", "5", "--format", "jsonl"];
         checked += check(&lines, &args, true);
         checked += check(&solve, &["solve", f, "--format", "json"], false);
     }
