@@ -101,7 +101,7 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
             out,
             "note: the rank check left {} block(s) to the count, too large to factorize densely: {}",
             a.unchecked.len(),
-            sizes.join(", ")
+            crate::structure::capped(&sizes)
         );
     }
     if !a.isolated.is_empty() {
@@ -113,13 +113,13 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
         let _ = writeln!(
             out,
             "isolated freedoms (each turns one body alone, moving no other; left out): {}",
-            list.join(", ")
+            crate::structure::capped(&list)
         );
     }
     flush(out)?;
     if let Some(d) = &a.diagnosis {
         if !d.unsolved.is_empty() {
-            let _ = writeln!(out, "bodies left unsolved: {}", d.unsolved.join(", "));
+            let _ = writeln!(out, "bodies left unsolved: {}", crate::structure::capped(&d.unsolved));
         }
         for n in &d.notes {
             let _ = writeln!(out, "- {n}");

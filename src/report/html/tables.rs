@@ -68,7 +68,7 @@ pub(super) fn summary(out: &mut String, r: &Inputs) {
     if let Some(d) = &a.diagnosis
         && !d.unsolved.is_empty()
     {
-        items.push(format!("bodies left unsolved: {}", d.unsolved.join(", ")));
+        items.push(format!("bodies left unsolved: {}", crate::structure::capped(&d.unsolved)));
     }
     if !a.isolated.is_empty() {
         let list: Vec<String> = a
@@ -78,7 +78,7 @@ pub(super) fn summary(out: &mut String, r: &Inputs) {
             .collect();
         items.push(format!(
             "isolated freedoms (each turns one body alone, moving no other; left out): {}",
-            list.join(", ")
+            crate::structure::capped(&list)
         ));
     }
     items.extend(notes.iter().cloned());
