@@ -434,9 +434,11 @@ fn fix_base_drives_every_free_joint_to_the_frame() {
     let m = load(file, text, Format::Toml).expect("bundled example loads");
     let lib = Library::builtin();
     let mut o = opts();
+    o.limit = Some(20);
     let auto = transform(&m, &o, &lib, None).unwrap();
     assert!(auto.summary.fixed_base.is_empty());
     assert!(auto.placements.iter().any(|p| p.spec() != "1-14:6"));
+    o.limit = None;
     o.base = BaseMode::Fixed;
     let fixed = transform(&m, &o, &lib, None).unwrap();
     assert_eq!(fixed.summary.fixed_base, vec!["1-14".to_string()]);
