@@ -218,9 +218,11 @@ enum Command {
     /// matroid (incremental matching, pruning as soon as a partial placement over-determines
     /// a part), checks each with the structural analysis (placements the rank check rejects are
     /// excluded and counted), groups placements with the same partition into families and
-    /// ranks them. `--inputs SPEC` instead compares one placement with the file's own.
+    /// ranks them. A floating base (a free joint, its part's only joint to the frame, as an
+    /// imported robot's) is taken as driven in full, its pose given; the output names it.
+    /// `--inputs SPEC` instead compares one placement with the file's own.
     #[command(
-        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl\n  mbsa transform @stewart --partition hash:1/4 --format jsonl > shard1.jsonl"
+        after_help = "Examples:\n  mbsa transform @rotor\n  mbsa transform @rotor --inputs 1-2,1-13,13-15\n  mbsa transform @stewart --on P,F --top 5\n  mbsa transform cassie.xml --limit 50\n  mbsa transform @stewart --fix-base\n  mbsa transform @micro-manipulator --grounded --format jsonl > placements.jsonl\n  mbsa transform @stewart --partition hash:1/4 --format jsonl > shard1.jsonl"
     )]
     Transform {
         #[command(flatten)]

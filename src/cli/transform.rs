@@ -33,6 +33,16 @@ pub struct TransformArgs {
     /// Joints that may not be driven (same syntax as --inputs; counts are ignored).
     #[arg(long, value_name = "SPEC")]
     pub exclude: Option<String>,
+    /// Take every free joint to the frame (F) as driven in full: the base's pose is given, as
+    /// in a fixed-base analysis, and the other inputs are placed. By default this is done for
+    /// a floating base, a free joint that is its part's only joint to the frame (every
+    /// determined placement drives it in full anyway); the output names the joint.
+    #[arg(long, conflicts_with = "keep_free_base")]
+    pub fix_base: bool,
+    /// Place inputs on a floating base's free joint like on any other joint (the search is
+    /// longer and finds the same determined placements).
+    #[arg(long)]
+    pub keep_free_base: bool,
     /// How many binary expansions of multiple joints to explore.
     #[arg(long, default_value_t = 64)]
     pub max_expansions: usize,
@@ -105,6 +115,11 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         keep: spec(&args.keep, "--keep", &m)?,
         exclude: spec(&args.exclude, "--exclude", &m)?,
         inputs: spec(&structure.inputs, "--inputs", &m)?,
+        base: match (args.fix_base, args.keep_free_base) {
+            (true, _) => transform::BaseMode::Fixed,
+            (false, true) => transform::BaseMode::Free,
+            (false, false) => transform::BaseMode::Auto,
+        },
         max_expansions: args.max_expansions,
         limit: args.limit,
         budget: super::budget(),

@@ -109,6 +109,23 @@ impl Criterion {
     }
 }
 
+/// What [`transform`] does with a free joint to the frame (F; FP in a planar or spherical
+/// mechanism): a floating base, whose pose the analysis of a fixed-base robot takes as given.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum BaseMode {
+    /// Drive in full each free joint to the frame that is the only joint between its part and
+    /// the frame (a floating base). Nothing is lost: inputs on the other joints move bodies
+    /// relative to one another, so only the free joint's own inputs fix the part's pose, and
+    /// every determined placement drives it in full. The search only gets shorter.
+    #[default]
+    Auto,
+    /// `--fix-base`: drive in full every free joint to the frame, also where other joints
+    /// join its part to the frame (a fictitious free pair carrying a platform's pose).
+    Fixed,
+    /// `--keep-free-base`: place inputs on free joints to the frame as on any other joint.
+    Free,
+}
+
 /// Options of `mbsa transform`, one field per command-line flag.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TransformOptions {
@@ -127,6 +144,8 @@ pub struct TransformOptions {
     pub exclude: Option<InputSpec>,
     /// `--inputs SPEC`: evaluate this one placement beside the file's own ([`compare`]).
     pub inputs: Option<InputSpec>,
+    /// `--fix-base`, `--keep-free-base`: free joints to the frame taken as driven in full.
+    pub base: BaseMode,
     /// `--max-expansions`: how many binary expansions of the multiple joints to explore.
     pub max_expansions: usize,
     /// `--limit`: how many count-valid placements to examine at most (per part); the search
@@ -159,6 +178,7 @@ impl Default for TransformOptions {
             keep: None,
             exclude: None,
             inputs: None,
+            base: BaseMode::Auto,
             max_expansions: 64,
             limit: None,
             budget: Budget::DEFAULT,
@@ -362,6 +382,10 @@ pub struct Summary {
     pub f: i64,
     /// Joints (binary pairs) that may be driven under the restrictions.
     pub drivable: usize,
+    /// Free joints to the frame taken as driven in full, the base's pose given
+    /// ([`BaseMode`]): every placement drives them in full (absent when none).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub fixed_base: Vec<String>,
     /// Independent parts: the mechanism's bodies form this many connected pieces once the
     /// frame is removed. Each is placed on its own; the counts are products over the parts.
     pub parts: usize,
@@ -495,6 +519,7 @@ fn enumerate_kept(
         geometry,
         f: 0,
         drivable: 0,
+        fixed_base: rules.fixed_base.clone(),
         parts: parts.len().max(1),
         expansions: 1,
         expansions_total: 1,
@@ -594,6 +619,9 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             ));
         }
     }
+    if let Some(n) = redundancy_note(s) {
+        s.notes.insert(0, n);
+    }
     if s.excluded_by_rank > 0 {
         s.notes.push(format!(
             "{} of {} count-valid placements are not determined (the rank check finds redundant \
@@ -609,6 +637,31 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             s.listed
         ));
     }
+}
+
+/// Nothing determined while constraint equations are dependent at the file's configuration:
+/// the first note says so and where to go (a Cassie leg's foot loop, planar, closed by a
+/// ball joint: each placement keeps a redundant equation and a freedom no input controls).
+fn redundancy_note(s: &Summary) -> Option<String> {
+    if s.determined > 0 || s.excluded_by_rank == 0 || s.set_aside == 0 {
+        return None;
+    }
+    let found = if s.truncated {
+        format!(
+            "none of the {} placement(s) examined is determined",
+            count_words(s.count_valid)
+        )
+    } else {
+        "no placement is determined".to_string()
+    };
+    Some(format!(
+        "{found}, and {} constraint equation(s) are redundant at the file's configuration \
+         (parallel or concurrent axes, a planar or spherical loop written in space): redundant \
+         constraints can leave every placement with a freedom no input controls; `mbsa repair` \
+         finds joint changes that remove them and keep the motion, and `--geometry random` \
+         gives the answer at generic geometry",
+        s.set_aside
+    ))
 }
 
 /// A count for messages; a saturated `u128::MAX` says "more than 10^38".

@@ -146,7 +146,20 @@ impl Problem {
             .into_iter()
             .map(|(o, qs)| (qs, rules.keep[o]))
             .collect();
-        self.cand = (0..nq).filter(|&q| self.hi[q] > self.lo[q]).collect();
+        // Pairs on a body with an isolated spin come last: a unit there generically drives
+        // the spin, which no determined placement does (its `f` inputs leave exactly the
+        // isolated freedoms free), so the first placements found, and those `--limit`
+        // examines, are the others (a Delta robot's rods). The placements are the same.
+        let spun = |q: usize| {
+            [self.a[q], self.c[q]]
+                .into_iter()
+                .any(|x| x != m.frame && self.u[x] < b)
+        };
+        let (mut cand, last): (Vec<usize>, Vec<usize>) = (0..nq)
+            .filter(|&q| self.hi[q] > self.lo[q])
+            .partition(|&q| !spun(q));
+        cand.extend(last);
+        self.cand = cand;
         cons
     }
 

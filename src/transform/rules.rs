@@ -1,7 +1,7 @@
 //! The restrictions of a run (`--on`, `--grounded`, `--keep`, `--exclude`) resolved on the
 //! original joints.
 
-use super::{TransformError, TransformOptions};
+use super::{BaseMode, TransformError, TransformOptions};
 use crate::mechanism::{InputSpecError, Mechanism, resolve_ref};
 
 /// The restrictions resolved on the original joints.
@@ -11,6 +11,8 @@ pub(super) struct Rules {
     pub(super) grounded: bool,
     /// Driven DOF joint j must keep at least.
     pub(super) keep: Vec<u32>,
+    /// Ids of the free joints to the frame driven in full ([`BaseMode`]).
+    pub(super) fixed_base: Vec<String>,
     pub(super) notes: Vec<String>,
     /// Whether the analyses use no geometry or a random realization (drawn joint by joint):
     /// then the independent parts of an expansion may be analysed apart ([`ExpansionParts`]).
@@ -26,6 +28,7 @@ impl Rules {
             allowed: joints.iter().map(|&j| self.allowed[j]).collect(),
             grounded: self.grounded,
             keep: joints.iter().map(|&j| self.keep[j]).collect(),
+            fixed_base: Vec::new(),
             notes: Vec::new(),
             random: self.random,
         }
@@ -90,6 +93,7 @@ impl Rules {
                 notes.push(format!("kept inputs: {}", kept.join(", ")));
             }
         }
+        let fixed_base = fix_bases(m, opts.base, &excluded, &mut keep, &mut notes)?;
         for (a, x) in allowed.iter_mut().zip(&excluded) {
             *a &= !x;
         }
@@ -97,8 +101,121 @@ impl Rules {
             allowed,
             grounded: opts.grounded,
             keep,
+            fixed_base,
             notes,
             random: false,
         })
     }
+}
+
+/// Whether joint `j` of `m` is a free joint to the frame: binary, the frame one of its bodies,
+/// removing no freedom (F in space; FP in a planar or spherical mechanism).
+fn free_to_frame(m: &Mechanism, j: usize) -> bool {
+    let joint = &m.joints[j];
+    joint.bodies.len() == 2 && joint.bodies.contains(&m.frame) && joint.grade() == m.b()
+}
+
+/// The free joints to the frame that `mode` drives in full: each gets its grade as kept
+/// inputs, and a note names them. [`BaseMode::Auto`] takes those that are the only joint
+/// between their part (bodies connected without the frame) and the frame, and leaves an
+/// excluded one alone (no placement then exists, as without the rule); [`BaseMode::Fixed`]
+/// takes every one, and an excluded one is an error.
+fn fix_bases(
+    m: &Mechanism,
+    mode: BaseMode,
+    excluded: &[bool],
+    keep: &mut [u32],
+    notes: &mut Vec<String>,
+) -> Result<Vec<String>, TransformError> {
+    let free: Vec<usize> = (0..m.joints.len())
+        .filter(|&j| free_to_frame(m, j))
+        .collect();
+    let chosen: Vec<usize> = match mode {
+        BaseMode::Free => Vec::new(),
+        BaseMode::Fixed => free,
+        BaseMode::Auto => {
+            let to_frame = frame_joints_per_part(m);
+            let part = part_roots(m);
+            free.into_iter()
+                .filter(|&j| !excluded[j])
+                .filter(|&j| {
+                    let x = m.joints[j].bodies.iter().find(|&&x| x != m.frame);
+                    x.is_some_and(|&x| to_frame[part[x]] == 1)
+                })
+                .collect()
+        }
+    };
+    for &j in &chosen {
+        if excluded[j] {
+            return Err(TransformError::KeepExcluded {
+                joint: m.joints[j].id.clone(),
+            });
+        }
+        keep[j] = keep[j].max(m.joints[j].grade());
+    }
+    if chosen.is_empty() {
+        return Ok(Vec::new());
+    }
+    let named: Vec<String> = chosen
+        .iter()
+        .map(|&j| format!("{} ({} DOF)", m.joints[j].id, m.joints[j].grade()))
+        .collect();
+    notes.push(match mode {
+        BaseMode::Fixed => format!(
+            "base taken as driven in full (--fix-base), its pose given as in a fixed-base \
+             analysis: {}; the other inputs are placed",
+            named.join(", ")
+        ),
+        _ => format!(
+            "floating base taken as driven in full, its pose given as in a fixed-base analysis: \
+             {}; no other input fixes its pose, so every determined placement drives it in full \
+             (--keep-free-base searches without this)",
+            named.join(", ")
+        ),
+    });
+    Ok(chosen.iter().map(|&j| m.joints[j].id.clone()).collect())
+}
+
+/// The part (a root body) of each body: bodies joined by joints that do not touch the frame.
+fn part_roots(m: &Mechanism) -> Vec<usize> {
+    let mut up: Vec<usize> = (0..m.bodies.len()).collect();
+    fn root(up: &mut [usize], mut x: usize) -> usize {
+        while up[x] != x {
+            up[x] = up[up[x]];
+            x = up[x];
+        }
+        x
+    }
+    for j in m.joints.iter().filter(|j| !j.bodies.contains(&m.frame)) {
+        let Some((&first, rest)) = j.bodies.split_first() else {
+            continue;
+        };
+        for &y in rest {
+            let (a, b) = (root(&mut up, first), root(&mut up, y));
+            if a != b {
+                up[a.max(b)] = a.min(b);
+            }
+        }
+    }
+    (0..up.len()).map(|x| root(&mut up, x)).collect()
+}
+
+/// How many joints join each part (indexed by its root, [`part_roots`]) to the frame.
+fn frame_joints_per_part(m: &Mechanism) -> Vec<usize> {
+    let part = part_roots(m);
+    let mut n = vec![0usize; m.bodies.len()];
+    for j in m.joints.iter().filter(|j| j.bodies.contains(&m.frame)) {
+        let mut roots: Vec<usize> = j
+            .bodies
+            .iter()
+            .filter(|&&x| x != m.frame)
+            .map(|&x| part[x])
+            .collect();
+        roots.sort_unstable();
+        roots.dedup();
+        for r in roots {
+            n[r] += 1;
+        }
+    }
+    n
 }

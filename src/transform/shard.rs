@@ -187,6 +187,10 @@ pub fn digest(source: &[u8], opts: &TransformOptions, extra: &str) -> String {
         opts.analysis
     );
     h.field(enumeration.as_bytes());
+    // The default adds nothing, so a run without the flags keeps its digest.
+    if opts.base != super::BaseMode::Auto {
+        h.field(format!("{:?}", opts.base).as_bytes());
+    }
     h.field(extra.as_bytes());
     format!("{:016x}", h.finish())
 }

@@ -3,7 +3,7 @@
 use mbsa::format::{Format, load};
 use mbsa::structure::Library;
 use mbsa::transform::{
-    Placement, Progress, TransformError, TransformOptions, enumerate, transform,
+    BaseMode, Placement, Progress, TransformError, TransformOptions, enumerate, transform,
 };
 use mbsa::{BodyId, InputSpec, JointSpec, JointType, Mechanism, Space};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -331,4 +331,147 @@ fn a_limit_reached_with_nothing_determined_says_how_to_go_on() {
             .iter()
             .all(|n| !n.starts_with("none of the"))
     );
+}
+
+/// An imported model, read as `mbsa transform FILE` reads it.
+fn imported(name: &str) -> Mechanism {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/fixtures/import")
+        .join(name);
+    mbsa::import::import_file(&path, &mbsa::import::ImportOptions::default())
+        .unwrap_or_else(|e| panic!("{name}: {e}"))
+        .mechanism
+}
+
+fn with_base(base: BaseMode, limit: Option<usize>) -> TransformOptions {
+    TransformOptions {
+        base,
+        limit,
+        ..TransformOptions::default()
+    }
+}
+
+/// A Delta robot imported from Gazebo floats: its base's free joint (`base_link:free`) is its
+/// only joint to the world. Its pose is taken as given, so `--limit 50` finds the arms'
+/// placements at once (it used to examine 50 placements driving the base or the rods' spins
+/// and find none); the note and the JSON name the joint.
+#[test]
+fn a_floating_base_is_driven_in_full_and_named() {
+    let m = imported("delta_robot.sdf");
+    let lib = Library::builtin();
+    let t = transform(&m, &with_base(BaseMode::Auto, Some(50)), &lib, None).unwrap();
+    assert_eq!(t.summary.f, 9);
+    assert_eq!(t.summary.fixed_base, vec!["base_link:free".to_string()]);
+    assert!(t.summary.determined > 0, "{:?}", t.summary);
+    assert!(t.placements.iter().all(|p| {
+        p.inputs
+            .iter()
+            .any(|i| i.joint == "base_link:free" && i.driven == 6)
+    }));
+    assert!(
+        t.summary
+            .notes
+            .iter()
+            .any(|n| n.starts_with("floating base taken as driven in full")
+                && n.contains("base_link:free (6 DOF)")),
+        "{:?}",
+        t.summary.notes
+    );
+    let best = &t.placements[0];
+    assert_eq!(
+        best.spec(),
+        "base_link:free:6,proximal_link_1_joint,proximal_link_3_joint,proximal_link_5_joint"
+    );
+    let json: serde_json::Value = serde_json::from_str(&mbsa::report::json(&t)).unwrap();
+    assert_eq!(
+        json["summary"]["fixed_base"],
+        serde_json::json!(["base_link:free"])
+    );
+    let text = mbsa::report::transform::table(&t, 3);
+    assert!(text.contains("note: floating base taken as driven in full"));
+    // The same run twice: the same bytes.
+    let again = transform(&m, &with_base(BaseMode::Auto, Some(50)), &lib, None).unwrap();
+    assert_eq!(mbsa::report::json(&again), mbsa::report::json(&t));
+    // Without a floating base, no key.
+    let r = transform(&rotor(), &opts(), &lib, None).unwrap();
+    let json: serde_json::Value = serde_json::from_str(&mbsa::report::json(&r)).unwrap();
+    assert!(json["summary"].get("fixed_base").is_none());
+}
+
+/// Nothing is lost: every determined placement of a floating mechanism drives its free base
+/// in full, so searching with the base free finds the same ones (@floating-base, with its leg;
+/// the Delta with inputs on its R and F joints only, as the whole search with the base free
+/// takes minutes).
+#[test]
+fn fixing_a_floating_base_keeps_every_determined_placement() {
+    let lib = Library::builtin();
+    let (file, text) = mbsa::examples::find("floating-base").expect("bundled example");
+    let leg = load(file, text, Format::Toml).expect("bundled example loads");
+    for (m, on) in [(imported("delta_robot.sdf"), Some("R,F")), (leg, None)] {
+        let mut o = with_base(BaseMode::Auto, None);
+        o.on = on.map(|t| TransformOptions::parse_on(t).unwrap());
+        let fixed = transform(&m, &o, &lib, None).unwrap();
+        o.base = BaseMode::Free;
+        let free = transform(&m, &o, &lib, None).unwrap();
+        assert!(free.summary.fixed_base.is_empty());
+        assert!(fixed.summary.determined > 0);
+        assert_eq!(
+            specs(&fixed.placements),
+            specs(&free.placements),
+            "{}",
+            m.name
+        );
+        assert!(free.summary.count_valid >= fixed.summary.count_valid);
+    }
+}
+
+/// A free joint that is not its part's only joint to the frame (the fictitious pair 1-14 of
+/// @stewart, which carries the platform's pose) is placed like any other, unless `--fix-base`
+/// says otherwise; then it is driven in full, and `--exclude` of it is an error.
+#[test]
+fn fix_base_drives_every_free_joint_to_the_frame() {
+    let (file, text) = mbsa::examples::find("stewart").expect("bundled example");
+    let m = load(file, text, Format::Toml).expect("bundled example loads");
+    let lib = Library::builtin();
+    let mut o = opts();
+    o.limit = Some(20);
+    let auto = transform(&m, &o, &lib, None).unwrap();
+    assert!(auto.summary.fixed_base.is_empty());
+    assert!(auto.placements.iter().any(|p| p.spec() != "1-14:6"));
+    o.limit = None;
+    o.base = BaseMode::Fixed;
+    let fixed = transform(&m, &o, &lib, None).unwrap();
+    assert_eq!(fixed.summary.fixed_base, vec!["1-14".to_string()]);
+    assert_eq!(specs(&fixed.placements), vec!["1-14:6".to_string()]);
+    assert!(fixed.summary.notes.iter().any(|n| n.contains("--fix-base")));
+    o.exclude = Some(InputSpec::parse("1-14").unwrap());
+    assert!(matches!(
+        transform(&m, &o, &lib, None),
+        Err(TransformError::KeepExcluded { .. })
+    ));
+}
+
+/// The Cassie at its file's configuration: each foot's four-bar is planar and closed by a
+/// ball, so 2 constraint equations are redundant there and no placement examined is
+/// determined. The first note says so and points to `mbsa repair`, besides naming the base.
+#[test]
+fn redundant_constraints_are_said_first_with_the_way_to_repair() {
+    let m = imported("cassie.xml");
+    let lib = Library::builtin();
+    let t = transform(&m, &with_base(BaseMode::Auto, Some(50)), &lib, None).unwrap();
+    assert_eq!(t.summary.fixed_base, vec!["cassie-pelvis:free".to_string()]);
+    assert_eq!((t.summary.determined, t.summary.set_aside), (0, 2));
+    let first = &t.summary.notes[0];
+    assert!(
+        first.starts_with("none of the 50 placement(s) examined is determined, and 2 constraint")
+            && first.contains("`mbsa repair`"),
+        "{:?}",
+        t.summary.notes
+    );
+    // A mechanism whose redundancy the set-aside equations absorb (a planar four-bar written
+    // in space) has placements and no such note.
+    let four = imported("four_bar.sdf");
+    let t = transform(&four, &TransformOptions::default(), &lib, None).unwrap();
+    assert!(t.summary.set_aside > 0 && t.summary.determined > 0);
+    assert!(t.summary.notes.iter().all(|n| !n.contains("mbsa repair")));
 }

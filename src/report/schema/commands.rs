@@ -53,6 +53,7 @@ pub(super) fn transform_summary() -> Value {
             ("geometry", geometry_used()),
             ("f", integer()),
             ("drivable", count()),
+            ("fixed_base", strings()),
             ("parts", count()),
             ("expansions", count()),
             ("expansions_total", count()),
@@ -64,7 +65,7 @@ pub(super) fn transform_summary() -> Value {
             ("truncated", boolean()),
             ("notes", strings()),
         ],
-        &["geometry"],
+        &["geometry", "fixed_base"],
     )
 }
 
