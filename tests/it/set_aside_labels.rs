@@ -20,7 +20,13 @@ fn count_only() -> Options {
 }
 
 fn build(joints: &[JointSpec]) -> Mechanism {
-    Mechanism::from_parts("random", Space::Planar, BodyId::Int(1), vec![], joints.to_vec())
+    Mechanism::from_parts(
+        "random",
+        Space::Planar,
+        BodyId::Int(1),
+        vec![],
+        joints.to_vec(),
+    )
 }
 
 fn count_status(joints: &[JointSpec]) -> (u64, u64, Status) {
@@ -164,7 +170,8 @@ fn shape(a: &Analysis, back: &std::collections::HashMap<i64, i64>) -> Vec<Shape>
     };
     let mut out: Vec<Shape> = (0..a.groups.len())
         .map(|k| {
-            let mut deps: Vec<Vec<i64>> = a.groups[k].depends_on.iter().map(|&d| bodies(d)).collect();
+            let mut deps: Vec<Vec<i64>> =
+                a.groups[k].depends_on.iter().map(|&d| bodies(d)).collect();
             deps.sort();
             (a.groups[k].level, bodies(k), deps)
         })
@@ -193,17 +200,27 @@ fn permutation(n: usize, seed: u64) -> Vec<i64> {
 }
 
 /// One case: the planar file, the same in space, and the same in space with its bodies
-/// renamed (two permutations), all with the same groups and solve order. `Err` names what
-/// differed.
-fn case(n: usize, seed: u64) -> Result<(), String> {
+/// renamed (two permutations), all with the same groups and solve order. `Ok(false)` when
+/// there is no case: no mechanism, or a planar file at a special configuration (constraints
+/// set aside in the plane too, as parallel P axes in a loop make), whose groups are not the
+/// reference. `Err` names what differed.
+fn case(n: usize, seed: u64) -> Result<bool, String> {
     let Some(pairs) = random_planar(n, seed) else {
-        return Ok(());
+        return Ok(false);
     };
     let identity: Vec<i64> = (1..=n as i64).collect();
     let back_of = |label: &[i64]| -> std::collections::HashMap<i64, i64> {
-        label.iter().enumerate().map(|(k, &l)| (l, k as i64 + 1)).collect()
+        label
+            .iter()
+            .enumerate()
+            .map(|(k, &l)| (l, k as i64 + 1))
+            .collect()
     };
-    let planar = shape(&analyze_file(&file(&pairs, false, &identity)), &back_of(&identity));
+    let planar = analyze_file(&file(&pairs, false, &identity));
+    if !planar.redundant.is_empty() {
+        return Ok(false);
+    }
+    let planar = shape(&planar, &back_of(&identity));
     let mut labels = vec![identity.clone(), identity.iter().rev().copied().collect()];
     labels.push(permutation(n, seed ^ 0x1abe1));
     for label in &labels {
@@ -216,17 +233,52 @@ fn case(n: usize, seed: u64) -> Result<(), String> {
             ));
         }
     }
-    Ok(())
+    Ok(true)
 }
 
-/// 200 random planar mechanisms written in space, each under three labellings.
+/// Random planar mechanisms written in space, each under three labellings: `count` seeds
+/// from `first` (at least half of them cases). The failures.
+fn cases(first: u64, count: u64) -> Vec<String> {
+    let mut failed = Vec::new();
+    let mut checked = 0;
+    for k in first..first + count {
+        let n = 3 + (k % 8) as usize;
+        match case(n, 0x5e7a_51de ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)) {
+            Ok(true) => checked += 1,
+            Ok(false) => {}
+            Err(e) => failed.push(e),
+        }
+    }
+    assert!(
+        checked >= count as usize / 2,
+        "{checked} cases of {count} seeds"
+    );
+    failed
+}
+
+/// 200 cases (7 failed when the rows were chosen by frame distance alone: a pair of a later
+/// group, first by its pair number, kept the out-of-plane rows of a one-body group or a dyad,
+/// which merged into a coarser group).
 #[test]
 fn planar_in_space_has_the_planar_groups_under_any_labels() {
-    let failed: Vec<String> = (0..200u64)
-        .filter_map(|k| {
-            let n = 3 + (k % 8) as usize;
-            case(n, 0x5e7a_51de ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)).err()
-        })
-        .collect();
-    assert!(failed.is_empty(), "{} failed:\n{}", failed.len(), failed.join("\n"));
+    let failed = cases(0, 200);
+    assert!(
+        failed.is_empty(),
+        "{} failed:\n{}",
+        failed.len(),
+        failed.join("\n")
+    );
+}
+
+/// 2,000 further cases (`--ignored`).
+#[test]
+#[ignore = "2,000 cases, about 30 s in a debug build"]
+fn planar_in_space_has_the_planar_groups_under_any_labels_many() {
+    let failed = cases(200, 2000);
+    assert!(
+        failed.is_empty(),
+        "{} failed:\n{}",
+        failed.len(),
+        failed.join("\n")
+    );
 }

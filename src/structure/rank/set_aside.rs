@@ -45,16 +45,24 @@ pub(super) fn redundant_at_configuration(
         local,
         depth: frame_depths(m, eqs),
     };
-    let choose = |keys: Option<&SolveKeys>| -> Vec<Option<BlockChoice>> {
-        blocks.iter().map(|block| aside.choose(block, keys)).collect()
+    let choose = |order: Order<'_>| -> Vec<Option<BlockChoice>> {
+        blocks
+            .iter()
+            .map(|block| aside.choose(block, order))
+            .collect()
     };
-    let mut best = choose(None);
+    let mut best = choose(Order::Frame { reverse: false });
     if best.iter().flatten().all(|c| c.dropped == 0) {
         return Vec::new();
     }
     let (mut groups, mut keys) = aside.solve_keys(&best, rows);
-    for _ in 1..MAX_PASSES {
-        let next = choose(Some(&keys));
+    let reversed = choose(Order::Frame { reverse: true });
+    let (n, k) = aside.solve_keys(&reversed, rows);
+    if n > groups {
+        (best, groups, keys) = (reversed, n, k);
+    }
+    for _ in 0..MAX_PASSES {
+        let next = choose(Order::Solve(&keys));
         let (n, k) = aside.solve_keys(&next, rows);
         if n <= groups {
             break;
@@ -72,9 +80,17 @@ pub(super) fn redundant_at_configuration(
     out
 }
 
-/// Choices of the rows kept, at most: the first by frame distance, each next one in the solve
-/// order of the one before.
-const MAX_PASSES: usize = 3;
+/// Choices of the rows kept in the solve order of the best choice before, at most.
+const MAX_PASSES: usize = 2;
+
+/// The order in which a block's pairs are taken.
+#[derive(Clone, Copy)]
+enum Order<'a> {
+    /// By frame distance, then pair number (descending with `reverse`).
+    Frame { reverse: bool },
+    /// By the larger [`SolveKeys`] of the pair's bodies, then the smaller, then pair number.
+    Solve(&'a SolveKeys),
+}
 
 /// A node's place in the solve order of a count decomposition: the level of its group (the
 /// frame and an over-determined part 0, an under-determined part after every group), then its
@@ -125,10 +141,9 @@ struct Configuration<'a> {
 }
 
 impl Configuration<'_> {
-    /// The rows of one biconnected block (its pairs) kept at the configuration, taken in
-    /// order of frame distance (`keys` `None`) or of the solve order `keys`; `None` when the
-    /// sparse choice is past its memory.
-    fn choose(&self, block: &[usize], keys: Option<&SolveKeys>) -> Option<BlockChoice> {
+    /// The rows of one biconnected block (its pairs) kept at the configuration, the pairs
+    /// taken in `order`; `None` when the sparse choice is past its memory.
+    fn choose(&self, block: &[usize], order: Order<'_>) -> Option<BlockChoice> {
         let (m, eqs, free) = (self.m, self.eqs, self.free);
         let b = m.b() as usize;
         let mut bodies: Vec<usize> = block
@@ -139,17 +154,19 @@ impl Configuration<'_> {
         bodies.sort_unstable();
         bodies.dedup();
         let ncols = b * bodies.len();
-        let mut order = block.to_vec();
-        match keys {
-            None => order.sort_by_key(|&e| {
+        let mut pairs = block.to_vec();
+        match order {
+            Order::Frame { reverse } => pairs.sort_by_key(|&e| {
                 let [h, o] = eqs.bodies(e);
-                (self.depth[h].max(self.depth[o]), e)
+                let depth = self.depth[h].max(self.depth[o]);
+                (depth, if reverse { usize::MAX - e } else { e })
             }),
-            Some(k) => order.sort_by_key(|&e| {
+            Order::Solve(k) => pairs.sort_by_key(|&e| {
                 let [h, o] = eqs.bodies(e);
                 (k[h].max(k[o]), k[h].min(k[o]), e)
             }),
         }
+        let order = pairs;
         let nrows: usize = block.iter().map(|&e| free.nrows(e)).sum();
         let cut = self.tol.cut(1.0, nrows.max(ncols));
         // Pair `e`'s row `i` on the block's columns: (column of each side, the row on that
