@@ -21,9 +21,11 @@ use nalgebra::DMatrix;
 /// The frame distance only approximates the solve order: where a pair of a later group comes
 /// first (at the same distance, by its pair number, which follows the body labels), it keeps
 /// rows a group solved before it needs, and that group merges into a coarser one. So, when
-/// rows were set aside, the count decomposition of the rows kept gives a solve order, and the
-/// rows are chosen again in that order ([`SolveKeys`]: pairs into earlier groups first); the
-/// new choice is taken while it gives more groups (at most [`MAX_PASSES`] passes).
+/// rows were set aside, they are chosen again with the pairs at one distance in the reverse
+/// pair order, and then in the solve order of the best choice so far (the count decomposition
+/// of the rows it keeps, [`SolveKeys`]: pairs into earlier groups first, at most
+/// [`MAX_PASSES`] times); a choice replaces the best one when its decomposition has more
+/// groups, so the first choice stays where its groups are as fine as any.
 pub(super) fn redundant_at_configuration(
     m: &Mechanism,
     eqs: &Equations,
