@@ -99,7 +99,7 @@ fn random_planar(n: usize, seed: u64) -> Option<Vec<Pair>> {
             return None;
         }
     }
-    let mut coord = |rng: &mut SplitMix64| (rng.below(2001) as f64 - 1000.0) / 100.0;
+    let coord = |rng: &mut SplitMix64| (rng.below(2001) as f64 - 1000.0) / 100.0;
     Some(
         joints
             .into_iter()
