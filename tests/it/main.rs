@@ -53,6 +53,7 @@ mod repair;
 mod report_html;
 mod report_schema;
 mod scale_smoke;
+mod set_aside_labels;
 mod sharding;
 mod structure_cases;
 mod structure_multiple_order;

@@ -8,7 +8,7 @@ use super::unknowns::LocalFrames;
 use crate::elimination::{Block, Elimination};
 use crate::mechanism::Mechanism;
 use crate::structure::Redundancy;
-use crate::structure::count::Equations;
+use crate::structure::count::{Equations, Part};
 use nalgebra::DMatrix;
 
 /// Set aside the constraint equations that are dependent at the file's configuration, keeping
@@ -17,6 +17,16 @@ use nalgebra::DMatrix;
 /// within its biconnected block of the body graph (a dependency never spans two blocks: a
 /// self-stress restricted to one block is one). The pairs' input rows are kept. Returns the
 /// redundancies found, one per block.
+///
+/// The frame distance only approximates the solve order: where a pair of a later group comes
+/// first (at the same distance, by its pair number, which follows the body labels), it keeps
+/// rows a group solved before it needs, and that group merges into a coarser one. So, when
+/// rows were set aside, they are chosen again with the pairs at one distance in the reverse
+/// pair order, and then in the solve order of the best choice so far (the count decomposition
+/// of the rows it keeps, [`SolveKeys`]: pairs into earlier groups first, at most
+/// [`MAX_PASSES`] times); a choice replaces the best one when its decomposition has more
+/// groups, so the first choice stays where its groups are as fine as any. Only blocks of at
+/// most [`MAX_DENSE_UNKNOWNS`] unknowns are chosen again.
 pub(super) fn redundant_at_configuration(
     m: &Mechanism,
     eqs: &Equations,
@@ -26,7 +36,10 @@ pub(super) fn redundant_at_configuration(
     local: Option<&LocalFrames>,
     set_aside: &mut [u32],
 ) -> Vec<Redundancy> {
-    let blocks = biconnected_blocks(eqs.nodes, eqs, m.frame);
+    let blocks: Vec<Vec<usize>> = biconnected_blocks(eqs.nodes, eqs, m.frame)
+        .into_iter()
+        .filter(|block| block.len() >= 2)
+        .collect();
     let aside = Configuration {
         m,
         eqs,
@@ -35,14 +48,80 @@ pub(super) fn redundant_at_configuration(
         local,
         depth: frame_depths(m, eqs),
     };
-    let mut out = Vec::new();
-    for block in blocks {
-        if block.len() < 2 {
-            continue;
-        }
-        out.extend(aside.block(&block, rows, set_aside));
+    let first: Vec<Option<BlockChoice>> = blocks
+        .iter()
+        .map(|block| aside.choose(block, Order::Frame { reverse: false }))
+        .collect();
+    if first.iter().flatten().all(|c| c.dropped == 0) {
+        return Vec::new();
     }
-    out
+    // The choice is made again on the dense blocks only: a larger block keeps its first
+    // choice (three sparse choices doubled the time of 3,000 windows written in space).
+    let again: Vec<bool> = first
+        .iter()
+        .map(|c| {
+            c.as_ref().is_some_and(|c| {
+                c.dropped > 0 && c.bodies.len() * m.b() as usize <= MAX_DENSE_UNKNOWNS
+            })
+        })
+        .collect();
+    if !again.contains(&true) {
+        return aside.apply(&blocks, first, rows, set_aside);
+    }
+    let choose = |order: Order<'_>| -> Vec<Option<BlockChoice>> {
+        blocks
+            .iter()
+            .zip(&first)
+            .zip(&again)
+            .map(|((block, c), &again)| match again {
+                true => aside.choose(block, order),
+                false => c.clone(),
+            })
+            .collect()
+    };
+    let mut best = first.clone();
+    let (mut groups, mut keys) = aside.solve_keys(&best, rows);
+    let reversed = choose(Order::Frame { reverse: true });
+    let (n, k) = aside.solve_keys(&reversed, rows);
+    if n > groups {
+        (best, groups, keys) = (reversed, n, k);
+    }
+    for _ in 0..MAX_PASSES {
+        let next = choose(Order::Solve(&keys));
+        let (n, k) = aside.solve_keys(&next, rows);
+        if n <= groups {
+            break;
+        }
+        (best, groups, keys) = (next, n, k);
+    }
+    aside.apply(&blocks, best, rows, set_aside)
+}
+
+/// Choices of the rows kept in the solve order of the best choice before, at most.
+const MAX_PASSES: usize = 2;
+
+/// The order in which a block's pairs are taken.
+#[derive(Clone, Copy)]
+enum Order<'a> {
+    /// By frame distance, then pair number (descending with `reverse`).
+    Frame { reverse: bool },
+    /// By the larger [`SolveKeys`] of the pair's bodies, then the smaller, then pair number.
+    Solve(&'a SolveKeys),
+}
+
+/// A node's place in the solve order of a count decomposition: the level of its group (the
+/// frame and an over-determined part 0, an under-determined part after every group), then its
+/// distance from the frame.
+type SolveKeys = Vec<(usize, usize)>;
+
+/// One block's choice: the rows kept per pair, the number dropped, the block's movable bodies
+/// and its number of constraint rows.
+#[derive(Clone)]
+struct BlockChoice {
+    kept: Vec<(usize, Vec<usize>)>,
+    dropped: usize,
+    bodies: Vec<usize>,
+    nrows: usize,
 }
 
 /// Distance of every node from the frame (breadth first over pairs).
@@ -80,15 +159,9 @@ struct Configuration<'a> {
 }
 
 impl Configuration<'_> {
-    /// The equations of one biconnected block (its pairs) dependent at the configuration set
-    /// aside: the pairs' `rows` replaced, the count per joint added to `set_aside`. The
-    /// redundancy, when any was.
-    fn block(
-        &self,
-        block: &[usize],
-        rows: &mut PairRows,
-        set_aside: &mut [u32],
-    ) -> Option<Redundancy> {
+    /// The rows of one biconnected block (its pairs) kept at the configuration, the pairs
+    /// taken in `order`; `None` when the sparse choice is past its memory.
+    fn choose(&self, block: &[usize], order: Order<'_>) -> Option<BlockChoice> {
         let (m, eqs, free) = (self.m, self.eqs, self.free);
         let b = m.b() as usize;
         let mut bodies: Vec<usize> = block
@@ -99,11 +172,19 @@ impl Configuration<'_> {
         bodies.sort_unstable();
         bodies.dedup();
         let ncols = b * bodies.len();
-        let mut order = block.to_vec();
-        order.sort_by_key(|&e| {
-            let [h, o] = eqs.bodies(e);
-            (self.depth[h].max(self.depth[o]), e)
-        });
+        let mut pairs = block.to_vec();
+        match order {
+            Order::Frame { reverse } => pairs.sort_by_key(|&e| {
+                let [h, o] = eqs.bodies(e);
+                let depth = self.depth[h].max(self.depth[o]);
+                (depth, if reverse { usize::MAX - e } else { e })
+            }),
+            Order::Solve(k) => pairs.sort_by_key(|&e| {
+                let [h, o] = eqs.bodies(e);
+                (k[h].max(k[o]), k[h].min(k[o]), e)
+            }),
+        }
+        let order = pairs;
         let nrows: usize = block.iter().map(|&e| free.nrows(e)).sum();
         let cut = self.tol.cut(1.0, nrows.max(ncols));
         // Pair `e`'s row `i` on the block's columns: (column of each side, the row on that
@@ -117,19 +198,64 @@ impl Configuration<'_> {
                 None => (0..b).map(|k| sign * r[(i, k)]).collect(),
             }
         };
-        let chosen = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
-            Some(independent_rows_dense(
-                eqs, free, &order, &bodies, b, cut, &side,
-            ))
+        let (kept, dropped) = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
+            independent_rows_dense(eqs, free, &order, &bodies, b, cut, &side)
         } else {
-            independent_rows_sparse(eqs, free, &order, &bodies, b, cut, &side)
+            independent_rows_sparse(eqs, free, &order, &bodies, b, cut, &side)?
         };
-        let (kept, dropped) = chosen?;
-        if dropped == 0 {
-            return None;
+        Some(BlockChoice {
+            kept,
+            dropped,
+            bodies,
+            nrows,
+        })
+    }
+
+    /// Each block's `chosen` rows kept (the pairs' `rows` replaced, the count per joint added
+    /// to `set_aside`); the redundancies, one per block that lost rows.
+    fn apply(
+        &self,
+        blocks: &[Vec<usize>],
+        chosen: Vec<Option<BlockChoice>>,
+        rows: &mut PairRows,
+        set_aside: &mut [u32],
+    ) -> Vec<Redundancy> {
+        let mut out = Vec::new();
+        for (block, choice) in blocks.iter().zip(chosen) {
+            let Some(c) = choice.filter(|c| c.dropped > 0) else {
+                continue;
+            };
+            let lowered = self.keep_rows(&c.kept, rows, set_aside);
+            out.push(self.redundancy(block, &c.bodies, lowered, c.nrows, c.dropped));
         }
-        let lowered = self.keep_rows(&kept, rows, set_aside);
-        Some(self.redundancy(block, &bodies, lowered, nrows, dropped))
+        out
+    }
+
+    /// The number of groups of the count decomposition with the rows `chosen` kept (and every
+    /// input), and its [`SolveKeys`].
+    fn solve_keys(&self, chosen: &[Option<BlockChoice>], rows: &PairRows) -> (usize, SolveKeys) {
+        let (m, eqs) = (self.m, self.eqs);
+        let mut counted = eqs.clone();
+        for e in 0..eqs.len() {
+            counted.cap[e] = rows.nrows(e) as u32;
+        }
+        for (e, mine) in chosen.iter().flatten().flat_map(|c| &c.kept) {
+            let inputs = rows.nrows(*e).saturating_sub(self.free.nrows(*e));
+            counted.cap[*e] = (mine.len() + inputs) as u32;
+        }
+        let d = crate::structure::count::decompose(m, &counted, &eqs.unknowns(m));
+        let last = d.groups.iter().map(|g| g.level).max().unwrap_or(0) + 1;
+        let keys = (0..eqs.nodes)
+            .map(|x| {
+                let level = match d.body_part.get(x) {
+                    Some(Part::Group(g)) => d.groups[*g].level,
+                    Some(Part::Under) => last,
+                    _ => 0,
+                };
+                (level, self.depth[x])
+            })
+            .collect();
+        (d.groups.len(), keys)
     }
 
     /// Replace each pair's rows by its kept constraint rows plus its input rows; the joints
