@@ -162,6 +162,8 @@ def main():
             ok = code == 0 or (code == 1 and cmd[0] != "solve")
             cells.append(f"{fmt_time(cpu)}, {rss:.0f} MB" if ok
                          else f"exit {code}, {fmt_time(cpu)}")
+            if not ok:
+                continue
             if first is None:
                 first = (n, max(cpu, 0.01))
             else:
@@ -173,15 +175,25 @@ def main():
         rows.append(f"| {label} | `{shown}` | {unit} "
                     + " ".join(f"{n:,}" for n in sizes) + " | " + " | ".join(cells)
                     + f" | {ratio} |")
-    table = "\n".join(["| family | command | sizes | small | middle | large | "
-                       "worst / linear from small |",
-                       "|---|---|---|---|---|---|---|"] + rows)
-    print(table)
+    head = ["| family | command | sizes | small | middle | large | worst / linear from small |",
+            "|---|---|---|---|---|---|---|"]
+    print("\n".join(head + rows))
     if a.write:
         doc = os.path.join(ROOT, "docs", "benchmarks.md")
         text = open(doc).read()
+        # With --families only those rows are measured: the others keep their cells.
+        old = re.search(r"<!-- generated:cliffs -->\n(.*?)<!-- end:cliffs -->", text, flags=re.S)
+        by_label = {}
+        for line in (old.group(1).splitlines() if old else [])[2:]:
+            by_label[line.split(" | ")[0].lstrip("| ")] = line
+        for line in rows:
+            by_label[line.split(" | ")[0].lstrip("| ")] = line
+        order = [f[1] for f in FAMILIES]
+        kept = sorted(by_label.items(),
+                      key=lambda kv: order.index(kv[0]) if kv[0] in order else len(order))
+        table = "\n".join(head + [line for _, line in kept])
         block = f"<!-- generated:cliffs -->\n{table}\n<!-- end:cliffs -->"
-        new, k = re.subn(r"<!-- generated:cliffs -->.*?<!-- end:cliffs -->", block, text,
+        new, k = re.subn(r"<!-- generated:cliffs -->.*?<!-- end:cliffs -->", lambda _: block, text,
                          flags=re.S)
         if k != 1:
             sys.exit("docs/benchmarks.md has no generated:cliffs block")
