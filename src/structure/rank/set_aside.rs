@@ -333,7 +333,8 @@ type Chosen = (Vec<(usize, Vec<usize>)>, usize);
 
 /// [`redundant_at_configuration`]'s greedy choice on a dense block (at most
 /// [`MAX_DENSE_UNKNOWNS`] columns): Gram-Schmidt against the kept rows, a row kept when its
-/// residual exceeds `cut` relative to its norm (at least 1).
+/// residual exceeds `cut` relative to its norm (a row moved to its body's reference point far
+/// from the centre is short: an absolute threshold would drop it for its length alone).
 fn independent_rows_dense(
     eqs: &Equations,
     free: &PairRows,
@@ -371,7 +372,7 @@ fn independent_rows_dense(
                 }
             }
             let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if n > cut * n0.max(1.0) {
+            if n > cut * n0 {
                 basis.push(v.iter().map(|x| x / n).collect());
                 mine.push(i);
             } else {
@@ -407,7 +408,7 @@ pub(super) const SPARSE_ASIDE_BYTES: u64 = 1 << 30;
 /// unknown per constraint row, one equation per body coordinate) eliminated one row at a time
 /// in the same order, a Householder QR without pivoting, which is the same Gram-Schmidt (a row
 /// is kept when its residual against the rows kept before it exceeds `cut` times its norm,
-/// the rows scaled to norm at most 1). Fronts stay local when the order walks along the
+/// the rows scaled to unit norm). Fronts stay local when the order walks along the
 /// mechanism, as the frame-distance order does on a row of windows. `None` past
 /// [`SPARSE_ASIDE_BYTES`].
 fn independent_rows_sparse(
@@ -438,7 +439,12 @@ fn independent_rows_sparse(
                 .map(|t| t * t)
                 .sum::<f64>()
                 .sqrt();
-            let scale = 1.0 / n0.max(1.0);
+            // Unit rows: the residual is then relative to the row's own norm, as in the dense
+            // choice. A pair's rows are orthonormal about the centre; moved to the body's
+            // reference point, a row of a joint at distance d from the centre shrinks to about
+            // 1/d, so an absolute threshold on it (`cut` grows with the block) set aside sound
+            // rows of a long mechanism's far ends.
+            let scale = if n0 > 0.0 { 1.0 / n0 } else { 0.0 };
             for (k, v) in sides {
                 per_body[k].0.push(u);
                 per_body[k].1.extend(v.iter().map(|t| t * scale));
@@ -518,6 +524,50 @@ mod tests {
             joint(format!("P{k}"), 1, 2 * k + 2, kf, 0.0);
         }
         out
+    }
+
+    /// A planar strip of `dyads` RRR dyads at right angles, each pinned to the two bodies of
+    /// the one before, exact coordinates; the crank is driven (mobility 1, one input).
+    fn dyad_strip(dyads: usize) -> String {
+        let mut out = String::from("precision = 0\nspace = \"planar\"\nframe = 1\n");
+        let mut joint = |id: String, a: usize, b: usize, x: f64, y: f64, driven: &str| {
+            out.push_str(&format!(
+                "\n[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}]\n{driven}"
+            ));
+        };
+        joint("A0".into(), 1, 2, 0.0, 0.5, "driven = 1\n");
+        for k in 1..=dyads {
+            let (a, b, kf) = (2 * k + 1, 2 * k + 2, k as f64);
+            let (ta, tb) = if k == 1 { (2, 1) } else { (a - 2, b - 2) };
+            joint(format!("T{k}"), ta, a, kf, 1.0, "");
+            joint(format!("C{k}"), a, b, kf + 0.5, 0.5, "");
+            joint(format!("B{k}"), tb, b, kf, 0.0, "");
+        }
+        out
+    }
+
+    /// A long, well-conditioned strip keeps every constraint at the file's configuration:
+    /// its rows far from the centre, short once moved to their bodies' reference points, are
+    /// judged relative to their own norm, not against a threshold that grows with the strip
+    /// (30,000 bodies, the sparse choice).
+    #[test]
+    fn a_long_strip_sets_nothing_aside() {
+        let text = dyad_strip(14_999);
+        let m = crate::format::load("strip", &text, crate::format::Format::Toml).expect("loads");
+        assert_eq!(m.bodies.len(), 30_000);
+        let opts = crate::structure::Options {
+            geometry: GeometrySource::File,
+            ..Default::default()
+        };
+        let lib = crate::structure::Library::empty();
+        let a = crate::structure::analyze(&m, &opts, &lib).expect("analyzes");
+        let text = format!("{a:?}");
+        assert!(
+            !text.contains("configuration: true"),
+            "constraints set aside"
+        );
+        assert_eq!(a.status, crate::structure::Status::Determined);
+        assert_eq!(a.groups.len(), 15_000, "the crank and one group per dyad");
     }
 
     /// The sparse choice of the constraints set aside at the file's configuration keeps the
