@@ -33,6 +33,7 @@ pub mod rigidity;
 pub mod rng;
 pub mod structure;
 pub mod transform;
+pub mod words;
 pub mod write;
 
 pub use joint::JointType;

@@ -318,7 +318,7 @@ pub struct Solution {
 }
 
 /// The joints of `pairs` whose residual exceeds `tol`, in pair order, each once; at most
-/// [`capped`](crate::structure::capped)'s count named.
+/// [`capped`](crate::words::capped)'s count named.
 pub(super) fn joints_of(
     m: &Mechanism,
     model: &PositionModel,
@@ -337,13 +337,13 @@ pub(super) fn joints_of(
     if ids.is_empty() {
         "(none)".into()
     } else {
-        crate::structure::capped(&ids)
+        crate::words::capped(&ids)
     }
 }
 
 fn body_list(m: &Mechanism, bodies: &[usize]) -> String {
     let ids: Vec<String> = bodies.iter().map(|&b| m.body_id(b).to_string()).collect();
-    format!("{{{}}}", crate::structure::capped(&ids))
+    format!("{{{}}}", crate::words::capped(&ids))
 }
 
 fn outcome_error(

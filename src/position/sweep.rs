@@ -149,7 +149,7 @@ impl Tracker {
         Some(format!(
             "dead point at {at}: the equations of group {} (bodies {}) became singular (conditioning {:.1e})",
             st.name,
-            crate::structure::capped(&st.bodies),
+            crate::words::capped(&st.bodies),
             st.conditioning
         ))
     }

@@ -119,7 +119,11 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
     flush(out)?;
     if let Some(d) = &a.diagnosis {
         if !d.unsolved.is_empty() {
-            let _ = writeln!(out, "bodies left unsolved: {}", crate::structure::capped(&d.unsolved));
+            let _ = writeln!(
+                out,
+                "bodies left unsolved: {}",
+                crate::structure::capped(&d.unsolved)
+            );
         }
         for n in &d.notes {
             let _ = writeln!(out, "- {n}");

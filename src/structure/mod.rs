@@ -316,19 +316,7 @@ pub const FINITE_CHECK_WORK: u64 = 200_000_000;
 /// Joints the note of [`check_finite`] names at most (the JSON lists them all).
 const NOTE_JOINTS: usize = 8;
 
-/// Names a diagnosis note lists at most; the JSON's own fields (`bodies`, `joints`, ...) list
-/// them all. A note on a whole robot (20 bodies, 40 joints) stays a line a person reads.
-const NOTE_NAMES: usize = 12;
-
-/// `names` joined with commas, at most [`NOTE_NAMES`] of them, then "and N more".
-pub(crate) fn capped<S: AsRef<str>>(names: &[S]) -> String {
-    let shown: Vec<&str> = names.iter().take(NOTE_NAMES).map(AsRef::as_ref).collect();
-    if names.len() <= NOTE_NAMES {
-        shown.join(", ")
-    } else {
-        format!("{} and {} more", shown.join(", "), names.len() - NOTE_NAMES)
-    }
-}
+pub(crate) use crate::words::capped;
 
 /// Whether the first-order verdict of `a` (an analysis of `m`) holds for finite motion at the
 /// file's configuration, and a note (and [`Analysis::finite`]) when it does not.

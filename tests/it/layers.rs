@@ -15,6 +15,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "rng",
             "par",
             "numbers",
+            "words",
             "elimination",
             "exact",
             "graph",

@@ -68,7 +68,10 @@ pub(super) fn summary(out: &mut String, r: &Inputs) {
     if let Some(d) = &a.diagnosis
         && !d.unsolved.is_empty()
     {
-        items.push(format!("bodies left unsolved: {}", crate::structure::capped(&d.unsolved)));
+        items.push(format!(
+            "bodies left unsolved: {}",
+            crate::structure::capped(&d.unsolved)
+        ));
     }
     if !a.isolated.is_empty() {
         let list: Vec<String> = a
