@@ -212,11 +212,15 @@ class Mechanism:
         max_expansions: int = 64,
         count_only: bool = False,
         max_work: Optional[int] = None,
+        base: str = "auto",
     ) -> Placements:
         """Every placement of the driven inputs that determines the mechanism (``mbsa
-        transform --format jsonl``), at most ``limit`` count-valid ones examined per part."""
+        transform --format jsonl``), at most ``limit`` count-valid ones examined per part.
+        ``base``: ``"auto"`` drives a floating base (a free joint, its part's only joint to
+        the frame) in full, ``"fixed"`` every free joint to the frame (``--fix-base``),
+        ``"free"`` none (``--keep-free-base``); the summary's ``fixed_base`` names them."""
         lines, summary = self._raw.transform_jsonl(
-            limit, rank, on, grounded, keep, exclude, max_expansions, count_only, max_work
+            limit, rank, on, grounded, keep, exclude, max_expansions, count_only, max_work, base
         )
         return Placements(lines, summary)
 

@@ -8,7 +8,7 @@ use mbsa::position::inputs::{self, Value};
 use mbsa::position::{self, ClosureStatus, Configuration, NewtonOptions, PositionModel};
 use mbsa::rigidity::both as rigid;
 use mbsa::structure::{self, Library, Method};
-use mbsa::transform::{self, Criterion, TransformOptions};
+use mbsa::transform::{self, BaseMode, Criterion, TransformOptions};
 use pyo3::prelude::*;
 
 /// A mechanism read by `load` (the package wraps it in `mbsa.Mechanism`).
@@ -226,7 +226,7 @@ impl RawMechanism {
     }
 
     /// `mbsa transform --format jsonl`: the placements' lines and the summary line.
-    #[pyo3(signature = (limit=None, rank=None, on=None, grounded=false, keep=None, exclude=None, max_expansions=64, count_only=false, max_work=None))]
+    #[pyo3(signature = (limit=None, rank=None, on=None, grounded=false, keep=None, exclude=None, max_expansions=64, count_only=false, max_work=None, base="auto"))]
     #[allow(clippy::too_many_arguments)]
     fn transform_jsonl(
         &self,
@@ -240,7 +240,25 @@ impl RawMechanism {
         max_expansions: usize,
         count_only: bool,
         max_work: Option<u64>,
+        base: &str,
     ) -> PyResult<(Vec<String>, String)> {
+        // `--fix-base` and `--keep-free-base` of the CLI.
+        let base = match base {
+            "auto" => BaseMode::Auto,
+            "fixed" => BaseMode::Fixed,
+            "free" => BaseMode::Free,
+            other => {
+                let msg = format!("must be \"auto\", \"fixed\" or \"free\", not {other:?}");
+                return Err(errors::input_error(
+                    Some("base"),
+                    None,
+                    None,
+                    &msg,
+                    None,
+                    format!("base: {msg}"),
+                ));
+            }
+        };
         let m = &self.m;
         let spec = |t: Option<&str>, what: &str| {
             t.map(|t| mbsa::InputSpec::parse_in(t, m))
@@ -266,6 +284,7 @@ impl RawMechanism {
                 count_only,
                 ..Default::default()
             },
+            base,
             ..TransformOptions::default()
         };
         if !count_only {

@@ -1,6 +1,7 @@
 """Every bundled mechanism: the Python reports are the CLI's `--format json`, key for key."""
 
 import json
+from pathlib import Path
 
 import pytest
 
@@ -55,6 +56,20 @@ def test_transform_placements_are_the_clis_lines(cli):
     placements = mbsa.load("@rotor").transform(limit=20)
     assert list(placements) + [placements.summary] == lines
     assert len(placements) == len(lines) - 1
+
+
+def test_a_floating_base_is_fixed_as_the_cli_fixes_it(cli):
+    delta = str(Path(__file__).resolve().parents[2] / "tests/fixtures/import/delta_robot.sdf")
+    m = mbsa.load(delta)
+    for base, flags in [("auto", []), ("free", ["--keep-free-base"]), ("fixed", ["--fix-base"])]:
+        code, out, err = cli("transform", delta, "--limit", "5", "--format", "jsonl", *flags)
+        assert code == 0, err
+        lines = [json.loads(line) for line in out.splitlines()]
+        placements = m.transform(limit=5, base=base)
+        assert list(placements) + [placements.summary] == lines, base
+        assert ("fixed_base" in placements.summary) == (base != "free"), base
+    with pytest.raises(mbsa.Error):
+        m.transform(limit=5, base="floating")
 
 
 def test_solve_and_sweep_are_the_clis(cli_json):
