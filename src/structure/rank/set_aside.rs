@@ -333,8 +333,7 @@ type Chosen = (Vec<(usize, Vec<usize>)>, usize);
 
 /// [`redundant_at_configuration`]'s greedy choice on a dense block (at most
 /// [`MAX_DENSE_UNKNOWNS`] columns): Gram-Schmidt against the kept rows, a row kept when its
-/// residual exceeds `cut` relative to its norm (a row moved to its body's reference point far
-/// from the centre is short: an absolute threshold would drop it for its length alone).
+/// residual exceeds `cut` relative to its norm (at least 1).
 fn independent_rows_dense(
     eqs: &Equations,
     free: &PairRows,
@@ -372,7 +371,7 @@ fn independent_rows_dense(
                 }
             }
             let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if n > cut * n0 {
+            if n > cut * n0.max(1.0) {
                 basis.push(v.iter().map(|x| x / n).collect());
                 mine.push(i);
             } else {
