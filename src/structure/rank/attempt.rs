@@ -66,6 +66,9 @@ pub(super) fn check_at(
     } else {
         (vec![0u32; m.joints.len()], Vec::new())
     };
+    if let Some(lf) = &local {
+        lf.orthonormalize_rows(m, eqs, &mut rows);
+    }
     for (e, cap) in eqs.cap.iter_mut().enumerate() {
         *cap = rows.nrows(e) as u32;
     }

@@ -333,7 +333,7 @@ type Chosen = (Vec<(usize, Vec<usize>)>, usize);
 
 /// [`redundant_at_configuration`]'s greedy choice on a dense block (at most
 /// [`MAX_DENSE_UNKNOWNS`] columns): Gram-Schmidt against the kept rows, a row kept when its
-/// residual exceeds `cut` relative to its norm (at least 1).
+/// residual exceeds `cut` relative to its own norm on the bodies' local twists.
 fn independent_rows_dense(
     eqs: &Equations,
     free: &PairRows,
@@ -345,7 +345,7 @@ fn independent_rows_dense(
 ) -> Chosen {
     let ncols = b * bodies.len();
     let col = |x: usize| bodies.binary_search(&x).ok().map(|k| k * b);
-    let mut basis: Vec<Vec<f64>> = Vec::new();
+    let mut basis: Vec<(Vec<f64>, (usize, usize))> = Vec::new();
     let mut kept: Vec<(usize, Vec<usize>)> = Vec::new();
     let mut dropped = 0usize;
     for &e in order {
@@ -362,17 +362,27 @@ fn independent_rows_dense(
                 }
             }
             let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            // Only the basis vectors whose nonzero columns meet the row's take part (the
+            // others' products are exact zeros): along a chain both stay within a few bodies.
+            let mut span = support(&v);
             for _ in 0..2 {
-                for q in &basis {
-                    let d: f64 = q.iter().zip(&v).map(|(a, c)| a * c).sum();
-                    for (x, qk) in v.iter_mut().zip(q) {
+                for (q, (lo, hi)) in &basis {
+                    let (a, z) = ((*lo).max(span.0), (*hi).min(span.1));
+                    if a >= z {
+                        continue;
+                    }
+                    let d: f64 = q[a..z].iter().zip(&v[a..z]).map(|(a, c)| a * c).sum();
+                    for (x, qk) in v[*lo..*hi].iter_mut().zip(&q[*lo..*hi]) {
                         *x -= d * qk;
                     }
+                    span = (span.0.min(*lo), span.1.max(*hi));
                 }
             }
             let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-            if n > cut * n0.max(1.0) {
-                basis.push(v.iter().map(|x| x / n).collect());
+            if n > cut * n0 {
+                let q: Vec<f64> = v.iter().map(|x| x / n).collect();
+                let span = support(&q);
+                basis.push((q, span));
                 mine.push(i);
             } else {
                 dropped += 1;
@@ -381,6 +391,14 @@ fn independent_rows_dense(
         kept.push((e, mine));
     }
     (kept, dropped)
+}
+
+/// The columns from the first nonzero entry of `v` to past its last (empty: `(0, 0)`).
+fn support(v: &[f64]) -> (usize, usize) {
+    match v.iter().position(|&x| x != 0.0) {
+        Some(lo) => (lo, v.iter().rposition(|&x| x != 0.0).map_or(lo, |h| h + 1)),
+        None => (0, 0),
+    }
 }
 
 #[cfg(test)]
