@@ -37,7 +37,11 @@ test)
   # [build-dependencies]). The tests are fresh: only PyO3 and the binding crate are compiled.
   start=$(date +%s)
   PYO3_PYTHON="$py" cargo build --locked -p mbsa -p mbsa-python --lib --tests \
-    --features mbsa-python/extension-module
+    --features mbsa-python/extension-module 2>&1 | tee "$target/py-build.log"
+  if grep -q "Compiling mbsa v" "$target/py-build.log"; then
+    echo "warning: the extension's build compiled the library again: its dependencies' features" \
+      "differ from the test build's (Cargo.toml, [build-dependencies])" >&2
+  fi
   cp "$target/debug/lib_mbsa.so" python/mbsa/_mbsa.abi3.so
   # The package from the source tree (as `maturin develop` installs a python-source project).
   site=$("$py" -c 'import sysconfig; print(sysconfig.get_paths()["purelib"])')
