@@ -211,7 +211,13 @@ proptest! {
 /// Strict reordering check of one command over a few mechanisms; panics on the first
 /// difference with both outputs' differing lines.
 fn strict(args: &[&str]) {
-    for seed in 0..6 {
+    strict_on(args, 0..6);
+}
+
+/// [`strict`] on the mechanisms `seeds` (even: spatial, odd: planar, of generator seed
+/// `seed / 2`).
+fn strict_on(args: &[&str], seeds: impl IntoIterator<Item = u64>) {
+    for seed in seeds {
         let (a, b) = pair(
             10,
             seed % 2 == 1,
@@ -261,7 +267,12 @@ fn strict_dot() {
     strict(&["dot", "--view", "topology"]);
 }
 
+/// Without the spatial mechanism of seed 1: its 74,613 candidate placements take 8 s a run,
+/// and the five others already enumerate every placement of spatial and planar mechanisms.
 #[test]
 fn strict_transform() {
-    strict(&["transform", "--format", "json", "--count-only"]);
+    strict_on(
+        &["transform", "--format", "json", "--count-only"],
+        [0, 1, 3, 4, 5],
+    );
 }
