@@ -27,6 +27,7 @@ pub(super) fn diagnose(
     }
     if let Some((part, note)) = under_part(m, eqs, dec, isolated) {
         d.notes.push(note);
+        d.notes.extend(floating_base_note(m, dec, part.missing));
         d.underdetermined = Some(part);
     }
     d.notes.extend(redundant.iter().map(redundancy_note));
@@ -143,6 +144,39 @@ fn under_part(
         input_candidates,
     };
     Some((part, note))
+}
+
+/// The floating bases among the `missing` DOF no input fixes, on a line of their own: the free
+/// joints between the frame and a body of the under-determined part that are not driven in
+/// full (a robot imported with its base free: the Cassie's 12 DOF are its base's 6 and 6 of
+/// its legs).
+fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Option<String> {
+    let bases: Vec<(String, u32)> = m
+        .joints
+        .iter()
+        .filter(|j| j.bodies.len() == 2 && j.bodies.contains(&m.frame) && j.grade() == m.b())
+        .filter_map(|j| {
+            let body = *j.bodies.iter().find(|&&x| x != m.frame)?;
+            let free = j.grade() - j.driven.min(j.grade());
+            (free > 0 && dec.body_part.get(body) == Some(&Part::Under)).then(|| {
+                (
+                    format!("{} ({} to {})", j.id, m.body_id(m.frame), m.body_id(body)),
+                    free,
+                )
+            })
+        })
+        .collect();
+    if bases.is_empty() {
+        return None;
+    }
+    let dof: u64 = bases.iter().map(|b| u64::from(b.1)).sum();
+    let names: Vec<String> = bases.into_iter().map(|b| b.0).collect();
+    Some(format!(
+        "floating base: {dof} of these {missing} DOF are the free joint(s) {}; give the base's \
+         pose (drive the joint in full) or fix it to the frame (`mbsa transform` takes it as \
+         driven in full by default)",
+        capped(&names)
+    ))
 }
 
 /// The joints with a spare freedom that touch the under-determined part (`in_part` per node),

@@ -312,3 +312,48 @@ fn analyze_names_a_driven_joint_locked_at_a_toggle_as_rigid_finite_does() {
     );
     assert!(!out.contains("- toggle:"), "{out}");
 }
+
+/// A body on a free joint to the frame carrying a driven pendulum: `driven` is written on the
+/// free joint when `FREE_DRIVEN` replaces its marker.
+const FLOATING_PENDULUM: &str = r#"
+name = "pendulum on a free trunk"
+space = "spatial"
+frame = "ground"
+[[joint]]
+id = "base"
+type = "F"
+bodies = ["ground", "trunk"]
+# FREE_DRIVEN
+[[joint]]
+id = "hip"
+type = "R"
+bodies = ["trunk", "leg"]
+driven = 1
+"#;
+
+/// The DOF no input fixes say which of them are a floating base, on a line of their own, as
+/// `transform` (which drives such a base in full by default) has it; a base driven in full is
+/// not named. On the Cassie, 6 of the 12 DOF are its pelvis's free joint.
+#[test]
+fn a_floating_base_is_named_on_a_line_of_its_own() {
+    let (_, out) = mbsa(&["analyze", "-", "--count-only"], FLOATING_PENDULUM);
+    assert!(
+        out.contains(
+            "- floating base: 6 of these 6 DOF are the free joint(s) base (ground to trunk); \
+             give the base's pose"
+        ),
+        "{out}"
+    );
+    let driven = FLOATING_PENDULUM.replace("# FREE_DRIVEN", "driven = 6");
+    let (_, out) = mbsa(&["analyze", "-", "--count-only"], &driven);
+    assert!(out.contains("determined"), "{out}");
+    assert!(!out.contains("floating base"), "{out}");
+    let (_, out) = mbsa(&["analyze", "tests/fixtures/import/cassie.xml"], "");
+    assert!(
+        out.contains(
+            "- floating base: 6 of these 12 DOF are the free joint(s) cassie-pelvis:free \
+             (world to cassie-pelvis)"
+        ),
+        "{out}"
+    );
+}
