@@ -501,6 +501,13 @@ impl Mechanism {
         self.space.b()
     }
 
+    /// Whether joint `j` is a free joint to the frame (a floating base): binary, the frame one
+    /// of its bodies, removing no freedom (F in space; FP in a planar or spherical mechanism).
+    pub fn free_to_frame(&self, j: usize) -> bool {
+        let joint = &self.joints[j];
+        joint.bodies.len() == 2 && joint.bodies.contains(&self.frame) && joint.grade() == self.b()
+    }
+
     /// The id of body `i`.
     pub fn body_id(&self, i: usize) -> &BodyId {
         &self.bodies[i].id

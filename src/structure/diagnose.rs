@@ -151,10 +151,9 @@ fn under_part(
 /// full (a robot imported with its base free: the Cassie's 12 DOF are its base's 6 and 6 of
 /// its legs).
 fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Option<String> {
-    let bases: Vec<(String, u32)> = m
-        .joints
-        .iter()
-        .filter(|j| j.bodies.len() == 2 && j.bodies.contains(&m.frame) && j.grade() == m.b())
+    let bases: Vec<(String, u32)> = (0..m.joints.len())
+        .filter(|&j| m.free_to_frame(j))
+        .map(|j| &m.joints[j])
         .filter_map(|j| {
             let body = *j.bodies.iter().find(|&&x| x != m.frame)?;
             let free = j.grade() - j.driven.min(j.grade());

@@ -108,13 +108,6 @@ impl Rules {
     }
 }
 
-/// Whether joint `j` of `m` is a free joint to the frame: binary, the frame one of its bodies,
-/// removing no freedom (F in space; FP in a planar or spherical mechanism).
-fn free_to_frame(m: &Mechanism, j: usize) -> bool {
-    let joint = &m.joints[j];
-    joint.bodies.len() == 2 && joint.bodies.contains(&m.frame) && joint.grade() == m.b()
-}
-
 /// The free joints to the frame that `mode` drives in full: each gets its grade as kept
 /// inputs, and a note names them. [`BaseMode::Auto`] takes those that are the only joint
 /// between their part (bodies connected without the frame) and the frame, and leaves an
@@ -128,7 +121,7 @@ fn fix_bases(
     notes: &mut Vec<String>,
 ) -> Result<Vec<String>, TransformError> {
     let free: Vec<usize> = (0..m.joints.len())
-        .filter(|&j| free_to_frame(m, j))
+        .filter(|&j| m.free_to_frame(j))
         .collect();
     let chosen: Vec<usize> = match mode {
         BaseMode::Free => Vec::new(),

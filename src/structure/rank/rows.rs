@@ -234,11 +234,6 @@ impl PairRows {
         }
     }
 
-    /// Columns of a row (`B`).
-    pub(super) fn b(&self) -> usize {
-        self.b
-    }
-
     /// Number of pairs.
     pub(super) fn len(&self) -> usize {
         self.n.len()

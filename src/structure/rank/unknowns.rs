@@ -262,46 +262,16 @@ impl LocalFrames {
     /// decimal had 525 of its 1,196 equations set aside where `mbsa rigid` found none. The two
     /// bodies of a pair are neighbours, so the rows stay well scaled on the other body too.
     pub(super) fn orthonormalize_rows(&self, m: &Mechanism, eqs: &Equations, rows: &mut PairRows) {
-        let b = rows.b();
         for e in 0..rows.len() {
             let [h, o] = eqs.bodies(e);
             let x = if o != m.frame { o } else { h };
-            let (Some(s), true) = (self.frame.get(x).and_then(Option::as_ref), h != o) else {
+            let Some(s) = self.frame.get(x).and_then(Option::as_ref) else {
                 continue;
             };
-            if rows.nrows(e) == 0 {
+            if h == o || rows.nrows(e) == 0 {
                 continue;
             }
-            let r = rows.get(e).into_owned();
-            let local = &r * s;
-            // Gram-Schmidt (twice) on the local rows, the same operations on the rows.
-            let mut done: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(r.nrows());
-            let mut out = DMatrix::<f64>::zeros(r.nrows(), b);
-            let mut kept = 0;
-            for i in 0..r.nrows() {
-                let mut v: Vec<f64> = local.row(i).iter().copied().collect();
-                let mut w: Vec<f64> = r.row(i).iter().copied().collect();
-                for _ in 0..2 {
-                    for (qv, qw) in &done {
-                        let d: f64 = qv.iter().zip(&v).map(|(a, c)| a * c).sum();
-                        v.iter_mut().zip(qv).for_each(|(t, q)| *t -= d * q);
-                        w.iter_mut().zip(qw).for_each(|(t, q)| *t -= d * q);
-                    }
-                }
-                let n = v.iter().map(|t| t * t).sum::<f64>().sqrt();
-                if !(n > 1e-12 && n.is_finite()) {
-                    // Dependent in the body's twists (the change of coordinates is
-                    // invertible: rounding only): the pair keeps its rows as built.
-                    kept = usize::MAX;
-                    break;
-                }
-                v.iter_mut().for_each(|t| *t /= n);
-                w.iter_mut().for_each(|t| *t /= n);
-                out.row_mut(i).iter_mut().zip(&w).for_each(|(t, c)| *t = *c);
-                done.push((v, w));
-                kept += 1;
-            }
-            if kept == r.nrows() {
+            if let Some(out) = orthonormal_on(&rows.get(e).into_owned(), s) {
                 rows.set(e, &out);
             }
         }
@@ -315,6 +285,32 @@ impl LocalFrames {
         let length = used.scale.map_or(1.0, |s| s.length);
         crate::motion::FILE_TOL_FACTOR * (delta / length + directions * self.lever)
     }
+}
+
+/// The rows `r` made orthonormal on the twists `r · s` by Gram-Schmidt (twice), the same row
+/// operations on `r`; `None` when a row is dependent there (`s` is invertible: rounding only).
+fn orthonormal_on(r: &DMatrix<f64>, s: &DMatrix<f64>) -> Option<DMatrix<f64>> {
+    let local = r * s;
+    let mut done: Vec<(Vec<f64>, Vec<f64>)> = Vec::with_capacity(r.nrows());
+    for i in 0..r.nrows() {
+        let mut v: Vec<f64> = local.row(i).iter().copied().collect();
+        let mut w: Vec<f64> = r.row(i).iter().copied().collect();
+        for _ in 0..2 {
+            for (qv, qw) in &done {
+                let d: f64 = qv.iter().zip(&v).map(|(a, c)| a * c).sum();
+                v.iter_mut().zip(qv).for_each(|(t, q)| *t -= d * q);
+                w.iter_mut().zip(qw).for_each(|(t, q)| *t -= d * q);
+            }
+        }
+        let n = v.iter().map(|t| t * t).sum::<f64>().sqrt();
+        if !(n > 1e-12 && n.is_finite()) {
+            return None;
+        }
+        v.iter_mut().for_each(|t| *t /= n);
+        w.iter_mut().for_each(|t| *t /= n);
+        done.push((v, w));
+    }
+    Some(DMatrix::from_fn(r.nrows(), r.ncols(), |i, k| done[i].1[k]))
 }
 
 /// [`reduced_basis`] about the body's reference point: the stacked rows times `s` (its
