@@ -266,11 +266,13 @@ impl System {
         let (mut r, mut j, mut per_pair) =
             self.evaluate_local(model, targets, config, &local, &col);
         let mut iterations = 0;
-        let mut svd_values;
+        // The singular values of the last `j`, once they are known.
+        let mut svd_values: Option<Vec<f64>>;
         loop {
+            svd_values = None;
             if j.nrows() == 0 || j.ncols() == 0 || !j.iter().chain(r.iter()).all(|x| x.is_finite())
             {
-                svd_values = Vec::new();
+                svd_values = Some(Vec::new());
                 break;
             }
             // Bounded iterations: never loop on a pathological matrix.
@@ -281,22 +283,32 @@ impl System {
                     .saturating_mul(cols.min(rows))
                     / 4,
             )?;
-            let Some(svd) = nalgebra::SVD::try_new(j.clone(), true, true, f64::EPSILON, 10_000)
-            else {
-                svd_values = Vec::new();
-                break;
-            };
-            svd_values = svd.singular_values.iter().copied().collect::<Vec<_>>();
-            if inf(&r) <= opts.tolerance
+            // The last point needs the singular values only; a step of a square, well
+            // conditioned system is the LU solution, which the SVD's would equal to rounding.
+            let last = inf(&r) <= opts.tolerance
                 || iterations >= opts.max_iterations
-                || !r.iter().all(|x| x.is_finite())
-            {
-                break;
-            }
-            let top = svd_values.iter().copied().fold(0.0, f64::max);
-            let step = match svd.solve(&(-&r), 1e-10 * top.max(1e-300)) {
-                Ok(s) => s,
-                Err(_) => break,
+                || !r.iter().all(|x| x.is_finite());
+            let quick = if last { None } else { square_step(&j, &r) };
+            let step = match quick {
+                Some(step) => step,
+                None => {
+                    let Some(svd) =
+                        nalgebra::SVD::try_new(j.clone(), !last, !last, f64::EPSILON, 10_000)
+                    else {
+                        svd_values = Some(Vec::new());
+                        break;
+                    };
+                    let values: Vec<f64> = svd.singular_values.iter().copied().collect();
+                    let top = values.iter().copied().fold(0.0, f64::max);
+                    svd_values = Some(values);
+                    if last {
+                        break;
+                    }
+                    match svd.solve(&(-&r), 1e-10 * top.max(1e-300)) {
+                        Ok(s) => s,
+                        Err(_) => break,
+                    }
+                }
             };
             iterations += 1;
             let base = local.clone();
@@ -322,6 +334,12 @@ impl System {
                 break;
             }
         }
+        // A failed line search after an LU step: the values at the point kept.
+        let mut svd_values = svd_values.unwrap_or_else(|| {
+            nalgebra::SVD::try_new(j.clone(), false, false, f64::EPSILON, 10_000)
+                .map(|d| d.singular_values.iter().copied().collect())
+                .unwrap_or_default()
+        });
         svd_values.sort_by(|a, b| b.total_cmp(a));
         let out = NewtonOutcome {
             converged: inf(&r) <= opts.tolerance,
@@ -334,4 +352,28 @@ impl System {
         };
         Ok((out, local))
     }
+}
+
+/// Smallest ratio of the smallest to the largest pivot of a square system's LU (full
+/// pivoting) for which its solution is taken as the Newton step; below it the SVD's damped
+/// minimum-norm step is taken.
+const SQUARE_PIVOT_RATIO: f64 = 1e-6;
+
+/// The step `J⁻¹(−r)` of a square `J` whose LU pivots stay within [`SQUARE_PIVOT_RATIO`]
+/// of each other (far from a singular configuration), else `None`. A group of a solve is
+/// usually square; its LU costs a small part of an SVD with singular vectors.
+fn square_step(j: &DMatrix<f64>, r: &DVector<f64>) -> Option<DVector<f64>> {
+    if j.nrows() != j.ncols() {
+        return None;
+    }
+    let lu = j.clone().full_piv_lu();
+    let d = lu.u().diagonal();
+    let (lo, hi) = d.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+        (lo.min(x.abs()), hi.max(x.abs()))
+    });
+    // NaN pivots fail this comparison too.
+    if lo.partial_cmp(&(SQUARE_PIVOT_RATIO * hi)) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    lu.solve(&(-r)).filter(|s| s.iter().all(|x| x.is_finite()))
 }
