@@ -4,7 +4,10 @@
 //! Families (every one with a seeded random joint geometry, `with_random_geometry(m, 3)`):
 //! - `planar`: the planar Assur linkage `assur(1, (BODIES − 2)/2, 1, A)`;
 //! - `spatial`: its spatial twin `assur_spatial(1, (BODIES − 2)/2, 1, A)`;
-//! - `ladder`: the planar parallelogram ladder of the benches (crank +10°, file geometry).
+//! - `ladder`: the planar parallelogram ladder of the benches (crank +10°, file geometry);
+//! - `strip`: the strip of RRR dyads of scripts/cliffs.py, each pinned to the two bodies of the
+//!   one before (crank +1°, file geometry: a long chain of loops whose Jacobian's conditioning
+//!   grows with its length).
 //!
 //! The Assur workload: every moving body started at a random twist of size 1e-5 (model units)
 //! from the file's configuration, the crank at 0: both solvers must bring every body back
@@ -63,6 +66,38 @@ fn ladder(bodies: u64) -> Mechanism {
     Mechanism::from_parts("ladder", Space::Planar, BodyId::Int(1), vec![], joints)
 }
 
+fn strip(bodies: u64) -> Mechanism {
+    let mut t = String::from("space = \"planar\"\nframe = 1\n");
+    let mut joint = |id: String, a: u64, b: u64, x: f64, y: f64, driven: u32| {
+        t += &format!(
+            "[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}]\ndriven = {driven}\n"
+        );
+    };
+    joint("A0".into(), 1, 2, 0.0, 0.5, 1);
+    for k in 1..=(bodies - 2) / 2 {
+        let (a, b) = (2 * k + 1, 2 * k + 2);
+        let x = k as f64;
+        joint(
+            format!("T{k}"),
+            if k == 1 { 2 } else { a - 2 },
+            a,
+            x,
+            1.0,
+            0,
+        );
+        joint(format!("C{k}"), a, b, x + 0.5, 0.5, 0);
+        joint(
+            format!("B{k}"),
+            if k == 1 { 1 } else { b - 2 },
+            b,
+            x,
+            0.0,
+            0,
+        );
+    }
+    mbsa::format::load("strip", &t, mbsa::format::Format::Toml).expect("a strip")
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let family = args.first().map(String::as_str).unwrap_or("planar");
@@ -85,6 +120,7 @@ fn main() {
             0.0,
             1e-5,
         ),
+        "strip" => (strip(bodies), 1.0, 0.0),
         _ => (ladder(bodies), 10.0, 0.0),
     };
     let t = Instant::now();

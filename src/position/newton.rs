@@ -9,7 +9,6 @@ use super::pose::{Configuration, Pose};
 use super::residual::PositionModel;
 use crate::budget::{BudgetExceeded, Meter};
 use nalgebra::{DMatrix, DVector};
-use std::collections::HashMap;
 
 /// A system: some pairs' equations, some bodies unknown (the others held at their poses).
 #[derive(Clone, Debug)]
@@ -100,6 +99,19 @@ impl NewtonOutcome {
 /// Driven targets per pair (model units; empty = not driven).
 pub type Targets = Vec<Vec<f64>>;
 
+/// The unknown bodies of a system and their places in it, sorted by body: a dense system has
+/// at most a hundred, where a search costs less than hashing.
+struct Columns(Vec<(usize, usize)>);
+
+impl Columns {
+    fn get(&self, body: usize) -> Option<usize> {
+        self.0
+            .binary_search_by_key(&body, |&(b, _)| b)
+            .ok()
+            .map(|k| self.0[k].1)
+    }
+}
+
 impl System {
     /// Residual vector, Jacobian and per-pair maximum residual at `config`.
     pub fn evaluate(
@@ -113,12 +125,15 @@ impl System {
     }
 
     /// Column block of each unknown body.
-    fn columns(&self) -> HashMap<usize, usize> {
-        self.bodies
+    fn columns(&self) -> Columns {
+        let mut c: Vec<(usize, usize)> = self
+            .bodies
             .iter()
             .enumerate()
             .map(|(i, &b)| (b, i))
-            .collect()
+            .collect();
+        c.sort_unstable();
+        Columns(c)
     }
 
     /// [`System::evaluate`] with the unknown bodies at `local` (in `bodies` order) and the
@@ -129,11 +144,11 @@ impl System {
         targets: &Targets,
         config: &Configuration,
         local: &[Pose],
-        col: &HashMap<usize, usize>,
+        col: &Columns,
     ) -> (DVector<f64>, DMatrix<f64>, Vec<f64>) {
         let b = model.b();
-        let pose = |body: usize| match col.get(&body) {
-            Some(&i) => local[i],
+        let pose = |body: usize| match col.get(body) {
+            Some(i) => local[i],
             None => config.poses[body],
         };
         let blocks: Vec<_> = self
@@ -164,7 +179,7 @@ impl System {
             }
             per_pair.push(worst);
             for (side, body) in [(0, pair.a), (1, pair.b)] {
-                let Some(&c) = col.get(&body) else { continue };
+                let Some(c) = col.get(body) else { continue };
                 if side == 1 && pair.a == pair.b {
                     continue;
                 }
