@@ -16,7 +16,6 @@
 //! - [`inputs`]: input values (`JOINT=30`, `JOINT=0.5rad`, sweeps).
 //! - [`sweep`]: one input stepped through a range, stopped at a dead point or a branch change.
 
-pub mod block_chol;
 pub mod closure;
 pub mod finite;
 pub mod inputs;

@@ -1,35 +1,374 @@
 //! Sparse Gauss–Newton on many bodies at once: the global reference solve at scale.
 //!
 //! The Jacobian of a mechanism is block sparse: a pair's equations touch its two bodies only.
-//! Each step is the basic least-squares solution of `J δ = −e` by a multifrontal QR
-//! ([`crate::elimination`]) of `J`'s columns scaled to unit norm, one group a body (`B` = 3
-//! or 6 unknowns), in a minimum-degree elimination order of the body graph, with `e` carried
-//! as a last column. A column whose residual against the columns before it is under
-//! [`QR_TOLERANCE`] (a redundant equation, as in a planar loop written in space; an isolated
-//! spin; a singular configuration) gets no step, so free unknowns do not move. QR works on
-//! `J` itself: the normal equations `JᵀJ` square its conditioning, which on a long chain of
-//! loops (a strip of 10^4 dyads) grows past what their Cholesky factor can resolve. A step
-//! that does not lower `‖e‖` is halved (up to 30 times), as in [`super::newton`].
+//! Each step solves the normal equations `(JᵀJ + μI) δ = −Jᵀe` by a block Cholesky
+//! factorization (one `B × B` block per body, `B` = 3 or 6) in a minimum-degree elimination
+//! order of the body graph. `μ = 10⁻¹²·max diag(JᵀJ)` keeps the factorization defined when the
+//! equations are redundant (a planar loop written in space) or leave unknowns free (an
+//! isolated spin); since `Jᵀe` lies in the row space of `J`, the step then stays (to rounding)
+//! in that row space, as the dense solver's minimum-norm step does, so free unknowns do not
+//! move. Components of the step along singular values below about `10⁻⁶·σ_max` are damped (a
+//! Levenberg–Marquardt step): near a singular configuration Newton slows but does not jump.
+//! A step that does not lower `‖e‖` is halved (up to 30 times), as in [`super::newton`].
 //!
-//! The elimination order is computed once per solve from the body graph
-//! ([`super::block_chol::symbolic`]); its factor structure bounds the memory checked against
-//! the budget before anything is allocated, and every ordering step, evaluation and
-//! factorization is charged to a work [`Meter`]. Above [`DENSE_REPORT_COLUMNS`] the report's
-//! singular values are estimated from the block Cholesky pivots of `JᵀJ + μI` at the final
-//! point.
+//! The elimination order is computed once per solve from the body graph (the elimination
+//! graph gives the factor's structure as it goes); the memory the factor needs is checked
+//! against the budget before it is allocated, and every ordering step, evaluation and
+//! factorization is charged to a work [`Meter`].
 
-use super::block_chol::{Normal, Symbolic, symbolic};
 use super::newton::{NewtonOptions, NewtonOutcome, System, Targets};
 use super::pose::{Configuration, Pose};
 use super::residual::PositionModel;
 use crate::budget::{BudgetExceeded, Meter};
-use crate::elimination::{Block, Elimination, Stop};
-use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
 
 /// Largest system (columns) whose final Jacobian gets a dense SVD for the report's nullity
 /// and conditioning; above it they are estimated from the Cholesky pivots.
 pub const DENSE_REPORT_COLUMNS: usize = 600;
+
+/// Bytes of factor storage per entry of the elimination structure, beside the blocks.
+const STRUCT_BYTES: u64 = 16;
+
+/// The structure of the block Cholesky factor: columns in elimination order.
+#[derive(Clone, Debug)]
+pub struct Symbolic {
+    /// Block size.
+    b: usize,
+    /// `pos[c]`: elimination index of local unknown `c` (index in `System::bodies`).
+    pos: Vec<u32>,
+    /// Column `k`'s rows (elimination indices above `k`, ascending) are
+    /// `rows[start[k]..start[k + 1]]`.
+    start: Vec<usize>,
+    rows: Vec<u32>,
+}
+
+impl Symbolic {
+    /// Number of off-diagonal blocks of the factor.
+    pub fn off_blocks(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Bytes of the numeric factor.
+    pub fn factor_bytes(&self) -> u64 {
+        let blocks = (self.pos.len() + self.rows.len()) as u64;
+        blocks
+            .saturating_mul((self.b * self.b * 8) as u64)
+            .saturating_add(self.rows.len() as u64 * STRUCT_BYTES)
+    }
+
+    /// Work units of one numeric factorization (block multiply-adds times `B³`).
+    pub fn factor_work(&self) -> u64 {
+        let b3 = (self.b * self.b * self.b) as u64;
+        (0..self.pos.len())
+            .map(|k| {
+                let l = (self.start[k + 1] - self.start[k]) as u64;
+                (l * (l + 1) / 2 + l + 1) * b3
+            })
+            .fold(0u64, u64::saturating_add)
+    }
+
+    /// Index (into the off-diagonal blocks) of block (row `i`, column `k`), `i > k`.
+    fn find(&self, k: usize, i: u32) -> Option<usize> {
+        let r = &self.rows[self.start[k]..self.start[k + 1]];
+        r.binary_search(&i).ok().map(|x| self.start[k] + x)
+    }
+}
+
+/// Sorted union of `a` without `skip_a` and `b` without `skip_b`.
+fn merge(a: &[u32], b: &[u32], skip: u32, skip2: u32) -> Vec<u32> {
+    let mut out = Vec::with_capacity(a.len() + b.len());
+    let (mut i, mut j) = (0, 0);
+    while i < a.len() || j < b.len() {
+        let x = match (a.get(i), b.get(j)) {
+            (Some(&x), Some(&y)) if x == y => {
+                i += 1;
+                j += 1;
+                x
+            }
+            (Some(&x), Some(&y)) if x < y => {
+                i += 1;
+                x
+            }
+            (Some(_), Some(&y)) => {
+                j += 1;
+                y
+            }
+            (Some(&x), None) => {
+                i += 1;
+                x
+            }
+            (None, Some(&y)) => {
+                j += 1;
+                y
+            }
+            (None, None) => break,
+        };
+        if x != skip && x != skip2 {
+            out.push(x);
+        }
+    }
+    out
+}
+
+/// Minimum-degree elimination of the graph of `n` unknowns with `edges`: the elimination
+/// order and the factor structure. Ties go to the lowest index (deterministic). The
+/// elimination graph's size is checked against `max_bytes` as it grows.
+pub fn symbolic(
+    n: usize,
+    b: usize,
+    edges: &[(u32, u32)],
+    meter: &mut Meter,
+    max_bytes: u64,
+) -> Result<Symbolic, BudgetExceeded> {
+    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for &(u, v) in edges {
+        if u != v {
+            adj[u as usize].push(v);
+            adj[v as usize].push(u);
+        }
+    }
+    for a in &mut adj {
+        a.sort_unstable();
+        a.dedup();
+    }
+    meter.charge(edges.len() as u64 * 4 + n as u64)?;
+    let mut alive = vec![true; n];
+    let mut heap: BinaryHeap<Reverse<(usize, u32)>> = (0..n as u32)
+        .map(|v| Reverse((adj[v as usize].len(), v)))
+        .collect();
+    let mut order: Vec<u32> = Vec::with_capacity(n);
+    let mut structure: Vec<Vec<u32>> = vec![Vec::new(); n];
+    let mut stored: u64 = adj.iter().map(|a| a.len() as u64).sum();
+    let block = (b * b * 8) as u64 + STRUCT_BYTES;
+    let mut fill: u64 = 0;
+    while let Some(Reverse((d, v))) = heap.pop() {
+        let vi = v as usize;
+        if !alive[vi] || adj[vi].len() != d {
+            continue;
+        }
+        alive[vi] = false;
+        order.push(v);
+        let nb = std::mem::take(&mut adj[vi]);
+        for &u in &nb {
+            let ui = u as usize;
+            let merged = merge(&adj[ui], &nb, v, u);
+            meter.charge((adj[ui].len() + nb.len()) as u64 + 1)?;
+            stored = stored + merged.len() as u64 - adj[ui].len() as u64;
+            adj[ui] = merged;
+            heap.push(Reverse((adj[ui].len(), u)));
+        }
+        stored = stored.saturating_sub(nb.len() as u64);
+        // The factor holds every structure so far, the elimination graph the rest.
+        fill += nb.len() as u64;
+        structure[vi] = nb;
+        let estimate = stored
+            .saturating_mul(4)
+            .saturating_add((order.len() as u64 + fill).saturating_mul(block));
+        if estimate > max_bytes {
+            return Err(BudgetExceeded {
+                limit: crate::budget::Limit::Memory,
+                what: "the sparse factorization of the global solve".into(),
+                needed: estimate,
+                at_least: true,
+                allowed: max_bytes,
+            });
+        }
+    }
+    let mut pos = vec![0u32; n];
+    for (i, &v) in order.iter().enumerate() {
+        pos[v as usize] = i as u32;
+    }
+    let mut start = Vec::with_capacity(n + 1);
+    let mut rows = Vec::new();
+    start.push(0);
+    for &v in &order {
+        let mut r: Vec<u32> = structure[v as usize]
+            .iter()
+            .map(|&u| pos[u as usize])
+            .collect();
+        r.sort_unstable();
+        rows.extend_from_slice(&r);
+        start.push(rows.len());
+    }
+    Ok(Symbolic {
+        b,
+        pos,
+        start,
+        rows,
+    })
+}
+
+/// Dense lower Cholesky of the `b × b` row-major block `a` in place (upper part zeroed);
+/// pivots below `floor` are raised to it. Returns the squared pivots.
+fn chol(a: &mut [f64], b: usize, floor: f64, pivots: &mut [f64]) {
+    for j in 0..b {
+        let mut d = a[j * b + j];
+        for k in 0..j {
+            d -= a[j * b + k] * a[j * b + k];
+        }
+        let d = if d.is_finite() && d > floor { d } else { floor };
+        pivots[j] = d;
+        let l = d.sqrt();
+        a[j * b + j] = l;
+        for i in j + 1..b {
+            let mut s = a[i * b + j];
+            for k in 0..j {
+                s -= a[i * b + k] * a[j * b + k];
+            }
+            a[i * b + j] = s / l;
+        }
+        for i in 0..j {
+            a[i * b + j] = 0.0;
+        }
+    }
+}
+
+/// `x ← x L⁻ᵀ` for the row-major block `x` (each row solved against lower `l`).
+fn right_solve_lt(x: &mut [f64], l: &[f64], b: usize) {
+    for r in 0..b {
+        let row = &mut x[r * b..(r + 1) * b];
+        for j in 0..b {
+            let mut s = row[j];
+            for k in 0..j {
+                s -= row[k] * l[j * b + k];
+            }
+            row[j] = s / l[j * b + j];
+        }
+    }
+}
+
+/// `c ← c − x yᵀ` for row-major blocks.
+fn sub_xyt(c: &mut [f64], x: &[f64], y: &[f64], b: usize) {
+    for i in 0..b {
+        for j in 0..b {
+            let mut s = 0.0;
+            for k in 0..b {
+                s += x[i * b + k] * y[j * b + k];
+            }
+            c[i * b + j] -= s;
+        }
+    }
+}
+
+/// The normal equations at one point, in the factor's storage.
+struct Normal {
+    diag: Vec<f64>,
+    off: Vec<f64>,
+    grad: Vec<f64>,
+}
+
+impl Normal {
+    fn zeros(s: &Symbolic) -> Normal {
+        let bb = s.b * s.b;
+        Normal {
+            diag: vec![0.0; s.pos.len() * bb],
+            off: vec![0.0; s.rows.len() * bb],
+            grad: vec![0.0; s.pos.len() * s.b],
+        }
+    }
+
+    fn clear(&mut self) {
+        self.diag.fill(0.0);
+        self.off.fill(0.0);
+        self.grad.fill(0.0);
+    }
+
+    /// Factor `self + μI` in place; the squared pivots, in elimination order.
+    fn factor(&mut self, s: &Symbolic, mu: f64) -> Vec<f64> {
+        let b = s.b;
+        let bb = b * b;
+        let n = s.pos.len();
+        let mut pivots = vec![0.0; n * b];
+        let floor = mu.max(f64::MIN_POSITIVE);
+        for k in 0..n {
+            let dk = &mut self.diag[k * bb..(k + 1) * bb];
+            for i in 0..b {
+                dk[i * b + i] += mu;
+            }
+            chol(dk, b, floor, &mut pivots[k * b..(k + 1) * b]);
+            let lkk: Vec<f64> = dk.to_vec();
+            let (lo, hi) = (s.start[k], s.start[k + 1]);
+            let (left, right) = self.off.split_at_mut(hi * bb);
+            let col = &mut left[lo * bb..];
+            for blk in col.chunks_exact_mut(bb) {
+                right_solve_lt(blk, &lkk, b);
+            }
+            for a in 0..hi - lo {
+                let u = s.rows[lo + a] as usize;
+                let lu = &col[a * bb..(a + 1) * bb];
+                sub_xyt(&mut self.diag[u * bb..(u + 1) * bb], lu, lu, b);
+                let mut from = s.start[u];
+                for c in a + 1..hi - lo {
+                    let w = s.rows[lo + c];
+                    let lw = &col[c * bb..(c + 1) * bb];
+                    let r = &s.rows[from..s.start[u + 1]];
+                    let Ok(x) = r.binary_search(&w) else { continue };
+                    let at = from + x - hi;
+                    from += x + 1;
+                    sub_xyt(&mut right[at * bb..(at + 1) * bb], lw, lu, b);
+                }
+            }
+        }
+        pivots
+    }
+
+    /// Solve `L Lᵀ x = rhs` with the factor in place (elimination order).
+    fn solve(&self, s: &Symbolic, rhs: &mut [f64]) {
+        let b = s.b;
+        let bb = b * b;
+        let n = s.pos.len();
+        for k in 0..n {
+            let l = &self.diag[k * bb..(k + 1) * bb];
+            let (head, tail) = rhs.split_at_mut((k + 1) * b);
+            let y = &mut head[k * b..];
+            for i in 0..b {
+                let mut v = y[i];
+                for j in 0..i {
+                    v -= l[i * b + j] * y[j];
+                }
+                y[i] = v / l[i * b + i];
+            }
+            for idx in s.start[k]..s.start[k + 1] {
+                let w = s.rows[idx] as usize;
+                let blk = &self.off[idx * bb..(idx + 1) * bb];
+                let t = &mut tail[(w - k - 1) * b..(w - k) * b];
+                for i in 0..b {
+                    let mut v = 0.0;
+                    for j in 0..b {
+                        v += blk[i * b + j] * y[j];
+                    }
+                    t[i] -= v;
+                }
+            }
+        }
+        for k in (0..n).rev() {
+            let (head, tail) = rhs.split_at_mut((k + 1) * b);
+            let x = &mut head[k * b..];
+            for idx in s.start[k]..s.start[k + 1] {
+                let w = s.rows[idx] as usize;
+                let blk = &self.off[idx * bb..(idx + 1) * bb];
+                let t = &tail[(w - k - 1) * b..(w - k) * b];
+                for j in 0..b {
+                    let mut v = 0.0;
+                    for i in 0..b {
+                        v += blk[i * b + j] * t[i];
+                    }
+                    x[j] -= v;
+                }
+            }
+            let l = &self.diag[k * bb..(k + 1) * bb];
+            for i in (0..b).rev() {
+                let mut v = x[i];
+                for j in i + 1..b {
+                    v -= l[j * b + i] * x[j];
+                }
+                x[i] = v / l[i * b + i];
+            }
+        }
+    }
+}
 
 /// Where each pair's blocks go: elimination indices of its unknown sides and the
 /// off-diagonal block joining them.
@@ -39,18 +378,6 @@ struct Slot {
     b: Option<u32>,
     off: Option<usize>,
 }
-
-/// The pairs' Jacobians at one point: pair `p`'s rows are `start[p]..start[p + 1]`, each
-/// row its `2B` entries (the first body's columns, then the second's).
-#[derive(Default)]
-struct Jacobian {
-    start: Vec<usize>,
-    vals: Vec<f64>,
-}
-
-/// Residual norm (of a column scaled to unit norm) under which the QR of a step takes the
-/// column for dependent on those before it.
-const QR_TOLERANCE: f64 = 1e-12;
 
 /// Pairs evaluated at once (bounds the memory of one parallel batch).
 const CHUNK: usize = 4096;
@@ -93,14 +420,9 @@ impl<'a> Sparse<'a> {
         let n = sys.bodies.len();
         let max = opts.budget.max_memory_bytes;
         let sym = symbolic(n, b, &edges, meter, max)?;
-        // The normal equations and the QR factor (each about the factor's size), and per pair
-        // its slot, its Jacobian (at most `B` rows of `2B`) and that Jacobian's copy as a
-        // block of the QR.
-        let per_pair = 24 + 2 * (b * 2 * b * 8) as u64;
         opts.budget.check_memory(
             sym.factor_bytes()
-                .saturating_mul(2)
-                .saturating_add((sys.pairs.len() as u64).saturating_mul(per_pair)),
+                .saturating_add((sys.pairs.len() as u64).saturating_mul(24)),
             || "the sparse factorization of the global solve".into(),
         )?;
         let slots = sys
@@ -136,14 +458,12 @@ impl<'a> Sparse<'a> {
         &self.sym
     }
 
-    /// Residuals (all pairs, in order), per-pair maxima, the normal equations into `ne` and
-    /// the pairs' Jacobians into `jac`.
+    /// Residuals (all pairs, in order), per-pair maxima, and the normal equations into `ne`.
     fn evaluate(
         &self,
         config: &Configuration,
         local: &[Pose],
         ne: &mut Normal,
-        jac: &mut Jacobian,
         meter: &mut Meter,
     ) -> Result<(Vec<f64>, Vec<f64>), BudgetExceeded> {
         let b = self.model.b();
@@ -153,9 +473,6 @@ impl<'a> Sparse<'a> {
             _ => config.poses[body],
         };
         ne.clear();
-        jac.vals.clear();
-        jac.start.clear();
-        jac.start.push(0);
         let mut r = Vec::new();
         let mut per_pair = Vec::with_capacity(self.sys.pairs.len());
         for (chunk, slots) in self.sys.pairs.chunks(CHUNK).zip(self.slots.chunks(CHUNK)) {
@@ -177,14 +494,18 @@ impl<'a> Sparse<'a> {
                 per_pair.push(e.residual.iter().fold(0.0f64, |m, x| m.max(x.abs())));
                 r.extend_from_slice(&e.residual);
                 let j = &e.jacobian;
-                for i in 0..rows {
-                    jac.vals.extend((0..2 * b).map(|c| j[(i, c)]));
-                }
-                jac.start.push(r.len());
                 let sides = [(slot.a, 0usize), (slot.b, 1usize)];
                 for &(s, side) in &sides {
                     let Some(k) = s else { continue };
                     let k = k as usize;
+                    let g = &mut ne.grad[k * b..(k + 1) * b];
+                    for c in 0..b {
+                        let mut v = 0.0;
+                        for i in 0..rows {
+                            v += j[(i, side * b + c)] * e.residual[i];
+                        }
+                        g[c] += v;
+                    }
                     let d = &mut ne.diag[k * bb..(k + 1) * bb];
                     for c1 in 0..b {
                         for c2 in 0..b {
@@ -215,74 +536,6 @@ impl<'a> Sparse<'a> {
         Ok((r, per_pair))
     }
 
-    /// The Gauss–Newton step: the basic least-squares solution of `J δ = −e` by the
-    /// multifrontal QR of [`crate::elimination`] on the columns scaled to unit norm, the
-    /// groups (bodies) in the factor's elimination order, `e` a last column carried through.
-    /// The normal equations' factor would square `J`'s conditioning: on a long strip of dyads
-    /// (10^4 bodies) its steps stopped Newton short of convergence. Columns whose residual
-    /// falls under [`QR_TOLERANCE`] (redundant equations, an isolated spin, a singular
-    /// configuration) do not move. `diag` holds each unknown's `‖J column‖²`, in elimination
-    /// order.
-    fn step(
-        &self,
-        jac: &Jacobian,
-        e: &[f64],
-        diag: &[f64],
-        opts: &NewtonOptions,
-        meter: &mut Meter,
-    ) -> Result<Vec<f64>, BudgetExceeded> {
-        let b = self.sym.b;
-        let n = self.sym.pos.len();
-        let scale: Vec<f64> = diag
-            .iter()
-            .map(|&d| if d > 0.0 { 1.0 / d.sqrt() } else { 0.0 })
-            .collect();
-        let mut sizes = vec![b; n];
-        sizes.push(1);
-        let mut blocks = Vec::with_capacity(self.slots.len());
-        for (p, slot) in self.slots.iter().enumerate() {
-            let (lo, hi) = (jac.start[p], jac.start[p + 1]);
-            let sides: Vec<(usize, u32)> = [(0, slot.a), (1, slot.b)]
-                .into_iter()
-                .filter_map(|(side, k)| k.map(|k| (side, k)))
-                .collect();
-            if sides.is_empty() || hi == lo {
-                continue;
-            }
-            let cols = sides.len() * b + 1;
-            let mat = DMatrix::from_fn(hi - lo, cols, |i, c| {
-                let row = lo + i;
-                match sides.get(c / b) {
-                    Some(&(side, k)) => {
-                        jac.vals[row * 2 * b + side * b + c % b] * scale[k as usize * b + c % b]
-                    }
-                    None => e[row],
-                }
-            });
-            let mut groups: Vec<usize> = sides.iter().map(|&(_, k)| k as usize).collect();
-            groups.push(n);
-            blocks.push(Block { groups, mat });
-        }
-        let order: Vec<usize> = (0..n).collect();
-        let max = opts.budget.max_memory_bytes;
-        let elim =
-            Elimination::run_in_order_metered(&sizes, blocks, QR_TOLERANCE, max, &order, meter)
-                .map_err(|stop| match stop {
-                    Stop::Work(e) => e,
-                    Stop::Memory(needed) => BudgetExceeded {
-                        limit: crate::budget::Limit::Memory,
-                        what: "the sparse QR factorization of the global solve".into(),
-                        needed,
-                        at_least: true,
-                        allowed: max,
-                    },
-                })?;
-        let mut x = DVector::zeros(n * b + 1);
-        x[n * b] = 1.0;
-        elim.back_substitute(&mut x);
-        Ok((0..n * b).map(|i| x[i] * scale[i]).collect())
-    }
-
     /// Gauss–Newton from `config`; returns the outcome and the unknowns' new poses.
     pub fn solve(
         &self,
@@ -302,22 +555,28 @@ impl<'a> Sparse<'a> {
         let norm = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut local: Vec<Pose> = self.sys.bodies.iter().map(|&x| config.poses[x]).collect();
         let mut ne = Normal::zeros(&self.sym);
-        let mut jac = Jacobian::default();
-        let (mut r, mut per_pair) = self.evaluate(config, &local, &mut ne, &mut jac, meter)?;
+        let (mut r, mut per_pair) = self.evaluate(config, &local, &mut ne, meter)?;
         let mut iterations = 0;
+        let mut pivots: Vec<f64> = Vec::new();
+        let mut mu = 0.0;
+        let work = self.sym.factor_work();
         loop {
             let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
             if n == 0 || r.is_empty() || !finite {
                 break;
             }
+            let top = (0..n * b)
+                .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
+                .fold(0.0f64, f64::max);
+            mu = 1e-12 * top.max(1e-300);
+            let mut rhs: Vec<f64> = ne.grad.iter().map(|g| -g).collect();
+            meter.charge(work)?;
+            pivots = ne.factor(&self.sym, mu);
             if inf(&r) <= opts.tolerance || iterations >= opts.max_iterations {
                 break;
             }
-            let diag: Vec<f64> = (0..n * b)
-                .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                .collect();
-            let step = self.step(&jac, &r, &diag, opts, meter)?;
-            if !step.iter().all(|x| x.is_finite()) {
+            ne.solve(&self.sym, &mut rhs);
+            if !rhs.iter().all(|x| x.is_finite()) {
                 break;
             }
             iterations += 1;
@@ -328,10 +587,10 @@ impl<'a> Sparse<'a> {
             for _ in 0..30 {
                 for (c, p) in local.iter_mut().enumerate() {
                     let k = self.sym.pos[c] as usize;
-                    let tw: Vec<f64> = (0..b).map(|i| t * step[k * b + i]).collect();
+                    let tw: Vec<f64> = (0..b).map(|i| t * rhs[k * b + i]).collect();
                     *p = base[c].moved_by(self.model.space, &tw);
                 }
-                let (r2, p2) = self.evaluate(config, &local, &mut ne, &mut jac, meter)?;
+                let (r2, p2) = self.evaluate(config, &local, &mut ne, meter)?;
                 if norm(&r2) < norm0 || inf(&r2) <= opts.tolerance {
                     (r, per_pair) = (r2, p2);
                     accepted = true;
@@ -341,7 +600,6 @@ impl<'a> Sparse<'a> {
             }
             if !accepted {
                 local = base;
-                self.evaluate(config, &local, &mut ne, &mut jac, meter)?;
                 break;
             }
         }
@@ -362,19 +620,8 @@ impl<'a> Sparse<'a> {
             s.sort_by(|a, b| b.total_cmp(a));
             s
         } else {
-            // Estimates: square roots of the pivots of `JᵀJ + μI` less the damping (zero when
-            // a pivot is no more than twice the damping).
-            let top = (0..columns)
-                .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                .fold(0.0f64, f64::max);
-            let mu = 1e-12 * top.max(1e-300);
-            let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
-            let pivots = if r.is_empty() || !finite {
-                Vec::new()
-            } else {
-                meter.charge(self.sym.factor_work())?;
-                ne.factor(&self.sym, mu)
-            };
+            // Estimates: square roots of the pivots less the damping (zero when a pivot is
+            // no more than twice the damping).
             let mut s: Vec<f64> = pivots
                 .iter()
                 .map(|&p| if p <= 2.0 * mu { 0.0 } else { (p - mu).sqrt() })
