@@ -19,6 +19,8 @@ use std::sync::Mutex;
 pub struct Cache {
     pub(super) bases: Mutex<HashMap<u128, Option<DMatrix<f64>>>>,
     pub(super) blocks: Mutex<HashMap<u128, Option<Unchecked>>>,
+    /// An isolated freedom's confirmation: the seed of the first draw without it, if any.
+    pub(super) isolated: Mutex<HashMap<u128, Option<u64>>>,
 }
 
 /// Entries a [`Cache`] keeps before it starts over (memory stays bounded).
@@ -42,6 +44,17 @@ impl Cache {
     }
     pub(super) fn put_block(&self, k: u128, v: Option<Unchecked>) {
         let mut g = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
+        if g.len() >= CACHE_ENTRIES {
+            g.clear();
+        }
+        g.insert(k, v);
+    }
+    pub(super) fn get_isolated(&self, k: u128) -> Option<Option<u64>> {
+        let g = self.isolated.lock().unwrap_or_else(|e| e.into_inner());
+        g.get(&k).copied()
+    }
+    pub(super) fn put_isolated(&self, k: u128, v: Option<u64>) {
+        let mut g = self.isolated.lock().unwrap_or_else(|e| e.into_inner());
         if g.len() >= CACHE_ENTRIES {
             g.clear();
         }
