@@ -56,20 +56,23 @@ pub(super) enum Oracle {
 /// the realization and its driven DOF, and every placement that drives it so reads the same
 /// lines. At most [`LINES_KEPT`] entries are kept (then it starts over: memory stays bounded).
 #[derive(Default)]
-pub(super) struct Lines(Mutex<HashMap<(usize, u32), Arc<[Vec<Fp>]>>>);
+pub(super) struct Lines(Mutex<HashMap<(usize, u32), JointLines>>);
+
+/// One (joint, driven DOF)'s lines, shared by the placements that read them.
+type JointLines = Arc<[Vec<Fp>]>;
 
 /// Entries a [`Lines`] keeps before it starts over.
 const LINES_KEPT: usize = 1 << 14;
 
 impl Lines {
     /// The lines of joint `q` with `d` driven DOF, made by `make` when not kept.
-    fn get(&self, q: usize, d: u32, make: impl FnOnce() -> Vec<Vec<Fp>>) -> Arc<[Vec<Fp>]> {
+    fn get(&self, q: usize, d: u32, make: impl FnOnce() -> Vec<Vec<Fp>>) -> JointLines {
         let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(l) = kept.get(&(q, d)) {
             return Arc::clone(l);
         }
         drop(kept);
-        let l: Arc<[Vec<Fp>]> = make().into();
+        let l: JointLines = make().into();
         let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
         if kept.len() >= LINES_KEPT {
             kept.clear();
@@ -241,7 +244,7 @@ impl Oracle {
                 if f > v.len() {
                     return Some(false);
                 }
-                let mut stacked: Vec<Arc<[Vec<Fp>]>> = Vec::with_capacity(w.len());
+                let mut stacked: Vec<JointLines> = Vec::with_capacity(w.len());
                 for &(q, d) in w {
                     let [x, y] = m.joints[q].bodies[..] else {
                         return None;
