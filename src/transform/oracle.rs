@@ -3,8 +3,11 @@
 
 use super::null_space::{JacobianRows, block_null_vectors, jacobian};
 use crate::budget::{Budget, BudgetExceeded, Meter};
+use crate::exact::Fp;
 use crate::mechanism::Mechanism;
 use crate::structure::Analysis;
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
 
 /// Null vectors of the constraint system an [`Oracle`] keeps at most (its per-placement test is
 /// a dense rank of about `6 f` rows by this many columns).
@@ -42,7 +45,41 @@ pub(super) enum Oracle {
         col: Vec<usize>,
         /// Random null vectors of `J`.
         v: Vec<Vec<crate::exact::Fp>>,
+        /// The lines of a joint's rows on the null vectors, by (joint, driven DOF), as the
+        /// placements ask for them ([`Lines`]).
+        lines: Lines,
     },
+}
+
+/// Each (joint, driven DOF)'s rows on an [`Oracle::Motions`]' null vectors, kept as the
+/// placements of an expansion ask for them: a joint's exact rows are a function of the joint,
+/// the realization and its driven DOF, and every placement that drives it so reads the same
+/// lines. At most [`LINES_KEPT`] entries are kept (then it starts over: memory stays bounded).
+#[derive(Default)]
+pub(super) struct Lines(Mutex<HashMap<(usize, u32), JointLines>>);
+
+/// One (joint, driven DOF)'s lines, shared by the placements that read them.
+type JointLines = Arc<[Vec<Fp>]>;
+
+/// Entries a [`Lines`] keeps before it starts over.
+const LINES_KEPT: usize = 1 << 14;
+
+impl Lines {
+    /// The lines of joint `q` with `d` driven DOF, made by `make` when not kept.
+    fn get(&self, q: usize, d: u32, make: impl FnOnce() -> Vec<Vec<Fp>>) -> JointLines {
+        let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(l) = kept.get(&(q, d)) {
+            return Arc::clone(l);
+        }
+        drop(kept);
+        let l: JointLines = make().into();
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if kept.len() >= LINES_KEPT {
+            kept.clear();
+        }
+        kept.insert((q, d), Arc::clone(&l));
+        l
+    }
 }
 
 impl Oracle {
@@ -94,7 +131,12 @@ impl Oracle {
         // Either basis gives the same decisions: [`Oracle::decide`] uses only the rank of
         // the inputs' rows on the vectors, the same for any basis of the null space.
         if let Some((col, v)) = block_null_vectors(m, seed) {
-            return Ok(Oracle::Motions { seed, col, v });
+            return Ok(Oracle::Motions {
+                seed,
+                col,
+                v,
+                lines: Lines::default(),
+            });
         }
         let (j, col) = jacobian(m, seed);
         let nrows = j.nrows();
@@ -108,7 +150,12 @@ impl Oracle {
         }
         let mut rng = crate::rng::SplitMix64::new(seed ^ 0x7A4E_5F0B_0C1E_0000);
         let v = f.random_null_vectors(n, &mut rng);
-        Ok(Oracle::Motions { seed, col, v })
+        Ok(Oracle::Motions {
+            seed,
+            col,
+            v,
+            lines: Lines::default(),
+        })
     }
 
     /// For [`Oracle::Later`], once a placement was rejected: [`Oracle::Reject`] when the
@@ -181,47 +228,55 @@ impl Oracle {
     /// `Some(false)`: placement `w` (units per pair of `m`) is not determined; `Some(true)`:
     /// its whole system has full row rank; `None`: the analysis decides.
     pub(super) fn decide(&self, m: &Mechanism, w: &[(usize, u32)]) -> Option<bool> {
-        use crate::exact::{Fp, dense};
+        use crate::exact::dense;
         use crate::motion::exact as models;
         match self {
             Oracle::Undecided | Oracle::Later { .. } => None,
             Oracle::Reject => Some(false),
-            Oracle::Motions { seed, col, v } => {
+            Oracle::Motions {
+                seed,
+                col,
+                v,
+                lines,
+            } => {
                 let b = m.b() as usize;
                 let f: usize = w.iter().map(|&(_, n)| n as usize).sum();
                 if f > v.len() {
                     return Some(false);
                 }
-                let mut stacked: Vec<Vec<Fp>> = Vec::new();
+                let mut stacked: Vec<JointLines> = Vec::with_capacity(w.len());
                 for &(q, d) in w {
                     let [x, y] = m.joints[q].bodies[..] else {
                         return None;
                     };
-                    let rows = models::joint_rows(m, q, *seed, d);
-                    for r in 0..rows.nrows() {
-                        let line: Vec<Fp> = v
-                            .iter()
-                            .map(|vl| {
-                                let mut s = Fp::ZERO;
-                                for k in 0..b {
-                                    let ty = if col[y] == usize::MAX {
-                                        Fp::ZERO
-                                    } else {
-                                        vl[col[y] + k]
-                                    };
-                                    let tx = if col[x] == usize::MAX {
-                                        Fp::ZERO
-                                    } else {
-                                        vl[col[x] + k]
-                                    };
-                                    s += rows[(r, k)] * (ty - tx);
-                                }
-                                s
+                    stacked.push(lines.get(q, d, || {
+                        let rows = models::joint_rows(m, q, *seed, d);
+                        (0..rows.nrows())
+                            .map(|r| {
+                                v.iter()
+                                    .map(|vl| {
+                                        let mut s = Fp::ZERO;
+                                        for k in 0..b {
+                                            let ty = if col[y] == usize::MAX {
+                                                Fp::ZERO
+                                            } else {
+                                                vl[col[y] + k]
+                                            };
+                                            let tx = if col[x] == usize::MAX {
+                                                Fp::ZERO
+                                            } else {
+                                                vl[col[x] + k]
+                                            };
+                                            s += rows[(r, k)] * (ty - tx);
+                                        }
+                                        s
+                                    })
+                                    .collect()
                             })
-                            .collect();
-                        stacked.push(line);
-                    }
+                            .collect()
+                    }));
                 }
+                let stacked: Vec<&Vec<Fp>> = stacked.iter().flat_map(|l| l.iter()).collect();
                 if stacked.is_empty() {
                     return Some(f == 0);
                 }

@@ -287,3 +287,40 @@ fn limit_100_fits_a_budget_the_full_analyses_overrun() {
         }
     }
 }
+
+/// The cache keeps isolated freedoms' confirmations too: on the hexapod (six rod spins, each
+/// confirmed at other draws), analyses of placements determined or not, with one cache shared
+/// by all and each twice, equal the plain analyses.
+#[test]
+fn cached_analyses_equal_plain_ones_with_isolated_rod_spins() {
+    let (file, text) = mbsa::examples::find("hexapod-rss").expect("bundled example");
+    let m = mbsa::format::load(file, text, mbsa::format::Format::Toml).unwrap();
+    let lib = Library::builtin();
+    let opts = structure::Options::default();
+    let cache = AnalysisCache::default();
+    let mut base = m.clone();
+    for j in &mut base.joints {
+        j.driven = 0;
+    }
+    let specs = [
+        "1-2,1-4,1-6,1-8,1-10,1-12",
+        "1-2,1-4,1-6,1-8,1-10,2-3:1",
+        "1-2,1-4,1-6,1-8,3-14:2",
+        "1-2,1-4,1-6,1-8,1-10,1-12",
+        "2-3:1,4-5:1,6-7:1,1-8,1-10,1-12",
+    ];
+    let mut determined = 0;
+    for spec in specs {
+        let mut pm = base.clone();
+        pm.apply_inputs(&InputSpec::parse(spec).unwrap()).unwrap();
+        let plain = structure::analyze(&pm, &opts, &lib).unwrap();
+        assert!(!plain.isolated.is_empty(), "{spec}");
+        determined += usize::from(plain.status == Status::Determined);
+        for _ in 0..2 {
+            let cached = structure::analyze_cached(&pm, &opts, &lib, Some(&cache), None).unwrap();
+            assert_eq!(plain, cached, "{spec}");
+        }
+    }
+    // The crank placement (twice) is determined, and not every other one is.
+    assert!((2..specs.len()).contains(&determined), "{determined}");
+}

@@ -3,6 +3,7 @@
 
 use super::attempt::{Attempt, Touching};
 use super::blocks::width;
+use super::cache::Digest;
 use super::exact::{MAX_EXACT_UNKNOWNS, exact_rank};
 use super::float::{MAX_DENSE_UNKNOWNS, REL_TOL, Tol, cube, rank_of};
 use super::rows::{Chunk, PAIRS_PER_CHUNK, PairRows, pair_rows_at};
@@ -126,7 +127,15 @@ impl Attempt<'_> {
         let spurious = crate::par::map(iso_bodies.len(), |i| {
             let x = iso_bodies[i];
             let mine = touching.pairs(x);
-            confirm_seeds(seed, attempt).find(|&second| {
+            let key = self
+                .cache
+                .map(|_| self.isolated_key(eqs, x, mine, seed, attempt));
+            if let (Some(c), Some(k)) = (self.cache, key)
+                && let Some(hit) = c.get_isolated(k)
+            {
+                return hit;
+            }
+            let found = confirm_seeds(seed, attempt).find(|&second| {
                 let fresh = PairRows::from_chunks(
                     b,
                     mine.chunks(PAIRS_PER_CHUNK)
@@ -141,7 +150,11 @@ impl Attempt<'_> {
                 );
                 let again = reduced_basis(b, (0..mine.len()).map(|i| fresh.get(i)), &self.tol);
                 again.as_ref().map_or(b, |a| a.ncols()) > width(b, q, x)
-            })
+            });
+            if let (Some(c), Some(k)) = (self.cache, key) {
+                c.put_isolated(k, found);
+            }
+            found
         });
         let joint = &eqs.joint;
         let mut suspects: Vec<(usize, u64)> = iso_bodies
@@ -158,6 +171,33 @@ impl Attempt<'_> {
         suspects.sort_unstable();
         suspects.dedup();
         suspects
+    }
+
+    /// The cache key of body `x`'s confirmation ([`unconfirmed_isolated`]): everything it
+    /// depends on (the tolerance, the draws' seeds, the body's width, and each pair touching
+    /// it: its joint, that joint's inputs and its rows at this draw).
+    fn isolated_key(
+        &self,
+        eqs: &Equations,
+        x: usize,
+        mine: &[u32],
+        seed: u64,
+        attempt: u64,
+    ) -> u128 {
+        let mut d = Digest::new(4);
+        self.tol_words.iter().for_each(|&w| d.word(w));
+        d.word(seed);
+        d.word(attempt);
+        d.word(width(self.b, &self.q, x) as u64);
+        d.word(mine.len() as u64);
+        for &e in mine {
+            let e = e as usize;
+            d.word(eqs.joint[e] as u64);
+            d.word(u64::from(eqs.driven[e]));
+            d.word(u64::from(eqs.input_only[e]));
+            d.wide(self.rd[e]);
+        }
+        d.finish()
     }
 
     /// A draw at which the deficient block (`shape`: rows, columns) has full rank, when this
