@@ -25,39 +25,39 @@ pub struct Cache {
 /// Entries a [`Cache`] keeps before it starts over (memory stays bounded).
 const CACHE_ENTRIES: usize = 1 << 21;
 
+/// The entry under `k`, if kept.
+fn get<T: Clone>(map: &Mutex<HashMap<u128, T>>, k: u128) -> Option<T> {
+    let g = map.lock().unwrap_or_else(|e| e.into_inner());
+    g.get(&k).cloned()
+}
+
+/// Keep `v` under `k`, starting over once [`CACHE_ENTRIES`] are kept.
+fn put<T>(map: &Mutex<HashMap<u128, T>>, k: u128, v: T) {
+    let mut g = map.lock().unwrap_or_else(|e| e.into_inner());
+    if g.len() >= CACHE_ENTRIES {
+        g.clear();
+    }
+    g.insert(k, v);
+}
+
 impl Cache {
     pub(super) fn get_basis(&self, k: u128) -> Option<Option<DMatrix<f64>>> {
-        let g = self.bases.lock().unwrap_or_else(|e| e.into_inner());
-        g.get(&k).cloned()
+        get(&self.bases, k)
     }
     pub(super) fn put_basis(&self, k: u128, v: &Option<DMatrix<f64>>) {
-        let mut g = self.bases.lock().unwrap_or_else(|e| e.into_inner());
-        if g.len() >= CACHE_ENTRIES {
-            g.clear();
-        }
-        g.insert(k, v.clone());
+        put(&self.bases, k, v.clone());
     }
     pub(super) fn get_block(&self, k: u128) -> Option<Option<Unchecked>> {
-        let g = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
-        g.get(&k).cloned()
+        get(&self.blocks, k)
     }
     pub(super) fn put_block(&self, k: u128, v: Option<Unchecked>) {
-        let mut g = self.blocks.lock().unwrap_or_else(|e| e.into_inner());
-        if g.len() >= CACHE_ENTRIES {
-            g.clear();
-        }
-        g.insert(k, v);
+        put(&self.blocks, k, v);
     }
     pub(super) fn get_isolated(&self, k: u128) -> Option<Option<u64>> {
-        let g = self.isolated.lock().unwrap_or_else(|e| e.into_inner());
-        g.get(&k).copied()
+        get(&self.isolated, k)
     }
     pub(super) fn put_isolated(&self, k: u128, v: Option<u64>) {
-        let mut g = self.isolated.lock().unwrap_or_else(|e| e.into_inner());
-        if g.len() >= CACHE_ENTRIES {
-            g.clear();
-        }
-        g.insert(k, v);
+        put(&self.isolated, k, v);
     }
 }
 
