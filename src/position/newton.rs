@@ -284,7 +284,6 @@ impl System {
         // The singular values of the last `j`, once they are known.
         let mut svd_values: Option<Vec<f64>>;
         loop {
-            svd_values = None;
             if j.nrows() == 0 || j.ncols() == 0 || !j.iter().chain(r.iter()).all(|x| x.is_finite())
             {
                 svd_values = Some(Vec::new());
@@ -298,31 +297,17 @@ impl System {
                     .saturating_mul(cols.min(rows))
                     / 4,
             )?;
-            // The last point needs the singular values only; a step of a square, well
-            // conditioned system is the LU solution, which the SVD's would equal to rounding.
             let last = inf(&r) <= opts.tolerance
                 || iterations >= opts.max_iterations
                 || !r.iter().all(|x| x.is_finite());
-            let quick = if last { None } else { square_step(&j, &r) };
-            let step = match quick {
-                Some(step) => step,
-                None => {
-                    let Some(svd) =
-                        nalgebra::SVD::try_new(j.clone(), !last, !last, f64::EPSILON, 10_000)
-                    else {
-                        svd_values = Some(Vec::new());
-                        break;
-                    };
-                    let values: Vec<f64> = svd.singular_values.iter().copied().collect();
-                    let top = values.iter().copied().fold(0.0, f64::max);
+            let step = match next_step(&j, &r, last) {
+                Next::Stop(values) => {
                     svd_values = Some(values);
-                    if last {
-                        break;
-                    }
-                    match svd.solve(&(-&r), 1e-10 * top.max(1e-300)) {
-                        Ok(s) => s,
-                        Err(_) => break,
-                    }
+                    break;
+                }
+                Next::Step(step, values) => {
+                    svd_values = values;
+                    step
                 }
             };
             iterations += 1;
@@ -350,12 +335,13 @@ impl System {
             }
         }
         // A failed line search after an LU step: the values at the point kept.
-        let mut svd_values = svd_values.unwrap_or_else(|| {
-            nalgebra::SVD::try_new(j.clone(), false, false, f64::EPSILON, 10_000)
-                .map(|d| d.singular_values.iter().copied().collect())
-                .unwrap_or_default()
-        });
-        svd_values.sort_by(|a, b| b.total_cmp(a));
+        let svd_values = match svd_values {
+            Some(mut v) => {
+                v.sort_by(|a, b| b.total_cmp(a));
+                v
+            }
+            None => singular_values(j.clone()),
+        };
         let out = NewtonOutcome {
             converged: inf(&r) <= opts.tolerance,
             iterations,
@@ -366,6 +352,34 @@ impl System {
             pair_residuals: per_pair,
         };
         Ok((out, local))
+    }
+}
+
+/// What a Newton iteration does at a point.
+enum Next {
+    /// Take the step; the singular values when an SVD gave it.
+    Step(DVector<f64>, Option<Vec<f64>>),
+    /// Stop, with the singular values at the point.
+    Stop(Vec<f64>),
+}
+
+/// The step at `j`, `r`: the LU step of a square, well conditioned system, else the SVD's
+/// damped minimum-norm one; at the `last` point only the singular values.
+fn next_step(j: &DMatrix<f64>, r: &DVector<f64>, last: bool) -> Next {
+    if let Some(step) = (!last).then(|| square_step(j, r)).flatten() {
+        return Next::Step(step, None);
+    }
+    let Some(svd) = nalgebra::SVD::try_new(j.clone(), !last, !last, f64::EPSILON, 10_000) else {
+        return Next::Stop(Vec::new());
+    };
+    let values: Vec<f64> = svd.singular_values.iter().copied().collect();
+    if last {
+        return Next::Stop(values);
+    }
+    let top = values.iter().copied().fold(0.0, f64::max);
+    match svd.solve(&(-r), 1e-10 * top.max(1e-300)) {
+        Ok(step) => Next::Step(step, Some(values)),
+        Err(_) => Next::Stop(values),
     }
 }
 
@@ -391,4 +405,17 @@ fn square_step(j: &DMatrix<f64>, r: &DVector<f64>) -> Option<DVector<f64>> {
         return None;
     }
     lu.solve(&(-r)).filter(|s| s.iter().all(|x| x.is_finite()))
+}
+
+/// The singular values of `j`, largest first (none for an empty matrix or an SVD that does not
+/// converge).
+pub(super) fn singular_values(j: DMatrix<f64>) -> Vec<f64> {
+    if j.nrows() == 0 || j.ncols() == 0 {
+        return Vec::new();
+    }
+    let mut s: Vec<f64> = nalgebra::SVD::try_new(j, false, false, f64::EPSILON, 10_000)
+        .map(|d| d.singular_values.iter().copied().collect())
+        .unwrap_or_default();
+    s.sort_by(|a, b| b.total_cmp(a));
+    s
 }

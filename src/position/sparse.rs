@@ -610,15 +610,7 @@ impl<'a> Sparse<'a> {
                 cfg.poses[x] = *p;
             }
             let (_, j, _) = self.sys.evaluate(self.model, self.targets, &cfg);
-            let mut s: Vec<f64> = if j.nrows() == 0 || j.ncols() == 0 {
-                Vec::new()
-            } else {
-                nalgebra::SVD::try_new(j, false, false, f64::EPSILON, 10_000)
-                    .map(|d| d.singular_values.iter().copied().collect())
-                    .unwrap_or_default()
-            };
-            s.sort_by(|a, b| b.total_cmp(a));
-            s
+            super::newton::singular_values(j)
         } else {
             // Estimates: square roots of the pivots less the damping (zero when a pivot is
             // no more than twice the damping).
