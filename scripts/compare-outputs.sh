@@ -23,7 +23,8 @@ cmds=(
   "rigid" "rigid --format json" "rigid --method counting --format json"
   "rigid --with-inputs --method geometric --format json" "rigid --finite"
   "transform --limit 30" "transform --limit 30 --format json"
-  "solve" "solve --format json" "assemble" "check"
+  "solve" "solve --format json" "solve --global" "solve --global --format json"
+  "assemble" "check"
 )
 jobs=()
 for f in "${files[@]}"; do

@@ -111,6 +111,20 @@ impl Elimination {
         Self::run_ordered(sizes, blocks, abs_tol, max_bytes, Some(order), None).map_err(Stop::bytes)
     }
 
+    /// [`Elimination::run_in_order`] that also charges `meter` (as [`Elimination::run_metered`]).
+    /// Groups missing from `order` are never eliminated: their columns stay in the rows the
+    /// factors keep, as a right-hand side does.
+    pub(crate) fn run_in_order_metered(
+        sizes: &[usize],
+        blocks: Vec<Block>,
+        abs_tol: f64,
+        max_bytes: u64,
+        order: &[usize],
+        meter: &mut Meter,
+    ) -> Result<Elimination, Stop> {
+        Self::run_ordered(sizes, blocks, abs_tol, max_bytes, Some(order), Some(meter))
+    }
+
     fn run_ordered(
         sizes: &[usize],
         blocks: Vec<Block>,
@@ -254,6 +268,38 @@ impl Elimination {
             }
         }
         x
+    }
+
+    /// Back substitution through every factor, last first: `x` holds the values of the
+    /// groups not eliminated; each eliminated group's pivot unknowns are solved from its
+    /// rows and its free unknowns set to 0. With a right-hand side `e` as a group of one
+    /// column left out of the order and set to 1, the eliminated unknowns become the basic
+    /// least-squares solution of `J x = −e`.
+    pub(crate) fn back_substitute(&self, x: &mut DVector<f64>) {
+        for h in self.records.iter().rev() {
+            let sg = self.sizes[h.group];
+            let at = self.offsets[h.group];
+            for q in h.rank..sg {
+                x[at + h.perm[q]] = 0.0;
+            }
+            if h.rank == 0 {
+                continue;
+            }
+            let mut rhs = DVector::zeros(h.rank);
+            let mut c = sg;
+            for &o in &h.others {
+                let s = self.sizes[o];
+                rhs -= h.r.view((0, c), (h.rank, s)) * x.rows(self.offsets[o], s);
+                c += s;
+            }
+            for i in (0..h.rank).rev() {
+                let mut s = rhs[i];
+                for k in i + 1..h.rank {
+                    s -= h.r[(i, k)] * x[at + h.perm[k]];
+                }
+                x[at + h.perm[i]] = s / h.r[(i, i)];
+            }
+        }
     }
 
     /// A basis of the null space (dense vectors over all unknowns), one per free column.

@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod budget;
+mod cholesky;
 pub mod cut;
 pub mod diagnostic;
 mod elimination;

@@ -25,6 +25,7 @@ pub mod realize;
 pub mod residual;
 pub mod solve;
 pub mod sparse;
+mod sparse_qr;
 pub mod sweep;
 mod track;
 

@@ -392,6 +392,12 @@ fn comp(t: &TV, k: usize) -> TS {
 }
 
 impl Pair {
+    /// The joint point in each body's reference coordinates (first body, other body), in
+    /// model units.
+    pub fn anchors(&self) -> (Vector3<f64>, Vector3<f64>) {
+        (self.f.o, self.offset.point(&self.f.o))
+    }
+
     /// The pose that carries the joint's features on the second body: `pb` followed by
     /// [`Pair::offset`] (`pb` itself when the joint has no `second` geometry).
     pub fn carried(&self, pb: &Pose) -> Pose {

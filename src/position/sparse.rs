@@ -1,15 +1,21 @@
 //! Sparse Gauss–Newton on many bodies at once: the global reference solve at scale.
 //!
 //! The Jacobian of a mechanism is block sparse: a pair's equations touch its two bodies only.
-//! Each step solves the normal equations `(JᵀJ + μI) δ = −Jᵀe` by a block Cholesky
-//! factorization (one `B × B` block per body, `B` = 3 or 6) in a minimum-degree elimination
-//! order of the body graph. `μ = 10⁻¹²·max diag(JᵀJ)` keeps the factorization defined when the
+//! Each step solves the normal equations `(JᵀJ + μI) δ = −Jᵀe` by the block Cholesky of
+//! [`crate::cholesky`] (one `B × B` block per body, `B` = 3 or 6) in a minimum-degree
+//! elimination order of the body graph. Each body's unknowns are a twist about its reference
+//! point (the mean of its joint points), so that a rotation does not carry the body's distance
+//! from the origin (far bodies' columns would be nearly parallel); the normal equations are
+//! scaled to a unit diagonal and `μ = 10⁻¹²` of it keeps the factorization defined when the
 //! equations are redundant (a planar loop written in space) or leave unknowns free (an
 //! isolated spin); since `Jᵀe` lies in the row space of `J`, the step then stays (to rounding)
 //! in that row space, as the dense solver's minimum-norm step does, so free unknowns do not
 //! move. Components of the step along singular values below about `10⁻⁶·σ_max` are damped (a
 //! Levenberg–Marquardt step): near a singular configuration Newton slows but does not jump.
-//! A step that does not lower `‖e‖` is halved (up to 30 times), as in [`super::newton`].
+//! A full step that leaves over half the residual lowers `μ` a hundredfold (down to `10⁻¹⁶`);
+//! a step that does not lower `‖e‖` is halved (up to 30 times), as in [`super::newton`]. When
+//! the normal equations (which square the conditioning) do not converge on a system with
+//! little fill, the solve runs again with the QR steps of [`super::sparse_qr`].
 //!
 //! The elimination order is computed once per solve from the body graph (the elimination
 //! graph gives the factor's structure as it goes); the memory the factor needs is checked
@@ -19,363 +25,78 @@
 use super::newton::{NewtonOptions, NewtonOutcome, System, Targets};
 use super::pose::{Configuration, Pose};
 use super::residual::PositionModel;
+use super::sparse_qr::Jacobian;
 use crate::budget::{BudgetExceeded, Meter};
+use crate::cholesky::{Normal, Symbolic, symbolic};
+use crate::mechanism::Space;
+use nalgebra::{DMatrix, Vector3};
 use rayon::prelude::*;
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
 
 /// Largest system (columns) whose final Jacobian gets a dense SVD for the report's nullity
 /// and conditioning; above it they are estimated from the Cholesky pivots.
 pub const DENSE_REPORT_COLUMNS: usize = 600;
 
-/// Bytes of factor storage per entry of the elimination structure, beside the blocks.
-const STRUCT_BYTES: u64 = 16;
+/// Damping `μ` relative to the largest diagonal of the scaled normal equations: steps along
+/// singular values below about `10⁻⁶·σ_max` are damped.
+const DAMPING: f64 = 1e-12;
 
-/// The structure of the block Cholesky factor: columns in elimination order.
-#[derive(Clone, Debug)]
-pub struct Symbolic {
-    /// Block size.
-    b: usize,
-    /// `pos[c]`: elimination index of local unknown `c` (index in `System::bodies`).
-    pos: Vec<u32>,
-    /// Column `k`'s rows (elimination indices above `k`, ascending) are
-    /// `rows[start[k]..start[k + 1]]`.
-    start: Vec<usize>,
-    rows: Vec<u32>,
-}
+/// Least damping (about the rounding of the unit diagonal): singular values down to about
+/// `10⁻⁸·σ_max` resolved.
+const MIN_DAMPING: f64 = 1e-16;
 
-impl Symbolic {
-    /// Number of off-diagonal blocks of the factor.
-    pub fn off_blocks(&self) -> usize {
-        self.rows.len()
-    }
+/// A full step that leaves more than this fraction of `‖e‖` converges only linearly: the
+/// damping, not the equations, sets its pace, and it is lowered a hundredfold.
+const SLOW: f64 = 0.5;
 
-    /// Bytes of the numeric factor.
-    pub fn factor_bytes(&self) -> u64 {
-        let blocks = (self.pos.len() + self.rows.len()) as u64;
-        blocks
-            .saturating_mul((self.b * self.b * 8) as u64)
-            .saturating_add(self.rows.len() as u64 * STRUCT_BYTES)
-    }
+/// Halved or slow steps after which the normal equations give way to the QR steps (where
+/// those are affordable): they are limited by the conditioning, not the damping.
+const STALLS: usize = 4;
 
-    /// Work units of one numeric factorization (block multiply-adds times `B³`).
-    pub fn factor_work(&self) -> u64 {
-        let b3 = (self.b * self.b * self.b) as u64;
-        (0..self.pos.len())
-            .map(|k| {
-                let l = (self.start[k + 1] - self.start[k]) as u64;
-                (l * (l + 1) / 2 + l + 1) * b3
-            })
-            .fold(0u64, u64::saturating_add)
-    }
-
-    /// Index (into the off-diagonal blocks) of block (row `i`, column `k`), `i > k`.
-    fn find(&self, k: usize, i: u32) -> Option<usize> {
-        let r = &self.rows[self.start[k]..self.start[k + 1]];
-        r.binary_search(&i).ok().map(|x| self.start[k] + x)
-    }
-}
-
-/// Sorted union of `a` without `skip_a` and `b` without `skip_b`.
-fn merge(a: &[u32], b: &[u32], skip: u32, skip2: u32) -> Vec<u32> {
-    let mut out = Vec::with_capacity(a.len() + b.len());
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() || j < b.len() {
-        let x = match (a.get(i), b.get(j)) {
-            (Some(&x), Some(&y)) if x == y => {
-                i += 1;
-                j += 1;
-                x
+/// Columns `side·B..(side + 1)·B` of a pair's Jacobian (taken in twists about the world
+/// origin, `v_O`) rewritten in twists about the body's point `p` (`u = v_O + ω × p`, so
+/// `v_O = u + p × ω`): the rotation columns gain `J_v [p]×`. About a point on the body a
+/// rotation no longer carries the body's distance from the origin, which made the columns of
+/// far bodies nearly parallel.
+fn shift_columns(space: Space, j: &mut DMatrix<f64>, side: usize, p: &Vector3<f64>) {
+    let o = side * space.b() as usize;
+    for mut row in j.row_iter_mut() {
+        match space {
+            Space::Planar => row[o] += row[o + 1] * p.y - row[o + 2] * p.x,
+            Space::Spatial => {
+                let (vx, vy, vz) = (row[o + 3], row[o + 4], row[o + 5]);
+                row[o] += vy * p.z - vz * p.y;
+                row[o + 1] += vz * p.x - vx * p.z;
+                row[o + 2] += vx * p.y - vy * p.x;
             }
-            (Some(&x), Some(&y)) if x < y => {
-                i += 1;
-                x
-            }
-            (Some(_), Some(&y)) => {
-                j += 1;
-                y
-            }
-            (Some(&x), None) => {
-                i += 1;
-                x
-            }
-            (None, Some(&y)) => {
-                j += 1;
-                y
-            }
-            (None, None) => break,
-        };
-        if x != skip && x != skip2 {
-            out.push(x);
-        }
-    }
-    out
-}
-
-/// Minimum-degree elimination of the graph of `n` unknowns with `edges`: the elimination
-/// order and the factor structure. Ties go to the lowest index (deterministic). The
-/// elimination graph's size is checked against `max_bytes` as it grows.
-pub fn symbolic(
-    n: usize,
-    b: usize,
-    edges: &[(u32, u32)],
-    meter: &mut Meter,
-    max_bytes: u64,
-) -> Result<Symbolic, BudgetExceeded> {
-    let mut adj: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for &(u, v) in edges {
-        if u != v {
-            adj[u as usize].push(v);
-            adj[v as usize].push(u);
-        }
-    }
-    for a in &mut adj {
-        a.sort_unstable();
-        a.dedup();
-    }
-    meter.charge(edges.len() as u64 * 4 + n as u64)?;
-    let mut alive = vec![true; n];
-    let mut heap: BinaryHeap<Reverse<(usize, u32)>> = (0..n as u32)
-        .map(|v| Reverse((adj[v as usize].len(), v)))
-        .collect();
-    let mut order: Vec<u32> = Vec::with_capacity(n);
-    let mut structure: Vec<Vec<u32>> = vec![Vec::new(); n];
-    let mut stored: u64 = adj.iter().map(|a| a.len() as u64).sum();
-    let block = (b * b * 8) as u64 + STRUCT_BYTES;
-    let mut fill: u64 = 0;
-    while let Some(Reverse((d, v))) = heap.pop() {
-        let vi = v as usize;
-        if !alive[vi] || adj[vi].len() != d {
-            continue;
-        }
-        alive[vi] = false;
-        order.push(v);
-        let nb = std::mem::take(&mut adj[vi]);
-        for &u in &nb {
-            let ui = u as usize;
-            let merged = merge(&adj[ui], &nb, v, u);
-            meter.charge((adj[ui].len() + nb.len()) as u64 + 1)?;
-            stored = stored + merged.len() as u64 - adj[ui].len() as u64;
-            adj[ui] = merged;
-            heap.push(Reverse((adj[ui].len(), u)));
-        }
-        stored = stored.saturating_sub(nb.len() as u64);
-        // The factor holds every structure so far, the elimination graph the rest.
-        fill += nb.len() as u64;
-        structure[vi] = nb;
-        let estimate = stored
-            .saturating_mul(4)
-            .saturating_add((order.len() as u64 + fill).saturating_mul(block));
-        if estimate > max_bytes {
-            return Err(BudgetExceeded {
-                limit: crate::budget::Limit::Memory,
-                what: "the sparse factorization of the global solve".into(),
-                needed: estimate,
-                at_least: true,
-                allowed: max_bytes,
-            });
-        }
-    }
-    let mut pos = vec![0u32; n];
-    for (i, &v) in order.iter().enumerate() {
-        pos[v as usize] = i as u32;
-    }
-    let mut start = Vec::with_capacity(n + 1);
-    let mut rows = Vec::new();
-    start.push(0);
-    for &v in &order {
-        let mut r: Vec<u32> = structure[v as usize]
-            .iter()
-            .map(|&u| pos[u as usize])
-            .collect();
-        r.sort_unstable();
-        rows.extend_from_slice(&r);
-        start.push(rows.len());
-    }
-    Ok(Symbolic {
-        b,
-        pos,
-        start,
-        rows,
-    })
-}
-
-/// Dense lower Cholesky of the `b × b` row-major block `a` in place (upper part zeroed);
-/// pivots below `floor` are raised to it. Returns the squared pivots.
-fn chol(a: &mut [f64], b: usize, floor: f64, pivots: &mut [f64]) {
-    for j in 0..b {
-        let mut d = a[j * b + j];
-        for k in 0..j {
-            d -= a[j * b + k] * a[j * b + k];
-        }
-        let d = if d.is_finite() && d > floor { d } else { floor };
-        pivots[j] = d;
-        let l = d.sqrt();
-        a[j * b + j] = l;
-        for i in j + 1..b {
-            let mut s = a[i * b + j];
-            for k in 0..j {
-                s -= a[i * b + k] * a[j * b + k];
-            }
-            a[i * b + j] = s / l;
-        }
-        for i in 0..j {
-            a[i * b + j] = 0.0;
+            Space::Spherical => {}
         }
     }
 }
 
-/// `x ← x L⁻ᵀ` for the row-major block `x` (each row solved against lower `l`).
-fn right_solve_lt(x: &mut [f64], l: &[f64], b: usize) {
-    for r in 0..b {
-        let row = &mut x[r * b..(r + 1) * b];
-        for j in 0..b {
-            let mut s = row[j];
-            for k in 0..j {
-                s -= row[k] * l[j * b + k];
-            }
-            row[j] = s / l[j * b + j];
+/// A twist about `p` (`ω; u`) as the twist about the origin that [`Pose::moved_by`] takes.
+fn about_origin(space: Space, t: &mut [f64], p: &Vector3<f64>) {
+    match space {
+        Space::Planar => {
+            t[1] += p.y * t[0];
+            t[2] -= p.x * t[0];
         }
-    }
-}
-
-/// `c ← c − x yᵀ` for row-major blocks.
-fn sub_xyt(c: &mut [f64], x: &[f64], y: &[f64], b: usize) {
-    for i in 0..b {
-        for j in 0..b {
-            let mut s = 0.0;
-            for k in 0..b {
-                s += x[i * b + k] * y[j * b + k];
-            }
-            c[i * b + j] -= s;
+        Space::Spatial => {
+            let w = Vector3::new(t[0], t[1], t[2]);
+            let v = p.cross(&w);
+            t[3] += v.x;
+            t[4] += v.y;
+            t[5] += v.z;
         }
-    }
-}
-
-/// The normal equations at one point, in the factor's storage.
-struct Normal {
-    diag: Vec<f64>,
-    off: Vec<f64>,
-    grad: Vec<f64>,
-}
-
-impl Normal {
-    fn zeros(s: &Symbolic) -> Normal {
-        let bb = s.b * s.b;
-        Normal {
-            diag: vec![0.0; s.pos.len() * bb],
-            off: vec![0.0; s.rows.len() * bb],
-            grad: vec![0.0; s.pos.len() * s.b],
-        }
-    }
-
-    fn clear(&mut self) {
-        self.diag.fill(0.0);
-        self.off.fill(0.0);
-        self.grad.fill(0.0);
-    }
-
-    /// Factor `self + μI` in place; the squared pivots, in elimination order.
-    fn factor(&mut self, s: &Symbolic, mu: f64) -> Vec<f64> {
-        let b = s.b;
-        let bb = b * b;
-        let n = s.pos.len();
-        let mut pivots = vec![0.0; n * b];
-        let floor = mu.max(f64::MIN_POSITIVE);
-        for k in 0..n {
-            let dk = &mut self.diag[k * bb..(k + 1) * bb];
-            for i in 0..b {
-                dk[i * b + i] += mu;
-            }
-            chol(dk, b, floor, &mut pivots[k * b..(k + 1) * b]);
-            let lkk: Vec<f64> = dk.to_vec();
-            let (lo, hi) = (s.start[k], s.start[k + 1]);
-            let (left, right) = self.off.split_at_mut(hi * bb);
-            let col = &mut left[lo * bb..];
-            for blk in col.chunks_exact_mut(bb) {
-                right_solve_lt(blk, &lkk, b);
-            }
-            for a in 0..hi - lo {
-                let u = s.rows[lo + a] as usize;
-                let lu = &col[a * bb..(a + 1) * bb];
-                sub_xyt(&mut self.diag[u * bb..(u + 1) * bb], lu, lu, b);
-                let mut from = s.start[u];
-                for c in a + 1..hi - lo {
-                    let w = s.rows[lo + c];
-                    let lw = &col[c * bb..(c + 1) * bb];
-                    let r = &s.rows[from..s.start[u + 1]];
-                    let Ok(x) = r.binary_search(&w) else { continue };
-                    let at = from + x - hi;
-                    from += x + 1;
-                    sub_xyt(&mut right[at * bb..(at + 1) * bb], lw, lu, b);
-                }
-            }
-        }
-        pivots
-    }
-
-    /// Solve `L Lᵀ x = rhs` with the factor in place (elimination order).
-    fn solve(&self, s: &Symbolic, rhs: &mut [f64]) {
-        let b = s.b;
-        let bb = b * b;
-        let n = s.pos.len();
-        for k in 0..n {
-            let l = &self.diag[k * bb..(k + 1) * bb];
-            let (head, tail) = rhs.split_at_mut((k + 1) * b);
-            let y = &mut head[k * b..];
-            for i in 0..b {
-                let mut v = y[i];
-                for j in 0..i {
-                    v -= l[i * b + j] * y[j];
-                }
-                y[i] = v / l[i * b + i];
-            }
-            for idx in s.start[k]..s.start[k + 1] {
-                let w = s.rows[idx] as usize;
-                let blk = &self.off[idx * bb..(idx + 1) * bb];
-                let t = &mut tail[(w - k - 1) * b..(w - k) * b];
-                for i in 0..b {
-                    let mut v = 0.0;
-                    for j in 0..b {
-                        v += blk[i * b + j] * y[j];
-                    }
-                    t[i] -= v;
-                }
-            }
-        }
-        for k in (0..n).rev() {
-            let (head, tail) = rhs.split_at_mut((k + 1) * b);
-            let x = &mut head[k * b..];
-            for idx in s.start[k]..s.start[k + 1] {
-                let w = s.rows[idx] as usize;
-                let blk = &self.off[idx * bb..(idx + 1) * bb];
-                let t = &tail[(w - k - 1) * b..(w - k) * b];
-                for j in 0..b {
-                    let mut v = 0.0;
-                    for i in 0..b {
-                        v += blk[i * b + j] * t[i];
-                    }
-                    x[j] -= v;
-                }
-            }
-            let l = &self.diag[k * bb..(k + 1) * bb];
-            for i in (0..b).rev() {
-                let mut v = x[i];
-                for j in i + 1..b {
-                    v -= l[j * b + i] * x[j];
-                }
-                x[i] = v / l[i * b + i];
-            }
-        }
+        Space::Spherical => {}
     }
 }
 
 /// Where each pair's blocks go: elimination indices of its unknown sides and the
 /// off-diagonal block joining them.
 #[derive(Clone, Copy)]
-struct Slot {
-    a: Option<u32>,
-    b: Option<u32>,
+pub(super) struct Slot {
+    pub(super) a: Option<u32>,
+    pub(super) b: Option<u32>,
     off: Option<usize>,
 }
 
@@ -388,8 +109,12 @@ pub struct Sparse<'a> {
     model: &'a PositionModel,
     targets: &'a Targets,
     sym: Symbolic,
-    slots: Vec<Slot>,
+    pub(super) slots: Vec<Slot>,
     col: Vec<u32>,
+    /// Per elimination index: the local unknown (index in `System::bodies`) and its reference
+    /// point (the mean of its joint points, in its reference coordinates).
+    body: Vec<u32>,
+    centre: Vec<Vector3<f64>>,
 }
 
 impl<'a> Sparse<'a> {
@@ -443,6 +168,29 @@ impl<'a> Sparse<'a> {
                 Slot { a, b: bb, off }
             })
             .collect();
+        let mut sum = vec![(Vector3::zeros(), 0u32); n];
+        for &p in &sys.pairs {
+            let pair = &model.pairs[p];
+            let (xa, xb) = pair.anchors();
+            for (body, x) in [(pair.a, xa), (pair.b, xb)] {
+                if let Some(c) = known(body) {
+                    let e = &mut sum[c as usize];
+                    e.0 += x;
+                    e.1 += 1;
+                }
+            }
+        }
+        let mut body = vec![0u32; n];
+        let mut centre = vec![Vector3::zeros(); n];
+        for (c, &(x, m)) in sum.iter().enumerate() {
+            let k = sym.pos[c] as usize;
+            body[k] = c as u32;
+            centre[k] = if m > 0 && x.iter().all(|v| v.is_finite()) {
+                x / m as f64
+            } else {
+                Vector3::zeros()
+            };
+        }
         Ok(Sparse {
             sys,
             model,
@@ -450,6 +198,8 @@ impl<'a> Sparse<'a> {
             sym,
             slots,
             col,
+            body,
+            centre,
         })
     }
 
@@ -458,21 +208,41 @@ impl<'a> Sparse<'a> {
         &self.sym
     }
 
+    /// Twist size B.
+    pub(super) fn model_b(&self) -> usize {
+        self.model.b()
+    }
+
+    /// Where each unknown's reference point is at `local` (elimination order).
+    fn points(&self, local: &[Pose]) -> Vec<Vector3<f64>> {
+        self.body
+            .iter()
+            .zip(&self.centre)
+            .map(|(&c, x)| local[c as usize].point(x))
+            .collect()
+    }
+
     /// Residuals (all pairs, in order), per-pair maxima, and the normal equations into `ne`.
     fn evaluate(
         &self,
         config: &Configuration,
         local: &[Pose],
         ne: &mut Normal,
+        mut jac: Option<&mut Jacobian>,
         meter: &mut Meter,
     ) -> Result<(Vec<f64>, Vec<f64>), BudgetExceeded> {
         let b = self.model.b();
         let bb = b * b;
+        if let Some(j) = jac.as_deref_mut() {
+            j.clear();
+        }
         let pose = |body: usize| match self.col.get(body).copied() {
             Some(c) if c != u32::MAX => local[c as usize],
             _ => config.poses[body],
         };
         ne.clear();
+        let points = self.points(local);
+        let space = self.model.space;
         let mut r = Vec::new();
         let mut per_pair = Vec::with_capacity(self.sys.pairs.len());
         for (chunk, slots) in self.sys.pairs.chunks(CHUNK).zip(self.slots.chunks(CHUNK)) {
@@ -489,11 +259,19 @@ impl<'a> Sparse<'a> {
                     )
                 })
                 .collect();
-            for (e, slot) in eqs.iter().zip(slots) {
+            for (mut e, slot) in eqs.into_iter().zip(slots) {
                 let rows = e.residual.len();
                 per_pair.push(e.residual.iter().fold(0.0f64, |m, x| m.max(x.abs())));
                 r.extend_from_slice(&e.residual);
+                for (s, side) in [(slot.a, 0), (slot.b, 1)] {
+                    if let Some(k) = s {
+                        shift_columns(space, &mut e.jacobian, side, &points[k as usize]);
+                    }
+                }
                 let j = &e.jacobian;
+                if let Some(store) = jac.as_deref_mut() {
+                    store.push(j);
+                }
                 let sides = [(slot.a, 0usize), (slot.b, 1usize)];
                 for &(s, side) in &sides {
                     let Some(k) = s else { continue };
@@ -536,12 +314,37 @@ impl<'a> Sparse<'a> {
         Ok((r, per_pair))
     }
 
-    /// Gauss–Newton from `config`; returns the outcome and the unknowns' new poses.
+    /// Gauss–Newton from `config`; returns the outcome and the unknowns' new poses. The steps
+    /// come from the normal equations; when they do not converge on a system whose factor has
+    /// little fill (chains of loops), the solve runs again from `config` with the steps of the
+    /// sparse QR ([`super::sparse_qr`]), which does not square the conditioning, and the better
+    /// of the two is kept.
     pub fn solve(
         &self,
         config: &Configuration,
         opts: &NewtonOptions,
         meter: &mut Meter,
+    ) -> Result<(NewtonOutcome, Vec<Pose>), BudgetExceeded> {
+        let first = self.run(config, opts, meter, false)?;
+        if first.0.converged || !self.qr_affordable() {
+            return Ok(first);
+        }
+        let second = self.run(config, opts, meter, true)?;
+        Ok(if second.0.residual < first.0.residual {
+            second
+        } else {
+            first
+        })
+    }
+
+    /// Gauss–Newton from `config` with the normal equations' steps, or the QR's (`qr`).
+    /// Longer than most: the step, the line search and the report share the loop's state.
+    fn run(
+        &self,
+        config: &Configuration,
+        opts: &NewtonOptions,
+        meter: &mut Meter,
+        qr: bool,
     ) -> Result<(NewtonOutcome, Vec<Pose>), BudgetExceeded> {
         let b = self.model.b();
         let n = self.sys.bodies.len();
@@ -555,29 +358,56 @@ impl<'a> Sparse<'a> {
         let norm = |r: &[f64]| r.iter().map(|x| x * x).sum::<f64>().sqrt();
         let mut local: Vec<Pose> = self.sys.bodies.iter().map(|&x| config.poses[x]).collect();
         let mut ne = Normal::zeros(&self.sym);
-        let (mut r, mut per_pair) = self.evaluate(config, &local, &mut ne, meter)?;
+        let mut jac = Jacobian::default();
+        fn store(qr: bool, j: &mut Jacobian) -> Option<&mut Jacobian> {
+            if qr { Some(j) } else { None }
+        }
+        let (mut r, mut per_pair) =
+            self.evaluate(config, &local, &mut ne, store(qr, &mut jac), meter)?;
         let mut iterations = 0;
-        let mut pivots: Vec<f64> = Vec::new();
+        let mut pivots: Option<Vec<f64>> = None;
         let mut mu = 0.0;
+        let mut damping = DAMPING;
+        let mut stalls = 0;
         let work = self.sym.factor_work();
         loop {
             let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
             if n == 0 || r.is_empty() || !finite {
                 break;
             }
-            let top = (0..n * b)
-                .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                .fold(0.0f64, f64::max);
-            mu = 1e-12 * top.max(1e-300);
-            let mut rhs: Vec<f64> = ne.grad.iter().map(|g| -g).collect();
-            meter.charge(work)?;
-            pivots = ne.factor(&self.sym, mu);
-            if inf(&r) <= opts.tolerance || iterations >= opts.max_iterations {
+            let done = inf(&r) <= opts.tolerance || iterations >= opts.max_iterations;
+            let mut step = if qr {
+                if done {
+                    break;
+                }
+                let diag: Vec<f64> = (0..n * b)
+                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
+                    .collect();
+                self.qr_step(&jac, &r, &diag, opts, meter)?
+            } else {
+                ne.equilibrate(&self.sym);
+                let top = (0..n * b)
+                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
+                    .fold(0.0f64, f64::max);
+                mu = damping * top.max(1e-300);
+                let mut rhs: Vec<f64> = ne.grad.iter().map(|g| -g).collect();
+                meter.charge(work)?;
+                pivots = Some(ne.factor(&self.sym, mu));
+                if done {
+                    break;
+                }
+                ne.solve(&self.sym, &mut rhs);
+                for (x, d) in rhs.iter_mut().zip(&ne.scale) {
+                    *x *= d;
+                }
+                rhs
+            };
+            if !step.iter().all(|x| x.is_finite()) {
                 break;
             }
-            ne.solve(&self.sym, &mut rhs);
-            if !rhs.iter().all(|x| x.is_finite()) {
-                break;
+            let points = self.points(&local);
+            for (k, t) in step.chunks_exact_mut(b).enumerate() {
+                about_origin(self.model.space, t, &points[k]);
             }
             iterations += 1;
             let base = local.clone();
@@ -587,10 +417,11 @@ impl<'a> Sparse<'a> {
             for _ in 0..30 {
                 for (c, p) in local.iter_mut().enumerate() {
                     let k = self.sym.pos[c] as usize;
-                    let tw: Vec<f64> = (0..b).map(|i| t * rhs[k * b + i]).collect();
+                    let tw: Vec<f64> = (0..b).map(|i| t * step[k * b + i]).collect();
                     *p = base[c].moved_by(self.model.space, &tw);
                 }
-                let (r2, p2) = self.evaluate(config, &local, &mut ne, meter)?;
+                let (r2, p2) =
+                    self.evaluate(config, &local, &mut ne, store(qr, &mut jac), meter)?;
                 if norm(&r2) < norm0 || inf(&r2) <= opts.tolerance {
                     (r, per_pair) = (r2, p2);
                     accepted = true;
@@ -600,9 +431,38 @@ impl<'a> Sparse<'a> {
             }
             if !accepted {
                 local = base;
+                if pivots.is_none() {
+                    self.evaluate(config, &local, &mut ne, None, meter)?;
+                }
                 break;
             }
+            let slow = t < 1.0 || norm(&r) > SLOW * norm0;
+            stalls += usize::from(slow);
+            if stalls >= STALLS && !qr && self.qr_affordable() {
+                break;
+            }
+            damping = if t < 1.0 {
+                DAMPING
+            } else if norm(&r) > SLOW * norm0 {
+                (damping * 1e-2).max(MIN_DAMPING)
+            } else {
+                damping
+            };
         }
+        let columns = n * b;
+        if columns > DENSE_REPORT_COLUMNS && pivots.is_none() {
+            let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
+            if !r.is_empty() && finite {
+                ne.equilibrate(&self.sym);
+                let top = (0..n * b)
+                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
+                    .fold(0.0f64, f64::max);
+                mu = DAMPING * top.max(1e-300);
+                meter.charge(work)?;
+                pivots = Some(ne.factor(&self.sym, mu));
+            }
+        }
+        let pivots = pivots.unwrap_or_default();
         let columns = n * b;
         let singular_values = if columns <= DENSE_REPORT_COLUMNS {
             let mut cfg = config.clone();
@@ -631,5 +491,34 @@ impl<'a> Sparse<'a> {
             pair_residuals: per_pair,
         };
         Ok((out, local))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The columns rewritten about `p` and the twist carried back to the origin describe the
+    /// same motion: `J_p t = J (about_origin t)` for any `J` and `t`, in the plane and in space.
+    #[test]
+    fn twists_about_a_point_give_the_same_velocities() {
+        let p = Vector3::new(0.7, -1.3, 2.1);
+        for space in [Space::Planar, Space::Spatial] {
+            let b = space.b() as usize;
+            let j = DMatrix::from_fn(4, 2 * b, |i, c| ((i * 7 + c * 3) % 5) as f64 - 1.5);
+            let mut shifted = j.clone();
+            shift_columns(space, &mut shifted, 1, &p);
+            let local: Vec<f64> = (0..b).map(|i| 0.3 * i as f64 - 0.4).collect();
+            let mut origin = local.clone();
+            about_origin(space, &mut origin, &p);
+            let pad = |t: &[f64]| {
+                let mut v = nalgebra::DVector::zeros(2 * b);
+                v.rows_mut(b, b).copy_from_slice(t);
+                v
+            };
+            let (a, o) = (&shifted * pad(&local), &j * pad(&origin));
+            assert!((a - o).norm() < 1e-12, "{space:?}");
+            assert_ne!(local, origin, "{space:?}: the point moved nothing");
+        }
     }
 }

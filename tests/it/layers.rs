@@ -17,6 +17,7 @@ const LAYERS: &[(&str, &[&str])] = &[
             "numbers",
             "words",
             "elimination",
+            "cholesky",
             "exact",
             "graph",
         ],
