@@ -71,6 +71,7 @@ pub fn solve_table(r: &SolveReport) -> String {
         ]);
     }
     let _ = writeln!(s, "\n{t}");
+    s.push_str(&freedom_notes(r));
     let mut t = super::new_table();
     t.set_header(["body", "x", "y", "z", "angle (deg)", "axis"]);
     for p in &r.poses {
@@ -97,6 +98,28 @@ pub fn solve_table(r: &SolveReport) -> String {
     let _ = writeln!(s, "\n{t}");
     if let Some(f) = &r.finite {
         let _ = write!(s, "\n{}", finite_section(f));
+    }
+    s
+}
+
+/// A note per step whose equations leave freedoms at the solution (nullity above 0): along
+/// them its bodies kept their start pose, which no input chose.
+fn freedom_notes(r: &SolveReport) -> String {
+    let mut s = String::new();
+    for st in r.steps.iter().filter(|st| st.nullity > 0) {
+        let _ = writeln!(
+            s,
+            "note: step {} leaves {} freedom(s) that neither its equations nor the inputs fix \
+             (bodies {}):\n      along them its bodies keep their start pose. An isolated spin \
+             is harmless; otherwise drive\n      a joint there (`--set JOINT=VALUE`), or the \
+             configuration is singular.",
+            st.name,
+            st.nullity,
+            crate::words::capped(&st.bodies)
+        );
+    }
+    if !s.is_empty() {
+        s.push('\n');
     }
     s
 }

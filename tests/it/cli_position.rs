@@ -64,6 +64,28 @@ fn solve_json_and_table() {
 }
 
 #[test]
+fn a_step_with_freedoms_no_input_fixes_is_named() {
+    // The pendulum's joint is not driven: its bar stays at the file's pose, which no input
+    // chose, and the report says so (a solve of an under-driven robot read "solved" alone).
+    for extra in [&[][..], &["--global"][..]] {
+        let mut args = vec!["solve", "@pendulum"];
+        args.extend_from_slice(extra);
+        let (code, out, err) = mbsa(&args);
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            out.contains(
+                "leaves 1 freedom(s) that neither its equations nor the inputs fix (bodies 2)"
+            ),
+            "{out}"
+        );
+    }
+    // Driven, it has none.
+    let (code, out, err) = mbsa(&["solve", "@pendulum-driven", "--set", "O=30"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("freedom(s)"), "{out}");
+}
+
+#[test]
 fn global_and_groups_agree_on_the_bennett() {
     let (c1, g, _) = mbsa(&["solve", "@rig-bennett", "--set", "A=25", "--format", "json"]);
     let (c2, w, _) = mbsa(&[
