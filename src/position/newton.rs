@@ -59,6 +59,9 @@ pub struct NewtonOutcome {
     pub equations: usize,
     /// Largest residual per pair at the end, in `System::pairs` order.
     pub pair_residuals: Vec<f64>,
+    /// The steps stopped lowering the residual at their pace before the iteration limit (the
+    /// sparse solver's slow-step rules), which says nothing of whether a solution exists.
+    pub stalled: bool,
 }
 
 impl NewtonOutcome {
@@ -233,6 +236,7 @@ impl System {
                     unknowns: j.ncols(),
                     equations: j.nrows(),
                     pair_residuals: per_pair,
+                    stalled: false,
                 };
                 (out, self.bodies.iter().map(|&x| config.poses[x]).collect())
             }
@@ -350,6 +354,7 @@ impl System {
             unknowns: j.ncols(),
             equations: j.nrows(),
             pair_residuals: per_pair,
+            stalled: false,
         };
         Ok((out, local))
     }

@@ -357,7 +357,7 @@ fn outcome_error(
     let joints = joints_of(m, model, &sys.pairs, &out.pair_residuals, opts.tolerance);
     let bodies = body_list(m, &sys.bodies);
     let residual = out.residual * model.scale;
-    if out.iterations >= opts.max_iterations {
+    if out.iterations >= opts.max_iterations || out.stalled {
         SolveError::NotConverged {
             group: name.into(),
             bodies,

@@ -48,6 +48,11 @@ const MIN_DAMPING: f64 = 1e-16;
 /// damping, not the equations, sets its pace, and it is lowered a hundredfold.
 const SLOW: f64 = 0.5;
 
+/// A step that leaves more than this fraction of `‖e‖` made no real progress: [`STALLS`] of
+/// them in a row end the QR steps (a target out of reach, where the residual's least-squares
+/// minimum is not zero).
+const FLAT: f64 = 0.99;
+
 /// Halved or slow steps after which the normal equations give way to the QR steps (where
 /// those are affordable): they are limited by the conditioning, not the damping.
 const STALLS: usize = 4;
@@ -317,8 +322,9 @@ impl<'a> Sparse<'a> {
     /// Gauss–Newton from `config`; returns the outcome and the unknowns' new poses. The steps
     /// come from the normal equations; when they do not converge on a system whose factor has
     /// little fill (chains of loops), the solve runs again from `config` with the steps of the
-    /// sparse QR ([`super::sparse_qr`]), which does not square the conditioning, and the better
-    /// of the two is kept.
+    /// sparse QR ([`super::sparse_qr`]), which does not square the conditioning (from where
+    /// the normal equations stalled, the QR steps fared worse: those had drifted along the
+    /// near-null directions), and the better of the two ends is kept.
     pub fn solve(
         &self,
         config: &Configuration,
@@ -369,6 +375,8 @@ impl<'a> Sparse<'a> {
         let mut mu = 0.0;
         let mut damping = DAMPING;
         let mut stalls = 0;
+        let mut flat = 0;
+        let mut stalled = false;
         let work = self.sym.factor_work();
         loop {
             let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
@@ -438,7 +446,9 @@ impl<'a> Sparse<'a> {
             }
             let slow = t < 1.0 || norm(&r) > SLOW * norm0;
             stalls += usize::from(slow);
-            if stalls >= STALLS && !qr && self.qr_affordable() {
+            flat = if norm(&r) > FLAT * norm0 { flat + 1 } else { 0 };
+            if (stalls >= STALLS && !qr && self.qr_affordable()) || (qr && flat >= STALLS) {
+                stalled = true;
                 break;
             }
             damping = if t < 1.0 {
@@ -489,6 +499,7 @@ impl<'a> Sparse<'a> {
             unknowns: columns,
             equations: r.len(),
             pair_residuals: per_pair,
+            stalled,
         };
         Ok((out, local))
     }

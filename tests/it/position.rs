@@ -527,6 +527,24 @@ fn a_long_dyad_strip_solves_globally_as_group_by_group() {
 }
 
 #[test]
+fn a_long_dyad_strip_out_of_reach_stops_early_and_says_not_converged() {
+    // Half a turn of the crank takes the first dyad out of reach. The global solve stops once
+    // its steps make no progress (it ran its 60 iterations, each up to 30 halvings, before),
+    // and it says "did not converge": a stall says nothing of whether a solution exists.
+    let m = dyad_strip(1_500);
+    let model = PositionModel::new(&m).unwrap();
+    let start = Configuration::reference(m.bodies.len());
+    let tg = targets(&m, &model, &[(0, vec![deg(180.0)])]).unwrap();
+    let o = NewtonOptions::default();
+    match solve_global(&m, &model, &tg, &start, &o) {
+        Err(SolveError::NotConverged { iterations, .. }) => {
+            assert!(iterations < o.max_iterations, "{iterations} iterations")
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
 fn bennett_moves_with_finite_mobility_one() {
     let (_, text) = mbsa::examples::find("rig-bennett").unwrap();
     let mut m = mbsa::format::load("bennett", text, mbsa::format::Format::Toml).unwrap();
