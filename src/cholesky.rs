@@ -303,6 +303,14 @@ impl Normal {
         }
     }
 
+    /// The diagonal entries, in elimination order.
+    pub(crate) fn diagonal(&self, s: &Symbolic) -> Vec<f64> {
+        let b = s.b;
+        (0..s.pos.len() * b)
+            .map(|i| self.diag[(i / b) * b * b + (i % b) * (b + 1)])
+            .collect()
+    }
+
     pub(crate) fn clear(&mut self) {
         self.diag.fill(0.0);
         self.off.fill(0.0);

@@ -343,6 +343,48 @@ impl<'a> Sparse<'a> {
         })
     }
 
+    /// Scale `ne` to a unit diagonal and factor it, damped by `damping` of that diagonal's
+    /// largest entry: the damping `μ` and the squared pivots.
+    fn damped_factor(
+        &self,
+        ne: &mut Normal,
+        damping: f64,
+        meter: &mut Meter,
+    ) -> Result<(f64, Vec<f64>), BudgetExceeded> {
+        ne.equilibrate(&self.sym);
+        let top = ne.diagonal(&self.sym).into_iter().fold(0.0f64, f64::max);
+        let mu = damping * top.max(1e-300);
+        meter.charge(self.sym.factor_work())?;
+        Ok((mu, ne.factor(&self.sym, mu)))
+    }
+
+    /// The report's singular values at `local`: of the dense Jacobian up to
+    /// [`DENSE_REPORT_COLUMNS`] columns, above that estimated from the factor's `pivots`
+    /// (square roots of the pivots less the damping `mu`; zero when a pivot is no more than
+    /// twice the damping).
+    fn singular_values(
+        &self,
+        config: &Configuration,
+        local: &[Pose],
+        pivots: &[f64],
+        mu: f64,
+    ) -> Vec<f64> {
+        if self.sys.bodies.len() * self.model.b() <= DENSE_REPORT_COLUMNS {
+            let mut cfg = config.clone();
+            for (&x, p) in self.sys.bodies.iter().zip(local) {
+                cfg.poses[x] = *p;
+            }
+            let (_, j, _) = self.sys.evaluate(self.model, self.targets, &cfg);
+            return super::newton::singular_values(j);
+        }
+        let mut s: Vec<f64> = pivots
+            .iter()
+            .map(|&p| if p <= 2.0 * mu { 0.0 } else { (p - mu).sqrt() })
+            .collect();
+        s.sort_by(|a, b| b.total_cmp(a));
+        s
+    }
+
     /// Gauss–Newton from `config` with the normal equations' steps, or the QR's (`qr`).
     /// Longer than most: the step, the line search and the report share the loop's state.
     fn run(
@@ -377,7 +419,6 @@ impl<'a> Sparse<'a> {
         let mut stalls = 0;
         let mut flat = 0;
         let mut stalled = false;
-        let work = self.sym.factor_work();
         loop {
             let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
             if n == 0 || r.is_empty() || !finite {
@@ -388,22 +429,14 @@ impl<'a> Sparse<'a> {
                 if done {
                     break;
                 }
-                let diag: Vec<f64> = (0..n * b)
-                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                    .collect();
-                self.qr_step(&jac, &r, &diag, opts, meter)?
+                self.qr_step(&jac, &r, &ne.diagonal(&self.sym), opts, meter)?
             } else {
-                ne.equilibrate(&self.sym);
-                let top = (0..n * b)
-                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                    .fold(0.0f64, f64::max);
-                mu = damping * top.max(1e-300);
-                let mut rhs: Vec<f64> = ne.grad.iter().map(|g| -g).collect();
-                meter.charge(work)?;
-                pivots = Some(ne.factor(&self.sym, mu));
+                let (m, p) = self.damped_factor(&mut ne, damping, meter)?;
+                (mu, pivots) = (m, Some(p));
                 if done {
                     break;
                 }
+                let mut rhs: Vec<f64> = ne.grad.iter().map(|g| -g).collect();
                 ne.solve(&self.sym, &mut rhs);
                 for (x, d) in rhs.iter_mut().zip(&ne.scale) {
                     *x *= d;
@@ -463,34 +496,11 @@ impl<'a> Sparse<'a> {
         if columns > DENSE_REPORT_COLUMNS && pivots.is_none() {
             let finite = ne.diag.iter().chain(&ne.off).all(|x| x.is_finite());
             if !r.is_empty() && finite {
-                ne.equilibrate(&self.sym);
-                let top = (0..n * b)
-                    .map(|i| ne.diag[(i / b) * b * b + (i % b) * (b + 1)])
-                    .fold(0.0f64, f64::max);
-                mu = DAMPING * top.max(1e-300);
-                meter.charge(work)?;
-                pivots = Some(ne.factor(&self.sym, mu));
+                let (m, p) = self.damped_factor(&mut ne, DAMPING, meter)?;
+                (mu, pivots) = (m, Some(p));
             }
         }
-        let pivots = pivots.unwrap_or_default();
-        let columns = n * b;
-        let singular_values = if columns <= DENSE_REPORT_COLUMNS {
-            let mut cfg = config.clone();
-            for (&x, p) in self.sys.bodies.iter().zip(&local) {
-                cfg.poses[x] = *p;
-            }
-            let (_, j, _) = self.sys.evaluate(self.model, self.targets, &cfg);
-            super::newton::singular_values(j)
-        } else {
-            // Estimates: square roots of the pivots less the damping (zero when a pivot is
-            // no more than twice the damping).
-            let mut s: Vec<f64> = pivots
-                .iter()
-                .map(|&p| if p <= 2.0 * mu { 0.0 } else { (p - mu).sqrt() })
-                .collect();
-            s.sort_by(|a, b| b.total_cmp(a));
-            s
-        };
+        let singular_values = self.singular_values(config, &local, &pivots.unwrap_or_default(), mu);
         let out = NewtonOutcome {
             converged: inf(&r) <= opts.tolerance,
             iterations,
