@@ -28,8 +28,8 @@ use super::residual::PositionModel;
 use super::sparse_qr::Jacobian;
 use crate::budget::{BudgetExceeded, Meter};
 use crate::cholesky::{Normal, Symbolic, symbolic};
-use crate::mechanism::Space;
-use nalgebra::{DMatrix, Vector3};
+use crate::motion::twist_shift;
+use nalgebra::{DMatrix, DVector, Vector3};
 use rayon::prelude::*;
 
 /// Largest system (columns) whose final Jacobian gets a dense SVD for the report's nullity
@@ -56,45 +56,6 @@ const FLAT: f64 = 0.99;
 /// Halved or slow steps after which the normal equations give way to the QR steps (where
 /// those are affordable): they are limited by the conditioning, not the damping.
 const STALLS: usize = 4;
-
-/// Columns `side·B..(side + 1)·B` of a pair's Jacobian (taken in twists about the world
-/// origin, `v_O`) rewritten in twists about the body's point `p` (`u = v_O + ω × p`, so
-/// `v_O = u + p × ω`): the rotation columns gain `J_v [p]×`. About a point on the body a
-/// rotation no longer carries the body's distance from the origin, which made the columns of
-/// far bodies nearly parallel.
-fn shift_columns(space: Space, j: &mut DMatrix<f64>, side: usize, p: &Vector3<f64>) {
-    let o = side * space.b() as usize;
-    for mut row in j.row_iter_mut() {
-        match space {
-            Space::Planar => row[o] += row[o + 1] * p.y - row[o + 2] * p.x,
-            Space::Spatial => {
-                let (vx, vy, vz) = (row[o + 3], row[o + 4], row[o + 5]);
-                row[o] += vy * p.z - vz * p.y;
-                row[o + 1] += vz * p.x - vx * p.z;
-                row[o + 2] += vx * p.y - vy * p.x;
-            }
-            Space::Spherical => {}
-        }
-    }
-}
-
-/// A twist about `p` (`ω; u`) as the twist about the origin that [`Pose::moved_by`] takes.
-fn about_origin(space: Space, t: &mut [f64], p: &Vector3<f64>) {
-    match space {
-        Space::Planar => {
-            t[1] += p.y * t[0];
-            t[2] -= p.x * t[0];
-        }
-        Space::Spatial => {
-            let w = Vector3::new(t[0], t[1], t[2]);
-            let v = p.cross(&w);
-            t[3] += v.x;
-            t[4] += v.y;
-            t[5] += v.z;
-        }
-        Space::Spherical => {}
-    }
-}
 
 /// Where each pair's blocks go: elimination indices of its unknown sides and the
 /// off-diagonal block joining them.
@@ -227,6 +188,18 @@ impl<'a> Sparse<'a> {
             .collect()
     }
 
+    /// Per unknown (elimination order), [`twist_shift`] at its reference point at `local`:
+    /// its twist about that point to the twist about the origin (`None` in a spherical
+    /// mechanism). About a point on the body a rotation no longer carries the body's distance
+    /// from the origin, which made the Jacobian columns of far bodies nearly parallel.
+    fn shifts(&self, local: &[Pose]) -> Vec<Option<DMatrix<f64>>> {
+        let space = self.model.space;
+        self.points(local)
+            .iter()
+            .map(|p| twist_shift(space, [p.x, p.y, p.z]))
+            .collect()
+    }
+
     /// Residuals (all pairs, in order), per-pair maxima, and the normal equations into `ne`.
     fn evaluate(
         &self,
@@ -246,8 +219,7 @@ impl<'a> Sparse<'a> {
             _ => config.poses[body],
         };
         ne.clear();
-        let points = self.points(local);
-        let space = self.model.space;
+        let shifts = self.shifts(local);
         let mut r = Vec::new();
         let mut per_pair = Vec::with_capacity(self.sys.pairs.len());
         for (chunk, slots) in self.sys.pairs.chunks(CHUNK).zip(self.slots.chunks(CHUNK)) {
@@ -268,9 +240,11 @@ impl<'a> Sparse<'a> {
                 let rows = e.residual.len();
                 per_pair.push(e.residual.iter().fold(0.0f64, |m, x| m.max(x.abs())));
                 r.extend_from_slice(&e.residual);
+                // Columns in twists about each unknown's point: `J_O M(p)`.
                 for (s, side) in [(slot.a, 0), (slot.b, 1)] {
-                    if let Some(k) = s {
-                        shift_columns(space, &mut e.jacobian, side, &points[k as usize]);
+                    if let Some(shift) = s.and_then(|k| shifts[k as usize].as_ref()) {
+                        let cols = e.jacobian.columns(side * b, b) * shift;
+                        e.jacobian.columns_mut(side * b, b).copy_from(&cols);
                     }
                 }
                 let j = &e.jacobian;
@@ -446,9 +420,11 @@ impl<'a> Sparse<'a> {
             if !step.iter().all(|x| x.is_finite()) {
                 break;
             }
-            let points = self.points(&local);
-            for (k, t) in step.chunks_exact_mut(b).enumerate() {
-                about_origin(self.model.space, t, &points[k]);
+            for (t, shift) in step.chunks_exact_mut(b).zip(self.shifts(&local)) {
+                if let Some(shift) = shift {
+                    let about_origin = shift * DVector::from_column_slice(t);
+                    t.copy_from_slice(about_origin.as_slice());
+                }
             }
             iterations += 1;
             let base = local.clone();
@@ -512,34 +488,5 @@ impl<'a> Sparse<'a> {
             stalled,
         };
         Ok((out, local))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// The columns rewritten about `p` and the twist carried back to the origin describe the
-    /// same motion: `J_p t = J (about_origin t)` for any `J` and `t`, in the plane and in space.
-    #[test]
-    fn twists_about_a_point_give_the_same_velocities() {
-        let p = Vector3::new(0.7, -1.3, 2.1);
-        for space in [Space::Planar, Space::Spatial] {
-            let b = space.b() as usize;
-            let j = DMatrix::from_fn(4, 2 * b, |i, c| ((i * 7 + c * 3) % 5) as f64 - 1.5);
-            let mut shifted = j.clone();
-            shift_columns(space, &mut shifted, 1, &p);
-            let local: Vec<f64> = (0..b).map(|i| 0.3 * i as f64 - 0.4).collect();
-            let mut origin = local.clone();
-            about_origin(space, &mut origin, &p);
-            let pad = |t: &[f64]| {
-                let mut v = nalgebra::DVector::zeros(2 * b);
-                v.rows_mut(b, b).copy_from_slice(t);
-                v
-            };
-            let (a, o) = (&shifted * pad(&local), &j * pad(&origin));
-            assert!((a - o).norm() < 1e-12, "{space:?}");
-            assert_ne!(local, origin, "{space:?}: the point moved nothing");
-        }
     }
 }
