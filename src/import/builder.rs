@@ -5,11 +5,16 @@ use super::error::ImportError;
 use super::pins::merge_pins;
 use super::toml_text::{comment_text, num, precision_text, toml_str, written_rounding};
 use super::{Import, ImportOptions, SourceFormat};
+use super::{Pose, shift};
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
+use crate::words::capped;
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
+
+/// Gaps below this (length, or angle in radians) between the two frames of a weld are closed.
+const CLOSED: f64 = 1e-6;
 
 /// A joint of the intermediate model.
 #[derive(Clone, Debug)]
@@ -33,6 +38,9 @@ pub(crate) struct Builder {
     comments: Vec<String>,
     index: HashMap<String, usize>,
     uf: Vec<usize>,
+    /// Where each body sits relative to the file's placement of it: the identity, unless a
+    /// loop cut welded it where the cut puts it ([`Builder::weld_moved`]).
+    moved: Vec<Pose>,
     pub frame: usize,
     pub joints: Vec<JointRec>,
     pub warnings: Vec<String>,
@@ -52,6 +60,7 @@ impl Builder {
             comments: Vec::new(),
             index: HashMap::new(),
             uf: Vec::new(),
+            moved: Vec::new(),
             frame: 0,
             joints: Vec::new(),
             warnings: Vec::new(),
@@ -72,6 +81,7 @@ impl Builder {
         self.comments.push(comment.to_string());
         self.index.insert(name.to_string(), i);
         self.uf.push(i);
+        self.moved.push(Pose::identity());
         i
     }
 
@@ -111,12 +121,121 @@ impl Builder {
             (a, b)
         };
         self.uf[gone] = keep_root;
-        let (kn, gn) = (self.names[other].clone(), self.names[keep].clone());
-        let _ = (kn, gn);
         self.notes.push(format!(
             "`{}` welded to `{}` ({why})",
             self.names[other], self.names[keep]
         ));
+    }
+
+    /// How body `i` was moved from the file's placement of it (the identity unless a weld
+    /// moved it).
+    pub fn moved(&self, i: usize) -> Pose {
+        self.moved[i]
+    }
+
+    /// Weld `other` to `keep` where `d` (a move of `other`) puts it: the links welded to
+    /// `other` move with it (or, when those hold the fixed frame, the links welded to `keep`
+    /// move by the inverse), and every joint between the moved links and the others carries
+    /// the moved side in its `second` geometry ([`shift::move_side`]). Returns the names of
+    /// the moved links; `Err` with the joints that cannot carry a moved side, nothing changed.
+    pub fn weld_moved(
+        &mut self,
+        keep: usize,
+        other: usize,
+        d: &Pose,
+        why: &str,
+    ) -> Result<Vec<String>, Vec<String>> {
+        let frame = self.root(self.frame);
+        let (group, d) = if self.root(other) == frame {
+            (self.root(keep), d.inverse())
+        } else {
+            (self.root(other), *d)
+        };
+        let inside: Vec<bool> = (0..self.names.len())
+            .map(|i| self.root(i) == group)
+            .collect();
+        let side = |j: &JointRec| -> Option<usize> {
+            let ins: Vec<bool> = j.bodies.iter().map(|&x| inside[x]).collect();
+            match ins.as_slice() {
+                [a, b] if a != b => Some(usize::from(*b)),
+                _ => None,
+            }
+        };
+        let blocked: Vec<String> = self
+            .joints
+            .iter()
+            .filter(|j| j.bodies.iter().any(|&x| inside[x]))
+            .filter(|j| {
+                let whole = j.bodies.iter().all(|&x| inside[x]);
+                !whole && (j.bodies.len() != 2 || !shift::can_move_side(j.kind))
+            })
+            .map(|j| format!("{} ({})", j.id, j.kind.code()))
+            .collect();
+        if !blocked.is_empty() {
+            return Err(blocked);
+        }
+        for j in &mut self.joints {
+            if let Some(k) = side(j) {
+                shift::move_side(j.kind, &mut j.geometry, k, &d);
+            } else if j.bodies.iter().all(|&x| inside[x]) {
+                shift::move_joint(&mut j.geometry, &d);
+            }
+        }
+        let mut names = Vec::new();
+        for (i, &ins) in inside.iter().enumerate() {
+            if ins {
+                self.moved[i] = d * self.moved[i];
+                names.push(self.names[i].clone());
+            }
+        }
+        self.weld(keep, other, why);
+        Ok(names)
+    }
+
+    /// Weld body `other` to body `keep` by a loop cut that makes frame `fc` of `other`
+    /// coincide with frame `fk` of `keep` (both world poses as the file places the bodies).
+    /// Closed: the bodies are welded. Open: `other` is welded where the cut puts it
+    /// ([`Builder::weld_moved`]), or, where a joint cannot carry the move, as placed; a
+    /// warning (at `loc`, naming the cut `what`) gives the gap and which it was.
+    pub fn weld_cut(
+        &mut self,
+        keep: usize,
+        other: usize,
+        fk: &Pose,
+        fc: &Pose,
+        what: &str,
+        loc: &str,
+    ) {
+        // A body a weld before this one moved sits where that weld put it.
+        let (fk, fc) = (self.moved(keep) * fk, self.moved(other) * fc);
+        let gap = (fk.translation.vector - fc.translation.vector).norm();
+        let angle = (fk.rotation.inverse() * fc.rotation).angle();
+        let why = format!("{what} at {loc}");
+        let (a, c) = (self.names[keep].clone(), self.names[other].clone());
+        if gap <= CLOSED && angle <= CLOSED {
+            self.weld(keep, other, &why);
+            return;
+        }
+        let open = format!(
+            "{loc}: {what} between `{a}` and `{c}` is not closed at this configuration (gap {gap:.3e}, angle {angle:.3e} rad)"
+        );
+        match self.weld_moved(keep, other, &(fk * fc.inverse()), &why) {
+            Ok(moved) => {
+                let quoted: Vec<String> = moved.iter().map(|n| format!("`{n}`")).collect();
+                let (who, it) = match quoted.len() {
+                    1 => (format!("{} is", quoted[0]), "it"),
+                    _ => (
+                        format!("the bodies {} (one body) are", capped(&quoted)),
+                        "them",
+                    ),
+                };
+                self.warn(format!("{open}: {who} welded where the cut puts {it}, and the joints to {it} carry that side in `second` (`mbsa assemble` closes the loops)"));
+            }
+            Err(blocked) => {
+                self.warn(format!("{open}: the bodies are welded as they are placed, which is not the assembled mechanism (the joints {} cannot carry a moved side)", capped(&blocked)));
+                self.weld(keep, other, &why);
+            }
+        }
     }
 
     /// Add a joint; returns its index.

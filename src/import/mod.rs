@@ -16,6 +16,7 @@ mod osim;
 mod pins;
 mod pose;
 mod sdf;
+mod shift;
 mod toml_text;
 mod urdf;
 mod xml;

@@ -262,6 +262,41 @@ fn extended_urdf_five_bar_reads_its_yaml_beside_it_and_has_two_dof() {
 }
 
 #[test]
+fn extended_urdf_delta_welds_its_open_6d_cuts_where_they_close() {
+    // Gepetto's planar delta: three 6D cuts (welds) that zero joint positions leave open by
+    // 1 to 3 cm and up to pi rad. Pinocchio (PyPI `pin` 4.1.0), loading robot.urdf with the
+    // three 6D contacts of robot.yaml and closing them by Gauss-Newton: 14 velocities, 18
+    // rows of rank 9, so 5 DOF and 9 redundant. Welded as placed, the model had 5 proper
+    // DOF and 3 not fixed by its 2 motors; welded where each cut puts it, the three sphere
+    // links turn alone on their coaxial hinges and the 2 motors determine the rest.
+    let d = scratch("delta");
+    let (open, closed) = (d.join("open.toml"), d.join("closed.toml"));
+    let err = import_to(&fixture("robot_delta.urdf"), &open, &[]);
+    assert_eq!(
+        err.matches("is welded where the cut puts it").count(),
+        3,
+        "{err}"
+    );
+    let (code, _, err) = mbsa(&["analyze", path(&open)]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("is not assembled"), "{err}");
+    let (code, out, err) = mbsa(&["assemble", path(&open)]);
+    assert_eq!(code, 0, "{err}");
+    std::fs::write(&closed, out).expect("write");
+    assert_eq!(rigid(path(&closed), &[]), (-4, 5, 9));
+    let v = analyze(path(&closed), &[]);
+    assert_eq!(v["status"], "determined", "{v}");
+    assert_eq!(v["mobility"]["inputs"], 2, "{v}");
+    let isolated: Vec<&str> = v["isolated"]
+        .as_array()
+        .expect("isolated")
+        .iter()
+        .filter_map(|i| i["body"].as_str())
+        .collect();
+    assert_eq!(isolated, ["sphere_2", "sphere_5", "sphere_6"], "{v}");
+}
+
+#[test]
 fn the_closure_file_can_be_named_and_counts_against_the_input_limit() {
     let d = scratch("named");
     let yaml = d.join("loops.yaml");

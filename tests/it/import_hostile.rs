@@ -475,3 +475,51 @@ fn a_long_urdf_chain_is_read_in_near_linear_time() {
     // Quadratic reading took 40 s here (release); linear, under a second in debug.
     assert!(start.elapsed().as_secs() < 20, "{:?}", start.elapsed());
 }
+
+/// The hand-written OpenSim four-bar with its PointConstraint replaced by a WeldConstraint of
+/// the coupler's tip to the rocker's, the rocker's frame turned by `turn` about z.
+fn four_bar_welded(turn: f64) -> String {
+    let text = std::fs::read_to_string("tests/fixtures/import/four_bar_point_constraint.osim")
+        .expect("fixture");
+    let start = text.find("<PointConstraint").expect("point constraint");
+    let end = text.find("</PointConstraint>").expect("its end") + "</PointConstraint>".len();
+    let weld = format!(
+        "<WeldConstraint name=\"C\">\
+         <socket_frame1>coupler_tip</socket_frame1><socket_frame2>rocker_tip</socket_frame2>\
+         <frames>\
+         <PhysicalOffsetFrame name=\"coupler_tip\"><socket_parent>/bodyset/coupler</socket_parent>\
+         <translation>2 0 0</translation><orientation>0 0 0</orientation></PhysicalOffsetFrame>\
+         <PhysicalOffsetFrame name=\"rocker_tip\"><socket_parent>/bodyset/rocker</socket_parent>\
+         <translation>1 0 0</translation><orientation>0 0 {turn}</orientation></PhysicalOffsetFrame>\
+         </frames></WeldConstraint>"
+    );
+    format!("{}{weld}{}", &text[..start], &text[end..])
+}
+
+#[test]
+fn an_opensim_weld_constraint_open_at_the_default_coordinates_is_welded_where_it_closes() {
+    // The rocker stands at 90°, so its tip frame turned by -90° meets the coupler's: closed.
+    let closed = four_bar_welded(-std::f64::consts::FRAC_PI_2);
+    let (code, out, err) = import("osim_weld_closed", "m.osim", &closed);
+    assert_eq!(code, 0, "{err}");
+    assert!(!err.contains("not closed"), "{err}");
+    assert!(out.contains("`rocker` welded to `coupler`"), "{out}");
+    // Turned by 0.3 rad more, the weld is open: the rocker is moved where it closes and its
+    // hinge to the ground carries the rocker's side in `second` (it was welded as placed,
+    // silently).
+    let open = four_bar_welded(-std::f64::consts::FRAC_PI_2 + 0.3);
+    let (code, out, err) = import("osim_weld_open", "m.osim", &open);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains("(gap 0.000e0, angle 3.000e-1 rad): `rocker` is welded where the cut puts it"),
+        "{err}"
+    );
+    assert!(
+        out.contains("[joint.second]") || out.contains("second ="),
+        "{out}"
+    );
+    let d = dir("osim_weld_assemble");
+    let p = write(&d, "m.toml", &out);
+    let (code, _, err) = mbsa(&["assemble", &p]);
+    assert_eq!(code, 0, "{err}");
+}

@@ -1,8 +1,9 @@
 //! OpenSim constraints (PointConstraint: a spherical joint; WeldConstraint: a weld) and
 //! actuators (CoordinateActuator, TorqueActuator: driven DOF).
 
-use super::{last, text_of, vec3};
-use crate::import::{Builder, ImportError, JointRec, Node, Pose, Src};
+use super::joints::offset_frame;
+use super::{last, text_of, vec3, xyz_body};
+use crate::import::{Builder, ImportError, JointRec, Node, Pose, Src, pose};
 use crate::joint::JointType;
 use nalgebra::{Point3, Vector3};
 use std::collections::HashMap;
@@ -22,14 +23,9 @@ pub(super) fn constraint(
         b.warn(format!("{loc}: <{tag}> `{cname}` is disabled: left out"));
         return Ok(());
     }
-    let body_of = |a: &str, bb: &str| -> Result<(String, Pose), ImportError> {
-        let name = text_of(c, a)
-            .or_else(|| text_of(c, bb))
-            .map(last)
-            .unwrap_or("")
-            .to_string();
-        match world.get(&name) {
-            Some(p) => Ok((name, *p)),
+    let body_of_name = |name: &str| -> Result<(String, Pose), ImportError> {
+        match world.get(name) {
+            Some(p) => Ok((name.to_string(), *p)),
             None => Err(src
                 .err(
                     c,
@@ -38,6 +34,10 @@ pub(super) fn constraint(
                 )
                 .with_help("name a Body of the BodySet, or the ground")),
         }
+    };
+    let body_of = |a: &str, bb: &str| -> Result<(String, Pose), ImportError> {
+        let name = text_of(c, a).or_else(|| text_of(c, bb)).map(last);
+        body_of_name(name.unwrap_or(""))
     };
     match tag {
         "PointConstraint" => {
@@ -65,10 +65,24 @@ pub(super) fn constraint(
             });
         }
         "WeldConstraint" => {
-            let (n1, _) = body_of("socket_frame1", "body_1")?;
-            let (n2, _) = body_of("socket_frame2", "body_2")?;
+            // Each side: an OpenSim 4 frame (through the constraint's offset frames), or an
+            // OpenSim 3 body with the frame's location and orientation in it.
+            let side = |k: u8| -> Result<(String, Pose), ImportError> {
+                let (name, x) = match text_of(c, &format!("socket_frame{k}")) {
+                    Some(path) => offset_frame(src, c, path)?,
+                    None => {
+                        let name = text_of(c, &format!("body_{k}")).map(last).unwrap_or("");
+                        let at = vec3(src, c, &format!("location_body_{k}"))?;
+                        let turn = vec3(src, c, &format!("orientation_body_{k}"))?;
+                        (name.to_string(), pose(at, xyz_body(&turn)))
+                    }
+                };
+                let (name, w) = body_of_name(&name)?;
+                Ok((name, w * x))
+            };
+            let ((n1, f1), (n2, f2)) = (side(1)?, side(2)?);
             let (i1, i2) = (b.body(&n1, ""), b.body(&n2, ""));
-            b.weld(i1, i2, &format!("WeldConstraint `{cname}`"));
+            b.weld_cut(i1, i2, &f1, &f2, &format!("WeldConstraint `{cname}`"), &loc);
         }
         "CoordinateCouplerConstraint" => {
             b.warn(format!("{loc}: CoordinateCouplerConstraint `{cname}` couples coordinates: not representable (left out)"));

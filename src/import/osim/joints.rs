@@ -88,14 +88,6 @@ fn joint_frames_3(src: &Src, j: Node, name: &str, owner: &str) -> Result<JointFr
 /// An OpenSim 4 joint: its parent and child frames, each resolved through the joint's offset
 /// frames to a body and a pose in it.
 fn joint_frames_4(src: &Src, j: Node, name: &str) -> Result<JointFrames, ImportError> {
-    let frames: HashMap<&str, Node> = child(j, "frames")
-        .map(|f| {
-            f.children()
-                .filter(|c| c.is_element())
-                .filter_map(|c| c.attribute("name").map(|n| (n, c)))
-                .collect()
-        })
-        .unwrap_or_default();
     let resolve = |tag_a: &str, tag_b: &str| -> Result<(String, Pose), ImportError> {
         let Some(s) = text_of(j, tag_a).or_else(|| text_of(j, tag_b)) else {
             return Err(src
@@ -106,26 +98,44 @@ fn joint_frames_4(src: &Src, j: Node, name: &str) -> Result<JointFrames, ImportE
                 )
                 .with_help("OpenSim 4 joints name their parent and child frames"));
         };
-        let mut cur = last(s).to_string();
-        let mut acc = Pose::identity();
-        for _ in 0..=frames.len() {
-            match frames.get(cur.as_str()) {
-                Some(f) => {
-                    let x = pose(
-                        vec3(src, *f, "translation")?,
-                        xyz_body(&vec3(src, *f, "orientation")?),
-                    );
-                    acc = x * acc;
-                    cur = last(text_of(*f, "socket_parent").unwrap_or("")).to_string();
-                }
-                None => break,
-            }
-        }
-        Ok((cur, acc))
+        offset_frame(src, j, s)
     };
     let (p, x_pf) = resolve("socket_parent_frame", "parent_frame")?;
     let (c, x_bm) = resolve("socket_child_frame", "child_frame")?;
     Ok((p, c, x_pf, x_bm))
+}
+
+/// The frame `path` names, resolved through the offset frames of `owner`'s `<frames>` (a
+/// joint's or a constraint's) to a body and the frame's pose in it.
+pub(super) fn offset_frame(
+    src: &Src,
+    owner: Node,
+    path: &str,
+) -> Result<(String, Pose), ImportError> {
+    let frames: HashMap<&str, Node> = child(owner, "frames")
+        .map(|f| {
+            f.children()
+                .filter(|c| c.is_element())
+                .filter_map(|c| c.attribute("name").map(|n| (n, c)))
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut cur = last(path).to_string();
+    let mut acc = Pose::identity();
+    for _ in 0..=frames.len() {
+        match frames.get(cur.as_str()) {
+            Some(f) => {
+                let x = pose(
+                    vec3(src, *f, "translation")?,
+                    xyz_body(&vec3(src, *f, "orientation")?),
+                );
+                acc = x * acc;
+                cur = last(text_of(*f, "socket_parent").unwrap_or("")).to_string();
+            }
+            None => break,
+        }
+    }
+    Ok((cur, acc))
 }
 
 /// A joint's coordinates and their default values (a locked coordinate warned: imported free;

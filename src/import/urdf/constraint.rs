@@ -246,16 +246,13 @@ pub(super) fn close(
     loc: &str,
 ) {
     let (a, c) = (&first.link, &second.link);
-    let (fa, fc) = (first.frame, second.frame);
-    let gap = (fa.translation.vector - fc.translation.vector).norm();
     let (ia, ic) = (b.body(a, ""), b.body(c, ""));
+    // A link a weld before this one moved sits where that weld put it.
+    let (fa, fc) = (b.moved(ia) * first.frame, b.moved(ic) * second.frame);
+    let gap = (fa.translation.vector - fc.translation.vector).norm();
     let (kind, axis, axis2) = match cut {
         Cut::Weld => {
-            let angle = (fa.rotation.inverse() * fc.rotation).angle();
-            if gap > CLOSED || angle > CLOSED {
-                b.warn(format!("{loc}: {what} between `{a}` and `{c}` is not closed at this configuration (gap {gap:.3e}, angle {angle:.3e} rad): the links are welded as they are placed, which is not the assembled mechanism"));
-            }
-            b.weld(ia, ic, &format!("{what} at {loc}"));
+            b.weld_cut(ia, ic, &first.frame, &second.frame, what, loc);
             return;
         }
         Cut::Joint(kind, axis, axis2) => (*kind, *axis, *axis2),

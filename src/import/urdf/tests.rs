@@ -100,6 +100,55 @@ fn an_open_cut_keeps_the_second_frame_and_says_so() {
 }
 
 #[test]
+fn an_open_weld_moves_its_link_where_the_cut_puts_it() {
+    // The cut welds c's frame (at (1, 1.2, 0), turned a quarter about z) to b's (at (1, 1,
+    // 0)): c moves there, and its hinge to the base carries c's side in `second`.
+    let r = urdf(&proposal("link", "0 1.2 0", ""));
+    let jc = r
+        .mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == "jc")
+        .expect("jc");
+    assert!(near(jc.geometry.origin, [1.0, 0.0, 0.0]), "{}", r.toml);
+    let second = jc.geometry.second.as_ref().expect("second");
+    assert!(near(second.origin, [-0.2, 1.0, 0.0]), "{}", r.toml);
+    assert!(near(second.axis, [0.0, 0.0, 1.0]), "{}", r.toml);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("`c` is welded where the cut puts it")),
+        "{:?}",
+        r.warnings
+    );
+}
+
+#[test]
+fn an_open_weld_whose_link_slides_is_welded_as_placed_and_says_which_joint() {
+    // A prismatic joint cannot carry a side turned about its axis: nothing moves.
+    let text = proposal("link", "0 1.2 0", "").replace(
+        r#"<joint name="jc" type="revolute"><parent link="base"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/>"#,
+        r#"<joint name="jc" type="prismatic"><parent link="base"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/>"#,
+    );
+    let r = urdf(&text);
+    let jc = r
+        .mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == "jc")
+        .expect("jc");
+    assert_eq!(jc.kind, JointType::P, "{}", r.toml);
+    assert!(jc.geometry.second.is_none(), "{}", r.toml);
+    assert!(
+        r.warnings.iter().any(|w| w.contains(
+            "welded as they are placed, which is not the assembled mechanism (the joints jc (P) cannot carry a moved side)"
+        )),
+        "{:?}",
+        r.warnings
+    );
+}
+
+#[test]
 fn proposal_errors_are_located() {
     let err = |t: &str| import_str("t.urdf", t, None, &ImportOptions::default()).unwrap_err();
     let e = err(&proposal("revolute", "0 1 0", ""));
