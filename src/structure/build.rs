@@ -5,7 +5,8 @@ use super::count::{Decomposition, Equations, Part, RawGroup};
 use super::diagnose::diagnose;
 use super::{
     Analysis, CountSummary, Diagnosis, Group, Isolated, Library, Missing, Near, Options,
-    Redundancy, Status, TypeCount, UnderPart, locked_planar, push_id, roman, spatiality,
+    Redundancy, Status, TypeCount, UnderPart, UnderPiece, locked_planar, push_id, roman,
+    spatiality,
 };
 use crate::joint::JointType;
 use crate::mechanism::{BodyId, Mechanism};
@@ -572,8 +573,25 @@ fn free_bodies(m: &Mechanism, disconnected: &[String], diag: &mut Diagnosis) {
         short: Vec::new(),
         bodies: Vec::new(),
         input_candidates: Vec::new(),
+        pieces: Vec::new(),
     });
+    // Each free body is a piece of its own beside what the part held.
+    if part.pieces.is_empty() && !part.bodies.is_empty() {
+        part.pieces.push(UnderPiece {
+            missing: part.missing,
+            bodies: part.bodies.clone(),
+            input_candidates: part.input_candidates.clone(),
+        });
+    }
+    let pieces = !part.pieces.is_empty() || disconnected.len() > 1;
     for body in disconnected {
+        if pieces {
+            part.pieces.push(UnderPiece {
+                missing: u64::from(b),
+                bodies: vec![body.clone()],
+                input_candidates: Vec::new(),
+            });
+        }
         part.missing += u64::from(b);
         part.short.push(Missing {
             body: body.clone(),

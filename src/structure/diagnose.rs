@@ -3,7 +3,8 @@
 
 use super::count::{Decomposition, Equations, Part};
 use super::{
-    Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart, capped,
+    Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart, UnderPiece,
+    capped,
 };
 use crate::mechanism::Mechanism;
 use serde::Serialize;
@@ -131,19 +132,107 @@ fn under_part(
     let cands = input_candidates(m, eqs, &in_part);
     let caveat = isolated_caveat(m, &cands, isolated);
     let input_candidates = joint_ids(m, cands);
-    let note = format!(
-        "{missing} DOF not fixed by any input: bodies {{{}}} can move; one more input on \
-         one of the joints {} would fix one DOF{caveat}",
-        capped(&bodies),
-        capped(&input_candidates)
-    );
+    let pieces = under_pieces(m, eqs, dec, &in_part);
+    let note = if pieces.len() < 2 {
+        format!(
+            "{missing} DOF not fixed by any input: bodies {{{}}} can move; one more input on \
+             one of the joints {} would fix one DOF{caveat}",
+            capped(&bodies),
+            capped(&input_candidates)
+        )
+    } else {
+        let mut each: Vec<String> = pieces
+            .iter()
+            .take(NOTE_PIECES)
+            .map(|p| {
+                format!(
+                    "{} DOF of bodies {{{}}} (one more input on one of the joints {} would fix \
+                     one)",
+                    p.missing,
+                    capped(&p.bodies),
+                    capped(&p.input_candidates)
+                )
+            })
+            .collect();
+        if pieces.len() > NOTE_PIECES {
+            let rest = &pieces[NOTE_PIECES..];
+            let dof: u64 = rest.iter().map(|p| p.missing).sum();
+            each.push(format!("{} more parts of {dof} DOF", rest.len()));
+        }
+        format!(
+            "{missing} DOF not fixed by any input, in {} independent parts: {}{caveat}",
+            pieces.len(),
+            each.join("; ")
+        )
+    };
     let part = UnderPart {
         missing,
         short,
         bodies,
         input_candidates,
+        pieces,
     };
     Some((part, note))
+}
+
+/// Independent pieces of the under-determined part a note describes one by one.
+const NOTE_PIECES: usize = 6;
+
+/// The under-determined part's independent pieces (connected by no equation between two of
+/// their nodes), in the order of their first body; empty when there is one.
+fn under_pieces(
+    m: &Mechanism,
+    eqs: &Equations,
+    dec: &Decomposition,
+    in_part: &[bool],
+) -> Vec<UnderPiece> {
+    let mut uf: Vec<usize> = (0..eqs.nodes).collect();
+    fn root(uf: &mut [usize], mut x: usize) -> usize {
+        while uf[x] != x {
+            uf[x] = uf[uf[x]];
+            x = uf[x];
+        }
+        x
+    }
+    for e in 0..eqs.len() {
+        let [a, b] = eqs.bodies(e);
+        if in_part[a] && in_part[b] {
+            let (ra, rb) = (root(&mut uf, a), root(&mut uf, b));
+            uf[ra.max(rb)] = ra.min(rb);
+        }
+    }
+    let mut order: Vec<usize> = Vec::new();
+    let mut members: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    for x in (0..eqs.nodes).filter(|&x| in_part[x] && x != m.frame) {
+        let r = root(&mut uf, x);
+        let list = members.entry(r).or_default();
+        if list.is_empty() {
+            order.push(r);
+        }
+        list.push(x);
+    }
+    if order.len() < 2 {
+        return Vec::new();
+    }
+    order
+        .iter()
+        .map(|r| {
+            let nodes = &members[r];
+            let mut mask = vec![false; eqs.nodes];
+            for &x in nodes {
+                mask[x] = true;
+            }
+            UnderPiece {
+                missing: nodes.iter().map(|&x| u64::from(dec.body_missing[x])).sum(),
+                bodies: nodes
+                    .iter()
+                    .filter(|&&x| x < m.bodies.len())
+                    .map(|&x| m.body_id(x).to_string())
+                    .collect(),
+                input_candidates: joint_ids(m, input_candidates(m, eqs, &mask)),
+            }
+        })
+        .collect()
 }
 
 /// The floating bases among the `missing` DOF no input fixes, on a line of their own: the free
@@ -533,9 +622,12 @@ pub(super) fn name_toggle(
     );
     if let Some(u) = d.underdetermined.as_mut() {
         u.input_candidates.clear();
-        let prefix = format!("{} DOF not fixed by any input:", u.missing);
+        for p in &mut u.pieces {
+            p.input_candidates.clear();
+        }
+        let prefix = format!("{} DOF not fixed by any input", u.missing);
         let under_note = format!(
-            "{prefix} bodies {{{}}} can move, left free by the input at the toggle on {}; \
+            "{prefix}: bodies {{{}}} can move, left free by the input at the toggle on {}; \
              moving that input, not adding one, fixes them",
             capped(&u.bodies),
             capped(&ids)

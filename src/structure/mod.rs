@@ -193,6 +193,21 @@ pub struct UnderPart {
     pub bodies: Vec<String>,
     /// Joints where one more input would fix a DOF (touching the part, spare grade).
     pub input_candidates: Vec<String>,
+    /// The part's independent pieces (no joint between two of them), when there are several
+    /// (the two fingers of a gripper): each one's unfixed DOF, bodies and input candidates.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub pieces: Vec<UnderPiece>,
+}
+
+/// One independent piece of the under-determined part.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize)]
+pub struct UnderPiece {
+    /// Its unfixed DOF.
+    pub missing: u64,
+    /// Its bodies.
+    pub bodies: Vec<String>,
+    /// Joints where one more input would fix one of its DOF.
+    pub input_candidates: Vec<String>,
 }
 
 /// Why the mechanism is not determined.

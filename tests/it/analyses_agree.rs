@@ -357,3 +357,50 @@ fn a_floating_base_is_named_on_a_line_of_its_own() {
         "{out}"
     );
 }
+
+/// DOF no input fixes in parts that no joint joins are told part by part: the Robotiq
+/// gripper's two fingers (2 DOF each at the file's configuration) each with their own
+/// candidates, where one line named all eight bodies and every joint of both; past six parts
+/// the rest are counted.
+#[test]
+fn dof_no_input_fixes_are_told_by_independent_part() {
+    let (_, out) = mbsa(&["analyze", "tests/fixtures/import/robotiq_2f85.xml"], "");
+    assert!(
+        out.contains(
+            "- 4 DOF not fixed by any input, in 2 independent parts: 2 DOF of bodies \
+             {left_coupler, left_driver, left_follower, left_spring_link} (one more input on \
+             one of the joints connect:left_follower-left_coupler, left_coupler_joint, \
+             left_driver_joint, left_follower_joint, left_spring_link_joint would fix one); 2 \
+             DOF of bodies {right_coupler,"
+        ),
+        "{out}"
+    );
+    let (_, out, _) = crate::common::mbsa(&[
+        "analyze",
+        "tests/fixtures/import/robotiq_2f85.xml",
+        "--format",
+        "json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+    let pieces = &v["diagnosis"]["underdetermined"]["pieces"];
+    assert_eq!(pieces.as_array().map(Vec::len), Some(2), "{out}");
+    assert_eq!(pieces[1]["missing"], 2, "{out}");
+    // Eight legs of one DOF hanging from the frame: six told, two counted.
+    let mut legs = String::from("space = \"planar\"\nframe = 0\n");
+    for k in 0..8 {
+        legs.push_str(&format!(
+            "[[joint]]\ntype = \"R\"\nbodies = [0, {}]\n[[joint]]\ntype = \"R\"\nbodies = [{}, {}]\n",
+            2 * k + 1,
+            2 * k + 1,
+            2 * k + 2
+        ));
+    }
+    let (_, out) = mbsa(&["analyze", "-", "--count-only"], &legs);
+    assert!(
+        out.contains(
+            "- 16 DOF not fixed by any input, in 8 independent parts: 2 DOF of bodies {1, 2}"
+        ),
+        "{out}"
+    );
+    assert!(out.contains("; 2 more parts of 4 DOF"), "{out}");
+}

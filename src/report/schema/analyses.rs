@@ -122,8 +122,19 @@ fn diagnosis() -> Value {
             ),
             ("bodies", strings()),
             ("input_candidates", strings()),
+            (
+                "pieces",
+                array(obj(
+                    &[
+                        ("missing", count()),
+                        ("bodies", strings()),
+                        ("input_candidates", strings()),
+                    ],
+                    &[],
+                )),
+            ),
         ],
-        &[],
+        &["pieces"],
     );
     obj(
         &[
