@@ -535,8 +535,8 @@ pub fn solve_global(
         bodies: step.bodies.clone(),
     };
     let mut meter = opts.budget.meter("the global position solve");
-    let sp = super::sparse::Sparse::new(&sys, model, targets, opts, &mut meter)?;
-    let (out, poses) = sp.solve(start, opts, &mut meter)?;
+    let mut sp = super::sparse::Sparse::new(&sys, model, targets, opts, &mut meter)?;
+    let (out, poses) = sp.solve_continued(start, opts, &mut meter)?;
     if !out.converged {
         return Err(outcome_error(m, model, "global", &sys, &out, opts));
     }

@@ -66,6 +66,28 @@ pub(super) struct Slot {
     off: Option<usize>,
 }
 
+/// The first piece of a continuation, as a fraction of the input's move.
+const INITIAL_PIECE: f64 = 0.25;
+
+/// The smallest piece a continuation cuts the move into.
+const MIN_PIECE: f64 = 1.0 / 16.0;
+
+/// The targets a fraction `f` of the way: the goal itself at 1 (and where a value has no start).
+fn partial(goal: &Targets, moves: &[Vec<(f64, f64)>], f: f64) -> Targets {
+    if f >= 1.0 {
+        return goal.clone();
+    }
+    goal.iter()
+        .zip(moves)
+        .map(|(t, m)| {
+            if m.len() != t.len() {
+                return t.clone();
+            }
+            m.iter().map(|&(v, d)| v + f * d).collect()
+        })
+        .collect()
+}
+
 /// Pairs evaluated at once (bounds the memory of one parallel batch).
 const CHUNK: usize = 4096;
 
@@ -73,7 +95,7 @@ const CHUNK: usize = 4096;
 pub struct Sparse<'a> {
     sys: &'a System,
     model: &'a PositionModel,
-    targets: &'a Targets,
+    targets: Targets,
     sym: Symbolic,
     pub(super) slots: Vec<Slot>,
     col: Vec<u32>,
@@ -160,13 +182,18 @@ impl<'a> Sparse<'a> {
         Ok(Sparse {
             sys,
             model,
-            targets,
+            targets: targets.clone(),
             sym,
             slots,
             col,
             body,
             centre,
         })
+    }
+
+    /// Solve for other driven targets with the same ordering (a continuation's steps).
+    pub(super) fn set_targets(&mut self, targets: Targets) {
+        self.targets = targets;
     }
 
     /// The factor's structure.
@@ -317,6 +344,82 @@ impl<'a> Sparse<'a> {
         })
     }
 
+    /// [`Sparse::solve`], and where it does not converge (the iteration limit, or steps that
+    /// stalled: no proof that no solution exists), a continuation: the driven values are moved
+    /// from `config`'s to the targets in pieces, each solved from the last (a large input move
+    /// takes Newton outside its basin on a long chain of loops; a piece stays inside). A piece
+    /// that does not converge is cut in half, down to [`MIN_PIECE`] of the move; then the first
+    /// outcome stands.
+    pub fn solve_continued(
+        &mut self,
+        config: &Configuration,
+        opts: &NewtonOptions,
+        meter: &mut Meter,
+    ) -> Result<(NewtonOutcome, Vec<Pose>), BudgetExceeded> {
+        let first = self.solve(config, opts, meter)?;
+        let open = |o: &NewtonOutcome| o.iterations >= opts.max_iterations || o.stalled;
+        if first.0.converged || !open(&first.0) {
+            return Ok(first);
+        }
+        let goal = std::mem::take(&mut self.targets);
+        let moves = self.driven_moves(config, &goal);
+        let mut at = config.clone();
+        let (mut done, mut piece) = (0.0f64, INITIAL_PIECE);
+        let (mut last, mut iterations) = (None, first.0.iterations);
+        while done < 1.0 {
+            let next = (done + piece).min(1.0);
+            self.set_targets(partial(&goal, &moves, next));
+            let (out, poses) = self.solve(&at, opts, meter)?;
+            iterations += out.iterations;
+            if out.converged {
+                for (&b, p) in self.sys.bodies.iter().zip(&poses) {
+                    at.poses[b] = *p;
+                }
+                done = next;
+                last = Some((out, poses));
+            } else if piece / 2.0 >= MIN_PIECE {
+                piece /= 2.0;
+            } else {
+                self.set_targets(goal);
+                return Ok(first);
+            }
+        }
+        self.set_targets(goal);
+        Ok(match last {
+            Some((out, poses)) => (NewtonOutcome { iterations, ..out }, poses),
+            None => first,
+        })
+    }
+
+    /// Each driven value's start (at `config`) and its move to `goal` (angles the short way
+    /// round), per pair of the model.
+    fn driven_moves(&self, config: &Configuration, goal: &Targets) -> Vec<Vec<(f64, f64)>> {
+        goal.iter()
+            .enumerate()
+            .map(|(p, t)| {
+                if t.is_empty() {
+                    return Vec::new();
+                }
+                let pair = &self.model.pairs[p];
+                let now = self
+                    .model
+                    .pair_values(p, &config.poses[pair.a], &config.poses[pair.b]);
+                t.iter()
+                    .zip(now)
+                    .map(|(&t, (v, angle))| {
+                        let d = t - v;
+                        let d = if angle {
+                            d - std::f64::consts::TAU * (d / std::f64::consts::TAU).round()
+                        } else {
+                            d
+                        };
+                        (v, d)
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
     /// Scale `ne` to a unit diagonal and factor it, damped by `damping` of that diagonal's
     /// largest entry: the damping `μ` and the squared pivots.
     fn damped_factor(
@@ -348,7 +451,7 @@ impl<'a> Sparse<'a> {
             for (&x, p) in self.sys.bodies.iter().zip(local) {
                 cfg.poses[x] = *p;
             }
-            let (_, j, _) = self.sys.evaluate(self.model, self.targets, &cfg);
+            let (_, j, _) = self.sys.evaluate(self.model, &self.targets, &cfg);
             return super::newton::singular_values(j);
         }
         let mut s: Vec<f64> = pivots

@@ -527,6 +527,28 @@ fn a_long_dyad_strip_solves_globally_as_group_by_group() {
 }
 
 #[test]
+fn a_move_too_large_for_one_global_solve_is_made_in_pieces() {
+    // With 4 iterations allowed, Newton cannot take the strip's crank 20° in one solve; the
+    // continuation moves it 5° at a time, each piece solved from the last (at 10^5 bodies the
+    // default limits do not take 20° in one solve either). The pieces end where the
+    // group-by-group solve does.
+    let m = dyad_strip(500);
+    let model = PositionModel::new(&m).unwrap();
+    let start = Configuration::reference(m.bodies.len());
+    let tg = targets(&m, &model, &[(0, vec![deg(20.0)])]).unwrap();
+    let o = NewtonOptions {
+        max_iterations: 4,
+        ..NewtonOptions::default()
+    };
+    let g = solve_global(&m, &model, &tg, &start, &o).expect("solved in pieces");
+    assert!(g.steps[0].iterations > o.max_iterations, "{:?}", g.steps[0]);
+    let (_, w) = solve_both(&m, &[(0, vec![deg(20.0)])], &start);
+    let far = m.bodies.len() - 1;
+    let (pg, pw) = (&g.config.poses[far], &w.config.poses[far]);
+    assert!((pg.translation - pw.translation).norm() < 1e-6);
+}
+
+#[test]
 fn a_long_dyad_strip_out_of_reach_stops_early_and_says_not_converged() {
     // Half a turn of the crank takes the first dyad out of reach. The global solve stops once
     // its steps make no progress (it ran its 60 iterations, each up to 30 halvings, before),
