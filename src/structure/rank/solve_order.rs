@@ -1,6 +1,7 @@
 //! The solve order in which the constraint rows set aside at the file's configuration are
 //! chosen: the count decomposition of a first choice, each of its groups split into the
-//! groups that all its own equations (the rows set aside included) determine in turn.
+//! groups that all its own equations (the rows set aside included) determine in turn, and
+//! the groups it left in the under-determined part found.
 //!
 //! Why: a row is set aside when it depends on the rows kept before it, so the order decides
 //! which group pays for a dependency. A group whose own rows were spent on a later group's
@@ -78,18 +79,9 @@ impl Split<'_> {
             // Its own pairs: into the group from the group, the frame or a lower level (a
             // pair to a lower level that is not a dependency lost all its rows; those bodies
             // are solved before the group all the same).
-            let mut own: Vec<usize> = grp
-                .bodies
-                .iter()
-                .flat_map(|&x| touching[x].iter().copied())
-                .filter(|&e| {
-                    eqs.bodies(e)
-                        .iter()
-                        .all(|&y| d.body_part[y] == Part::Group(g) || level(y) < grp.level)
-                })
-                .collect();
-            own.sort_unstable();
-            own.dedup();
+            let own = own_pairs(eqs, &touching, &grp.bodies, |y| {
+                d.body_part[y] == Part::Group(g) || level(y) < grp.level
+            });
             if own.iter().all(|&e| kept[e] as usize >= self.rows.nrows(e)) {
                 // Every own row kept: no proper part has more rows than the count gave it.
                 continue;
@@ -101,7 +93,66 @@ impl Split<'_> {
                 }
             }
         }
+        // Groups a choice left in the under-determined part, after every group.
+        let under: Vec<usize> = (0..eqs.nodes)
+            .filter(|&x| d.body_part[x] == Part::Under)
+            .collect();
+        if let Some((bodies, parts)) = self.determined_in(under, &touching, kept) {
+            split = true;
+            for (&x, p) in bodies.iter().zip(parts) {
+                keys[x] = (usize::MAX - 1, 0, p);
+            }
+        }
         split.then_some(keys)
+    }
+
+    /// The largest subset of the under-determined part `under` that its own rows determine,
+    /// every group solved, and its parts by [`Split::parts`]; `None` when it is empty, when
+    /// no own row was set aside (the count's under-determined part is then the rank's), or
+    /// past [`MAX_DENSE_UNKNOWNS`]. A body that moves in some motion of the part (its own
+    /// rows, the groups fixed) is in no determined subset; without the bodies that move, the
+    /// motions are found again, until none moves.
+    fn determined_in(
+        &self,
+        mut under: Vec<usize>,
+        touching: &[Vec<usize>],
+        kept: &[u32],
+    ) -> Option<(Vec<usize>, Vec<usize>)> {
+        let b = self.m.b() as usize;
+        let solved: Vec<bool> = {
+            let mut s = vec![true; self.eqs.nodes];
+            for &x in &under {
+                s[x] = false;
+            }
+            s
+        };
+        if under.is_empty() || b * under.len() > MAX_DENSE_UNKNOWNS {
+            return None;
+        }
+        let mut first = true;
+        loop {
+            let own = own_pairs(self.eqs, touching, &under, |y| {
+                solved[y] || under.binary_search(&y).is_ok()
+            });
+            if first && own.iter().all(|&e| kept[e] as usize >= self.rows.nrows(e)) {
+                return None;
+            }
+            first = false;
+            let (j, _) = self.group_rows(&under, &own);
+            let moving = moving_bodies(j, b, self.tol);
+            if !moving.contains(&true) {
+                let parts = self.parts(&under, &own)?;
+                return Some((under, parts));
+            }
+            let mut k = 0;
+            under.retain(|_| {
+                k += 1;
+                !moving[k - 1]
+            });
+            if under.is_empty() {
+                return None;
+            }
+        }
     }
 
     /// The parts of a group `bodies` (ascending) given the bodies its `own` pairs reach
@@ -216,6 +267,52 @@ fn motions_without(q: &DMatrix<f64>, r: &DMatrix<f64>, on_z: &[usize], cut: f64)
         return DMatrix::zeros(n, 0);
     };
     x.qr().q()
+}
+
+/// The pairs touching `bodies` whose other node is one of them or `known`, ascending.
+fn own_pairs(
+    eqs: &Equations,
+    touching: &[Vec<usize>],
+    bodies: &[usize],
+    known: impl Fn(usize) -> bool,
+) -> Vec<usize> {
+    let mut own: Vec<usize> = bodies
+        .iter()
+        .flat_map(|&x| touching[x].iter().copied())
+        .filter(|&e| eqs.bodies(e).iter().all(|&y| known(y)))
+        .collect();
+    own.sort_unstable();
+    own.dedup();
+    own
+}
+
+/// Per body (`b` columns each) of `j`'s columns, whether some twist of `j`'s null space
+/// moves it (entries of a fixed body are at most about the threshold).
+fn moving_bodies(j: DMatrix<f64>, b: usize, tol: &Tol) -> Vec<bool> {
+    let n = j.ncols();
+    // A square matrix with `j`'s null space: its `R` when it has at least as many rows.
+    let square = if j.nrows() >= n {
+        j.qr().r()
+    } else {
+        let mut p = DMatrix::<f64>::zeros(n, n);
+        p.view_mut((0, 0), (j.nrows(), n)).copy_from(&j);
+        p
+    };
+    let svd = square.svd(false, true);
+    let Some(vt) = svd.v_t else {
+        return vec![true; n / b.max(1)];
+    };
+    let smax = svd.singular_values.iter().copied().fold(0.0, f64::max);
+    let cut = tol.cut(smax, n);
+    let null: Vec<usize> = (0..svd.singular_values.len())
+        .filter(|&i| svd.singular_values[i] <= cut)
+        .collect();
+    (0..n / b.max(1))
+        .map(|k| {
+            null.iter()
+                .any(|&i| (k * b..(k + 1) * b).any(|c| vt[(i, c)].abs() > cut.max(1e-9)))
+        })
+        .collect()
 }
 
 /// The pairs touching each node (a pair of a node with itself left out).
