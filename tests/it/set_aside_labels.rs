@@ -205,9 +205,22 @@ fn permutation(n: usize, seed: u64) -> Vec<i64> {
 /// set aside in the plane too, as parallel P axes in a loop make), whose groups are not the
 /// reference. `Err` names what differed.
 fn case(n: usize, seed: u64) -> Result<bool, String> {
-    let Some(pairs) = random_planar(n, seed) else {
+    case_with(n, seed, false)
+}
+
+/// [`case`], with `under`: the first input of the mechanism removed, so that part of it is
+/// under-determined; a case whose spatial analysis sets a rigid part's own freedom aside
+/// (parts on parallel P joints) is none, its groups being those of another rule.
+fn case_with(n: usize, seed: u64, under: bool) -> Result<bool, String> {
+    let Some(mut pairs) = random_planar(n, seed) else {
         return Ok(false);
     };
+    if under {
+        let Some(p) = pairs.iter_mut().find(|p| p.driven > 0) else {
+            return Ok(false);
+        };
+        p.driven = 0;
+    }
     let identity: Vec<i64> = (1..=n as i64).collect();
     let back_of = |label: &[i64]| -> std::collections::HashMap<i64, i64> {
         label
@@ -225,7 +238,11 @@ fn case(n: usize, seed: u64) -> Result<bool, String> {
     labels.push(permutation(n, seed ^ 0x1abe1));
     for label in &labels {
         let text = file(&pairs, true, label);
-        let spatial = shape(&analyze_file(&text), &back_of(label));
+        let a = analyze_file(&text);
+        if under && !(a.isolated.is_empty() && a.spins.is_empty()) {
+            return Ok(false);
+        }
+        let spatial = shape(&a, &back_of(label));
         if spatial != planar {
             return Err(format!(
                 "n = {n}, seed = {seed}, labels {label:?}: in space {spatial:?}, planar \
@@ -275,6 +292,54 @@ fn planar_in_space_has_the_planar_groups_under_any_labels() {
 #[ignore = "2,000 cases, about 30 s in a debug build"]
 fn planar_in_space_has_the_planar_groups_under_any_labels_many() {
     let failed = cases(200, 2000);
+    assert!(
+        failed.is_empty(),
+        "{} failed:\n{}",
+        failed.len(),
+        failed.join("\n")
+    );
+}
+
+/// The seeds of the cases below, as the search that found them drew them.
+fn found_seed(k: u64) -> u64 {
+    0x1a4e ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15)
+}
+
+/// 47 bodies: the planar file has 18 groups. In space, the loop through a dyad joined to the
+/// frame and to the 16-body group solved before it is nearer the frame than that group's own
+/// loops: taken by frame distance, its rows kept the out-of-plane rows the group needed, and
+/// the two merged (17 groups).
+#[test]
+fn a_47_body_mechanism_in_space_has_the_planar_groups() {
+    assert_eq!(case(47, found_seed(207)), Ok(true));
+}
+
+/// 250 bodies: the planar file has 105 groups; in space, with the rows chosen by frame
+/// distance and then again in the solve order of the best choice so far, it had 98 under its
+/// own labels and 103 reversed or permuted.
+#[test]
+#[ignore = "250 bodies, about a minute in a debug build"]
+fn a_250_body_mechanism_in_space_has_the_planar_groups() {
+    assert_eq!(case(250, found_seed(4)), Ok(true));
+}
+
+/// Under-determined: the groups a first choice left in the under-determined part are found
+/// too (28 bodies, its first input removed: the planar file has 13 groups; with only the
+/// groups of the first choice split, 4 of its groups stayed in the under-determined part),
+/// and 300 further seeds.
+#[test]
+fn under_determined_planar_in_space_has_the_planar_groups() {
+    assert_eq!(case_with(28, found_seed(183), true), Ok(true));
+    let mut failed = Vec::new();
+    let mut checked = 0;
+    for k in 0..300 {
+        match case_with(5 + (k % 40) as usize, found_seed(k), true) {
+            Ok(true) => checked += 1,
+            Ok(false) => {}
+            Err(e) => failed.push(e),
+        }
+    }
+    assert!(checked >= 100, "{checked} cases");
     assert!(
         failed.is_empty(),
         "{} failed:\n{}",

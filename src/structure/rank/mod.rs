@@ -20,10 +20,11 @@
 //!
 //! Where it lives: [`check`] here draws realizations until its deficits are confirmed;
 //! `attempt` is one realization from rows to result, `rows` the pairs' constraint rows,
-//! `set_aside` the equations dependent at the file's configuration, `unknowns` each body's
-//! reduced unknowns, `blocks` and `round` the blocks of a decomposition, `float`, `screen`,
-//! `proof` and `exact` the rank decisions, `lowering` a deficit's explanation, `confirm` its
-//! second draw and `cache` what is kept across analyses.
+//! `set_aside` the equations dependent at the file's configuration (`solve_order` the order
+//! they are chosen in), `unknowns` each body's reduced unknowns, `blocks` and `round` the
+//! blocks of a decomposition, `float`, `screen`, `proof` and `exact` the rank decisions,
+//! `lowering` a deficit's explanation, `confirm` its second draw and `cache` what is kept
+//! across analyses.
 
 mod attempt;
 mod blocks;
@@ -37,6 +38,7 @@ mod round;
 mod rows;
 mod screen;
 mod set_aside;
+mod solve_order;
 mod unknowns;
 
 use crate::geometry::GeometryUsed;

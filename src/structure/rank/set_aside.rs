@@ -1,32 +1,29 @@
 //! The constraint equations set aside at the file's configuration: those dependent there
-//! (special geometry), chosen nearest the frame within each biconnected block.
+//! (special geometry), chosen within each biconnected block in a solve order.
 
 use super::float::{MAX_DENSE_UNKNOWNS, Tol};
 use super::lowering::body_names;
 use super::rows::{PairRows, input_rows};
+use super::solve_order::{SolveKeys, Split, on_node};
 use super::unknowns::LocalFrames;
 use crate::elimination::{Block, Elimination};
 use crate::mechanism::Mechanism;
 use crate::structure::Redundancy;
-use crate::structure::count::{Equations, Part};
+use crate::structure::count::Equations;
 use nalgebra::DMatrix;
 
-/// Set aside the constraint equations that are dependent at the file's configuration, keeping
-/// those nearest the frame: constraint rows are taken pair by pair in order of distance from
-/// the frame (then pair order), each kept when it is independent of the rows kept before it,
-/// within its biconnected block of the body graph (a dependency never spans two blocks: a
-/// self-stress restricted to one block is one). The pairs' input rows are kept. Returns the
-/// redundancies found, one per block.
+/// Set aside the constraint equations that are dependent at the file's configuration: within
+/// each biconnected block of the body graph (a dependency never spans two blocks: a
+/// self-stress restricted to one block is one), constraint rows are taken pair by pair, each
+/// kept when it is independent of the rows kept before it. The pairs' input rows are kept.
+/// Returns the redundancies found, one per block.
 ///
-/// The frame distance only approximates the solve order: where a pair of a later group comes
-/// first (at the same distance, by its pair number, which follows the body labels), it keeps
-/// rows a group solved before it needs, and that group merges into a coarser one. So, when
-/// rows were set aside, they are chosen again with the pairs at one distance in the reverse
-/// pair order, and then in the solve order of the best choice so far (the count decomposition
-/// of the rows it keeps, [`SolveKeys`]: pairs into earlier groups first, at most
-/// [`MAX_PASSES`] times); a choice replaces the best one when its decomposition has more
-/// groups, so the first choice stays where its groups are as fine as any. Only blocks of at
-/// most [`MAX_DENSE_UNKNOWNS`] unknowns are chosen again.
+/// The order decides which pairs pay for a dependency. Pairs are first taken by distance
+/// from the frame; when that sets rows aside, the rows are chosen again in the solve order
+/// of [`Split::solve_order`] (the groups of that first choice, each split into the groups
+/// its own equations determine in turn), if it splits any group: taken in a solve order,
+/// every group keeps rows that determine it, so a row a group needs is never spent on a
+/// later one.
 pub(super) fn redundant_at_configuration(
     m: &Mechanism,
     eqs: &Equations,
@@ -50,69 +47,40 @@ pub(super) fn redundant_at_configuration(
     };
     let first: Vec<Option<BlockChoice>> = blocks
         .iter()
-        .map(|block| aside.choose(block, Order::Frame { reverse: false }))
+        .map(|block| aside.choose(block, Order::Frame))
         .collect();
     if first.iter().flatten().all(|c| c.dropped == 0) {
         return Vec::new();
     }
-    // The choice is made again on the dense blocks only: a larger block keeps its first
-    // choice (three sparse choices doubled the time of 3,000 windows written in space).
-    let again: Vec<bool> = first
+    let split = Split {
+        m,
+        eqs,
+        rows,
+        tol,
+        local,
+    };
+    let Some(keys) = split.solve_order(&aside.kept_counts(&first, rows)) else {
+        return aside.apply(&blocks, first, rows, set_aside);
+    };
+    let again: Vec<Option<BlockChoice>> = blocks
         .iter()
-        .map(|c| {
-            c.as_ref().is_some_and(|c| {
-                c.dropped > 0 && c.bodies.len() * m.b() as usize <= MAX_DENSE_UNKNOWNS
-            })
+        .zip(first)
+        .map(|(block, c)| match c {
+            Some(c) if c.dropped > 0 => aside.choose(block, Order::Solve(&keys)),
+            c => c,
         })
         .collect();
-    if !again.contains(&true) {
-        return aside.apply(&blocks, first, rows, set_aside);
-    }
-    let choose = |order: Order<'_>| -> Vec<Option<BlockChoice>> {
-        blocks
-            .iter()
-            .zip(&first)
-            .zip(&again)
-            .map(|((block, c), &again)| match again {
-                true => aside.choose(block, order),
-                false => c.clone(),
-            })
-            .collect()
-    };
-    let mut best = first.clone();
-    let (mut groups, mut keys) = aside.solve_keys(&best, rows);
-    let reversed = choose(Order::Frame { reverse: true });
-    let (n, k) = aside.solve_keys(&reversed, rows);
-    if n > groups {
-        (best, groups, keys) = (reversed, n, k);
-    }
-    for _ in 0..MAX_PASSES {
-        let next = choose(Order::Solve(&keys));
-        let (n, k) = aside.solve_keys(&next, rows);
-        if n <= groups {
-            break;
-        }
-        (best, groups, keys) = (next, n, k);
-    }
-    aside.apply(&blocks, best, rows, set_aside)
+    aside.apply(&blocks, again, rows, set_aside)
 }
-
-/// Choices of the rows kept in the solve order of the best choice before, at most.
-const MAX_PASSES: usize = 2;
 
 /// The order in which a block's pairs are taken.
 #[derive(Clone, Copy)]
 enum Order<'a> {
-    /// By frame distance, then pair number (descending with `reverse`).
-    Frame { reverse: bool },
-    /// By the larger [`SolveKeys`] of the pair's bodies, then the smaller, then pair number.
+    /// By frame distance, then pair number.
+    Frame,
+    /// By the larger [`SolveKeys`] of the pair's nodes, then the smaller, then as `Frame`.
     Solve(&'a SolveKeys),
 }
-
-/// A node's place in the solve order of a count decomposition: the level of its group (the
-/// frame and an over-determined part 0, an under-determined part after every group), then its
-/// distance from the frame.
-type SolveKeys = Vec<(usize, usize)>;
 
 /// One block's choice: the rows kept per pair, the number dropped, the block's movable bodies
 /// and its number of constraint rows.
@@ -174,14 +142,18 @@ impl Configuration<'_> {
         let ncols = b * bodies.len();
         let mut pairs = block.to_vec();
         match order {
-            Order::Frame { reverse } => pairs.sort_by_key(|&e| {
+            Order::Frame => pairs.sort_by_key(|&e| {
                 let [h, o] = eqs.bodies(e);
-                let depth = self.depth[h].max(self.depth[o]);
-                (depth, if reverse { usize::MAX - e } else { e })
+                (self.depth[h].max(self.depth[o]), e)
             }),
             Order::Solve(k) => pairs.sort_by_key(|&e| {
                 let [h, o] = eqs.bodies(e);
-                (k[h].max(k[o]), k[h].min(k[o]), e)
+                (
+                    k[h].max(k[o]),
+                    k[h].min(k[o]),
+                    self.depth[h].max(self.depth[o]),
+                    e,
+                )
             }),
         }
         let order = pairs;
@@ -189,15 +161,8 @@ impl Configuration<'_> {
         let cut = self.tol.cut(1.0, nrows.max(ncols));
         // Pair `e`'s row `i` on the block's columns: (column of each side, the row on that
         // body's own twist about its reference point, signed).
-        let side = |e: usize, i: usize, x: usize, sign: f64| -> Vec<f64> {
-            let r = free.get(e);
-            match self.local.and_then(|lf| lf.frame[x].as_ref()) {
-                Some(s) => (0..b)
-                    .map(|k| sign * (0..b).map(|l| r[(i, l)] * s[(l, k)]).sum::<f64>())
-                    .collect(),
-                None => (0..b).map(|k| sign * r[(i, k)]).collect(),
-            }
-        };
+        let side =
+            |e: usize, i: usize, x: usize, sign: f64| on_node(self.local, &free.get(e), i, x, sign);
         let (kept, dropped) = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
             independent_rows_dense(eqs, free, &order, &bodies, b, cut, &side)
         } else {
@@ -231,31 +196,14 @@ impl Configuration<'_> {
         out
     }
 
-    /// The number of groups of the count decomposition with the rows `chosen` kept (and every
-    /// input), and its [`SolveKeys`].
-    fn solve_keys(&self, chosen: &[Option<BlockChoice>], rows: &PairRows) -> (usize, SolveKeys) {
-        let (m, eqs) = (self.m, self.eqs);
-        let mut counted = eqs.clone();
-        for e in 0..eqs.len() {
-            counted.cap[e] = rows.nrows(e) as u32;
-        }
+    /// The rows each pair keeps with the rows `chosen` kept (and every input).
+    fn kept_counts(&self, chosen: &[Option<BlockChoice>], rows: &PairRows) -> Vec<u32> {
+        let mut kept: Vec<u32> = (0..self.eqs.len()).map(|e| rows.nrows(e) as u32).collect();
         for (e, mine) in chosen.iter().flatten().flat_map(|c| &c.kept) {
             let inputs = rows.nrows(*e).saturating_sub(self.free.nrows(*e));
-            counted.cap[*e] = (mine.len() + inputs) as u32;
+            kept[*e] = (mine.len() + inputs) as u32;
         }
-        let d = crate::structure::count::decompose(m, &counted, &eqs.unknowns(m));
-        let last = d.groups.iter().map(|g| g.level).max().unwrap_or(0) + 1;
-        let keys = (0..eqs.nodes)
-            .map(|x| {
-                let level = match d.body_part.get(x) {
-                    Some(Part::Group(g)) => d.groups[*g].level,
-                    Some(Part::Under) => last,
-                    _ => 0,
-                };
-                (level, self.depth[x])
-            })
-            .collect();
-        (d.groups.len(), keys)
+        kept
     }
 
     /// Replace each pair's rows by its kept constraint rows plus its input rows; the joints
