@@ -64,7 +64,7 @@ pub fn solve_table(r: &SolveReport) -> String {
         t.add_row([
             st.name.clone(),
             st.level.to_string(),
-            st.bodies.join(", "),
+            crate::words::capped(&st.bodies),
             st.iterations.to_string(),
             st.nullity.to_string(),
             format!("{:.2e}", st.conditioning),

@@ -390,3 +390,28 @@ fn modelica_engine_v6_dead_centres_and_plain_revolutes() {
         "{out}"
     );
 }
+
+#[test]
+fn a_step_names_at_most_twelve_bodies() {
+    // A driven planar chain of 20 bodies: the global step holds them all, and its row names
+    // 12 (a strip of 10^5 bodies wrote them all on one line).
+    let mut text = String::from("space = \"planar\"\nframe = 0\n");
+    for k in 1..=20 {
+        text.push_str(&format!(
+            "[[joint]]\ntype = \"R\"\nbodies = [{}, {k}]\ndriven = 1\norigin = [{}, 0]\n",
+            k - 1,
+            k - 1
+        ));
+    }
+    let d = std::env::temp_dir().join(format!("mbsa-step-bodies-{}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join("chain.toml");
+    std::fs::write(&p, text).expect("write");
+    let (code, out, err) = mbsa(&["solve", "--global", p.to_str().expect("utf-8")]);
+    let _ = std::fs::remove_dir_all(&d);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains(" 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12 and 8 more "),
+        "{out}"
+    );
+}
