@@ -202,6 +202,32 @@ fn toml_of(m: &Mechanism, c: &Configuration, note: Option<&str>) -> String {
     s
 }
 
+/// A free joint to the frame that neither the file nor `--set` drives (an imported robot's
+/// floating base) is held at the file's pose, as `transform` takes it by default; the notes
+/// say so: left free, the solve would move the whole robot by whatever its steps chose (the
+/// group-by-group and the global solve each differently), since no equation fixes the base.
+fn hold_free_bases(m: &mut Mechanism, sets: &mut Vec<(usize, Vec<Value>)>) -> Vec<String> {
+    let mut notes = Vec::new();
+    for j in 0..m.joints.len() {
+        if !m.free_to_frame(j) || m.joints[j].driven > 0 {
+            continue;
+        }
+        let grade = m.joints[j].grade();
+        m.joints[j].driven = grade;
+        let zero = Value {
+            number: 0.0,
+            radians: None,
+        };
+        sets.push((j, vec![zero; grade as usize]));
+        let id = &m.joints[j].id;
+        notes.push(format!(
+            "the floating base `{id}` (a free joint to the frame, not driven) is held at the \
+             file's pose; `--set {id}=...` with its {grade} values moves it"
+        ));
+    }
+    notes
+}
+
 /// `mbsa assemble`.
 pub fn assemble(file: &FileArg, args: &AssembleArgs) -> Result<(), Failure> {
     let m = load(file)?;
@@ -240,7 +266,9 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         let j = &mut m.joints[sw.joint];
         j.driven = j.driven.max(1);
     }
+    let held = hold_free_bases(&mut m, &mut sets);
     let model = PositionModel::new(&m).map_err(|e| input_err(name, &e))?;
+    held.iter().for_each(|w| warn(w));
     let (config, note) = start(
         name,
         &m,

@@ -110,9 +110,9 @@ fn freedom_notes(r: &SolveReport) -> String {
         let _ = writeln!(
             s,
             "note: step {} leaves {} freedom(s) that neither its equations nor the inputs fix \
-             (bodies {}):\n      along them its bodies keep their start pose. An isolated spin \
-             is harmless; otherwise drive\n      a joint there (`--set JOINT=VALUE`), or the \
-             configuration is singular.",
+             (bodies {}):\n      along them its bodies stay near their start pose, which no \
+             input chose. An isolated spin is harmless;\n      otherwise drive a joint there \
+             (`--set JOINT=VALUE`), or the configuration is singular.",
             st.name,
             st.nullity,
             crate::words::capped(&st.bodies)

@@ -415,3 +415,44 @@ fn a_step_names_at_most_twelve_bodies() {
         "{out}"
     );
 }
+
+#[test]
+fn a_floating_base_nothing_drives_is_held_where_the_file_puts_it() {
+    // A pendulum on a body that floats on a free joint to the ground: with the pendulum's
+    // joint set and the base driven by nothing, the base stays at the file's pose (left free,
+    // each solve moved it as its steps chose), in both solves, and a warning says so.
+    let text = "space = \"spatial\"\nframe = \"ground\"\n\
+                [[joint]]\nid = \"base\"\ntype = \"F\"\nbodies = [\"ground\", \"trunk\"]\n\
+                [[joint]]\nid = \"hinge\"\ntype = \"R\"\nbodies = [\"trunk\", \"arm\"]\n\
+                origin = [0, 0, 1]\naxis = [0, 1, 0]\n";
+    let d = std::env::temp_dir().join(format!("mbsa-floating-{}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    let p = d.join("floating.toml");
+    std::fs::write(&p, text).expect("write");
+    let path = p.to_str().expect("utf-8");
+    for extra in [&[][..], &["--global"][..]] {
+        let mut args = vec!["solve", path, "--set", "hinge=30", "--format", "json"];
+        args.extend_from_slice(extra);
+        let (code, out, err) = mbsa(&args);
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            err.contains("the floating base `base` (a free joint to the frame, not driven) is held at the file's pose"),
+            "{err}"
+        );
+        let v: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+        let poses = v["poses"].as_array().expect("poses");
+        let pose = |b: &str| poses.iter().find(|p| p["body"] == b).expect("body").clone();
+        let trunk = pose("trunk");
+        let moved = trunk["angle_deg"].as_f64().expect("angle").abs()
+            + trunk["translation"]
+                .as_array()
+                .expect("translation")
+                .iter()
+                .map(|x| x.as_f64().expect("number").abs())
+                .sum::<f64>();
+        assert!(moved < 1e-9, "{out}");
+        let arm = pose("arm")["angle_deg"].as_f64().expect("angle");
+        assert!((arm - 30.0).abs() < 1e-9, "{out}");
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
