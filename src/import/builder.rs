@@ -145,15 +145,26 @@ impl Builder {
         d: &Pose,
         why: &str,
     ) -> Result<Vec<String>, Vec<String>> {
+        // The second link's group moves; where its joints cannot carry the move (or it holds
+        // the frame), the first link's group moves back instead.
         let frame = self.root(self.frame);
-        let (group, d) = if self.root(other) == frame {
-            (self.root(keep), d.inverse())
-        } else {
-            (self.root(other), *d)
+        let candidates = [(self.root(other), *d), (self.root(keep), d.inverse())];
+        let mut first_blocked: Option<Vec<String>> = None;
+        let mut chosen = None;
+        for (group, d) in candidates.into_iter().filter(|c| c.0 != frame) {
+            let inside: Vec<bool> = (0..self.names.len())
+                .map(|i| self.root(i) == group)
+                .collect();
+            let blocked = self.blocked(&inside);
+            if blocked.is_empty() {
+                chosen = Some((inside, d));
+                break;
+            }
+            first_blocked.get_or_insert(blocked);
+        }
+        let Some((inside, d)) = chosen else {
+            return Err(first_blocked.unwrap_or_default());
         };
-        let inside: Vec<bool> = (0..self.names.len())
-            .map(|i| self.root(i) == group)
-            .collect();
         let side = |j: &JointRec| -> Option<usize> {
             let ins: Vec<bool> = j.bodies.iter().map(|&x| inside[x]).collect();
             match ins.as_slice() {
@@ -161,19 +172,6 @@ impl Builder {
                 _ => None,
             }
         };
-        let blocked: Vec<String> = self
-            .joints
-            .iter()
-            .filter(|j| j.bodies.iter().any(|&x| inside[x]))
-            .filter(|j| {
-                let whole = j.bodies.iter().all(|&x| inside[x]);
-                !whole && (j.bodies.len() != 2 || !shift::can_move_side(j.kind))
-            })
-            .map(|j| format!("{} ({})", j.id, j.kind.code()))
-            .collect();
-        if !blocked.is_empty() {
-            return Err(blocked);
-        }
         for j in &mut self.joints {
             if let Some(k) = side(j) {
                 shift::move_side(j.kind, &mut j.geometry, k, &d);
@@ -236,6 +234,19 @@ impl Builder {
                 self.weld(keep, other, &why);
             }
         }
+    }
+
+    /// The joints between the bodies `inside` and the others that cannot carry a moved side.
+    fn blocked(&self, inside: &[bool]) -> Vec<String> {
+        self.joints
+            .iter()
+            .filter(|j| j.bodies.iter().any(|&x| inside[x]))
+            .filter(|j| {
+                let whole = j.bodies.iter().all(|&x| inside[x]);
+                !whole && (j.bodies.len() != 2 || !shift::can_move_side(j.kind))
+            })
+            .map(|j| format!("{} ({})", j.id, j.kind.code()))
+            .collect()
     }
 
     /// Add a joint; returns its index.

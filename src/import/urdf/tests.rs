@@ -123,14 +123,38 @@ fn an_open_weld_moves_its_link_where_the_cut_puts_it() {
     );
 }
 
+/// The parallelogram with the hinges `names` made prismatic.
+fn sliding(names: &[&str]) -> String {
+    let mut text = proposal("link", "0 1.2 0", "");
+    for n in names {
+        text = text.replace(
+            &format!(r#"<joint name="{n}" type="revolute">"#),
+            &format!(r#"<joint name="{n}" type="prismatic">"#),
+        );
+    }
+    text
+}
+
 #[test]
-fn an_open_weld_whose_link_slides_is_welded_as_placed_and_says_which_joint() {
-    // A prismatic joint cannot carry a side turned about its axis: nothing moves.
-    let text = proposal("link", "0 1.2 0", "").replace(
-        r#"<joint name="jc" type="revolute"><parent link="base"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/>"#,
-        r#"<joint name="jc" type="prismatic"><parent link="base"/><child link="c"/><origin xyz="1 0 0"/><axis xyz="0 0 1"/>"#,
+fn an_open_weld_whose_second_link_slides_moves_the_first() {
+    // A prismatic joint cannot carry a side turned about its axis: c stays, and b (on a
+    // hinge) moves back to where the cut closes.
+    let r = urdf(&sliding(&["jc"]));
+    let joint = |id: &str| r.mechanism.joints.iter().find(|j| j.id == id).expect(id);
+    assert!(joint("jc").geometry.second.is_none(), "{}", r.toml);
+    assert!(joint("jb").geometry.second.is_some(), "{}", r.toml);
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("`b` is welded where the cut puts it")),
+        "{:?}",
+        r.warnings
     );
-    let r = urdf(&text);
+}
+
+#[test]
+fn an_open_weld_whose_links_both_slide_is_welded_as_placed_and_says_which_joint() {
+    let r = urdf(&sliding(&["jb", "jc"]));
     let jc = r
         .mechanism
         .joints
