@@ -194,45 +194,75 @@ fn under_pieces(
         }
         x
     }
+    let mut join = |a: usize, b: usize| {
+        let (ra, rb) = (root(&mut uf, a), root(&mut uf, b));
+        uf[ra.max(rb)] = ra.min(rb);
+    };
     for e in 0..eqs.len() {
         let [a, b] = eqs.bodies(e);
         if in_part[a] && in_part[b] {
-            let (ra, rb) = (root(&mut uf, a), root(&mut uf, b));
-            uf[ra.max(rb)] = ra.min(rb);
+            join(a, b);
         }
     }
-    let mut order: Vec<usize> = Vec::new();
-    let mut members: std::collections::HashMap<usize, Vec<usize>> = Default::default();
+    // The bodies of one multiple joint are one piece, its pin known or not: so every joint
+    // touches at most one piece, and the pieces' candidate lists stay as long as the joints.
+    for j in &m.joints {
+        let mut inside = j.bodies.iter().copied().filter(|&x| in_part[x]);
+        if let Some(first) = inside.next() {
+            inside.for_each(|x| join(first, x));
+        }
+    }
+    // Each node's piece, numbered in the order of the pieces' first nodes.
+    let mut piece = vec![usize::MAX; eqs.nodes];
+    let mut of_root = vec![usize::MAX; eqs.nodes];
+    let mut pieces: Vec<UnderPiece> = Vec::new();
     for x in (0..eqs.nodes).filter(|&x| in_part[x] && x != m.frame) {
         let r = root(&mut uf, x);
-        let list = members.entry(r).or_default();
-        if list.is_empty() {
-            order.push(r);
+        if of_root[r] == usize::MAX {
+            of_root[r] = pieces.len();
+            pieces.push(UnderPiece {
+                missing: 0,
+                bodies: Vec::new(),
+                input_candidates: Vec::new(),
+            });
         }
-        list.push(x);
+        let p = &mut pieces[of_root[r]];
+        piece[x] = of_root[r];
+        p.missing += u64::from(dec.body_missing[x]);
+        if x < m.bodies.len() {
+            p.bodies.push(m.body_id(x).to_string());
+        }
     }
-    if order.len() < 2 {
+    if pieces.len() < 2 {
         return Vec::new();
     }
-    order
-        .iter()
-        .map(|r| {
-            let nodes = &members[r];
-            let mut mask = vec![false; eqs.nodes];
-            for &x in nodes {
-                mask[x] = true;
-            }
-            UnderPiece {
-                missing: nodes.iter().map(|&x| u64::from(dec.body_missing[x])).sum(),
-                bodies: nodes
-                    .iter()
-                    .filter(|&&x| x < m.bodies.len())
-                    .map(|&x| m.body_id(x).to_string())
-                    .collect(),
-                input_candidates: joint_ids(m, input_candidates(m, eqs, &mask)),
-            }
-        })
-        .collect()
+    // Each piece's candidates: as `input_candidates`, in one pass over the joints (a pass per
+    // piece was quadratic: 10^5 bodies on one shared joint are 10^5 pieces).
+    let mut element_of = vec![usize::MAX; m.joints.len()];
+    for (i, &ji) in eqs.elements.iter().enumerate().rev() {
+        element_of[ji] = i;
+    }
+    let mut cands: Vec<Vec<usize>> = vec![Vec::new(); pieces.len()];
+    for (ji, j) in m.joints.iter().enumerate() {
+        if j.driven >= j.grade() * j.pairs() {
+            continue;
+        }
+        let element = (element_of[ji] != usize::MAX).then(|| eqs.bodies + element_of[ji]);
+        let mut touched: Vec<usize> = element
+            .into_iter()
+            .chain(j.bodies.iter().copied())
+            .filter_map(|x| piece.get(x).copied().filter(|&p| p != usize::MAX))
+            .collect();
+        touched.sort_unstable();
+        touched.dedup();
+        for p in touched {
+            cands[p].push(ji);
+        }
+    }
+    for (p, c) in pieces.iter_mut().zip(cands) {
+        p.input_candidates = joint_ids(m, c);
+    }
+    pieces
 }
 
 /// The floating bases among the `missing` DOF no input fixes, on a line of their own: the free
