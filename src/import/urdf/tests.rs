@@ -99,32 +99,9 @@ fn an_open_cut_keeps_the_second_frame_and_says_so() {
     );
 }
 
-#[test]
-fn an_open_weld_moves_its_link_where_the_cut_puts_it() {
-    // The cut welds c's frame (at (1, 1.2, 0), turned a quarter about z) to b's (at (1, 1,
-    // 0)): c moves there, and its hinge to the base carries c's side in `second`.
-    let r = urdf(&proposal("link", "0 1.2 0", ""));
-    let jc = r
-        .mechanism
-        .joints
-        .iter()
-        .find(|j| j.id == "jc")
-        .expect("jc");
-    assert!(near(jc.geometry.origin, [1.0, 0.0, 0.0]), "{}", r.toml);
-    let second = jc.geometry.second.as_ref().expect("second");
-    assert!(near(second.origin, [-0.2, 1.0, 0.0]), "{}", r.toml);
-    assert!(near(second.axis, [0.0, 0.0, 1.0]), "{}", r.toml);
-    assert!(
-        r.warnings
-            .iter()
-            .any(|w| w.contains("`c` is welded where the cut puts it")),
-        "{:?}",
-        r.warnings
-    );
-}
-
-/// The parallelogram with the hinges `names` made prismatic.
-fn sliding(names: &[&str]) -> String {
+/// The parallelogram closed by a `link` cut that c's frame misses (at (1, 1.2, 0), turned a
+/// quarter about z, where b's is at (1, 1, 0)), with the hinges `names` made prismatic.
+fn sliding(names: &[&str]) -> Import {
     let mut text = proposal("link", "0 1.2 0", "");
     for n in names {
         text = text.replace(
@@ -132,43 +109,57 @@ fn sliding(names: &[&str]) -> String {
             &format!(r#"<joint name="{n}" type="prismatic">"#),
         );
     }
-    text
+    urdf(&text)
+}
+
+fn joint<'a>(r: &'a Import, id: &str) -> &'a crate::mechanism::Joint {
+    r.mechanism
+        .joints
+        .iter()
+        .find(|j| j.id == id)
+        .unwrap_or_else(|| panic!("no joint {id}: {}", r.toml))
+}
+
+fn assert_warned(r: &Import, words: &str) {
+    assert!(
+        r.warnings.iter().any(|w| w.contains(words)),
+        "{words}: {:?}",
+        r.warnings
+    );
+}
+
+#[test]
+fn an_open_weld_moves_its_link_where_the_cut_puts_it() {
+    // c moves where the cut closes, and its hinge to the base carries c's side in `second`.
+    let r = sliding(&[]);
+    let jc = joint(&r, "jc");
+    assert!(near(jc.geometry.origin, [1.0, 0.0, 0.0]), "{}", r.toml);
+    let second = jc.geometry.second.as_ref().expect("second");
+    assert!(near(second.origin, [-0.2, 1.0, 0.0]), "{}", r.toml);
+    assert!(near(second.axis, [0.0, 0.0, 1.0]), "{}", r.toml);
+    assert_warned(&r, "`c` is welded where the cut puts it");
 }
 
 #[test]
 fn an_open_weld_whose_second_link_slides_moves_the_first() {
     // A prismatic joint cannot carry a side turned about its axis: c stays, and b (on a
     // hinge) moves back to where the cut closes.
-    let r = urdf(&sliding(&["jc"]));
-    let joint = |id: &str| r.mechanism.joints.iter().find(|j| j.id == id).expect(id);
-    assert!(joint("jc").geometry.second.is_none(), "{}", r.toml);
-    assert!(joint("jb").geometry.second.is_some(), "{}", r.toml);
-    assert!(
-        r.warnings
-            .iter()
-            .any(|w| w.contains("`b` is welded where the cut puts it")),
-        "{:?}",
-        r.warnings
-    );
+    let r = sliding(&["jc"]);
+    assert!(joint(&r, "jc").geometry.second.is_none(), "{}", r.toml);
+    assert!(joint(&r, "jb").geometry.second.is_some(), "{}", r.toml);
+    assert_warned(&r, "`b` is welded where the cut puts it");
 }
 
 #[test]
 fn an_open_weld_whose_links_both_slide_is_welded_as_placed_and_says_which_joint() {
-    let r = urdf(&sliding(&["jb", "jc"]));
-    let jc = r
-        .mechanism
-        .joints
-        .iter()
-        .find(|j| j.id == "jc")
-        .expect("jc");
+    let r = sliding(&["jb", "jc"]);
+    let jc = joint(&r, "jc");
     assert_eq!(jc.kind, JointType::P, "{}", r.toml);
     assert!(jc.geometry.second.is_none(), "{}", r.toml);
-    assert!(
-        r.warnings.iter().any(|w| w.contains(
-            "welded as they are placed, which is not the assembled mechanism (the joints jc (P) cannot carry a moved side)"
-        )),
-        "{:?}",
-        r.warnings
+    assert_warned(
+        &r,
+        "welded as they are placed, which is not the assembled mechanism (the joints jc (P) \
+         cannot carry a moved side)",
     );
 }
 
