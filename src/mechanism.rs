@@ -1000,14 +1000,20 @@ pub fn resolve_ref(m: &Mechanism, text: &str) -> Result<usize, InputSpecError> {
     match matches.len() {
         1 => Ok(matches[0]),
         0 => {
+            // Nearest by Jaro-Winkler (a shared start weighs most) and by shared letter pairs
+            // (a shared end counts too): for OpenSim's coordinate `elbow_flex_r`, the joint
+            // `elbow_r`, not `elbow_l`.
             let hint = m
                 .joints
                 .iter()
                 .flat_map(|j| [j.id.clone(), m.joint_bodies_label(j)])
-                .map(|cand| (strsim::jaro_winkler(text, &cand), cand))
-                .filter(|(s, _)| *s >= 0.75)
-                .max_by(|a, b| a.0.total_cmp(&b.0).then_with(|| b.1.cmp(&a.1)))
-                .map(|(_, c)| c);
+                .map(|cand| {
+                    let jw = strsim::jaro_winkler(text, &cand);
+                    (jw, jw + strsim::sorensen_dice(text, &cand), cand)
+                })
+                .filter(|(jw, _, _)| *jw >= 0.75)
+                .max_by(|a, b| a.1.total_cmp(&b.1).then_with(|| b.2.cmp(&a.2)))
+                .map(|(_, _, c)| c);
             Err(InputSpecError::NoMatch {
                 text: text.to_string(),
                 hint,
@@ -1032,6 +1038,28 @@ fn split_pair(m: &Mechanism, text: &str) -> Option<(usize, usize)> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_joint_name_not_found_suggests_the_nearest_one() {
+        let j = |id: &str, a: i64, b: i64| JointSpec {
+            id: Some(id.into()),
+            ..JointSpec::new(JointType::R, a, b, 0)
+        };
+        let m = Mechanism::from_parts(
+            "arms",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![j("elbow_l", 1, 2), j("elbow_r", 1, 3)],
+        );
+        let hint = |text: &str| match resolve_ref(&m, text) {
+            Err(InputSpecError::NoMatch { hint, .. }) => hint,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(hint("elbow_flex_r").as_deref(), Some("elbow_r"));
+        assert_eq!(hint("elbow_flex_l").as_deref(), Some("elbow_l"));
+        assert_eq!(hint("wrist"), None);
+    }
 
     #[test]
     fn a_joint_stays_small_and_reads_as_before() {

@@ -181,8 +181,17 @@ fn start(
         }
         return Ok((c, None));
     }
-    let (c2, _) = mbsa::position::assemble(m, &c, &NewtonOptions::default())
-        .map_err(|e| solve_failure(file, &e))?;
+    let (c2, _) =
+        mbsa::position::assemble(m, &c, &NewtonOptions::default()).map_err(|e| match e {
+            // From the file's own configuration: a start nearer a closed one may reach it.
+            SolveError::Unreachable { .. } if poses.is_none() => Failure::Input(format!(
+                "error: {file}: {e}\n  help: either the joints cannot all close (a link too \
+                 short), or the file's configuration is too far from a closed one for the \
+                 projection: give a nearer start with `--poses FILE` (poses as `mbsa solve \
+                 --format json` writes them, e.g. your simulator's own assembled pose)"
+            )),
+            e => solve_failure(file, &e),
+        })?;
     let after =
         mbsa::position::check_closure(m, &c2, tolerance).map_err(|e| input_err(file, &e))?;
     let note = format!(

@@ -27,6 +27,7 @@ mod partition;
 mod parts;
 mod place;
 mod problem;
+mod prune;
 mod ranked;
 mod rules;
 mod search;
@@ -614,7 +615,8 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             // A Delta robot at --limit 20: every placement examined drove a rod's spin.
             s.notes.push(format!(
                 "none of the {} placement(s) examined is determined: raise --limit, or narrow the \
-                 search with --on, --grounded or --exclude",
+                 search with --keep (inputs every placement keeps, e.g. the file's own), --on, \
+                 --grounded or --exclude",
                 count_words(s.count_valid)
             ));
         }

@@ -7,6 +7,7 @@ use super::oracle::Oracle;
 use super::partition::BodyNames;
 use super::parts::{ByParts, ExpansionParts};
 use super::problem::Problem;
+use super::prune::LazyPruner;
 use super::rules::Rules;
 use super::{
     Placed, Placement, Progress, ProgressFn, TransformError, TransformOptions, analysis_work,
@@ -90,7 +91,31 @@ pub(super) fn place(
             break;
         }
     }
+    if st.cut > 0 {
+        let note = if st.r.count_valid == 0 {
+            format!(
+                "no placement is determined: each one the count allows drives one motion twice \
+                 or a body's isolated spin at this geometry (the search cut all {} branch(es))",
+                st.cut
+            )
+        } else {
+            format!(
+                "the search cut {} branch(es) whose inputs drive one motion twice or a body's \
+                 isolated spin at this geometry: their placements are not determined and are not \
+                 counted among the count-valid ones",
+                st.cut
+            )
+        };
+        st.r.notes.push(note);
+    }
     Ok(st.r)
+}
+
+/// Add `note` to `notes` unless it is there.
+fn add_note(notes: &mut Vec<String>, note: String) {
+    if !notes.contains(&note) {
+        notes.push(note);
+    }
 }
 
 /// What every analysis of one mechanism's placements reads.
@@ -121,6 +146,8 @@ struct Placing<'a> {
     batch_size: usize,
     max_batch: usize,
     eval_meter: Meter,
+    /// Branches the search cut at a dependent or spin-driving unit ([`LazyPruner`]).
+    cut: u64,
 }
 
 impl<'a> Placing<'a> {
@@ -164,6 +191,7 @@ impl<'a> Placing<'a> {
             // The analyses charge their own meter (the search holds `meter`): each may spend the
             // work budget.
             eval_meter: opts.budget.meter("the analysis of the placements"),
+            cut: 0,
         }
     }
 }
@@ -238,63 +266,90 @@ impl Placing<'_> {
         // `Oracle::Later`: decided once a placement of this expansion is rejected.
         let mut late: Option<Oracle> = None;
         let excluded_before = self.r.excluded;
-        p.search(meter, &mut |w, flow| {
-            if self.found >= self.limit {
-                self.r.cut = true;
-                return false;
-            }
-            let seq = self.found;
-            self.found += 1;
-            let driven: Vec<(usize, u32)> = (0..w.len())
-                .filter(|&q| w[q] > 0)
-                .map(|q| (q, w[q]))
-                .collect();
-            if let Some(spec) = self.cx.opts.shard {
-                let key = super::shard::key_hash(
-                    &super::expansion::inputs_of(&e.mech, e, &driven),
-                    e.label.as_deref(),
-                );
-                if !spec.keeps(key, seq as u64) {
-                    // Another shard's: counted, not analysed.
-                    self.skipped += 1;
-                    return true;
-                }
-            }
-            self.batch.push((
-                x,
-                driven,
-                flow.iter()
-                    .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
-                    .collect(),
-                seq,
-            ));
-            if self.batch.len() >= self.batch_size {
-                // Batches grow from one placement: the first ones stream at once.
-                self.batch_size = (self.batch_size * 2).min(self.max_batch);
-                // Only with more placements to analyse: a rejected single one (each
-                // expansion of a shared joint) pays nothing.
-                if late.is_none()
-                    && self.r.excluded > excluded_before
-                    && matches!(p.oracle, Oracle::Later { .. })
-                {
-                    late = Some(p.oracle.dependent(
-                        &e.mech,
-                        &self.cx.opts.budget,
-                        &mut self.eval_meter,
-                    ));
-                }
-                let oracle = late.as_ref().unwrap_or(&p.oracle);
-                if let Err(b) = self.flush(e, cache, oracle, p.lean.as_ref(), &mut *sink) {
-                    err = Some(b);
+        let mut dependent = false;
+        // Where the count does not see every motion, the search cuts the branches whose
+        // inputs drive one twice or a spin (the former path analyses them all).
+        let mut pruner = (!self.cx.opts.full_analyses).then(|| {
+            LazyPruner::new(
+                &e.mech,
+                self.cx.opts.analysis.geometry,
+                self.cx.opts.analysis.precision,
+                &p.u,
+                p.set_aside,
+                self.cx
+                    .opts
+                    .budget
+                    .meter("the motions the search is cut by"),
+                self.cx.opts.limit,
+            )
+        });
+        p.search(
+            meter,
+            &mut |w, flow| {
+                if self.found >= self.limit {
+                    self.r.cut = true;
                     return false;
                 }
+                let seq = self.found;
+                self.found += 1;
+                let driven: Vec<(usize, u32)> = (0..w.len())
+                    .filter(|&q| w[q] > 0)
+                    .map(|q| (q, w[q]))
+                    .collect();
+                if let Some(spec) = self.cx.opts.shard {
+                    let key = super::shard::key_hash(
+                        &super::expansion::inputs_of(&e.mech, e, &driven),
+                        e.label.as_deref(),
+                    );
+                    if !spec.keeps(key, seq as u64) {
+                        // Another shard's: counted, not analysed.
+                        self.skipped += 1;
+                        return true;
+                    }
+                }
+                self.batch.push((
+                    x,
+                    driven,
+                    flow.iter()
+                        .map(|f| [f[0].min(255) as u8, f[1].min(255) as u8])
+                        .collect(),
+                    seq,
+                ));
+                if self.batch.len() >= self.batch_size {
+                    // Batches grow from one placement: the first ones stream at once.
+                    self.batch_size = (self.batch_size * 2).min(self.max_batch);
+                    // Only with more placements to analyse: a rejected single one (each
+                    // expansion of a shared joint) pays nothing.
+                    if late.is_none()
+                        && self.r.excluded > excluded_before
+                        && matches!(p.oracle, Oracle::Later { .. })
+                    {
+                        late = Some(p.oracle.dependent(
+                            &e.mech,
+                            &self.cx.opts.budget,
+                            &mut self.eval_meter,
+                        ));
+                    }
+                    let oracle = late.as_ref().unwrap_or(&p.oracle);
+                    if let Err(b) = self.flush(e, cache, oracle, p.lean.as_ref(), &mut *sink) {
+                        err = Some(b);
+                        return false;
+                    }
 
-                if self.stopped {
-                    return false;
+                    if self.stopped {
+                        return false;
+                    }
+                    // Dependent constraint equations reject every placement of this expansion:
+                    // the search stops at the first ones instead of rejecting them all.
+                    if matches!(oracle, Oracle::Reject) && self.r.excluded > excluded_before {
+                        dependent = true;
+                        return false;
+                    }
                 }
-            }
-            true
-        })?;
+                true
+            },
+            pruner.as_mut(),
+        )?;
         if let Some(b) = err {
             return Err(b.into());
         }
@@ -311,6 +366,21 @@ impl Placing<'_> {
         }
         let oracle = late.as_ref().unwrap_or(&p.oracle);
         self.flush(e, cache, oracle, p.lean.as_ref(), sink)?;
+        self.cut += pruner.as_ref().map_or(0, LazyPruner::cut);
+        if pruner.as_ref().is_some_and(LazyPruner::exhausted) {
+            // Stopped by the cuts' bound: more placements may exist, as at `--limit`.
+            self.r.cut = true;
+        }
+        if dependent || (matches!(oracle, Oracle::Reject) && self.r.excluded > excluded_before) {
+            let note = format!(
+                "the constraint equations are dependent at this geometry: every placement of the \
+                 {} input(s) keeps a freedom no input controls (the mechanism moves more than \
+                 the count says), so the search stopped at the first rejected one(s); \
+                 `mbsa rigid` names the redundant joints",
+                p.f
+            );
+            add_note(&mut self.r.notes, note);
+        }
         Ok(())
     }
 

@@ -2,6 +2,7 @@
 //! first, by exchanges along alternating paths, with a trail to undo them.
 
 use super::problem::{NONE, Problem, Scratch, State};
+use super::prune::LazyPruner;
 use crate::budget::{BudgetExceeded, Meter};
 
 /// The search's callback: a placement (units per pair) and its flow (units of each pair into
@@ -26,7 +27,17 @@ impl Problem {
     /// back, so a run of candidates that take no unit costs one pass over the bodies, not one
     /// each (with `--limit`, the work grows with the placements found, not with candidates ×
     /// bodies).
-    pub(super) fn search(&self, meter: &mut Meter, leaf: LeafFn<'_>) -> Result<(), BudgetExceeded> {
+    ///
+    /// With `prune` (where the count does not see every motion), once it is made, "one more
+    /// unit here" is taken only while the units fixed so far stay independent on the motions
+    /// and move no isolated freedom ([`super::prune::Pruner`]): every placement reached from
+    /// then on passes that test.
+    pub(super) fn search(
+        &self,
+        meter: &mut Meter,
+        leaf: LeafFn<'_>,
+        mut prune: Option<&mut LazyPruner<'_>>,
+    ) -> Result<(), BudgetExceeded> {
         let Some(root) = &self.root else {
             return Ok(());
         };
@@ -51,8 +62,25 @@ impl Problem {
         // still to be explored.
         let mut choices: Vec<(usize, usize)> = Vec::new();
         let mut cur = 0usize;
+        // The order the pruner reads the fixed units in: pairs that are no candidate (kept
+        // inputs), then the candidates in the search's order.
+        let order: Vec<usize> = match prune {
+            Some(_) => {
+                let mut is_cand = vec![false; t.w.len()];
+                self.cand.iter().for_each(|&q| is_cand[q] = true);
+                (0..t.w.len())
+                    .filter(|&q| !is_cand[q])
+                    .chain(self.cand.iter().copied())
+                    .collect()
+            }
+            None => Vec::new(),
+        };
+        let mut units: Vec<(usize, u32)> = Vec::new();
         loop {
             meter.charge(1)?;
+            if prune.as_ref().is_some_and(|p| p.exhausted()) {
+                return Ok(());
+            }
             while cur < self.cand.len() && t.lo[self.cand[cur]] >= t.hi[self.cand[cur]] {
                 cur += 1;
             }
@@ -69,7 +97,22 @@ impl Problem {
             } else {
                 let q = self.cand[cur];
                 let mark = t.trail.len();
-                if t.w[q] > t.lo[q] || self.exchange_in(&mut t, q, meter)? {
+                let admits = match prune.as_mut().and_then(|lp| {
+                    let m = lp.mechanism();
+                    lp.get().map(|p| (m, p))
+                }) {
+                    Some((m, p)) => {
+                        units.clear();
+                        units.extend(order.iter().filter_map(|&r| {
+                            let n = t.lo[r] + u32::from(r == q);
+                            (n > 0).then_some((r, n))
+                        }));
+                        meter.charge(units.len() as u64 + 1)?;
+                        p.independent(m, &units)
+                    }
+                    None => true,
+                };
+                if admits && (t.w[q] > t.lo[q] || self.exchange_in(&mut t, q, meter)?) {
                     choices.push((mark, cur));
                     t.set_lo(q, t.lo[q] + 1);
                 } else if !self.cap(&mut t, q, meter)? {

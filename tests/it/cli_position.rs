@@ -142,6 +142,35 @@ fn bad_inputs_exit_2_with_the_reason() {
 }
 
 #[test]
+fn an_assembly_that_cannot_close_names_poses_as_the_way_on() {
+    // A four-bar whose ground link (10) is longer than the other three together: no
+    // projection closes it. From the file's own configuration the help names `--poses`,
+    // the way on when a start nearer a closed configuration exists (Gepetto's kangaroo leg
+    // from zero joint positions).
+    let dir = std::env::temp_dir().join(format!("mbsa-unreachable-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("four-bar.toml");
+    let joint = |id: &str, a: u32, b: u32, x: f64| {
+        format!("[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, 0]\n")
+    };
+    let text = format!(
+        "name = \"four-bar\"\nspace = \"planar\"\nframe = 1\n{}{}{}{}second = {{ origin = [10, 0] }}\n",
+        joint("A", 1, 2, 0.0),
+        joint("B", 2, 3, 1.0),
+        joint("C", 3, 4, 2.0),
+        joint("D", 4, 1, 3.0)
+    );
+    std::fs::write(&path, text).unwrap();
+    let (code, _, err) = mbsa(&["assemble", path.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("cannot be closed") && err.contains("--poses FILE"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn a_configuration_missing_closure_is_reported_and_assembled() {
     let dir = std::env::temp_dir().join(format!("mbsa-position-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
