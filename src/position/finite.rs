@@ -271,7 +271,7 @@ fn slice_coords(
     for (i, &body) in sys.bodies.iter().enumerate() {
         let p0 = &config.poses[body];
         let p = &x.poses[body];
-        let rv = log_rotation(&(p.rotation * p0.rotation.transpose()));
+        let rv = super::pose::log_rotation(&(p.rotation * p0.rotation.transpose()));
         let dt = p.translation - p0.translation;
         let full = [rv.x, rv.y, rv.z, dt.x, dt.y, dt.z];
         // d(translation)/d(ω) = −[p]×, d/dv = I; d(rv)/dω ≈ I.
@@ -296,23 +296,6 @@ fn slice_coords(
         }
     }
     (d, jd)
-}
-
-/// Rotation vector (axis times angle) of an almost orthonormal matrix. Robust near the
-/// identity, where `Rotation3::angle` (an `acos` of the trace) gives NaN once rounding puts
-/// the trace above 3: that NaN silently disabled the curve test and the slices.
-fn log_rotation(r: &nalgebra::Matrix3<f64>) -> nalgebra::Vector3<f64> {
-    let w = nalgebra::Vector3::new(
-        r[(2, 1)] - r[(1, 2)],
-        r[(0, 2)] - r[(2, 0)],
-        r[(1, 0)] - r[(0, 1)],
-    ) * 0.5;
-    let s = w.norm();
-    if s < 1e-300 {
-        return nalgebra::Vector3::zeros();
-    }
-    let c = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
-    w * (s.atan2(c) / s)
 }
 
 /// The configuration at slice coordinates `d` from `config` (the inverse of

@@ -143,6 +143,31 @@ pub struct PoseReport {
     pub axis: [f64; 3],
 }
 
+/// Rotation vector (axis times angle) of an almost orthonormal matrix. Robust near the
+/// identity, where `Rotation3::angle` (an `acos` of the trace) gives NaN once rounding puts
+/// the trace above 3: that NaN silently disabled the curve test and the slices, and wrote
+/// `NaN°` for a ball joint that did not turn. Near a half turn, where the skew part vanishes,
+/// nalgebra's own logarithm takes over.
+pub(crate) fn log_rotation(r: &Matrix3<f64>) -> Vector3<f64> {
+    let w = Vector3::new(
+        r[(2, 1)] - r[(1, 2)],
+        r[(0, 2)] - r[(2, 0)],
+        r[(1, 0)] - r[(0, 1)],
+    ) * 0.5;
+    let s = w.norm();
+    let c = ((r.trace() - 1.0) * 0.5).clamp(-1.0, 1.0);
+    if c < -0.9 {
+        let v = Rotation3::from_matrix_unchecked(*r).scaled_axis();
+        if v.iter().all(|x| x.is_finite()) {
+            return v;
+        }
+    }
+    if s < 1e-300 {
+        return Vector3::zeros();
+    }
+    w * (s.atan2(c) / s)
+}
+
 /// Round tiny noise to zero and keep 12 significant digits so reports are stable.
 pub(crate) fn tidy(x: f64) -> f64 {
     if x.abs() < 1e-12 {
@@ -186,6 +211,40 @@ impl PoseReport {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_rotation_vector_of_a_rounded_identity_is_zero_not_nan() {
+        // A ball joint that did not turn, its relative rotation rounded with a trace just
+        // above 3: `Rotation3::scaled_axis` (an `acos` of the trace) is NaN there, and `mbsa
+        // solve` wrote `NaN°` for it.
+        // A spherical joint of Gepetto's two-legged Digit-like robot at `--set motor_knee=70`.
+        let r = Matrix3::from_column_slice(&[
+            1.0,
+            1.567686990591483e-16,
+            6.271025365656158e-16,
+            -1.5676676676523737e-16,
+            1.0,
+            -5.862281146629122e-16,
+            -6.2753621743461e-16,
+            5.862416671900683e-16,
+            1.0000000000000004,
+        ]);
+        let v = log_rotation(&r);
+        assert!(v.iter().all(|x| x.is_finite() && x.abs() < 1e-15), "{v}");
+        // A half turn about z, and a quarter turn about x, are read back.
+        let half = Rotation3::from_axis_angle(&Vector3::z_axis(), std::f64::consts::PI);
+        let v = log_rotation(half.matrix());
+        assert!(
+            (v.norm() - std::f64::consts::PI).abs() < 1e-12 && v.z.abs() > 3.0,
+            "{v}"
+        );
+        let quarter = Rotation3::from_axis_angle(&Vector3::x_axis(), 0.5 * std::f64::consts::PI);
+        let v = log_rotation(quarter.matrix());
+        assert!(
+            (v - Vector3::new(0.5 * std::f64::consts::PI, 0.0, 0.0)).norm() < 1e-12,
+            "{v}"
+        );
+    }
 
     #[test]
     fn a_rotation_reported_as_zero_has_the_zero_rotations_axis() {

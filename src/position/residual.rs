@@ -374,7 +374,7 @@ fn u_angles(pa: &Pose, pb: &Pose, u: &Vector3<f64>, w: &Vector3<f64>) -> [TS; 2]
 /// derivative is taken at coincident orientations (exact there, approximate elsewhere).
 fn rotation_component(pa: &Pose, pb: &Pose, e: &Vector3<f64>) -> TS {
     let rel = pa.rotation.transpose() * pb.rotation;
-    let rv = Rotation3::from_matrix_unchecked(rel).scaled_axis();
+    let rv = super::pose::log_rotation(&rel);
     let mut s = TS::constant(rv.dot(e));
     let we = pa.dir(e);
     for k in 0..3 {
@@ -655,6 +655,33 @@ impl PositionModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_ball_joint_that_did_not_turn_reads_zero_not_nan() {
+        // Its relative rotation rounded with a trace just above 3: the `acos` of
+        // `Rotation3::scaled_axis` is NaN there, and `mbsa solve` wrote `NaN°`.
+        // A spherical joint of Gepetto's two-legged Digit-like robot at `--set motor_knee=70`.
+        let r = nalgebra::Matrix3::from_column_slice(&[
+            1.0,
+            1.567686990591483e-16,
+            6.271025365656158e-16,
+            -1.5676676676523737e-16,
+            1.0,
+            -5.862281146629122e-16,
+            -6.2753621743461e-16,
+            5.862416671900683e-16,
+            1.0000000000000004,
+        ]);
+        let pa = Pose::identity();
+        let pb = Pose {
+            rotation: r,
+            translation: Vector3::zeros(),
+        };
+        for e in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            let v = rotation_component(&pa, &pb, &e).v;
+            assert!(v.is_finite() && v.abs() < 1e-15, "{v}");
+        }
+    }
     use crate::motion::kinds::Allowed;
     use crate::motion::{SplitMix64, random_geometry};
 

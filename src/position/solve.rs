@@ -243,6 +243,15 @@ pub fn schedule<O: SolveOrder + ?Sized>(m: &Mechanism, a: &O, model: &PositionMo
     }
 }
 
+/// What an unreachable step means: an assembly has no input values, a solve step may.
+fn unreachable_why(group: &str) -> &'static str {
+    if group == "assembly" {
+        "the joints cannot all close from this start"
+    } else {
+        "an input value out of reach or a configuration that cannot be assembled"
+    }
+}
+
 /// Why a solve failed.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SolveError {
@@ -255,7 +264,8 @@ pub enum SolveError {
     /// A step's equations have no solution near the start (a value out of reach, a
     /// configuration that cannot be assembled).
     #[error(
-        "group {group} (bodies {bodies}) cannot be closed: residual {residual:.3e} stays on joint(s) {joints}; an input value out of reach or a configuration that cannot be assembled"
+        "group {group} (bodies {bodies}) cannot be closed: residual {residual:.3e} stays on joint(s) {joints}; {}",
+        unreachable_why(group)
     )]
     Unreachable {
         /// Step name.

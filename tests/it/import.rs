@@ -170,8 +170,9 @@ fn robotiq_2f85_two_planar_five_bars_closed_by_connect() {
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).expect("json");
     let s = &v["summary"];
-    // Per finger 11 placements of 2 DOF on 4 R and 1 S (driven about world x, then y); the
-    // S driven twice is excluded: its turn about y is locked, so a freedom stays free.
+    // Per finger 11 placements of 2 DOF on 4 R and 1 S (driven about world x, then y) pass
+    // the count; the S driven twice is not determined (its turn about y is locked, so a
+    // freedom stays free), and the search cuts it: 10 per finger examined, all determined.
     assert_eq!(
         (
             &s["f"],
@@ -179,7 +180,13 @@ fn robotiq_2f85_two_planar_five_bars_closed_by_connect() {
             &s["excluded_by_rank"],
             &s["determined"]
         ),
-        (&4.into(), &121.into(), &21.into(), &100.into()),
+        (&4.into(), &100.into(), &0.into(), &100.into()),
+        "{s}"
+    );
+    assert!(
+        s["notes"][0]
+            .as_str()
+            .is_some_and(|n| n.contains("the search cut 11 branch(es)")),
         "{s}"
     );
     // The source's numbers are known to ±5e-6 (pad pos 0.01352); the composed world
