@@ -267,15 +267,15 @@ impl Placing<'_> {
         let mut late: Option<Oracle> = None;
         let excluded_before = self.r.excluded;
         let mut dependent = false;
-        // Where the count does not see every motion, the search cuts the branches whose
-        // inputs drive one twice or a spin (the former path analyses them all).
+        // At the file's geometry, where the count may not see every motion, the search cuts
+        // the branches whose inputs drive one twice or a spin (the former path analyses them
+        // all).
         let mut pruner = (!self.cx.opts.full_analyses).then(|| {
             LazyPruner::new(
                 &e.mech,
                 self.cx.opts.analysis.geometry,
                 self.cx.opts.analysis.precision,
                 &p.u,
-                p.set_aside,
                 self.cx
                     .opts
                     .budget

@@ -60,7 +60,6 @@ pub(super) struct LazyPruner<'a> {
     source: GeometrySource,
     precision: Option<f64>,
     unknowns: &'a [u32],
-    set_aside: u32,
     state: Option<Option<Pruner>>,
     /// The work of making the motions (its own meter: the search holds its own).
     meter: Meter,
@@ -75,7 +74,6 @@ impl<'a> LazyPruner<'a> {
         source: GeometrySource,
         precision: Option<f64>,
         unknowns: &'a [u32],
-        set_aside: u32,
         meter: Meter,
         limit: Option<usize>,
     ) -> LazyPruner<'a> {
@@ -84,7 +82,6 @@ impl<'a> LazyPruner<'a> {
             source,
             precision,
             unknowns,
-            set_aside,
             state: None,
             meter,
             max_cuts: limit.map_or(u64::MAX, |l| {
@@ -102,7 +99,6 @@ impl<'a> LazyPruner<'a> {
                 self.source,
                 self.precision,
                 self.unknowns,
-                self.set_aside,
                 &mut self.meter,
             );
             self.state = Some(made.ok().flatten());
@@ -131,24 +127,20 @@ impl<'a> LazyPruner<'a> {
 
 impl Pruner {
     /// The pruner of `m` (an expansion: binary pairs) at the geometry the rank check uses
-    /// (`source`, `precision`), or `None` when it does not apply (a multiple joint, more than
-    /// [`MAX_COLUMNS`] unknowns, no motion) or is not needed (no motion the count does not
-    /// see: no body with fewer `unknowns` than B, nothing `set_aside`).
+    /// (`source`, `precision`) when it is the file's, or `None` when it does not apply (a
+    /// random realization, a multiple joint, more than [`MAX_COLUMNS`] unknowns, no motion).
+    /// The bodies with fewer `unknowns` than B are those whose isolated freedoms it reads.
     pub(super) fn of(
         m: &Mechanism,
         source: GeometrySource,
         precision: Option<f64>,
         unknowns: &[u32],
-        set_aside: u32,
         meter: &mut Meter,
     ) -> Result<Option<Pruner>, BudgetExceeded> {
         let b = m.b() as usize;
         let reduced: Vec<usize> = (0..unknowns.len().min(m.bodies.len()))
             .filter(|&x| x != m.frame && (unknowns[x] as usize) < b)
             .collect();
-        if reduced.is_empty() && set_aside == 0 {
-            return Ok(None);
-        }
         let ncols = m.bodies.len().saturating_sub(1) * b;
         if ncols == 0 || ncols > MAX_COLUMNS || m.joints.iter().any(|j| j.bodies.len() != 2) {
             return Ok(None);
