@@ -19,8 +19,8 @@ use crate::mechanism::{Geometry, Mechanism};
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 
-/// The threshold of a motion at a random realization.
-const RANDOM_THRESHOLD: f64 = 1e-8;
+/// The least threshold of a motion (a file whose numbers give no precision: rounding only).
+const LEAST_THRESHOLD: f64 = 1e-8;
 
 /// Branches a search with `--limit L` may cut, per placement of the limit (the Digit-like
 /// leg cuts about 55 per placement it reaches).
@@ -153,11 +153,11 @@ impl Pruner {
         if used.seed.is_some() {
             return Ok(None);
         }
-        // The rank check's threshold at the file's geometry; at a random realization (rows of
-        // unit size, generic) a dependence is one to rounding.
+        // The rank check's threshold at the file's geometry, at least a dependence to
+        // rounding.
         let thr = file_threshold(m, &used)
-            .unwrap_or(RANDOM_THRESHOLD)
-            .max(RANDOM_THRESHOLD);
+            .unwrap_or(LEAST_THRESHOLD)
+            .max(LEAST_THRESHOLD);
         let bodies: Vec<[usize; 2]> = m
             .joints
             .iter()
