@@ -457,12 +457,9 @@ fn gauss_jordan(a: &mut [Fp], d: usize, w_all: usize) -> Option<()> {
     Some(())
 }
 
-/// The constraint rows `J` of `m` (binary joints, no inputs) over GF(p) at the random
-/// realization `seed`, one column group per movable body, and each body's first column
-/// (`usize::MAX`: the frame).
-pub(super) fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>) {
-    use crate::exact::{Fp, SparseMatrix};
-    use crate::motion::exact as models;
+/// Each body's first column in a Jacobian of `B` columns per movable body (`usize::MAX`:
+/// the frame), and the number of columns.
+pub(super) fn body_columns(m: &Mechanism) -> (Vec<usize>, usize) {
     let b = m.b() as usize;
     let mut col = vec![usize::MAX; m.bodies.len()];
     let mut c = 0;
@@ -472,6 +469,17 @@ pub(super) fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix,
             c += b;
         }
     }
+    (col, c)
+}
+
+/// The constraint rows `J` of `m` (binary joints, no inputs) over GF(p) at the random
+/// realization `seed`, one column group per movable body, and each body's first column
+/// (`usize::MAX`: the frame).
+pub(super) fn jacobian(m: &Mechanism, seed: u64) -> (crate::exact::SparseMatrix, Vec<usize>) {
+    use crate::exact::{Fp, SparseMatrix};
+    use crate::motion::exact as models;
+    let b = m.b() as usize;
+    let (col, _) = body_columns(m);
     let mut j = SparseMatrix::with_groups(vec![b; m.bodies.len().saturating_sub(1)]);
     for q in 0..m.joints.len() {
         let [x, y] = m.joints[q].bodies[..] else {

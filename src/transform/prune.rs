@@ -327,15 +327,7 @@ fn motions(
     thr: f64,
 ) -> Option<Vec<Option<DMatrix<f64>>>> {
     let b = m.b() as usize;
-    let mut col = vec![usize::MAX; m.bodies.len()];
-    let mut c = 0;
-    for (x, slot) in col.iter_mut().enumerate() {
-        if x != m.frame {
-            *slot = c;
-            c += b;
-        }
-    }
-    let ncols = c;
+    let (col, ncols) = super::null_space::body_columns(m);
     let mut rows: Vec<Vec<f64>> = Vec::new();
     for (q, &[x, y]) in bodies.iter().enumerate().filter(|(_, p)| p[0] != p[1]) {
         let model = crate::motion::pair_model(m, q, &geoms[q], 0);

@@ -223,26 +223,30 @@ fn rejected_placements_of_a_random_mechanism_keep_their_verdict() {
     );
 }
 
-/// A placement the exact rank certifies is analysed from the search's own flow (its strongly
-/// connected components, levels and types), not by a full analysis: the same placements,
-/// groups, types, scores, ranks and families as the full analyses give.
-fn lean_equals_full(m: &Mechanism, limit: Option<usize>) {
+/// `transform` of `m` as the command line runs it, and by the former path (every count-valid
+/// placement analysed in full).
+fn default_and_full(
+    m: &Mechanism,
+    limit: Option<usize>,
+) -> (mbsa::transform::Transform, mbsa::transform::Transform) {
     let lib = Library::builtin();
     let o = TransformOptions {
         limit,
         ..TransformOptions::default()
     };
-    let lean = transform(m, &o, &lib, None).unwrap();
-    let full = transform(
-        m,
-        &TransformOptions {
-            full_analyses: true,
-            ..o
-        },
-        &lib,
-        None,
-    )
-    .unwrap();
+    let run = transform(m, &o, &lib, None).unwrap();
+    let full = TransformOptions {
+        full_analyses: true,
+        ..o
+    };
+    (run, transform(m, &full, &lib, None).unwrap())
+}
+
+/// A placement the exact rank certifies is analysed from the search's own flow (its strongly
+/// connected components, levels and types), not by a full analysis: the same placements,
+/// groups, types, scores, ranks and families as the full analyses give.
+fn lean_equals_full(m: &Mechanism, limit: Option<usize>) {
+    let (lean, full) = default_and_full(m, limit);
     assert!(!full.placements.is_empty());
     assert_eq!(lean, full);
 }
@@ -373,18 +377,7 @@ fn the_search_cut_at_rod_spins_lists_the_placements_the_full_analyses_list() {
     ];
     for m in &cases {
         let name = &m.name;
-        let o = TransformOptions::default();
-        let cut = transform(m, &o, &lib, None).unwrap();
-        let full = transform(
-            m,
-            &TransformOptions {
-                full_analyses: true,
-                ..o
-            },
-            &lib,
-            None,
-        )
-        .unwrap();
+        let (cut, full) = default_and_full(m, None);
         // The same placements in the same ranks, groups and scores (their numbers in the
         // enumeration differ: the search skips the branches it cuts).
         let key = |t: &mbsa::transform::Transform| -> Vec<String> {
