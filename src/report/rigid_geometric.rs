@@ -140,7 +140,7 @@ fn mobility_and_redundancy(s: &mut String, r: &GeometricReport) {
         // At the file's configuration "locked" is first order: a piston at a crank's dead
         // centre has no velocity there but moves at once (Modelica's EngineV6).
         let what = if r.geometry == "file" {
-            "joint freedoms with no first-order motion here; `--finite` names those that move nearby, as at a dead centre"
+            "joint freedoms with no first-order motion here; `--finite` tells which of these joints move nearby, as at a dead centre"
         } else {
             "joint freedoms that never move"
         };

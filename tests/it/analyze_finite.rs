@@ -215,3 +215,25 @@ fn rounded_numbers_leave_a_disagreeing_finite_answer_undecided() {
     assert_eq!(v["finite"]["verdict"], "overconstrained_moving", "{json}");
     assert!(v["finite"].get("rounded").is_none(), "{json}");
 }
+
+/// The geometric report's locked DOF point to `--finite` for those that move nearby: the
+/// finite test accounts for each of them, at a dead centre (they move) and in a rigid
+/// sub-assembly (they stay).
+#[test]
+fn rigid_finite_accounts_for_every_locked_freedom() {
+    let (code, out, _) = mbsa(&["rigid", "mechanisms/msl-engine-v6.toml", "--finite"], "");
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("20 locked DOF"), "{out}");
+    assert!(
+        out.contains(
+            "locked DOF: 20 joint freedom(s) have no first-order motion here; 2 move at the \
+             nearby configurations (cylinder1.cylinder 1, cylinder4.cylinder 1), 18 stay locked \
+             there (cylinder1.b1 3, cylinder2.b1 3"
+        ),
+        "{out}"
+    );
+    let (code, out, _) = mbsa(&["rigid", "mechanisms/rig-rssr.toml", "--finite"], "");
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("2 locked DOF"), "{out}");
+    assert!(out.contains("2 stay locked there (B 1, C 1)"), "{out}");
+}

@@ -159,3 +159,23 @@ fn the_finite_test_is_refused_up_front_when_its_sizes_exceed_the_budget() {
         "{out}"
     );
 }
+
+/// `rigid --finite` on loops of 60 and 80 joints: the levels of curve tests the count makes
+/// certain are estimated before they run. At 80 from the sizes, at 60 projected from the
+/// first levels; both ran 10-17 s before the meter stopped them at the budget's end.
+#[test]
+fn the_finite_test_projects_its_levels_before_running_them() {
+    let (code, out, err) = mbsa(&["rigid", "--finite", "-"], &loop_of(80));
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("at least 74 level(s) of curve tests, needs"),
+        "{err}"
+    );
+    let (code, out, err) = mbsa(&["rigid", "--finite", "-"], &loop_of(60));
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(
+        err.contains("the finite-mobility test (projected from its first 2 of at least 54 levels"),
+        "{err}"
+    );
+    assert!(err.contains("--max-work"), "{err}");
+}

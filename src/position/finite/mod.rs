@@ -12,6 +12,8 @@
 //! dimension. `docs/algorithms.md` ("Finite mobility") gives the argument, the measurements
 //! and the limits.
 
+mod joints;
+
 use super::closure::{ClosureStatus, assemble, check_closure, undriven};
 use super::newton::{NewtonOptions, System, Targets};
 use super::pose::Configuration;
@@ -20,6 +22,7 @@ use super::solve::SolveError;
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::mechanism::Mechanism;
 use crate::rng::SplitMix64;
+use joints::{PairMotion, instantaneous_joints, locked_freedoms, locked_note, toggle_joints};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 
@@ -641,7 +644,27 @@ pub fn finite_mobility(
     // theorem). Only the first level runs then, for the nearby samples; without this an open
     // chain of a few hundred joints ran one level per freedom (minutes).
     let regular = j0.ncols() - first_order == j0.nrows();
-    let levels = slice_levels(&curves, &n0, regular, opts, meter)?;
+    let sure = if regular {
+        1
+    } else {
+        (count.max(0) as usize).min(first_order)
+    };
+    // The levels sure to be certified (the solution set has dimension at least the count),
+    // each at least a landing and the halvings of its certificate, two steps a solve:
+    // refused now rather than after minutes of them.
+    let per_level = step_units(rows + sure, n).saturating_mul(2 * (1 + HALVINGS as u64));
+    opts.budget.check_work(
+        meter
+            .used()
+            .saturating_add(per_level.saturating_mul(sure as u64)),
+        || {
+            format!(
+                "the finite-mobility test on {n} unknowns and {rows} constraint rows, at least \
+                 {sure} level(s) of curve tests,"
+            )
+        },
+    )?;
+    let levels = slice_levels(&curves, &n0, regular, sure, opts, meter)?;
     let finite = levels.finite;
     let near = levels.best.map(|(_, n)| n).unwrap_or_else(|| n0.clone());
     let motion = PairMotion {
@@ -659,7 +682,7 @@ pub fn finite_mobility(
     } else {
         Vec::new()
     };
-    Ok(finite_report(FiniteMobility {
+    let mut r = finite_report(FiniteMobility {
         count,
         first_order,
         finite,
@@ -671,7 +694,14 @@ pub fn finite_mobility(
         notes: Vec::new(),
         assembled: false,
         rounded: None,
-    }))
+    });
+    // Every freedom locked here accounted for: the geometric report's "locked DOF" line
+    // points here for those that move nearby.
+    if first_order > 0 {
+        let locked = locked_freedoms(m, &motion, &n0, &near, opts.step);
+        r.notes.extend(locked_note(&locked));
+    }
+    Ok(r)
 }
 
 /// What the slicing levels of [`finite_mobility`] found: the local dimension, the nullities
@@ -684,13 +714,19 @@ struct Levels {
 
 /// The slicing levels of [`finite_mobility`] from the first-order motions `n0`: `k` runs up
 /// from 0 while some start is certified on a curve within `k` random tangent hyperplanes.
+///
+/// `sure` levels are certain to be certified (the count): after each from the second on, the
+/// work of those left is projected from the work of the levels since the first, and past the budget the test stops then, not at the
+/// end of the budget.
 fn slice_levels(
     curves: &Curves<'_>,
     n0: &DMatrix<f64>,
     regular: bool,
+    sure: usize,
     opts: &FiniteOptions,
     meter: &mut Meter,
 ) -> Result<Levels, SolveError> {
+    let mut after_first = meter.used();
     let first_order = n0.ncols();
     let (_, jd0) = slice_coords(curves.sys, curves.model, curves.config, curves.config);
     let mut rng = SplitMix64::new(opts.seed ^ 0xF1_u64);
@@ -724,6 +760,23 @@ fn slice_levels(
             break;
         }
         levels.finite += 1;
+        // The first level also samples the nullity nearby: the projection starts after it.
+        if levels.finite == 1 {
+            after_first = meter.used();
+        }
+        if levels.finite >= 2 && levels.finite < sure {
+            // Later levels cost at least what the earlier ones did (each adds a slice).
+            let per_level = (meter.used() - after_first) / (levels.finite - 1) as u64;
+            let left = (sure - levels.finite) as u64;
+            let projected = meter.used().saturating_add(per_level.saturating_mul(left));
+            opts.budget.check_work(projected, || {
+                format!(
+                    "the finite-mobility test (projected from its first {} of at least {sure} \
+                     levels of curve tests)",
+                    levels.finite
+                )
+            })?;
+        }
         // One more random tangent hyperplane through the configuration.
         let w = DVector::from_fn(first_order, |_, _| rng.next_signed());
         let c = n0 * w;
@@ -797,88 +850,6 @@ fn keep_least(best: &mut Option<(usize, DMatrix<f64>)>, n1: DMatrix<f64>) {
     if best.as_ref().is_none_or(|(k, _)| n1.ncols() < *k) {
         *best = Some((n1.ncols(), n1));
     }
-}
-
-/// The relative motion of a pair over the columns of a basis of motions.
-struct PairMotion<'a> {
-    model: &'a PositionModel,
-    sys: &'a System,
-}
-
-impl PairMotion<'_> {
-    /// The largest relative motion of pair `p` over the columns of `basis`.
-    fn of(&self, basis: &DMatrix<f64>, p: usize) -> f64 {
-        let b = self.model.b();
-        let pair = &self.model.pairs[p];
-        let col = |body: usize| self.sys.bodies.iter().position(|&x| x == body);
-        let mut worst: f64 = 0.0;
-        for c in 0..basis.ncols() {
-            let mut s = 0.0;
-            for k in 0..b {
-                let tb = col(pair.b).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
-                let ta = col(pair.a).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
-                s += (tb - ta) * (tb - ta);
-            }
-            worst = worst.max(s.sqrt());
-        }
-        worst
-    }
-}
-
-/// The joints moved by the part of the first-order motions `n0` far from the nearby
-/// tangent space `near` (the instantaneous-only freedoms).
-fn instantaneous_joints(
-    m: &Mechanism,
-    motion: &PairMotion<'_>,
-    n0: &DMatrix<f64>,
-    near: &DMatrix<f64>,
-) -> Vec<String> {
-    let model = motion.model;
-    let mut singular_joints = Vec::new();
-    let proj = n0 - near * (near.transpose() * n0);
-    let svd = nalgebra::SVD::try_new(proj, true, false, f64::EPSILON, 10_000);
-    if let Some((Some(u), values)) = svd.map(|d| (d.u, d.singular_values)) {
-        let svd_values = values;
-        let keep: Vec<usize> = (0..svd_values.len())
-            .filter(|&i| svd_values[i] > 0.1)
-            .collect();
-        let extra = DMatrix::from_fn(u.nrows(), keep.len(), |r, c| u[(r, keep[c])]);
-        for p in 0..model.pairs.len() {
-            let id = &m.joints[model.pairs[p].joint].id;
-            if motion.of(&extra, p) > 1e-6 && !singular_joints.contains(id) {
-                singular_joints.push(id.clone());
-            }
-        }
-    }
-    singular_joints
-}
-
-/// The joints stationary in every first-order motion `n0` that move in the nearby tangent
-/// space `near` (toggles).
-fn toggle_joints(
-    m: &Mechanism,
-    motion: &PairMotion<'_>,
-    n0: &DMatrix<f64>,
-    near: &DMatrix<f64>,
-    step: f64,
-) -> Vec<String> {
-    let model = motion.model;
-    let mut locked_at_toggle = Vec::new();
-    // At a sample `step` away a toggle's joint moves about `step` times its second-order
-    // rate: a piston at a crank's dead centre 1e-3 rad away slides at 1e-4 of the crank's
-    // rate (Modelica's EngineV6 has two). So the floor scales with the step and with the
-    // fastest joint; a joint locked for good stays at rounding (1e-10), far below it.
-    let scale = (0..model.pairs.len())
-        .map(|p| motion.of(near, p))
-        .fold(0.0, f64::max);
-    let floor = 1e-3 * step * scale;
-    for p in 0..model.pairs.len() {
-        let id = &m.joints[model.pairs[p].joint].id;
-        if motion.of(n0, p) < 1e-7 && motion.of(near, p) > floor && !locked_at_toggle.contains(id) {
-            locked_at_toggle.push(id.clone());
-        }
-    }
-    locked_at_toggle
 }
 
 /// The verdict and notes of a finite-mobility report from its counts and joints.
