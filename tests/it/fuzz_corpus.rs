@@ -63,3 +63,23 @@ fn transform_corpus() {
 fn import_corpus() {
     replay("import", import::run);
 }
+
+/// The trees the import target writes import in every format with one mobility count (the sum
+/// of their joints' freedoms): the renaming and reordering property compares real imports, not
+/// two errors.
+#[test]
+fn generated_trees_import_in_every_format() {
+    // Hinges, sliders and balls, some on the root, some on other bodies.
+    let bytes = [0u8, 0, 5, 0, 1, 6, 1, 2, 9, 2, 0, 1, 3, 1, 4, 1, 2, 0];
+    // URDF has no ball joint: the tree writes a `floating` one (6 DOF).
+    let dof = |ball: i64| -> i64 {
+        bytes
+            .chunks(3)
+            .map(|c| [1, 1, ball][c[1] as usize % 3])
+            .sum()
+    };
+    let formats = [("MJCF", 3), ("SDFormat", 3), ("URDF", 6), ("OpenSim", 3)];
+    for ((format, ball), got) in formats.iter().zip(import::tree_mobility(&bytes)) {
+        assert_eq!(got, Ok(dof(*ball)), "{format}");
+    }
+}
