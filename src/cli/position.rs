@@ -270,6 +270,16 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         Some(s) => Some(inputs::parse_sweep(&m, s).map_err(|e| input_err("--sweep", &e))?),
         None => None,
     };
+    // The sweep sets its joint at every step: a `--set` of it would be dropped.
+    if let Some(sw) = &sweep
+        && let Some(k) = sets.iter().position(|(k, _)| *k == sw.joint)
+    {
+        return Err(Failure::Input(format!(
+            "error: joint `{}` is given by both `--sweep` and `--set` (`{}`)\n  help: the sweep \
+             sets it at every step; drop the `--set`, or start the range there",
+            m.joints[sw.joint].id, written[k]
+        )));
+    }
     inputs::drive(&mut m, &sets);
     if let Some(sw) = &sweep {
         let j = &mut m.joints[sw.joint];

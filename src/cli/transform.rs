@@ -50,7 +50,10 @@ pub struct TransformArgs {
     /// stops there, and the output says when placements were left out.
     #[arg(long)]
     pub limit: Option<usize>,
-    /// Output format: a ranked table, JSON with every placement, or JSON lines streamed one placement per line.
+    /// Output format: a ranked table, JSON with the placements and their scores, or JSON lines
+    /// streamed one placement per line. The counts are exact; at most 100,000 placements are
+    /// listed (fewer for large mechanisms), the best first when the mechanism has independent
+    /// parts; a mechanism in one part streams every one as JSON lines.
     #[arg(long, value_enum, default_value_t = TransformFormat::Table)]
     pub format: TransformFormat,
     /// Write only shard M of N of the placements, as JSON lines for `mbsa merge`: `hash:M/N`
@@ -69,7 +72,7 @@ pub(super) fn parse_partition(text: &str) -> Result<ShardSpec, String> {
 pub enum TransformFormat {
     /// Ranked table for people.
     Table,
-    /// One JSON object with every placement and its scores.
+    /// One JSON object with the placements (at most 100,000) and their scores.
     Json,
     /// One JSON object per line, streamed; the summary comes last.
     Jsonl,

@@ -44,13 +44,32 @@ fn render(a: &Analysis, out: &mut String, flush: &mut Flush<'_>) -> std::io::Res
         Status::Underdetermined => "under-determined",
         Status::Mixed => "not determined (over- and under-determined parts)",
     };
+    let groups = match a.groups.len() {
+        0 => "no structural group".to_string(),
+        n => format!("{n} structural group(s) on {} level(s)", a.levels),
+    };
+    // Where the rank check set constraint equations aside (dependent at the configuration)
+    // the count is not the mobility: both, as `transform` says them ("count -2, true mobility
+    // 1"). A deficit found in a group with its inputs is the inputs', not the mechanism's.
+    let dependent: i64 = a
+        .redundant
+        .iter()
+        .filter(|r| r.configuration)
+        .map(|r| i64::from(r.count))
+        .sum();
+    let mobility = if dependent > 0 {
+        format!(
+            "count {}, true mobility {}",
+            a.mobility.count,
+            a.mobility.count + dependent
+        )
+    } else {
+        format!("mobility {}", a.mobility.count)
+    };
     let _ = writeln!(
         out,
-        "{}: {} structural group(s) on {} level(s); mobility {}, inputs {}; {}{}",
+        "{}: {groups}; {mobility}, inputs {}; {}{}",
         a.name,
-        a.groups.len(),
-        a.levels,
-        a.mobility.count,
         a.mobility.inputs,
         status,
         if a.count_only { " (count only)" } else { "" }

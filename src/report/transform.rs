@@ -125,16 +125,27 @@ pub fn summary(s: &Summary) -> String {
     if s.isolated > 0 {
         let _ = write!(why, ", minus {} isolated", s.isolated);
     }
+    // A negative f is a count of surplus constraints, not of inputs: no input can be placed.
+    let to_place = if s.f < 0 {
+        format!("no input to place ({} DOF over-constrained by count)", -s.f)
+    } else {
+        format!("{} input(s) to place", s.f)
+    };
     let _ = writeln!(
         out,
-        "{}: {}: {} input(s) to place; {} count-valid placement(s) examined, {} excluded by \
-         the rank check, {} determined",
+        "{}: {}: {}; {} count-valid placement(s) examined, {} excluded by the rank check, {} \
+         determined{}",
         s.name,
         why,
-        s.f,
+        to_place,
         count_words(s.count_valid),
         count_words(s.excluded_by_rank),
-        count_words(s.determined)
+        count_words(s.determined),
+        if s.parts > 1 {
+            format!(" (products over {} independent parts)", s.parts)
+        } else {
+            String::new()
+        }
     );
     if let Some(g) = &s.geometry {
         let _ = writeln!(out, "{}", super::geometry_line(g));

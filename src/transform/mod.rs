@@ -632,9 +632,15 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             count_words(s.count_valid)
         ));
     }
+    push_listing_note(s);
+}
+
+/// The note when fewer placements are listed than are determined ([`list_cap`]).
+fn push_listing_note(s: &mut Summary) {
     if (s.listed as u128) < s.determined {
         s.notes.push(format!(
-            "{} determined placements: the best {} are listed",
+            "{} determined placements: the best {} are listed (the listing is capped to bound \
+             memory; the counts are exact)",
             count_words(s.determined),
             s.listed
         ));

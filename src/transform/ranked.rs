@@ -6,7 +6,7 @@ use super::partition::{Fingerprint, Partition, Repr};
 use super::problem::Problem;
 use super::{
     Criterion, Family, Placement, ProgressFn, Scores, Summary, Transform, TransformError,
-    TransformOptions, count_words, enumerate_kept, list_cap,
+    TransformOptions, enumerate_kept, list_cap,
 };
 use crate::mechanism::Mechanism;
 use crate::structure::{Analysis, Library};
@@ -125,7 +125,7 @@ impl Listing {
         if summary.listed != placements.len() {
             summary.notes.retain(|n| !n.contains("are listed"));
             summary.listed = placements.len();
-            finish_listing_note(&mut summary);
+            super::push_listing_note(&mut summary);
         }
         let mut index: HashMap<Fingerprint, usize> = HashMap::new();
         let mut families: Vec<Vec<usize>> = Vec::new();
@@ -274,16 +274,6 @@ impl Serialize for Ranked {
         st.serialize_field("placements", &Placements(self))?;
         st.serialize_field("families", &Families(self))?;
         st.end()
-    }
-}
-
-fn finish_listing_note(s: &mut Summary) {
-    if (s.listed as u128) < s.determined {
-        s.notes.push(format!(
-            "{} determined placements: the best {} are listed",
-            count_words(s.determined),
-            s.listed
-        ));
     }
 }
 

@@ -42,6 +42,28 @@ fn a_joint_set_twice_is_refused() {
     assert_eq!(code, 0, "{err}");
 }
 
+/// A joint both swept and set: the sweep would drop the `--set` without a word (exit 0, the
+/// output of the sweep alone); refused instead.
+#[test]
+fn a_joint_swept_and_set_is_refused() {
+    let (code, out, err) = mbsa(&[
+        "solve",
+        "@slider-crank-geometry",
+        "--sweep",
+        "O=0..90:30",
+        "--set",
+        "O=20",
+    ]);
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains("joint `O` is given by both `--sweep` and `--set` (`O=20`)"),
+        "{err}"
+    );
+    let (code, _, err) = mbsa(&["solve", "@slider-crank-geometry", "--sweep", "O=0..90:30"]);
+    assert_eq!(code, 0, "{err}");
+}
+
 /// A library type with a zero, zero-padded or overflowing pair count is refused with the
 /// count and the range in the message; a plain one is read.
 #[test]

@@ -144,3 +144,36 @@ fn standard_input_given_twice_is_refused() {
     assert_eq!(code, 2);
     assert!(err.contains("more than once"), "{err}");
 }
+
+/// A CI gate that checks nothing must say so: non-finite `[expect]` values are refused at
+/// their location in every format (they were dropped, and `check` said "valid (no [expect]
+/// table)", exit 0), and an empty table is called empty.
+#[test]
+fn non_finite_and_empty_expect_tables_are_not_a_silent_pass() {
+    let body = "space = \"planar\"\nframe = 1\n[[joint]]\ntype = \"R\"\nbodies = [1, 2]\n\
+                driven = 1\n";
+    let toml = scratch("nan.toml", &format!("{body}[expect]\nmobility = nan\n"));
+    let json = scratch(
+        "inf.json",
+        "{\"space\": \"planar\", \"frame\": 1, \"joint\": [{\"type\": \"R\", \"bodies\": [1, 2], \
+         \"driven\": 1}], \"expect\": {\"mobility\": 1e999}}",
+    );
+    let yaml = scratch(
+        "nan.yaml",
+        "space: planar\nframe: 1\njoint:\n  - type: R\n    bodies: [1, 2]\n    driven: 1\n\
+         expect:\n  mobility: .nan\n",
+    );
+    for f in [&toml, &json, &yaml] {
+        let (code, out, err) = run(&["check", f], "");
+        assert_eq!(code, 2, "{f}: {out}{err}");
+        assert!(err.contains("is not a finite number"), "{f}: {err}");
+        assert!(err.contains(&format!("{f}:")), "{f}: located: {err}");
+    }
+    let empty = scratch("empty.toml", &format!("{body}[expect]\n"));
+    let (code, out, err) = run(&["check", &empty], "");
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(
+        out.contains("valid (empty [expect] table: nothing checked)"),
+        "{out}"
+    );
+}

@@ -218,7 +218,7 @@ fn four_bars_in_any_unit_and_place_get_the_same_verdicts() {
         (
             true,
             [-2, 1, 3, 20, 17, 18, 0],
-            "mobility -2, inputs 0; under-determined",
+            "count -2, true mobility 1, inputs 0; under-determined",
             "mobility = -2\ntrue_mobility = 1\nredundant = 3\nisolated = 0\ngroups = 0\n\
              determined = false\nuncontrolled = 1\n",
         ),

@@ -491,3 +491,20 @@ fn redundant_constraints_are_said_first_with_the_way_to_repair() {
     assert!(t.summary.set_aside > 0 && t.summary.determined > 0);
     assert!(t.summary.notes.iter().all(|n| !n.contains("mbsa repair")));
 }
+
+#[test]
+fn an_over_constrained_count_places_no_input_rather_than_a_negative_number() {
+    let (code, out, _) = crate::common::mbsa(&[
+        "transform",
+        "mechanisms/four-bar-3d-driven.toml",
+        "--geometry",
+        "random",
+    ]);
+    assert_eq!(code, 0, "{out}");
+    let head = out.lines().next().unwrap();
+    assert!(
+        head.contains("count -2: no input to place (2 DOF over-constrained by count)"),
+        "{head}"
+    );
+    assert!(!out.contains("-2 input(s)"), "{out}");
+}
