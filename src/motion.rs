@@ -130,7 +130,7 @@ pub enum MotionError {
     /// The file's configuration misses closure grossly (more than
     /// [`crate::position::closure::GROSS`] × the model size): it is not assembled.
     #[error(
-        "the configuration written is not assembled: joint `{joint}` is open by {residual:.3e}, more than {limit:.1e} (1e-2 x model size){others}; `mbsa assemble FILE > closed.toml` projects it onto the constraints (least change)"
+        "the configuration written is not assembled: joint `{joint}` is open by {residual:.3e}, more than {limit:.1e} (1e-2 x model size; a gap in file lengths, a turn of e rad counted as e x model size){others}; `mbsa assemble FILE > closed.toml` projects it onto the constraints (least change)"
     )]
     NotClosed {
         /// The worst joint.

@@ -101,8 +101,16 @@ pub fn run(file: &FileArg, structure: &StructureArgs, args: &TransformArgs) -> R
         Failure::Input(mbsa::diagnostic::render_plain(flag, e))
     };
     // Past the work budget: the budget's own message and exit code.
+    // The search's own bounds come first in the help: `--limit` answers at once where the
+    // whole search would take the budget (a 24-body leg ran 120 s to the work limit).
     let failed = |e: transform::TransformError| match e {
-        transform::TransformError::Budget(b) => super::budget_failure(&b),
+        transform::TransformError::Budget(b) => match super::budget_failure(&b) {
+            super::Failure::Input(text) if args.limit.is_none() => super::Failure::Input(format!(
+                "{text}\n  help: or bound the search: `--limit N` examines the first N \
+                 placements; `--keep SPEC` places the others around the inputs you keep"
+            )),
+            f => f,
+        },
         e => bad("transform", &e),
     };
     let opts = TransformOptions {

@@ -292,6 +292,11 @@ pub fn import_str(
         Some((t, w)) => (t.as_str(), w.clone()),
         None => (text, Vec::new()),
     };
+    let qualified = match format {
+        SourceFormat::Osim => xml::qualified_osim_tags(text),
+        _ => None,
+    };
+    let text = qualified.as_deref().unwrap_or(text);
     let src = Src::new(name, text);
     if Path::new(name)
         .extension()

@@ -7,6 +7,53 @@ use std::cell::Cell;
 use std::ops::Range;
 use std::path::Path;
 
+/// OpenSim's own serialization names some elements by their class and property,
+/// `<HuntCrossleyForce::ContactParametersSet>` (eight models of opensim-org/opensim-models,
+/// the DynamicJumper and the Walker among them). XML 1.0 allows `:` in a name, but a reader of
+/// XML namespaces (roxmltree) refuses two in one name. Such tag names get `__` for `::`: the
+/// same length, so every `file:line:column` is unchanged; the importer reads no such element.
+/// `None` when no tag name has `::`.
+pub(crate) fn qualified_osim_tags(text: &str) -> Option<String> {
+    let bytes = text.as_bytes();
+    let mut out: Option<Vec<u8>> = None;
+    let mut i = 0;
+    while let Some(k) = memchr_lt(&bytes[i..]) {
+        let mut j = i + k + 1;
+        if bytes.get(j) == Some(&b'/') {
+            j += 1;
+        }
+        let start = j;
+        while j < bytes.len()
+            && !matches!(bytes[j], b' ' | b'\t' | b'\r' | b'\n' | b'>' | b'/' | b'<')
+        {
+            j += 1;
+        }
+        let name = &bytes[start..j];
+        // Comments, declarations and CDATA start with `!` or `?`: not names.
+        if !name.starts_with(b"!") && !name.starts_with(b"?") {
+            let mut c = 0;
+            while c + 1 < name.len() {
+                if name[c] == b':' && name[c + 1] == b':' {
+                    let o = out.get_or_insert_with(|| bytes.to_vec());
+                    o[start + c] = b'_';
+                    o[start + c + 1] = b'_';
+                    c += 2;
+                } else {
+                    c += 1;
+                }
+            }
+        }
+        i = j.max(i + k + 1);
+    }
+    // Only ASCII `:` became ASCII `_`: still UTF-8.
+    out.map(|o| String::from_utf8(o).expect("ASCII replaced by ASCII"))
+}
+
+/// The position of the first `<` in `bytes`.
+fn memchr_lt(bytes: &[u8]) -> Option<usize> {
+    bytes.iter().position(|&b| b == b'<')
+}
+
 /// The declarations at the start of `text` written `<?` + white space (`<? xml version="1.0"?>`,
 /// as the published Stewart platform SDF begins), which no XML parser that checks
 /// well-formedness accepts (a processing instruction's target must follow `<?` at once). The
@@ -395,4 +442,23 @@ fn offset_of(text: &str, line: usize, col: usize) -> usize {
         at = start + b;
     }
     at.min(text.len())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::qualified_osim_tags;
+
+    /// Start and end tags named `Class::Property` get `__` (a tag written inside a comment
+    /// too, which nothing reads); text and attribute values keep their `::`; the length stays.
+    #[test]
+    fn only_tag_names_lose_their_double_colons() {
+        let text = "<a x=\"b::c\"><!-- <K::P> --><K::P n=\"1\">t::u</K::P><K::P/></a>";
+        let out = qualified_osim_tags(text).expect("a tag to rename");
+        assert_eq!(
+            out,
+            "<a x=\"b::c\"><!-- <K__P> --><K__P n=\"1\">t::u</K__P><K__P/></a>"
+        );
+        assert_eq!(out.len(), text.len());
+        assert_eq!(qualified_osim_tags("<a x=\"b::c\">t::u</a>"), None);
+    }
 }

@@ -142,5 +142,15 @@ fn finite(
         .unwrap_or_else(|| crate::motion::written_precision(m));
     let at_precision = geometric.filter(|_| !opts.with_inputs).map(|g| g.mobility);
     position::caveat_rounded(&mut f, precision, at_precision);
+    if opts.with_inputs {
+        // The test follows the mechanism's own motions: its inputs, fixed in the counting and
+        // the geometry above, move here.
+        f.notes.insert(
+            0,
+            "the finite mobility is the mechanism's own, its inputs free: `--with-inputs` \
+             applies to the counting and the geometry, not to this test"
+                .into(),
+        );
+    }
     Ok(f)
 }

@@ -606,7 +606,9 @@ fn analyze_at(
             let special: Vec<&Redundancy> =
                 a.redundant.iter().filter(|r| r.configuration).collect();
             let why = if special.is_empty() {
-                "the file's configuration is special (a singular or degenerate pose)".to_string()
+                "the file's geometry is special (axes parallel, concurrent or coaxial by design, or a \
+                 singular pose)"
+                    .to_string()
             } else {
                 let n: u32 = special.iter().map(|r| r.count).sum();
                 let joints: Vec<&str> = special

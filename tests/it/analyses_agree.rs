@@ -404,3 +404,107 @@ fn dof_no_input_fixes_are_told_by_independent_part() {
     );
     assert!(out.contains("; 2 more parts of 4 DOF"), "{out}");
 }
+
+/// A chassis on a free joint with two wheels hinged on one axle (MuJoCo's `car.xml`): the
+/// chassis pitching about the axle moves no other body, but the free joint's input drives it.
+const CAR: &str = r#"<mujoco model="car">
+  <worldbody>
+    <body name="car" pos="0 0 .03">
+      <freejoint/>
+      <geom type="box" size=".06 .04 .01"/>
+      <body name="left wheel" pos="-.07 .06 0" zaxis="0 1 0">
+        <joint name="left"/>
+        <geom type="cylinder" size=".03 .01"/>
+      </body>
+      <body name="right wheel" pos="-.07 -.06 0" zaxis="0 1 0">
+        <joint name="right"/>
+        <geom type="cylinder" size=".03 .01"/>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"#;
+
+/// A femur on a hinge at the hip and a planar knee whose normal is the hinge's axis (OpenSim's
+/// leg39, its knee's coupled translations left out): the femur's turn about the hip moves no
+/// other body, an isolated freedom, but the tibia reaches the frame only through the femur.
+const HIP_AND_PLANAR_KNEE: &str = r#"
+name = "hip hinge and planar knee"
+space = "spatial"
+frame = "pelvis"
+[[joint]]
+id = "hip"
+type = "R"
+bodies = ["pelvis", "femur"]
+origin = [0, 0, 0]
+axis = [0, 0, 1]
+[[joint]]
+id = "knee"
+type = "PL"
+bodies = ["femur", "tibia"]
+origin = [0, -0.4, 0]
+normal = [0, 0, 1]
+"#;
+
+/// A body on a free joint has no isolated freedom: the free joint's input drives every motion
+/// of it (MuJoCo's car: the chassis pitching about its wheels' axle moves no other body).
+/// Before, `transform` placed one input too few (0 determined, exit 0) and `analyze` said an
+/// input on the wheels "may only turn it, fixing none", while driving every joint determined
+/// the car. Where an isolated freedom left out of the count leaves nothing determined, the
+/// note says why and how to test one more input. A rod between two balls keeps its spin.
+#[test]
+fn a_body_on_a_free_joint_has_no_isolated_freedom() {
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("analyses_agree");
+    std::fs::create_dir_all(&dir).expect("writable");
+    let car = dir.join("car.xml");
+    std::fs::write(&car, CAR).expect("writable");
+    let car = car.to_str().expect("UTF-8");
+    let rigid = json(
+        &["rigid", car, "--method", "geometric", "--format", "json"],
+        "",
+    );
+    assert_eq!(rigid["mobility"], 8, "{rigid}");
+    assert_eq!(rigid["isolated"], 0, "{rigid}");
+    let a = json(&["analyze", car, "--format", "json"], "");
+    assert_eq!(a["isolated"], serde_json::json!([]), "{a}");
+    assert_eq!(a["uncontrolled"], 8, "{a}");
+    let a = json(
+        &[
+            "analyze",
+            car,
+            "--format",
+            "json",
+            "--inputs",
+            "car:free:6,left,right",
+        ],
+        "",
+    );
+    assert_eq!(a["status"], "determined", "{a}");
+    let t = json(&["transform", car, "--format", "json"], "");
+    assert_eq!(t["summary"]["f"], 8, "{t}");
+    assert_eq!(t["summary"]["determined"], 1, "{t}");
+    // The femur's turn stays isolated; nothing determined says why.
+    let (_, out) = mbsa(&["transform", "-"], HIP_AND_PLANAR_KNEE);
+    assert!(
+        out.contains("nothing is determined with 1 isolated DOF left out of the inputs"),
+        "{out}"
+    );
+    let a = json(
+        &["analyze", "-", "--format", "json", "--inputs", "hip,knee:3"],
+        HIP_AND_PLANAR_KNEE,
+    );
+    assert_eq!(a["status"], "determined", "{a}");
+    // The rod of an RSSR keeps its spin about the line through its ball centres.
+    let rigid = json(
+        &[
+            "rigid",
+            "@rig-rssr",
+            "--method",
+            "geometric",
+            "--format",
+            "json",
+        ],
+        "",
+    );
+    assert_eq!(rigid["isolated"], 1, "{rigid}");
+}

@@ -237,3 +237,29 @@ fn rigid_finite_accounts_for_every_locked_freedom() {
     assert!(out.contains("2 locked DOF"), "{out}");
     assert!(out.contains("2 stay locked there (B 1, C 1)"), "{out}");
 }
+
+/// `rigid --with-inputs --finite`: the counting and the geometry fix the inputs, the finite
+/// test follows the mechanism's own motion; the report says so instead of printing two
+/// mobilities without a word (`count 0; true mobility 0`, then `Finite mobility: 1`).
+#[test]
+fn rigid_finite_with_inputs_says_the_finite_mobility_is_the_mechanisms_own() {
+    let (code, out, _) = mbsa(
+        &[
+            "rigid",
+            "@slider-crank-geometry",
+            "--with-inputs",
+            "--finite",
+        ],
+        "",
+    );
+    assert_eq!(code, 0, "{out}");
+    assert!(
+        out.contains(
+            "the finite mobility is the mechanism's own, its inputs free: `--with-inputs` \
+             applies to the counting and the geometry, not to this test"
+        ),
+        "{out}"
+    );
+    let (_, out, _) = mbsa(&["rigid", "@slider-crank-geometry", "--finite"], "");
+    assert!(!out.contains("its inputs free"), "{out}");
+}

@@ -593,3 +593,36 @@ fn stewart_upu_as_published_imports_with_a_warning_on_its_prologue() {
         + 1;
     assert!(out.contains(&format!("stewart_upu.sdf:{line}:")), "{out}");
 }
+
+/// OpenSim writes some elements as `Class::Property` (`<HuntCrossleyForce::ContactParametersSet>`
+/// in eight models of opensim-org/opensim-models, the DynamicJumper and the Walker among them):
+/// read, where they were refused as "malformed XML: invalid name token".
+#[test]
+fn opensim_elements_named_class_and_property_are_read() {
+    let text = std::fs::read_to_string(fixture("double_pendulum.osim")).expect("fixture");
+    let force = "<ForceSet><objects><HuntCrossleyForce name=\"foot\">\
+                 <HuntCrossleyForce::ContactParametersSet name=\"contact_parameters\"><objects>\
+                 <HuntCrossleyForce::ContactParameters><stiffness>1e8</stiffness>\
+                 </HuntCrossleyForce::ContactParameters></objects>\
+                 </HuntCrossleyForce::ContactParametersSet></HuntCrossleyForce></objects>\
+                 </ForceSet>\n";
+    let at = text.rfind("</Model>").expect("a Model element");
+    let with = format!("{}{force}{}", &text[..at], &text[at..]);
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("import");
+    std::fs::create_dir_all(&dir).expect("writable");
+    let file = dir.join("qualified.osim");
+    std::fs::write(&file, with).expect("writable");
+    let file = file.to_str().expect("UTF-8");
+    assert_eq!(numbers(file, &[]), (2, 2, 0));
+    // Locations after the renamed tags are unchanged.
+    let head = format!("{}{force}", &text[..at]);
+    let line = head.matches('\n').count() + 1;
+    let broken = dir.join("qualified-broken.osim");
+    std::fs::write(&broken, format!("{head}<oops a=>\n{}", &text[at..])).expect("writable");
+    let (code, _, err) = mbsa(&["mobility", broken.to_str().expect("UTF-8")]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(&format!("qualified-broken.osim:{line}:")),
+        "{line}: {err}"
+    );
+}

@@ -508,3 +508,28 @@ fn an_over_constrained_count_places_no_input_rather_than_a_negative_number() {
     );
     assert!(!out.contains("-2 input(s)"), "{out}");
 }
+
+/// A whole search past the work budget names the search's own bounds beside the budget's
+/// flags (a 24-body leg ran 120 s to the work limit, where `--limit 20` answers at once);
+/// with `--limit` given, only the budget's.
+#[test]
+fn a_search_over_the_budget_names_limit_and_keep() {
+    let (code, out, err) =
+        crate::common::mbsa(&["--max-work", "100000", "transform", "@hexapod-rss"]);
+    assert_eq!(code, 2, "{out}{err}");
+    assert!(err.contains("--max-work"), "{err}");
+    assert!(
+        err.contains("help: or bound the search: `--limit N` examines the first N placements"),
+        "{err}"
+    );
+    let (code, _, err) = crate::common::mbsa(&[
+        "--max-work",
+        "100000",
+        "transform",
+        "@hexapod-rss",
+        "--limit",
+        "1000",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(!err.contains("bound the search"), "{err}");
+}

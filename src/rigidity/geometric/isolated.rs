@@ -102,9 +102,16 @@ impl Analysis<'_> {
         let mut comp = Complements::new(nb, b);
         // Isolated means undrivable: a motion across a cut of two or more joints that
         // constrain (a body on one joint moves by that joint's own DOF, which an input
-        // drives; an F joint constrains nothing). The frame never moves.
+        // drives). A body on an F joint (which constrains nothing) moves by that joint's DOF,
+        // every motion of the body: none is isolated. The frame never moves.
         let cut: Vec<usize> = (0..nb)
             .map(|body| {
+                if incident[body]
+                    .iter()
+                    .any(|&pi| models[pairs[pi].joint].rows.nrows() == 0)
+                {
+                    return 0;
+                }
                 let mut js: Vec<usize> = incident[body]
                     .iter()
                     .map(|&pi| pairs[pi].joint)
@@ -270,7 +277,13 @@ impl Analysis<'_> {
             return None;
         }
         // Isolated only across a cut of two or more constraining joints (one joint's own DOF
-        // is driven by an input on it).
+        // is driven by an input on it, an F joint's every motion).
+        if boundary
+            .iter()
+            .any(|&pi| models[pairs[pi].joint].rows.nrows() == 0)
+        {
+            return None;
+        }
         let mut cut_joints: Vec<usize> = boundary
             .iter()
             .map(|&pi| pairs[pi].joint)

@@ -66,7 +66,15 @@ impl Attempt<'_> {
         let b = self.b;
         let frame = self.local.as_ref().and_then(|lf| lf.frame[body].as_ref());
         // Isolated means undrivable: a motion across a cut of two or more constraining joints.
-        // A body on one joint moves by that joint's own DOF, which an input drives.
+        // A body on one joint moves by that joint's own DOF, which an input drives; a body on
+        // a free joint (F: no constraint at all) moves by its DOF too, every motion of the
+        // body, as a car's chassis pitching about its wheels' axle.
+        if mine
+            .iter()
+            .any(|&e| self.m.joints[eqs.joint[e as usize]].grade() as usize >= b)
+        {
+            return frame.cloned();
+        }
         let mut joints = mine
             .iter()
             .map(|&e| e as usize)
