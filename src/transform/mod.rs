@@ -621,18 +621,6 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             ));
         }
     }
-    if s.determined == 0 && !s.truncated && s.isolated > 0 {
-        // A body whose turn moves no other (a femur between a hip hinge and a planar knee of
-        // the same axis, a washer between two coaxial hinges) is left out of the count; where
-        // bodies reach the frame only through it, driving them drags it: it needs an input.
-        s.notes.push(format!(
-            "nothing is determined with {} isolated DOF left out of the inputs (`mbsa analyze` \
-             names their bodies): where other bodies reach the frame only through such a body, \
-             its turn needs an input too; `mbsa analyze --inputs SPEC` tests a placement with \
-             one more",
-            s.isolated
-        ));
-    }
     if let Some(n) = redundancy_note(s) {
         s.notes.insert(0, n);
     }

@@ -450,8 +450,7 @@ normal = [0, 0, 1]
 /// of it (MuJoCo's car: the chassis pitching about its wheels' axle moves no other body).
 /// Before, `transform` placed one input too few (0 determined, exit 0) and `analyze` said an
 /// input on the wheels "may only turn it, fixing none", while driving every joint determined
-/// the car. Where an isolated freedom left out of the count leaves nothing determined, the
-/// note says why and how to test one more input. A rod between two balls keeps its spin.
+/// the car. A rod between two balls keeps its spin.
 #[test]
 fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("analyses_agree");
@@ -483,12 +482,8 @@ fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let t = json(&["transform", car, "--format", "json"], "");
     assert_eq!(t["summary"]["f"], 8, "{t}");
     assert_eq!(t["summary"]["determined"], 1, "{t}");
-    // The femur's turn stays isolated; nothing determined says why.
-    let (_, out) = mbsa(&["transform", "-"], HIP_AND_PLANAR_KNEE);
-    assert!(
-        out.contains("nothing is determined with 1 isolated DOF left out of the inputs"),
-        "{out}"
-    );
+    // The femur's turn stays isolated (docs/reliability.md, known issues); driving the hip
+    // and the knee determines the leg.
     let a = json(
         &["analyze", "-", "--format", "json", "--inputs", "hip,knee:3"],
         HIP_AND_PLANAR_KNEE,
