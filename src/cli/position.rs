@@ -39,7 +39,8 @@ pub struct SolveArgs {
     /// at a dead point or a branch change.
     #[arg(long, value_name = "JOINT=FROM..TO:STEP")]
     pub sweep: Option<String>,
-    /// Project the starting configuration onto the constraints first (least change).
+    /// Project the starting configuration onto the constraints first (least change); the
+    /// inputs `--set` does not give then hold the values the assembly left them at.
     #[arg(long)]
     pub assemble: bool,
     /// Start from these poses (JSON, as `--format json` writes them) instead of the file's
@@ -237,6 +238,38 @@ fn hold_free_bases(m: &mut Mechanism, sets: &mut Vec<(usize, Vec<Value>)>) -> Ve
     notes
 }
 
+/// Assembled, the inputs that neither `--set` (the first `given` of `sets`) nor the sweep
+/// gives hold the values the assembly left them at: the file's own values are those of its
+/// open configuration, which the closed loops may not reach (Gepetto's Disney-like leg: "did
+/// not converge", where `mbsa assemble` then `mbsa solve` solved it).
+fn hold_assembled(
+    m: &Mechanism,
+    model: &PositionModel,
+    config: &mbsa::position::Configuration,
+    given: usize,
+    swept: Option<usize>,
+    sets: &mut Vec<(usize, Vec<Value>)>,
+) {
+    let at = mbsa::position::joint_values(m, model, config);
+    for (j, joint) in m.joints.iter().enumerate() {
+        if joint.driven == 0 || Some(j) == swept || sets[..given].iter().any(|(k, _)| *k == j) {
+            continue;
+        }
+        let values: Vec<Value> = at[j]
+            .values
+            .iter()
+            .zip(&at[j].units)
+            .take(joint.driven as usize)
+            .map(|(&number, &unit)| Value {
+                number,
+                radians: (unit == "deg").then_some(false),
+            })
+            .collect();
+        sets.retain(|(k, _)| *k != j);
+        sets.push((j, values));
+    }
+}
+
 /// `mbsa assemble`.
 pub fn assemble(file: &FileArg, args: &AssembleArgs) -> Result<(), Failure> {
     let m = load(file)?;
@@ -285,6 +318,7 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         let j = &mut m.joints[sw.joint];
         j.driven = j.driven.max(1);
     }
+    let given = sets.len();
     let held = hold_free_bases(&mut m, &mut sets);
     let model = PositionModel::new(&m).map_err(|e| input_err(name, &e))?;
     held.iter().for_each(|w| warn(w));
@@ -295,6 +329,10 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         args.tolerance,
         args.assemble,
     )?;
+    if args.assemble {
+        let swept = sweep.as_ref().map(|s| s.joint);
+        hold_assembled(&m, &model, &config, given, swept, &mut sets);
+    }
     let opts = NewtonOptions {
         budget: super::budget(),
         ..NewtonOptions::default()
