@@ -14,22 +14,25 @@ pub(super) struct PairMotion<'a> {
 }
 
 impl PairMotion<'_> {
-    /// The largest relative motion of pair `p` over the columns of `basis`.
-    fn of(&self, basis: &DMatrix<f64>, p: usize) -> f64 {
+    /// The relative twists of pair `p` (`b` rows) over the columns of `basis`.
+    fn relative(&self, basis: &DMatrix<f64>, p: usize) -> DMatrix<f64> {
         let b = self.model.b();
         let pair = &self.model.pairs[p];
         let col = |body: usize| self.sys.bodies.iter().position(|&x| x == body);
-        let mut worst: f64 = 0.0;
-        for c in 0..basis.ncols() {
-            let mut s = 0.0;
-            for k in 0..b {
-                let tb = col(pair.b).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
-                let ta = col(pair.a).map(|i| basis[(i * b + k, c)]).unwrap_or(0.0);
-                s += (tb - ta) * (tb - ta);
-            }
-            worst = worst.max(s.sqrt());
-        }
-        worst
+        let (cb, ca) = (col(pair.b), col(pair.a));
+        DMatrix::from_fn(b, basis.ncols(), |k, c| {
+            let tb = cb.map_or(0.0, |i| basis[(i * b + k, c)]);
+            let ta = ca.map_or(0.0, |i| basis[(i * b + k, c)]);
+            tb - ta
+        })
+    }
+
+    /// The largest relative motion of pair `p` over the columns of `basis`.
+    fn of(&self, basis: &DMatrix<f64>, p: usize) -> f64 {
+        self.relative(basis, p)
+            .column_iter()
+            .map(|c| c.norm())
+            .fold(0.0, f64::max)
     }
 
     /// The least motion at the nearby configurations `step` away that counts as moving. At
@@ -47,18 +50,10 @@ impl PairMotion<'_> {
     /// The rank of pair `p`'s relative twists over the columns of `basis`: singular values
     /// above `abs`.
     fn rank(&self, basis: &DMatrix<f64>, p: usize, abs: f64) -> usize {
-        let b = self.model.b();
-        let pair = &self.model.pairs[p];
-        let col = |body: usize| self.sys.bodies.iter().position(|&x| x == body);
-        let (cb, ca) = (col(pair.b), col(pair.a));
         if basis.ncols() == 0 {
             return 0;
         }
-        let rel = DMatrix::from_fn(b, basis.ncols(), |k, c| {
-            let tb = cb.map_or(0.0, |i| basis[(i * b + k, c)]);
-            let ta = ca.map_or(0.0, |i| basis[(i * b + k, c)]);
-            tb - ta
-        });
+        let rel = self.relative(basis, p);
         rel.singular_values().iter().filter(|s| **s > abs).count()
     }
 }
