@@ -416,6 +416,10 @@ pub struct Summary {
     pub truncated: bool,
     /// Plain-language notes (restrictions, truncation, why nothing was found).
     pub notes: Vec<String>,
+    /// Bodies with isolated freedoms (left out of `f`) through which other bodies reach the
+    /// frame (not in the JSON: the note names them).
+    #[serde(skip)]
+    pub dependent_isolated: Vec<String>,
 }
 
 /// The ranked result of [`transform`].
@@ -531,6 +535,7 @@ fn enumerate_kept(
         limit: opts.limit,
         truncated: false,
         notes: rules.notes.clone(),
+        dependent_isolated: Vec::new(),
     };
     if parts.len() <= 1 {
         let r = place(
@@ -621,6 +626,16 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             ));
         }
     }
+    if s.determined == 0 && !s.truncated && !s.dependent_isolated.is_empty() {
+        // A ball chain's inner links, spinning alone: what hangs beyond them is driven
+        // through them (docs/reliability.md, known issues).
+        s.notes.push(format!(
+            "nothing is determined with the isolated freedoms of {} left out of the inputs: \
+             other bodies reach the frame only through them, and driving those drags them; \
+             `mbsa analyze --inputs SPEC` tests a placement with an input there too",
+            crate::words::capped(&s.dependent_isolated)
+        ));
+    }
     if let Some(n) = redundancy_note(s) {
         s.notes.insert(0, n);
     }
@@ -694,6 +709,7 @@ fn ser_count<S: serde::Serializer>(n: &u128, s: S) -> Result<S::Ok, S::Error> {
 #[derive(Default)]
 struct Placed {
     isolated: u32,
+    dependent: Vec<String>,
     set_aside: u32,
     f: i64,
     drivable: usize,
@@ -709,6 +725,7 @@ struct Placed {
 impl Summary {
     fn absorb(&mut self, r: &Placed) {
         self.isolated += r.isolated;
+        self.dependent_isolated.extend(r.dependent.iter().cloned());
         self.set_aside += r.set_aside;
         self.f += r.f;
         self.drivable += r.drivable;

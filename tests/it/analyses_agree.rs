@@ -446,11 +446,27 @@ origin = [0, -0.4, 0]
 normal = [0, 0, 1]
 "#;
 
+/// A chain of three ball joints (a MuJoCo rope): the inner links spin about the line through
+/// their two balls, moving no other body.
+const BALL_CHAIN: &str = r#"<mujoco model="rope">
+  <worldbody>
+    <body name="b1" pos="0 0 1"><joint name="j1" type="ball"/><geom size="0.05"/>
+      <body name="b2" pos="0 0 -0.2"><joint name="j2" type="ball"/><geom size="0.05"/>
+        <body name="b3" pos="0 0 -0.2"><joint name="j3" type="ball"/><geom size="0.05"/>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+</mujoco>
+"#;
+
 /// A body on a free joint has no isolated freedom: the free joint's input drives every motion
 /// of it (MuJoCo's car: the chassis pitching about its wheels' axle moves no other body).
 /// Before, `transform` placed one input too few (0 determined, exit 0) and `analyze` said an
 /// input on the wheels "may only turn it, fixing none", while driving every joint determined
-/// the car. A rod between two balls keeps its spin.
+/// the car. Where an isolated freedom others depend on leaves nothing determined (a ball
+/// chain, a femur between a hip hinge and a planar knee), the note names its bodies. A rod
+/// between two balls keeps its spin.
 #[test]
 fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("analyses_agree");
@@ -482,8 +498,36 @@ fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let t = json(&["transform", car, "--format", "json"], "");
     assert_eq!(t["summary"]["f"], 8, "{t}");
     assert_eq!(t["summary"]["determined"], 1, "{t}");
-    // The femur's turn stays isolated (docs/reliability.md, known issues); driving the hip
-    // and the knee determines the leg.
+    // The femur's turn and a ball chain's inner spins stay isolated (docs/reliability.md,
+    // known issues): nothing determined says why; driving every joint determines them.
+    let chain = dir.join("ball_chain.xml");
+    std::fs::write(&chain, BALL_CHAIN).expect("writable");
+    let chain = chain.to_str().expect("UTF-8");
+    let (_, out) = mbsa(&["transform", chain], "");
+    assert!(
+        out.contains("nothing is determined with the isolated freedoms of b1, b2 left out"),
+        "{out}"
+    );
+    let (_, out) = mbsa(&["transform", "-"], HIP_AND_PLANAR_KNEE);
+    assert!(out.contains("isolated freedoms of femur left out"), "{out}");
+    let a = json(
+        &[
+            "analyze",
+            chain,
+            "--format",
+            "json",
+            "--inputs",
+            "j1:3,j2:3,j3:3",
+        ],
+        "",
+    );
+    assert_eq!(a["status"], "determined", "{a}");
+    // Bar frameworks have isolated spins too, but no body others reach the frame through.
+    let (_, out) = mbsa(&["transform", "@rig-double-banana"], "");
+    assert!(
+        !out.contains("nothing is determined with the isolated"),
+        "{out}"
+    );
     let a = json(
         &["analyze", "-", "--format", "json", "--inputs", "hip,knee:3"],
         HIP_AND_PLANAR_KNEE,
