@@ -190,7 +190,9 @@ fn summary(text: &str, format: SourceFormat) -> Result<(i64, usize, usize), Stri
 }
 
 /// The mobility count of the tree drawn from `bytes`, written in each format (MJCF, SDFormat,
-/// URDF, OpenSim), or the import's error.
+/// URDF, OpenSim), or the import's error. For `tests/it/fuzz_corpus.rs`; the fuzz binary
+/// does not call it.
+#[allow(dead_code)]
 pub fn tree_mobility(bytes: &[u8]) -> Vec<Result<i64, String>> {
     let t = Tree::from(bytes);
     [
