@@ -17,7 +17,7 @@ pub(crate) fn qualified_osim_tags(text: &str) -> Option<String> {
     let bytes = text.as_bytes();
     let mut out: Option<Vec<u8>> = None;
     let mut i = 0;
-    while let Some(k) = memchr_lt(&bytes[i..]) {
+    while let Some(k) = bytes[i..].iter().position(|&b| b == b'<') {
         let mut j = i + k + 1;
         if bytes.get(j) == Some(&b'/') {
             j += 1;
@@ -47,11 +47,6 @@ pub(crate) fn qualified_osim_tags(text: &str) -> Option<String> {
     }
     // Only ASCII `:` became ASCII `_`: still UTF-8.
     out.map(|o| String::from_utf8(o).expect("ASCII replaced by ASCII"))
-}
-
-/// The position of the first `<` in `bytes`.
-fn memchr_lt(bytes: &[u8]) -> Option<usize> {
-    bytes.iter().position(|&b| b == b'<')
 }
 
 /// The declarations at the start of `text` written `<?` + white space (`<? xml version="1.0"?>`,
