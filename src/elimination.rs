@@ -1109,34 +1109,6 @@ pub(crate) fn biconnected_blocks(
     blocks
 }
 
-/// The vertices through which some others reach `root` (the cut vertices of `root`'s
-/// component, `root` itself left out): a block the search entered through such a vertex
-/// reaches `root` only through it. Vertices of other components are never marked.
-pub(crate) fn separating(adj: &[Vec<(usize, usize)>], root: usize) -> Vec<bool> {
-    let n = adj.len();
-    let mut sep = vec![false; n];
-    if root >= n {
-        return sep;
-    }
-    let mut reach = vec![false; n];
-    reach[root] = true;
-    let mut queue = vec![root];
-    while let Some(v) = queue.pop() {
-        for &(w, _) in &adj[v] {
-            if !reach[w] {
-                reach[w] = true;
-                queue.push(w);
-            }
-        }
-    }
-    for (entry, _) in biconnected_blocks(adj, root) {
-        if entry != root && reach[entry] {
-            sep[entry] = true;
-        }
-    }
-    sep
-}
-
 /// The elimination's former bookkeeping, kept for tests: a set of live block ids per group
 /// and the front widths as set unions ([`Elimination::run_within`] must agree with it).
 #[cfg(test)]

@@ -100,6 +100,30 @@ pub fn mobility(m: &Mechanism) -> MobilityReport {
     }
 }
 
+/// The bodies through which other bodies reach the frame (the cut vertices of the body graph
+/// on the frame's side; a joint of three bodies or more is a vertex of its own, so its bodies
+/// are not cut vertices merely for sharing it). An isolated freedom of such a body is no
+/// freedom to leave out: an input on a joint beyond it drives a body relative to it, and so
+/// drags it.
+pub fn separating_bodies(m: &Mechanism) -> Vec<bool> {
+    let nb = m.bodies.len();
+    let mut edges: Vec<(u32, u32)> = Vec::with_capacity(m.joints.len());
+    let mut n = nb;
+    for j in &m.joints {
+        match j.bodies[..] {
+            [a, c] => edges.push((a as u32, c as u32)),
+            [_] | [] => {}
+            _ => {
+                edges.extend(j.bodies.iter().map(|&x| (n as u32, x as u32)));
+                n += 1;
+            }
+        }
+    }
+    let mut sep = crate::graph::cut::separating(n, &edges, m.frame);
+    sep.truncate(nb);
+    sep
+}
+
 /// Connected components of the body graph (union-find, path halving).
 pub struct Components {
     parent: Vec<usize>,

@@ -346,6 +346,47 @@ impl Placement {
             .collect::<Vec<_>>()
             .join(",")
     }
+
+    /// The bytes the placement holds (its own and on the heap, each allocation as an
+    /// allocator rounds it: a short name takes 32 bytes), as [`ranked::Listing`] counts them
+    /// to bound a listing's memory.
+    pub(super) fn bytes(&self) -> usize {
+        use std::mem::size_of;
+        let heap = |n: usize| {
+            if n == 0 {
+                0
+            } else {
+                (n + 8).next_multiple_of(16).max(32)
+            }
+        };
+        let text = |s: &Option<String>| s.as_ref().map_or(0, |s| heap(s.capacity()));
+        let inputs: usize = heap(self.inputs.capacity() * size_of::<Input>())
+            + self
+                .inputs
+                .iter()
+                .map(|i| heap(i.joint.capacity()) + heap(i.pair.capacity()))
+                .sum::<usize>();
+        let types: usize = heap(self.types.capacity() * size_of::<TypeCount>())
+            + self
+                .types
+                .iter()
+                .map(|t| heap(t.kind.capacity()))
+                .sum::<usize>();
+        size_of::<Placement>()
+            + inputs
+            + types
+            + text(&self.expansion)
+            + text(&self.brief)
+            + self.partition.bytes()
+            + self.inputs_at.capacity() * size_of::<usize>()
+            + self.groups_at.capacity() * size_of::<(usize, usize)>()
+            + self.kinds.capacity() * size_of::<u32>()
+            + self.in_lib.capacity()
+            + self
+                .lean
+                .as_ref()
+                .map_or(0, |l| l.capacity() * size_of::<(usize, u32)>())
+    }
 }
 
 /// Placements with the same partition into groups.
@@ -416,10 +457,6 @@ pub struct Summary {
     pub truncated: bool,
     /// Plain-language notes (restrictions, truncation, why nothing was found).
     pub notes: Vec<String>,
-    /// Bodies with isolated freedoms (left out of `f`) through which other bodies reach the
-    /// frame (not in the JSON: the note names them).
-    #[serde(skip)]
-    pub dependent_isolated: Vec<String>,
 }
 
 /// The ranked result of [`transform`].
@@ -451,15 +488,15 @@ pub struct Progress {
 /// A progress callback (called from the thread that called the library, between batches).
 pub type ProgressFn<'a> = &'a (dyn Fn(Progress) + Sync);
 
-/// The most placements a result lists (and keeps in memory): 100,000, fewer for large
-/// mechanisms (about 256 MB of listed placements). Counts are never cut by it.
+/// The most placements a result lists: 100,000, fewer for large mechanisms. Counts are never
+/// cut by it. A ranked listing also keeps at most [`LIST_MEMORY`] bytes of placements.
 fn list_cap(m: &Mechanism, limit: Option<usize>) -> usize {
     let per = 64 * (m.bodies.len() + m.joints.len()) + 512;
     let cap = (LIST_MEMORY / per).clamp(1_000, 100_000);
     limit.map_or(cap, |l| l.min(cap))
 }
 
-/// Bytes of listed placements a result may hold ([`list_cap`]).
+/// Bytes of listed placements a result may hold ([`list_cap`], [`ranked::Listing`]).
 const LIST_MEMORY: usize = 256 << 20;
 
 /// Enumerate the determined placements and stream them to `sink`, calling `progress` between
@@ -535,7 +572,6 @@ fn enumerate_kept(
         limit: opts.limit,
         truncated: false,
         notes: rules.notes.clone(),
-        dependent_isolated: Vec::new(),
     };
     if parts.len() <= 1 {
         let r = place(
@@ -626,16 +662,6 @@ pub(crate) fn finish_notes(s: &mut Summary) {
             ));
         }
     }
-    if s.determined == 0 && !s.truncated && !s.dependent_isolated.is_empty() {
-        // A ball chain's inner links, spinning alone: what hangs beyond them is driven
-        // through them (docs/reliability.md, known issues).
-        s.notes.push(format!(
-            "nothing is determined with the isolated freedoms of {} left out of the inputs: \
-             other bodies reach the frame only through them, and driving those drags them; \
-             `mbsa analyze --inputs SPEC` tests a placement with an input there too",
-            crate::words::capped(&s.dependent_isolated)
-        ));
-    }
     if let Some(n) = redundancy_note(s) {
         s.notes.insert(0, n);
     }
@@ -709,7 +735,6 @@ fn ser_count<S: serde::Serializer>(n: &u128, s: S) -> Result<S::Ok, S::Error> {
 #[derive(Default)]
 struct Placed {
     isolated: u32,
-    dependent: Vec<String>,
     set_aside: u32,
     f: i64,
     drivable: usize,
@@ -725,7 +750,6 @@ struct Placed {
 impl Summary {
     fn absorb(&mut self, r: &Placed) {
         self.isolated += r.isolated;
-        self.dependent_isolated.extend(r.dependent.iter().cloned());
         self.set_aside += r.set_aside;
         self.f += r.f;
         self.drivable += r.drivable;

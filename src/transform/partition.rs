@@ -55,6 +55,22 @@ impl Partition {
         }
     }
 
+    /// The bytes the partition holds on the heap (the id table it shares not counted).
+    pub(super) fn bytes(&self) -> usize {
+        match &self.0 {
+            Repr::Indexed { bodies, ends, .. } => 4 * (bodies.capacity() + ends.capacity()),
+            Repr::Text(v) => v
+                .iter()
+                .map(|g| {
+                    std::mem::size_of::<Vec<String>>()
+                        + g.iter()
+                            .map(|b| std::mem::size_of::<String>() + b.capacity())
+                            .sum::<usize>()
+                })
+                .sum(),
+        }
+    }
+
     /// Whether there are no groups.
     pub fn is_empty(&self) -> bool {
         self.len() == 0

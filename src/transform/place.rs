@@ -69,7 +69,6 @@ pub(super) fn place(
         let p = Problem::of(e, m, rules, opts, &cache, &st.cx.names.ids, meter)?;
         if x == 0 {
             st.r.isolated = p.isolated;
-            st.r.dependent = p.dependent.clone();
             st.r.set_aside = p.set_aside;
             st.r.f = p.f;
             st.r.drivable = p.drivable();

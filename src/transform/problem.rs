@@ -43,9 +43,6 @@ pub(super) struct Problem {
     /// Pairs that may receive inputs beyond the kept ones, in joint order.
     pub(super) cand: Vec<usize>,
     pub(super) isolated: u32,
-    /// Bodies with isolated freedoms (left out of `f`) through which other bodies reach the
-    /// frame: driving those drags them, so a placement of `f` inputs may determine nothing.
-    pub(super) dependent: Vec<String>,
     pub(super) set_aside: u32,
     pub(super) f: i64,
     /// Units the search places beyond the kept ones.
@@ -87,7 +84,6 @@ impl Problem {
             kept_groups: Vec::new(),
             cand: Vec::new(),
             isolated: un.isolated,
-            dependent: un.dependent.clone(),
             set_aside: un.set_aside.iter().sum(),
             f: 0,
             need: 0,
@@ -379,8 +375,6 @@ impl Problem {
 struct Unknowns {
     u: Vec<u32>,
     isolated: u32,
-    /// Bodies with isolated freedoms through which other bodies reach the frame.
-    dependent: Vec<String>,
     /// Constraint equations of each pair dependent at the file's configuration.
     set_aside: Vec<u32>,
     oracle: Oracle,
@@ -400,7 +394,6 @@ impl Unknowns {
         let mut u = vec![b; nb];
         u[m.frame] = 0;
         let mut isolated = 0u32;
-        let mut dependent = Vec::new();
         let mut oracle = Oracle::Undecided;
         let mut lean = None;
         // Constraint equations dependent at the file's configuration fix nothing: inputs take
@@ -439,53 +432,24 @@ impl Unknowns {
                     lean = Some(Lean::of(m, ids));
                 }
             }
-            let isolated_bodies = a.map(|a| &a.isolated[..]).unwrap_or(&[]);
-            let separating = if isolated_bodies.is_empty() {
-                Vec::new()
-            } else {
-                separating_bodies(m)
-            };
-            for iso in isolated_bodies {
+            for iso in a.map(|a| &a.isolated[..]).unwrap_or(&[]) {
                 let id = crate::mechanism::BodyId::from_text(&iso.body);
                 if let Some(x) = m.body_index(&id)
                     && pairs[x] >= 2
                 {
                     u[x] = u[x].saturating_sub(iso.dimension);
                     isolated += iso.dimension;
-                    if separating[x] {
-                        dependent.push(iso.body.clone());
-                    }
                 }
             }
         }
         Ok(Unknowns {
             u,
             isolated,
-            dependent,
             set_aside,
             oracle,
             lean,
         })
     }
-}
-
-/// The bodies through which other bodies reach the frame (a joint of several bodies joins
-/// its first to each other one).
-fn separating_bodies(m: &Mechanism) -> Vec<bool> {
-    let mut adj: Vec<Vec<(usize, usize)>> = vec![Vec::new(); m.bodies.len()];
-    let mut edge = 0;
-    for j in &m.joints {
-        if let Some((&first, rest)) = j.bodies.split_first() {
-            for &x in rest {
-                if x != first {
-                    adj[first].push((x, edge));
-                    adj[x].push((first, edge));
-                    edge += 1;
-                }
-            }
-        }
-    }
-    crate::elimination::separating(&adj, m.frame)
 }
 
 impl std::fmt::Debug for Problem {

@@ -5,8 +5,8 @@ use super::expansion::exps_default_inputs;
 use super::partition::{Fingerprint, Partition, Repr};
 use super::problem::Problem;
 use super::{
-    Criterion, Family, Placement, ProgressFn, Scores, Summary, Transform, TransformError,
-    TransformOptions, enumerate_kept, list_cap,
+    Criterion, Family, LIST_MEMORY, Placement, ProgressFn, Scores, Summary, Transform,
+    TransformError, TransformOptions, enumerate_kept, list_cap,
 };
 use crate::mechanism::Mechanism;
 use crate::structure::{Analysis, Library};
@@ -73,6 +73,8 @@ pub(super) struct Listing {
     /// The most placements listed ([`list_cap`]).
     cap: usize,
     placements: Vec<(Placement, Fingerprint)>,
+    /// The bytes `placements` hold ([`Placement::bytes`]).
+    bytes: usize,
 }
 
 impl Listing {
@@ -81,6 +83,7 @@ impl Listing {
             criteria,
             cap,
             placements: Vec::new(),
+            bytes: 0,
         }
     }
 
@@ -104,11 +107,31 @@ impl Listing {
         p.groups_at = Vec::new();
         p.kinds = Vec::new();
         p.in_lib = Vec::new();
+        self.bytes += p.bytes();
         self.placements.push((p, fp));
-        if self.placements.len() >= 2 * self.cap {
-            self.order();
-            self.placements.truncate(self.cap);
+        if self.placements.len() >= 2 * self.cap || self.bytes > LIST_MEMORY + LIST_MEMORY / 2 {
+            self.keep_best();
         }
+    }
+
+    /// Keep the best placements, at most `cap` of them and [`LIST_MEMORY`] bytes (the best
+    /// one always): a placement of a mechanism of 10^5 bodies holds megabytes, so a count
+    /// alone does not bound the listing's memory.
+    fn keep_best(&mut self) {
+        self.order();
+        self.placements.truncate(self.cap);
+        let mut bytes = 0;
+        let mut keep = 0;
+        for (p, _) in &self.placements {
+            let b = p.bytes();
+            if keep > 0 && bytes + b > LIST_MEMORY {
+                break;
+            }
+            bytes += b;
+            keep += 1;
+        }
+        self.placements.truncate(keep);
+        self.bytes = bytes;
     }
 
     /// Rank the best `cap`, group them into families and find the file's own placement
@@ -119,8 +142,7 @@ impl Listing {
         own: &[super::Input],
         problem: Option<Problem>,
     ) -> Ranked {
-        self.order();
-        self.placements.truncate(self.cap);
+        self.keep_best();
         let mut placements = self.placements;
         if summary.listed != placements.len() {
             summary.notes.retain(|n| !n.contains("are listed"));

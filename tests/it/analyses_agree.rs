@@ -464,9 +464,10 @@ const BALL_CHAIN: &str = r#"<mujoco model="rope">
 /// of it (MuJoCo's car: the chassis pitching about its wheels' axle moves no other body).
 /// Before, `transform` placed one input too few (0 determined, exit 0) and `analyze` said an
 /// input on the wheels "may only turn it, fixing none", while driving every joint determined
-/// the car. Where an isolated freedom others depend on leaves nothing determined (a ball
-/// chain, a femur between a hip hinge and a planar knee), the note names its bodies. A rod
-/// between two balls keeps its spin.
+/// the car. Nor has a body others reach the frame through (a ball chain's inner links, a
+/// femur between a hip hinge and a planar knee): the inputs beyond it drag it, and leaving
+/// its spin out placed too few inputs (0 determined, exit 0). A rod between two balls keeps
+/// its spin.
 #[test]
 fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("analyses_agree");
@@ -498,18 +499,30 @@ fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     let t = json(&["transform", car, "--format", "json"], "");
     assert_eq!(t["summary"]["f"], 8, "{t}");
     assert_eq!(t["summary"]["determined"], 1, "{t}");
-    // The femur's turn and a ball chain's inner spins stay isolated (docs/reliability.md,
-    // known issues): nothing determined says why; driving every joint determines them.
+    // The ball chain: 9 inputs (7 before, none of which determined it), as every command
+    // counts them.
     let chain = dir.join("ball_chain.xml");
     std::fs::write(&chain, BALL_CHAIN).expect("writable");
     let chain = chain.to_str().expect("UTF-8");
-    let (_, out) = mbsa(&["transform", chain], "");
-    assert!(
-        out.contains("nothing is determined with the isolated freedoms of b1, b2 left out"),
-        "{out}"
+    let t = json(&["transform", chain, "--format", "json"], "");
+    assert_eq!(t["summary"]["f"], 9, "{t}");
+    assert_eq!(t["summary"]["isolated"], 0, "{t}");
+    assert_eq!(t["summary"]["determined"], 1, "{t}");
+    let a = json(&["analyze", chain, "--format", "json"], "");
+    assert_eq!(a["isolated"], serde_json::json!([]), "{a}");
+    assert_eq!(a["uncontrolled"], 9, "{a}");
+    let rigid = json(
+        &["rigid", chain, "--method", "geometric", "--format", "json"],
+        "",
     );
-    let (_, out) = mbsa(&["transform", "-"], HIP_AND_PLANAR_KNEE);
-    assert!(out.contains("isolated freedoms of femur left out"), "{out}");
+    assert_eq!(
+        (&rigid["mobility"], &rigid["isolated"]),
+        (&9.into(), &0.into()),
+        "{rigid}"
+    );
+    let t = json(&["transform", "-", "--format", "json"], HIP_AND_PLANAR_KNEE);
+    assert_eq!(t["summary"]["f"], 4, "{t}");
+    assert_eq!(t["summary"]["determined"], 1, "{t}");
     let a = json(
         &[
             "analyze",
@@ -522,12 +535,19 @@ fn a_body_on_a_free_joint_has_no_isolated_freedom() {
         "",
     );
     assert_eq!(a["status"], "determined", "{a}");
-    // Bar frameworks have isolated spins too, but no body others reach the frame through.
-    let (_, out) = mbsa(&["transform", "@rig-double-banana"], "");
-    assert!(
-        !out.contains("nothing is determined with the isolated"),
-        "{out}"
+    // Bar frameworks keep their bars' spins: no body reaches the frame through a bar.
+    let rigid = json(
+        &[
+            "rigid",
+            "@rig-double-banana",
+            "--method",
+            "geometric",
+            "--format",
+            "json",
+        ],
+        "",
     );
+    assert!(rigid["isolated"].as_u64() > Some(0), "{rigid}");
     let a = json(
         &["analyze", "-", "--format", "json", "--inputs", "hip,knee:3"],
         HIP_AND_PLANAR_KNEE,

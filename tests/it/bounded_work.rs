@@ -92,9 +92,10 @@ fn a_shared_joint_transform_writes_linear_output() {
         );
         sizes.push(table.len());
     }
-    // Twice the bodies, about twice the bytes (n^2 gave four times).
+    // Twice the bodies, about twice the bytes (n^2 gave four times); the table shows three
+    // placements of the family, 15,000 inputs each (n^2 gave 435 MB).
     assert!(sizes[1] < 3 * sizes[0], "{sizes:?}");
-    assert!(sizes[1] < 2_000_000, "{sizes:?}");
+    assert!(sizes[1] < 4_000_000, "{sizes:?}");
     let file = generated(&["star", "--bodies", "20000", "--joint", "S", "--shared"]);
     let start = Instant::now();
     let (code, table, err) = mbsa(&["transform", "--limit", "1", "-"], &file);

@@ -86,3 +86,33 @@ impl std::io::Write for Counter {
         Ok(())
     }
 }
+
+/// One S joint shared by 40,000 bodies: its 64 binary expansions are all determined (a chain
+/// of balls on one centre drags what hangs beyond it), each placement listing 40,000 inputs
+/// (about 7 MB). The ranked listing keeps at most 256 MiB of them, best first, where a count
+/// of placements alone (at least 1,000, or `--limit`) kept them all: 1.4 GB at 10^5 bodies.
+#[test]
+fn a_listing_of_large_placements_is_bounded_in_bytes() {
+    let _serial = crate::serial();
+    let m = generate::star(40_000, mbsa::joint::JointType::S, false, true, false).unwrap();
+    let lib = Library::builtin();
+    let o = TransformOptions {
+        limit: Some(100),
+        ..TransformOptions::default()
+    };
+    let counts = std::cell::Cell::new((0u128, 0usize));
+    let (ranked, _) = held_by(
+        || transform::ranked(&m, &o, &lib, None).unwrap(),
+        |r| counts.set((r.summary.determined, r.summary.listed)),
+    );
+    let (determined, listed) = counts.get();
+    assert_eq!(determined, 64);
+    assert!(
+        0 < listed && (listed as u128) < determined,
+        "{listed} of {determined} listed"
+    );
+    assert!(
+        ranked < (256 << 20) + 2_000 * m.bodies.len(),
+        "{ranked} bytes held for {listed} placements"
+    );
+}

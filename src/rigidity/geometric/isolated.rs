@@ -103,7 +103,8 @@ impl Analysis<'_> {
         // Isolated means undrivable: a motion across a cut of two or more joints that
         // constrain (a body on one joint moves by that joint's own DOF, which an input
         // drives). A body on an F joint (which constrains nothing) moves by that joint's DOF,
-        // every motion of the body: none is isolated. The frame never moves.
+        // every motion of the body: none is isolated. Nor is one others reach the frame
+        // through: the inputs beyond it drag it. The frame never moves.
         let cut: Vec<usize> = (0..nb)
             .map(|body| {
                 if incident[body]
@@ -122,6 +123,8 @@ impl Analysis<'_> {
                 js.len()
             })
             .collect();
+        // Found only when a body has an isolated motion, which few have.
+        let mut separating: Option<Vec<bool>> = None;
         for body in 0..nb {
             if cut[body] < 2 {
                 iso[body] = DMatrix::zeros(b, 0);
@@ -149,6 +152,11 @@ impl Analysis<'_> {
                     incident[body].iter().map(|&pi| pairs[pi].joint),
                 )
             };
+            if iso[body].ncols() > 0
+                && separating.get_or_insert_with(|| crate::mobility::separating_bodies(m))[body]
+            {
+                iso[body] = DMatrix::zeros(b, 0);
+            }
             if iso[body].ncols() > 0 {
                 comp.set(body, complement(&iso[body], b));
             }

@@ -42,6 +42,9 @@ pub(super) struct Attempt<'a> {
     pub(super) unchecked: Vec<Unchecked>,
     pub(super) work: u64,
     pub(super) rounds: usize,
+    /// The bodies others reach the frame through ([`crate::mobility::separating_bodies`]),
+    /// found when a body first needs it.
+    pub(super) separating: std::sync::OnceLock<Vec<bool>>,
 }
 
 /// [`check`](super::check) at one realization: the joints in `redraw.joints` at their own
@@ -100,6 +103,7 @@ pub(super) fn check_at(
         unchecked: Vec::new(),
         work: 0,
         rounds: 0,
+        separating: std::sync::OnceLock::new(),
     };
     // (a) Isolated freedoms and reduced unknowns (each body on its own, in parallel).
     let touching = Touching::of(eqs);

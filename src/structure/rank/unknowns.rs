@@ -62,13 +62,36 @@ impl Attempt<'_> {
 
     /// A body's reduced unknowns from the pairs `mine` touching it, through the cache when
     /// there is one.
+    ///
+    /// Isolated means undrivable: a motion across a cut of two or more constraining joints.
+    /// A body on one joint moves by that joint's own DOF, which an input drives; a body on a
+    /// free joint (F: no constraint at all) moves by its DOF too, every motion of the body, as
+    /// a car's chassis pitching about its wheels' axle; a body others reach the frame through
+    /// is dragged by the inputs beyond it, as the inner links of a chain of ball joints (found
+    /// only when a body has an isolated freedom, which few have).
     fn body_basis(&self, body: usize, mine: &[u32], eqs: &Equations) -> Option<DMatrix<f64>> {
+        let v = self.pairs_basis(body, mine, eqs);
+        if v.as_ref().is_some_and(|v| v.ncols() < self.b)
+            && self
+                .separating
+                .get_or_init(|| crate::mobility::separating_bodies(self.m))
+                .get(body)
+                .copied()
+                .unwrap_or(false)
+        {
+            return self
+                .local
+                .as_ref()
+                .and_then(|lf| lf.frame[body].as_ref())
+                .cloned();
+        }
+        v
+    }
+
+    /// [`Self::body_basis`] before the bodies others reach the frame through are set apart.
+    fn pairs_basis(&self, body: usize, mine: &[u32], eqs: &Equations) -> Option<DMatrix<f64>> {
         let b = self.b;
         let frame = self.local.as_ref().and_then(|lf| lf.frame[body].as_ref());
-        // Isolated means undrivable: a motion across a cut of two or more constraining joints.
-        // A body on one joint moves by that joint's own DOF, which an input drives; a body on
-        // a free joint (F: no constraint at all) moves by its DOF too, every motion of the
-        // body, as a car's chassis pitching about its wheels' axle.
         if mine
             .iter()
             .any(|&e| self.m.joints[eqs.joint[e as usize]].grade() as usize >= b)
