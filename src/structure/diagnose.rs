@@ -132,8 +132,42 @@ fn under_part(
     let cands = input_candidates(m, eqs, &in_part);
     let caveat = isolated_caveat(m, &cands, isolated);
     let input_candidates = joint_ids(m, cands);
-    let pieces = under_pieces(m, eqs, dec, &in_part);
-    let note = if pieces.len() < 2 {
+    let pieces = under_pieces(m, eqs, dec, &in_part, &[]);
+    let bases = floating_bases(m, dec);
+    let beyond = if pieces.len() < 2 && !bases.is_empty() {
+        let mut posed = vec![false; eqs.nodes];
+        bases.iter().for_each(|&(_, body, _)| posed[body] = true);
+        under_pieces(m, eqs, dec, &in_part, &posed)
+    } else {
+        Vec::new()
+    };
+    let note = if beyond.len() >= 2 {
+        // A robot whose legs meet only at its free base (the Cassie): each leg on its own,
+        // without a count (the flow's split of the base's DOF among the legs is arbitrary).
+        let base_dof: u64 = bases.iter().map(|&(_, _, f)| u64::from(f)).sum();
+        let mut each: Vec<String> = beyond
+            .iter()
+            .take(NOTE_PIECES)
+            .map(|p| {
+                format!(
+                    "\n  - bodies {{{}}}: one more input on one of the joints {} would fix one",
+                    capped(&p.bodies),
+                    capped(&p.input_candidates)
+                )
+            })
+            .collect();
+        if beyond.len() > NOTE_PIECES {
+            each.push(format!("\n  - {} more parts", beyond.len() - NOTE_PIECES));
+        }
+        let caveat = caveat.trim_start();
+        format!(
+            "{missing} DOF not fixed by any input: {base_dof} of the floating base (below), the \
+             rest in {} parts that meet only at the base:{}{}{caveat}",
+            beyond.len(),
+            each.concat(),
+            if caveat.is_empty() { "" } else { "\n  " },
+        )
+    } else if pieces.len() < 2 {
         format!(
             "{missing} DOF not fixed by any input: bodies {{{}}} can move; one more input on \
              one of the joints {} would fix one DOF{caveat}",
@@ -179,13 +213,17 @@ fn under_part(
 const NOTE_PIECES: usize = 6;
 
 /// The under-determined part's independent pieces (connected by no equation between two of
-/// their nodes), in the order of their first body; empty when there is one.
+/// their nodes), in the order of their first body; empty when there is one. The nodes
+/// `posed` (floating bases, or none) are taken as held: they join nothing and are in no piece.
 fn under_pieces(
     m: &Mechanism,
     eqs: &Equations,
     dec: &Decomposition,
     in_part: &[bool],
+    posed: &[bool],
 ) -> Vec<UnderPiece> {
+    let posed = |x: usize| posed.get(x).copied().unwrap_or(false);
+    let in_part = |x: usize| in_part[x] && !posed(x);
     let mut uf: Vec<usize> = (0..eqs.nodes).collect();
     fn root(uf: &mut [usize], mut x: usize) -> usize {
         while uf[x] != x {
@@ -200,14 +238,14 @@ fn under_pieces(
     };
     for e in 0..eqs.len() {
         let [a, b] = eqs.bodies(e);
-        if in_part[a] && in_part[b] {
+        if in_part(a) && in_part(b) {
             join(a, b);
         }
     }
     // The bodies of one multiple joint are one piece, its pin known or not: so every joint
     // touches at most one piece, and the pieces' candidate lists stay as long as the joints.
     for j in &m.joints {
-        let mut inside = j.bodies.iter().copied().filter(|&x| in_part[x]);
+        let mut inside = j.bodies.iter().copied().filter(|&x| in_part(x));
         if let Some(first) = inside.next() {
             inside.for_each(|x| join(first, x));
         }
@@ -216,7 +254,7 @@ fn under_pieces(
     let mut piece = vec![usize::MAX; eqs.nodes];
     let mut of_root = vec![usize::MAX; eqs.nodes];
     let mut pieces: Vec<UnderPiece> = Vec::new();
-    for x in (0..eqs.nodes).filter(|&x| in_part[x] && x != m.frame) {
+    for x in (0..eqs.nodes).filter(|&x| in_part(x) && x != m.frame) {
         let r = root(&mut uf, x);
         if of_root[r] == usize::MAX {
             of_root[r] = pieces.len();
@@ -270,18 +308,14 @@ fn under_pieces(
 /// full (a robot imported with its base free: the Cassie's 12 DOF are its base's 6 and 6 of
 /// its legs).
 fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Option<String> {
-    let bases: Vec<(String, u32)> = (0..m.joints.len())
-        .filter(|&j| m.free_to_frame(j))
-        .map(|j| &m.joints[j])
-        .filter_map(|j| {
-            let body = *j.bodies.iter().find(|&&x| x != m.frame)?;
-            let free = j.grade() - j.driven.min(j.grade());
-            (free > 0 && dec.body_part.get(body) == Some(&Part::Under)).then(|| {
-                (
-                    format!("{} ({} to {})", j.id, m.body_id(m.frame), m.body_id(body)),
-                    free,
-                )
-            })
+    let bases: Vec<(String, u32)> = floating_bases(m, dec)
+        .into_iter()
+        .map(|(j, body, free)| {
+            let id = &m.joints[j].id;
+            (
+                format!("{id} ({} to {})", m.body_id(m.frame), m.body_id(body)),
+                free,
+            )
         })
         .collect();
     if bases.is_empty() {
@@ -295,6 +329,20 @@ fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Optio
          driven in full by default)",
         capped(&names)
     ))
+}
+
+/// The bodies of the under-determined part on a free joint to the frame not driven in full,
+/// with the joint and its freedoms left (one entry a joint, in joint order).
+fn floating_bases(m: &Mechanism, dec: &Decomposition) -> Vec<(usize, usize, u32)> {
+    (0..m.joints.len())
+        .filter(|&j| m.free_to_frame(j))
+        .filter_map(|j| {
+            let joint = &m.joints[j];
+            let body = *joint.bodies.iter().find(|&&x| x != m.frame)?;
+            let free = joint.grade() - joint.driven.min(joint.grade());
+            (free > 0 && dec.body_part.get(body) == Some(&Part::Under)).then_some((j, body, free))
+        })
+        .collect()
 }
 
 /// The joints with a spare freedom that touch the under-determined part (`in_part` per node),
