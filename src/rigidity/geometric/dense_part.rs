@@ -3,7 +3,7 @@
 //! vectors, its self-stresses, its locked DOF and its rigid clusters.
 
 use super::analysis::{Analysis, Tally, ZERO_TOL};
-use super::clusters::{find, union_min};
+use super::clusters::{Local, union_min};
 use super::dense::{orthonormalize, small_rank};
 use super::jacobian::{Built, Part, eliminate};
 use super::redundancy::{StressStep, self_stresses};
@@ -282,7 +282,7 @@ impl Analysis<'_> {
         let (b, d, tw, iso) = (self.b, tws.d, &tws.tw, &self.iso);
         let lidx = |x: usize| part.bodies.binary_search(&x).unwrap_or(0);
         let nl = part.bodies.len();
-        let mut luf: Vec<usize> = (0..nl).collect();
+        let mut cl = Local::new(part.bodies.iter().map(|&x| iso[x].ncols()).collect());
         let same = |x: usize, y: usize| {
             let diff = &tw[x] - &tw[y];
             let cols: Vec<DVector<f64>> = iso[part.bodies[x]]
@@ -300,12 +300,9 @@ impl Analysis<'_> {
         };
         for &pi in &part.pairs {
             let p = self.pairs[pi];
-            let (x, y) = (lidx(p.hub), lidx(p.other));
-            if same(x, y) {
-                union_min(&mut luf, x, y);
-            }
+            cl.join_if(lidx(p.hub), lidx(p.other), &same);
         }
-        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
+        let reps: Vec<usize> = (0..nl).filter(|&x| cl.root(x) == x).collect();
         meter.charge(
             (reps.len() as u64)
                 .saturating_mul(reps.len() as u64)
@@ -314,14 +311,11 @@ impl Analysis<'_> {
         )?;
         for i in 0..reps.len() {
             for j in 0..i {
-                let (a, c) = (reps[j], reps[i]);
-                if find(&mut luf, c) == c && find(&mut luf, a) == a && same(a, c) {
-                    luf[c] = a;
-                }
+                cl.join_if(reps[j], reps[i], &same);
             }
         }
         for x in 0..nl {
-            let r = find(&mut luf, x);
+            let r = cl.root(x);
             if r != x {
                 union_min(uf, part.bodies[r], part.bodies[x]);
             }

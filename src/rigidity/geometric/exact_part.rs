@@ -1,7 +1,7 @@
 //! The exact analysis of one large part at a random realization: its rank, locked DOF, rigid
 //! clusters and self-stress support over GF(2^61 − 1).
 
-use super::clusters::{find, merge_across_joints, union_min};
+use super::clusters::{Local, merge_across_joints};
 use super::jacobian::{BodyIndex, Incidence, Pair, Part};
 use crate::budget::{Budget, BudgetExceeded, Meter};
 use crate::exact::Fp;
@@ -321,48 +321,39 @@ impl ExactPart<'_> {
             }
             rank_with(d, [ix, iy]) == rank_with(DMatrix::from_element(b, 0, Fp::ZERO), [ix, iy])
         };
-        let mut luf: Vec<usize> = (0..nl).collect();
+        let mut cl = Local::new(
+            (0..nl)
+                .map(|x| eiso.get(&x).map_or(0, |m| m.ncols()))
+                .collect(),
+        );
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * tw.k) as u64))?;
         // Neighbours first (as the floating-point path does).
         for &pi in &part.pairs {
             let p = pairs[pi];
-            let (x, y) = (lidx(p.hub), lidx(p.other));
-            if same(x, y) {
-                union_min(&mut luf, x, y);
-            }
+            cl.join_if(lidx(p.hub), lidx(p.other), &same);
         }
         // Then any two clusters whose representatives move alike: without isolated motions
         // that is equal twists, found by sorting (the floating-point path compares every two
         // representatives); a representative with isolated motions of its own is compared
         // with the representatives of the clusters that share a joint with it.
-        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
+        let reps: Vec<usize> = (0..nl).filter(|&x| cl.root(x) == x).collect();
         meter.charge((reps.len() as u64).saturating_mul((bk * 20) as u64))?;
-        let mut plain: Vec<usize> = reps
+        // Each cluster by its representative's twists.
+        let mut plain: Vec<(usize, usize)> = reps
             .iter()
-            .copied()
-            .filter(|x| !eiso.contains_key(x))
+            .map(|&r| (r, cl.rep(r)))
+            .filter(|&(_, x)| !eiso.contains_key(&x))
             .collect();
-        plain.sort_by(|&x, &y| tw.of(x).cmp(tw.of(y)).then(x.cmp(&y)));
+        plain.sort_by(|&(_, x), &(_, y)| tw.of(x).cmp(tw.of(y)).then(x.cmp(&y)));
         for w in plain.windows(2) {
-            if tw.of(w[0]) == tw.of(w[1]) {
-                union_min(&mut luf, w[0], w[1]);
+            if tw.of(w[0].1) == tw.of(w[1].1) {
+                cl.join(w[0].0, w[1].0);
             }
         }
         if !eiso.is_empty() {
-            merge_across_joints(
-                part,
-                pairs,
-                lidx,
-                &mut luf,
-                |r| eiso.contains_key(&r),
-                same,
-                meter,
-            )?;
+            merge_across_joints(part, pairs, lidx, &mut cl, same, meter)?;
         }
-        for x in 0..nl {
-            let r = find(&mut luf, x);
-            luf[x] = r;
-        }
+        let luf = (0..nl).map(|x| cl.root(x)).collect();
         Ok(luf)
     }
 }

@@ -30,7 +30,7 @@
 //! part's pairs and bodies (sorting aside).
 
 use super::analysis::ZERO_TOL;
-use super::clusters::{find, merge_across_joints, union_min};
+use super::clusters::{Local, merge_across_joints, union_min};
 use super::dense::{orthonormalize, small_null, small_rank};
 use super::jacobian::{Complements, Pair, Part, eliminate, pair_block};
 use super::threshold;
@@ -471,32 +471,21 @@ impl SparsePart<'_> {
             }
             res.norm() <= same_tol
         };
-        let mut luf: Vec<usize> = (0..nl).collect();
+        let mut cl = Local::new((0..nl).map(|x| iso_of(x).ncols()).collect());
         meter.charge((part.pairs.len() as u64).saturating_mul((b * b * k + 64) as u64))?;
         for &pi in &part.pairs {
             let p = pairs[pi];
-            let (x, y) = (lidx(p.hub), lidx(p.other));
-            if same(x, y) {
-                union_min(&mut luf, x, y);
-            }
+            cl.join_if(lidx(p.hub), lidx(p.other), &same);
         }
-        let reps: Vec<usize> = (0..nl).filter(|&x| find(&mut luf, x) == x).collect();
-        self.merge_plain(&reps, tw, k, same_tol, &same, &mut luf, meter)?;
+        let reps: Vec<usize> = (0..nl).filter(|&x| cl.root(x) == x).collect();
+        self.merge_plain(&reps, tw, k, same_tol, &same, &mut cl, meter)?;
         // Representatives with isolated motions: compared with the clusters sharing a joint
         // with them (as the exact path does), until nothing changes.
-        if reps.iter().any(|&x| iso_of(x).ncols() > 0) {
-            merge_across_joints(
-                part,
-                self.pairs,
-                &lidx,
-                &mut luf,
-                |r| iso_of(r).ncols() > 0,
-                same,
-                meter,
-            )?;
+        if reps.iter().any(|&x| cl.has_iso(x)) {
+            merge_across_joints(part, self.pairs, &lidx, &mut cl, same, meter)?;
         }
         for x in 0..nl {
-            let r = find(&mut luf, x);
+            let r = cl.root(x);
             if r != x {
                 union_min(uf, part.bodies[r], part.bodies[x]);
             }
@@ -515,7 +504,7 @@ impl SparsePart<'_> {
         k: usize,
         same_tol: f64,
         same: &dyn Fn(usize, usize) -> bool,
-        luf: &mut [usize],
+        cl: &mut Local,
         meter: &mut Meter,
     ) -> Result<(), BudgetExceeded> {
         let b = self.b;
@@ -532,10 +521,12 @@ impl SparsePart<'_> {
             *v /= dn;
         }
         let proj = |li: usize| -> f64 { tw[li].iter().zip(&dir).map(|(a, c)| a * c).sum() };
+        // Each cluster by its representative's twists.
         let mut plain: Vec<(f64, usize)> = reps
             .iter()
-            .filter(|&&x| self.iso[self.part.bodies[x]].ncols() == 0)
-            .map(|&x| (proj(x), x))
+            .map(|&r| cl.rep(r))
+            .filter(|&x| self.iso[self.part.bodies[x]].ncols() == 0)
+            .map(|x| (proj(x), x))
             .collect();
         plain.sort_by(|a, c| a.0.total_cmp(&c.0).then(a.1.cmp(&c.1)));
         let mut compared: u64 = 0;
@@ -549,8 +540,8 @@ impl SparsePart<'_> {
                     meter.charge(4096 * (b * k * 4) as u64)?;
                 }
                 let (a, c) = (plain[i].1, plain[j].1);
-                if find(luf, a) != find(luf, c) && same(a, c) {
-                    union_min(luf, a, c);
+                if cl.root(a) != cl.root(c) && same(a, c) {
+                    cl.join(a, c);
                 }
             }
         }

@@ -361,3 +361,63 @@ fn exact_path_agrees_on_random_mechanisms() {
     // for the exact path: the float elimination misses one pivot there).
     assert!(compared >= 80, "{compared} of {} comparisons", 2 * ms.len());
 }
+
+/// A body spinning between two coaxial pins (Gepetto's five-bar, its ball end as written)
+/// moves like each neighbour, modulo its spin, while the neighbours turn relative to each
+/// other: they are two rigid parts, not one through it. Both floating-point paths, at the
+/// file's geometry.
+#[test]
+fn a_spinning_body_does_not_join_its_neighbours_into_one_rigid_part() {
+    let text = r#"
+name = "five-bar, ball end between coaxial pins"
+space = "spatial"
+frame = "built"
+[[joint]]
+id = "mot1"
+type = "R"
+bodies = ["built", "rod"]
+origin = [0, 0.15, 0]
+axis = [1, 0, 0]
+[[joint]]
+id = "free1"
+type = "R"
+bodies = ["rod", "rod_2"]
+origin = [0, 0.15, -0.4]
+axis = [1, 0, 0]
+[[joint]]
+id = "a"
+type = "R"
+bodies = ["rod_2", "sphere"]
+origin = [0, 0, -0.8]
+axis = [1, 0, 0]
+[[joint]]
+id = "b"
+type = "R"
+bodies = ["end_rod", "sphere"]
+origin = [0, 0, -0.8]
+axis = [1, 0, 0]
+[[joint]]
+id = "free2"
+type = "R"
+bodies = ["rod_3", "end_rod"]
+origin = [0, -0.15, -0.4]
+axis = [1, 0, 0]
+[[joint]]
+id = "mot2"
+type = "R"
+bodies = ["built", "rod_3"]
+origin = [0, -0.15, 0]
+axis = [1, 0, 0]
+"#;
+    let m = crate::format::load("five-bar", text, crate::format::Format::Toml).expect("valid");
+    let opts = GeometricOptions::default();
+    let check = |r: &GeometricReport| {
+        assert_eq!((r.mobility, r.isolated), (3, 1), "{r:?}");
+        for c in &r.rigid {
+            let has = |b: &str| c.bodies.iter().any(|x| x == b);
+            assert!(!(has("rod_2") && has("end_rod")), "{:?}", r.rigid);
+        }
+    };
+    check(&analyze(&m, &opts).expect("answers"));
+    check(&with_sparse_from(0, || analyze(&m, &opts)).expect("answers"));
+}
