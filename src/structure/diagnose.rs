@@ -134,17 +134,22 @@ fn under_part(
     let input_candidates = joint_ids(m, cands);
     let pieces = under_pieces(m, eqs, dec, &in_part, &[]);
     let bases = floating_bases(m, dec);
-    let beyond = if pieces.len() < 2 && !bases.is_empty() {
+    let base_dof: u64 = bases.iter().map(|&(_, _, f)| u64::from(f)).sum();
+    let beyond: Vec<UnderPiece> = if pieces.len() < 2 && missing > base_dof && !bases.is_empty() {
         let mut posed = vec![false; eqs.nodes];
         bases.iter().for_each(|&(_, body, _)| posed[body] = true);
+        // Parts where every joint is driven already move only with the base (a humanoid
+        // whose every hinge is driven): no input there fixes anything.
         under_pieces(m, eqs, dec, &in_part, &posed)
+            .into_iter()
+            .filter(|p| !p.input_candidates.is_empty())
+            .collect()
     } else {
         Vec::new()
     };
     let note = if beyond.len() >= 2 {
         // A robot whose legs meet only at its free base (the Cassie): each leg on its own,
         // without a count (the flow's split of the base's DOF among the legs is arbitrary).
-        let base_dof: u64 = bases.iter().map(|&(_, _, f)| u64::from(f)).sum();
         let mut each: Vec<String> = beyond
             .iter()
             .take(NOTE_PIECES)
@@ -157,7 +162,7 @@ fn under_part(
             })
             .collect();
         if beyond.len() > NOTE_PIECES {
-            each.push(format!("\n  - {} more parts", beyond.len() - NOTE_PIECES));
+            each.push(format!("\n  - {} more", parts(beyond.len() - NOTE_PIECES)));
         }
         let caveat = caveat.trim_start();
         format!(
@@ -191,7 +196,7 @@ fn under_part(
         if pieces.len() > NOTE_PIECES {
             let rest = &pieces[NOTE_PIECES..];
             let dof: u64 = rest.iter().map(|p| p.missing).sum();
-            each.push(format!("{} more parts of {dof} DOF", rest.len()));
+            each.push(format!("{} more of {dof} DOF", parts(rest.len())));
         }
         format!(
             "{missing} DOF not fixed by any input, in {} independent parts: {}{caveat}",
@@ -207,6 +212,15 @@ fn under_part(
         pieces,
     };
     Some((part, note))
+}
+
+/// `n part(s)` in words: "1 part", "3 parts".
+fn parts(n: usize) -> String {
+    if n == 1 {
+        "1 part".into()
+    } else {
+        format!("{n} parts")
+    }
 }
 
 /// Independent pieces of the under-determined part a note describes one by one.
@@ -332,7 +346,9 @@ fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Optio
 }
 
 /// The bodies of the under-determined part on a free joint to the frame not driven in full,
-/// with the joint and its freedoms left (one entry a joint, in joint order).
+/// with the joint and its freedoms left (one entry a joint, in joint order). A body that
+/// reaches the frame by another way too (a MuJoCo `connect` to the world) is no floating
+/// base: the other way fixes some of its DOF.
 fn floating_bases(m: &Mechanism, dec: &Decomposition) -> Vec<(usize, usize, u32)> {
     (0..m.joints.len())
         .filter(|&j| m.free_to_frame(j))
@@ -340,9 +356,39 @@ fn floating_bases(m: &Mechanism, dec: &Decomposition) -> Vec<(usize, usize, u32)
             let joint = &m.joints[j];
             let body = *joint.bodies.iter().find(|&&x| x != m.frame)?;
             let free = joint.grade() - joint.driven.min(joint.grade());
-            (free > 0 && dec.body_part.get(body) == Some(&Part::Under)).then_some((j, body, free))
+            (free > 0
+                && dec.body_part.get(body) == Some(&Part::Under)
+                && !reaches_frame_without(m, body, j))
+            .then_some((j, body, free))
         })
         .collect()
+}
+
+/// Whether `body` reaches the frame through joints other than `skip`.
+fn reaches_frame_without(m: &Mechanism, body: usize, skip: usize) -> bool {
+    let mut on: Vec<Vec<usize>> = vec![Vec::new(); m.bodies.len()];
+    for (k, j) in m.joints.iter().enumerate() {
+        if k != skip {
+            j.bodies.iter().for_each(|&x| on[x].push(k));
+        }
+    }
+    let mut seen = vec![false; m.bodies.len()];
+    seen[body] = true;
+    let mut stack = vec![body];
+    while let Some(x) = stack.pop() {
+        if x == m.frame {
+            return true;
+        }
+        for &k in &on[x] {
+            for &y in &m.joints[k].bodies {
+                if !seen[y] {
+                    seen[y] = true;
+                    stack.push(y);
+                }
+            }
+        }
+    }
+    false
 }
 
 /// The joints with a spare freedom that touch the under-determined part (`in_part` per node),

@@ -346,6 +346,22 @@ fn a_floating_base_is_named_on_a_line_of_its_own() {
         ),
         "{out}"
     );
+    // Two legs, each hip driven: the 6 DOF are the base's, no part beyond it is told (a
+    // humanoid got "the rest in 3 parts", each with an empty list of joints).
+    let two_legs = format!(
+        "{FLOATING_PENDULUM}[[joint]]\nid = \"hip2\"\ntype = \"R\"\nbodies = [\"trunk\", \"leg2\"]\ndriven = 1\n"
+    );
+    let (_, out) = mbsa(&["analyze", "-", "--count-only"], &two_legs);
+    assert!(out.contains("6 DOF not fixed"), "{out}");
+    assert!(!out.contains("meet only at the base"), "{out}");
+    // A base tethered to the ground by a ball too is no floating base: the ball fixes 3 of
+    // its DOF (a MuJoCo `connect` to the world).
+    let tethered = format!(
+        "{FLOATING_PENDULUM}[[joint]]\nid = \"tether\"\ntype = \"S\"\nbodies = [\"ground\", \"trunk\"]\n"
+    );
+    let (_, out) = mbsa(&["analyze", "-", "--count-only"], &tethered);
+    assert!(out.contains("3 DOF not fixed"), "{out}");
+    assert!(!out.contains("floating base"), "{out}");
     let driven = FLOATING_PENDULUM.replace("# FREE_DRIVEN", "driven = 6");
     let (_, out) = mbsa(&["analyze", "-", "--count-only"], &driven);
     assert!(out.contains("determined"), "{out}");
