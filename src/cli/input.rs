@@ -31,6 +31,11 @@ pub struct ImportArgs {
     /// Merge coincident coaxial revolute joints that share a body into multiple joints.
     #[arg(long)]
     pub merge_pins: bool,
+    /// Merge each ball joint written as three revolute joints (axes meeting at one point,
+    /// through two intermediate bodies nothing else holds, as CAD exporters write it) into
+    /// one S joint.
+    #[arg(long)]
+    pub merge_balls: bool,
     /// URDF: the Extended-URDF YAML file of loop closures (default: STEM.yaml beside the URDF
     /// when it has a `closed_loop` key).
     #[arg(long, value_name = "FILE")]
@@ -47,6 +52,7 @@ impl ImportArgs {
             format: self.from.map(Into::into),
             keyframe: self.keyframe.clone(),
             merge_pins: self.merge_pins,
+            merge_balls: self.merge_balls,
             max_input_bytes: Some(super::budget().max_input_bytes),
             closures: match self.no_closures {
                 true => Some(std::path::PathBuf::new()),

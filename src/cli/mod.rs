@@ -456,6 +456,12 @@ fn run(cli: Cli) -> Result<(), Failure> {
             if import.merge_pins {
                 summary.push_str(&format!("; {} pin joint(s) merged", result.merged_pins));
             }
+            if import.merge_balls {
+                summary.push_str(&format!(
+                    "; {} ball joint(s) made of revolute triples",
+                    result.merged_balls
+                ));
+            }
             match output {
                 Some(path) => {
                     input::write_output(&file, &path, &result.toml)?;

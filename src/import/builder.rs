@@ -1,6 +1,7 @@
 //! The shared intermediate model the readers fill: bodies (welded ones merged by union-find),
 //! joints, warnings and notes; written as format-v1 TOML and read back.
 
+use super::balls::merge_balls;
 use super::error::ImportError;
 use super::pins::merge_pins;
 use super::toml_text::{comment_text, num, precision_text, toml_str, written_rounding};
@@ -273,6 +274,21 @@ impl Builder {
         options: &ImportOptions,
     ) -> Result<Import, ImportError> {
         let mut joints = self.joints_through_welds();
+        let frame = self.root(self.frame);
+        let dropped = if options.merge_balls {
+            merge_balls(&mut joints, frame)
+        } else {
+            Vec::new()
+        };
+        if !dropped.is_empty() {
+            let names: Vec<String> = dropped.iter().map(|&b| self.names[b].clone()).collect();
+            self.notes.push(format!(
+                "--merge-balls: {} ball joint(s) written as three revolute joints merged into S \
+                 joints; their intermediate bodies left out: {}",
+                dropped.len() / 2,
+                crate::words::capped(&names)
+            ));
+        }
         let merged_pins = if options.merge_pins {
             merge_pins(&mut joints)
         } else {
@@ -284,7 +300,6 @@ impl Builder {
             ));
         }
         unique_joint_ids(&mut joints);
-        let frame = self.root(self.frame);
         if joints.is_empty() {
             return Err(ImportError::new(format!(
                 "`{source_name}`: no joints to analyse (every body is welded to the frame or \
@@ -292,7 +307,7 @@ impl Builder {
             ))
             .with_help("the analyses need at least one joint between two bodies"));
         }
-        self.warn_unlinked(&joints, frame);
+        self.warn_unlinked(&joints, frame, &dropped);
         check_magnitudes(&joints)?;
         // A 10 MB name is quoted by its start only (the written joints keep it whole).
         for w in self.warnings.iter_mut().chain(self.notes.iter_mut()) {
@@ -313,6 +328,7 @@ impl Builder {
             warnings: self.warnings,
             notes: self.notes,
             merged_pins,
+            merged_balls: dropped.len() / 2,
         })
     }
 
@@ -322,6 +338,7 @@ impl Builder {
         let mut joints = std::mem::take(&mut self.joints);
         let mut kept = Vec::with_capacity(joints.len());
         for mut j in joints.drain(..) {
+            let named = j.bodies.clone();
             for b in &mut j.bodies {
                 *b = self.root(*b);
             }
@@ -329,14 +346,18 @@ impl Builder {
             seen.sort_unstable();
             seen.dedup();
             if seen.len() < j.bodies.len() {
-                self.warnings.push(format!(
-                    "joint `{}` joins bodies welded together ({}): left out",
-                    j.id,
-                    j.bodies
-                        .iter()
+                // Named as the file names them, and the body the welds make them part of.
+                let quoted = |bs: &[usize]| {
+                    bs.iter()
                         .map(|&b| format!("`{}`", self.names[b]))
                         .collect::<Vec<_>>()
                         .join(", ")
+                };
+                self.warnings.push(format!(
+                    "joint `{}` joins bodies welded together ({}, welded into {}): left out",
+                    j.id,
+                    quoted(&named),
+                    quoted(&seen)
                 ));
                 continue;
             }
@@ -346,7 +367,7 @@ impl Builder {
     }
 
     /// Warnings for a frame no joint touches and for bodies no joint names (left out).
-    fn warn_unlinked(&mut self, joints: &[JointRec], frame: usize) {
+    fn warn_unlinked(&mut self, joints: &[JointRec], frame: usize, merged: &[usize]) {
         if !joints.iter().any(|j| j.bodies.contains(&frame)) {
             self.warnings.push(format!(
                 "no joint touches the frame `{}`: the bodies are not linked to it",
@@ -360,6 +381,9 @@ impl Builder {
             }
         }
         used_bodies[frame] = true;
+        for &b in merged {
+            used_bodies[b] = true;
+        }
         for (i, &u) in used_bodies.iter().enumerate() {
             if !u && self.root(i) == i {
                 self.warnings.push(format!(

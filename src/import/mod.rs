@@ -8,6 +8,7 @@
 //! and the [`Mechanism`] is read back from that text, so that `mbsa import` output and the
 //! source file give the same analysis. `docs/import.md` is the user reference.
 
+mod balls;
 mod builder;
 mod error;
 mod mjcf;
@@ -160,6 +161,9 @@ pub struct ImportOptions {
     pub keyframe: Option<String>,
     /// Merge coincident coaxial revolute joints that share a body into multiple joints.
     pub merge_pins: bool,
+    /// Merge each ball joint written as three revolute joints (axes meeting at one point,
+    /// through two bodies nothing else holds) into one S joint.
+    pub merge_balls: bool,
     /// Largest input accepted, in bytes: the main file and every file it includes together
     /// (default [`MAX_SOURCE_BYTES`]; the command line gives its `--max-input-bytes`).
     pub max_input_bytes: Option<u64>,
@@ -204,6 +208,8 @@ pub struct Import {
     pub notes: Vec<String>,
     /// How many joints `--merge-pins` merged into others.
     pub merged_pins: usize,
+    /// How many ball joints `--merge-balls` made of three revolute joints each.
+    pub merged_balls: usize,
 }
 
 impl Import {

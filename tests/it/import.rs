@@ -359,6 +359,55 @@ fn merge_pins_turns_two_coaxial_joints_into_one_multiple_joint() {
     round_trip(&file, &["--merge-pins"]);
 }
 
+/// Gepetto's Disney-like leg (Onshape) writes each ball joint as three revolute joints through
+/// two intermediate links. As written, the rods between two such balls spin with their
+/// intermediate links, so no spin is isolated and `transform` places 9 inputs; with
+/// `--merge-balls` the five triples are S joints, the rods' 2 spins are isolated and 7 inputs
+/// place it (as its motors and the legs' joints need), at the same mobility, 9.
+#[test]
+fn merge_balls_turns_three_concurrent_pins_into_one_ball() {
+    let file = fixture("disney_like.urdf");
+    let (code, out, err) = mbsa(&["import", &file, "--merge-balls"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        err.contains(
+            "15 bodies, 17 joints, 6 driven DOF; 5 ball joint(s) made of revolute triples"
+        ),
+        "{err}"
+    );
+    assert!(out.contains("--merge-balls: 5 ball joint(s) written as three revolute joints"));
+    assert_eq!(out.matches("type = \"S\"").count(), 5, "{out}");
+    let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("merge_balls");
+    std::fs::create_dir_all(&dir).expect("writable");
+    let mut seen = Vec::new();
+    for opts in [&[][..], &["--merge-balls"][..]] {
+        let (code, closed, err) = mbsa(&[&["assemble", file.as_str()][..], opts].concat());
+        assert_eq!(code, 0, "{err}");
+        let path = dir.join(format!("closed{}.toml", opts.len()));
+        std::fs::write(&path, closed).expect("writable");
+        let path = path.to_str().expect("UTF-8");
+        let (code, out, err) = mbsa(&["rigid", path, "--method", "geometric", "--format", "json"]);
+        assert_eq!(code, 0, "{err}");
+        let r: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+        let (code, out, err) = mbsa(&["transform", path, "--limit", "5", "--format", "json"]);
+        assert_eq!(code, 0, "{err}");
+        let t: serde_json::Value = serde_json::from_str(&out).expect("JSON");
+        seen.push((
+            r["bodies"].as_u64(),
+            r["mobility"].as_u64(),
+            r["isolated"].as_u64(),
+            t["summary"]["f"].as_i64(),
+        ));
+    }
+    assert_eq!(
+        seen,
+        [
+            (Some(25), Some(9), Some(0), Some(9)),
+            (Some(15), Some(9), Some(2), Some(7))
+        ]
+    );
+}
+
 // ------------------------------------------------------------------------------------------
 // OpenSim
 
