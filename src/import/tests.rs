@@ -489,9 +489,8 @@ fn sdf_1_9_degrees_and_quaternions_free_and_static_models() {
     // Model b is static: its links are welded to the world, so its joint joins welded bodies,
     // named as the file names them (not the weld's result twice: `world`, `world`).
     assert!(
-        i.warnings.iter().any(|w| w.contains(
-            "`b::J` joins bodies welded together (`b::L`, `b::K`, welded into `world`)"
-        )),
+        i.warnings.iter().any(|w| w
+            .contains("`b::J` joins bodies welded together (`b::L`, `b::K`, welded into `world`)")),
         "{:?}",
         i.warnings
     );

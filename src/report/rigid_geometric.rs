@@ -139,7 +139,10 @@ fn mobility_and_redundancy(s: &mut String, r: &GeometricReport) {
             .collect();
         // At the file's configuration "locked" is first order: a piston at a crank's dead
         // centre has no velocity there but moves at once (Modelica's EngineV6).
-        let what = if r.geometry == "file" {
+        let what = if r.driven > 0 {
+            // With the inputs held, what they fix is locked too (a driven five-bar's pins).
+            "joint freedoms with no first-order motion with the inputs held: fixed by the inputs, or by the geometry as at a dead centre; `rigid` without `--with-inputs` gives the geometry's own"
+        } else if r.geometry == "file" {
             "joint freedoms with no first-order motion here; `--finite` tells which of these joints move nearby, as at a dead centre"
         } else {
             "joint freedoms that never move"

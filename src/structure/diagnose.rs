@@ -162,7 +162,7 @@ fn under_part(
             })
             .collect();
         if beyond.len() > NOTE_PIECES {
-            each.push(format!("\n  - {} more", parts(beyond.len() - NOTE_PIECES)));
+            each.push(format!("\n  - {}", more_parts(beyond.len() - NOTE_PIECES)));
         }
         let caveat = caveat.trim_start();
         format!(
@@ -196,7 +196,7 @@ fn under_part(
         if pieces.len() > NOTE_PIECES {
             let rest = &pieces[NOTE_PIECES..];
             let dof: u64 = rest.iter().map(|p| p.missing).sum();
-            each.push(format!("{} more of {dof} DOF", parts(rest.len())));
+            each.push(format!("{} of {dof} DOF", more_parts(rest.len())));
         }
         format!(
             "{missing} DOF not fixed by any input, in {} independent parts: {}{caveat}",
@@ -214,12 +214,12 @@ fn under_part(
     Some((part, note))
 }
 
-/// `n part(s)` in words: "1 part", "3 parts".
-fn parts(n: usize) -> String {
+/// "1 more part", "3 more parts".
+fn more_parts(n: usize) -> String {
     if n == 1 {
-        "1 part".into()
+        "1 more part".into()
     } else {
-        format!("{n} parts")
+        format!("{n} more parts")
     }
 }
 

@@ -603,3 +603,34 @@ fn a_body_on_a_free_joint_has_no_isolated_freedom() {
     );
     assert_eq!(rigid["isolated"], 1, "{rigid}");
 }
+
+/// `rigid --with-inputs` on a driven five-bar: its two passive pins are locked because the
+/// inputs fix them, not "as at a dead centre" (the words of the mechanism's own locked
+/// freedoms, which plain `rigid` gives: none here).
+#[test]
+fn locked_freedoms_with_the_inputs_held_say_the_inputs_may_fix_them() {
+    let mut five_bar = String::from("space = \"spatial\"\nframe = \"built\"\n");
+    for (id, a, c, y, z, driven) in [
+        ("mot1", "built", "rod", 0.15, 0.0, 1),
+        ("free1", "rod", "rod_2", 0.15, -0.4, 0),
+        ("a", "rod_2", "tip", 0.0, -0.8, 0),
+        ("free2", "rod_3", "tip", -0.15, -0.4, 0),
+        ("mot2", "built", "rod_3", -0.15, 0.0, 1),
+    ] {
+        five_bar.push_str(&format!(
+            "[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [\"{a}\", \"{c}\"]\n\
+             origin = [0, {y}, {z}]\naxis = [1, 0, 0]\ndriven = {driven}\n"
+        ));
+    }
+    let (_, out) = mbsa(
+        &["rigid", "-", "--method", "geometric", "--with-inputs"],
+        &five_bar,
+    );
+    assert!(
+        out.contains("with the inputs held: fixed by the inputs, or by the geometry"),
+        "{out}"
+    );
+    assert!(!out.contains("; `--finite` tells which"), "{out}");
+    let (_, out) = mbsa(&["rigid", "-", "--method", "geometric"], &five_bar);
+    assert!(!out.contains("locked DOF"), "{out}");
+}

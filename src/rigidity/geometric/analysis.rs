@@ -420,6 +420,7 @@ impl Analysis<'_> {
             redundant_joints_unweighted,
             locked,
             locked_joints,
+            driven: m.joints.iter().map(|j| u64::from(j.driven)).sum(),
             isolated,
             fully_isolated: fully,
             structurally_isolated: structurally,

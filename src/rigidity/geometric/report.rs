@@ -140,6 +140,10 @@ pub struct GeometricReport {
     pub redundant_joints_unweighted: Vec<String>,
     /// Locked joint DOF (zero in every motion), total.
     pub locked: usize,
+    /// Driven DOF held in the analysis (`rigid --with-inputs`): a freedom the inputs fix is
+    /// locked too, so the table says which way to tell the two apart.
+    #[serde(skip)]
+    pub driven: u64,
     /// Locked DOF per joint (joints with none omitted).
     pub locked_joints: Vec<JointCount>,
     /// Isolated DOF, fully + structurally.
