@@ -214,8 +214,11 @@ pub fn run(data: &[u8]) {
     };
     let format = FORMATS[(sel & 3) as usize];
     if sel & 4 == 0 {
+        // The optional merges rewrite the joints: bits 3 and 4 turn them on.
         let opts = ImportOptions {
             format: Some(format),
+            merge_pins: sel & 8 != 0,
+            merge_balls: sel & 16 != 0,
             ..ImportOptions::default()
         };
         if let Ok(i) = import_bytes("fuzz.xml", rest, None, &opts) {
