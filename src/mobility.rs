@@ -134,9 +134,14 @@ pub struct Components {
 impl Components {
     /// Components of the bodies linked by joints.
     pub fn of(m: &Mechanism) -> Components {
+        Components::of_joints(m, 0..m.joints.len())
+    }
+
+    /// Components of the bodies linked by the joints `joints` (indices) only.
+    pub fn of_joints(m: &Mechanism, joints: impl Iterator<Item = usize>) -> Components {
         let mut c = Components::new(m.bodies.len());
-        for j in &m.joints {
-            c.join(&j.bodies);
+        for j in joints {
+            c.join(&m.joints[j].bodies);
         }
         c.flatten();
         c

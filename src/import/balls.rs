@@ -5,6 +5,7 @@
 //! (`second`): the ball keeps that side's centre.
 
 use super::JointRec;
+use super::pins::retain_alive;
 use super::pose::unit;
 use crate::joint::JointType;
 use crate::mechanism::{Geometry, Second};
@@ -74,12 +75,7 @@ pub(super) fn merge_balls(joints: &mut Vec<JointRec>, frame: usize) -> Vec<usize
             break;
         }
     }
-    let mut idx = 0;
-    joints.retain(|_| {
-        let keep = alive[idx];
-        idx += 1;
-        keep
-    });
+    retain_alive(joints, &alive);
     dropped
 }
 
@@ -235,7 +231,7 @@ mod tests {
         assert_eq!(js[1].kind, JointType::S);
         assert_eq!(js[1].bodies, [1, 4]);
         assert_eq!(js[1].id, "bx+by+bz");
-        let o = js[1].geometry.origin.unwrap();
+        let o = js[1].geometry.origin.expect("a centre");
         assert!((o[0] - 1.0).abs() < 1e-12 && o[1].abs() < 1e-12 && o[2].abs() < 1e-12);
     }
 
@@ -251,7 +247,7 @@ mod tests {
         assert_eq!(merge_balls(&mut js, 0), [2, 3]);
         let s = js[1].geometry.second.as_ref().expect("open");
         // The centre is 2 units back along the pin from its origin: 2 units back along y.
-        let o = s.origin.unwrap();
+        let o = s.origin.expect("a centre");
         assert!(
             (o[0] - 4.0).abs() < 1e-12 && (o[1] + 2.0).abs() < 1e-12 && (o[2] - 2.0).abs() < 1e-12,
             "{o:?}"

@@ -36,13 +36,18 @@ pub(super) fn merge_pins(joints: &mut Vec<JointRec>) -> usize {
             break;
         }
     }
+    retain_alive(joints, &alive);
+    merged
+}
+
+/// Keep the joints `alive` marks (the others were merged into them).
+pub(super) fn retain_alive(joints: &mut Vec<JointRec>, alive: &[bool]) {
     let mut idx = 0;
     joints.retain(|_| {
         let keep = alive[idx];
         idx += 1;
         keep
     });
-    merged
 }
 
 /// Whether two joints are coaxial revolute pins at one place: parallel axes on one line.

@@ -26,9 +26,10 @@ pub(super) fn diagnose(
         d.notes.push(note);
         d.overdetermined = Some(part);
     }
-    if let Some((part, note)) = under_part(m, eqs, dec, isolated) {
+    let bases = floating_bases(m, dec);
+    if let Some((part, note)) = under_part(m, eqs, dec, isolated, &bases) {
         d.notes.push(note);
-        d.notes.extend(floating_base_note(m, dec, part.missing));
+        d.notes.extend(floating_base_note(m, &bases, part.missing));
         d.underdetermined = Some(part);
     }
     d.notes.extend(redundant.iter().map(redundancy_note));
@@ -109,6 +110,7 @@ fn under_part(
     eqs: &Equations,
     dec: &Decomposition,
     isolated: &[Isolated],
+    bases: &[(usize, usize, u32)],
 ) -> Option<(UnderPart, String)> {
     // Element nodes (`<J>`: the shared pin of multiple joint J) can miss DOF too.
     let short: Vec<Missing> = (0..eqs.nodes)
@@ -133,7 +135,6 @@ fn under_part(
     let caveat = isolated_caveat(m, &cands, isolated);
     let input_candidates = joint_ids(m, cands);
     let pieces = under_pieces(m, eqs, dec, &in_part, &[]);
-    let bases = floating_bases(m, dec);
     let base_dof: u64 = bases.iter().map(|&(_, _, f)| u64::from(f)).sum();
     let beyond: Vec<UnderPiece> = if pieces.len() < 2 && missing > base_dof && !bases.is_empty() {
         let mut posed = vec![false; eqs.nodes];
@@ -321,10 +322,14 @@ fn under_pieces(
 /// joints between the frame and a body of the under-determined part that are not driven in
 /// full (a robot imported with its base free: the Cassie's 12 DOF are its base's 6 and 6 of
 /// its legs).
-fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Option<String> {
-    let bases: Vec<(String, u32)> = floating_bases(m, dec)
-        .into_iter()
-        .map(|(j, body, free)| {
+fn floating_base_note(
+    m: &Mechanism,
+    bases: &[(usize, usize, u32)],
+    missing: u64,
+) -> Option<String> {
+    let bases: Vec<(String, u32)> = bases
+        .iter()
+        .map(|&(j, body, free)| {
             let id = &m.joints[j].id;
             (
                 format!("{id} ({} to {})", m.body_id(m.frame), m.body_id(body)),
@@ -347,48 +352,30 @@ fn floating_base_note(m: &Mechanism, dec: &Decomposition, missing: u64) -> Optio
 
 /// The bodies of the under-determined part on a free joint to the frame not driven in full,
 /// with the joint and its freedoms left (one entry a joint, in joint order). A body that
-/// reaches the frame by another way too (a MuJoCo `connect` to the world) is no floating
-/// base: the other way fixes some of its DOF.
+/// reaches the frame by joints other than free joints to it (a MuJoCo `connect` to the world)
+/// is no floating base: they fix some of its DOF. One pass over the joints whatever the
+/// number of free bodies.
 fn floating_bases(m: &Mechanism, dec: &Decomposition) -> Vec<(usize, usize, u32)> {
-    (0..m.joints.len())
+    let free: Vec<usize> = (0..m.joints.len())
         .filter(|&j| m.free_to_frame(j))
+        .collect();
+    if free.is_empty() {
+        return Vec::new();
+    }
+    let held = crate::mobility::Components::of_joints(
+        m,
+        (0..m.joints.len()).filter(|&j| !m.free_to_frame(j)),
+    );
+    let frame = held.root(m.frame);
+    free.into_iter()
         .filter_map(|j| {
             let joint = &m.joints[j];
             let body = *joint.bodies.iter().find(|&&x| x != m.frame)?;
-            let free = joint.grade() - joint.driven.min(joint.grade());
-            (free > 0
-                && dec.body_part.get(body) == Some(&Part::Under)
-                && !reaches_frame_without(m, body, j))
-            .then_some((j, body, free))
+            let left = joint.grade() - joint.driven.min(joint.grade());
+            (left > 0 && dec.body_part.get(body) == Some(&Part::Under) && held.root(body) != frame)
+                .then_some((j, body, left))
         })
         .collect()
-}
-
-/// Whether `body` reaches the frame through joints other than `skip`.
-fn reaches_frame_without(m: &Mechanism, body: usize, skip: usize) -> bool {
-    let mut on: Vec<Vec<usize>> = vec![Vec::new(); m.bodies.len()];
-    for (k, j) in m.joints.iter().enumerate() {
-        if k != skip {
-            j.bodies.iter().for_each(|&x| on[x].push(k));
-        }
-    }
-    let mut seen = vec![false; m.bodies.len()];
-    seen[body] = true;
-    let mut stack = vec![body];
-    while let Some(x) = stack.pop() {
-        if x == m.frame {
-            return true;
-        }
-        for &k in &on[x] {
-            for &y in &m.joints[k].bodies {
-                if !seen[y] {
-                    seen[y] = true;
-                    stack.push(y);
-                }
-            }
-        }
-    }
-    false
 }
 
 /// The joints with a spare freedom that touch the under-determined part (`in_part` per node),
