@@ -356,6 +356,11 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         }
         .map_err(|e| solve_failure(name, &e))?;
         let mut report = SolveReport::new(&m, &model, &sol, method);
+        report.isolated = a
+            .isolated
+            .iter()
+            .map(|i| (i.body.clone(), i.dimension))
+            .collect();
         if args.finite {
             report.finite = Some(
                 mbsa::position::finite_mobility(

@@ -638,6 +638,10 @@ pub struct SolveReport {
     /// Finite against first-order mobility at the solved configuration, when asked.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub finite: Option<super::finite::FiniteMobility>,
+    /// The isolated freedoms the structural analysis found (body, dimension), for the words
+    /// on the freedoms a step leaves (not in the JSON: `analyze` lists them).
+    #[serde(skip)]
+    pub isolated: Vec<(String, u32)>,
 }
 
 impl SolveReport {
@@ -656,6 +660,7 @@ impl SolveReport {
             poses: pose_reports(m, model, &sol.config),
             joint_values: joint_values(m, model, &sol.config),
             finite: None,
+            isolated: Vec::new(),
         }
     }
 }

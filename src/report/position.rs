@@ -107,6 +107,31 @@ pub fn solve_table(r: &SolveReport) -> String {
 fn freedom_notes(r: &SolveReport) -> String {
     let mut s = String::new();
     for st in r.steps.iter().filter(|st| st.nullity > 0) {
+        // Exactly the isolated spins of the step's bodies (a Delta's three rods): named.
+        let spins: Vec<&str> = r
+            .isolated
+            .iter()
+            .filter(|(b, _)| st.bodies.contains(b))
+            .map(|(b, _)| b.as_str())
+            .collect();
+        let dof: u64 = r
+            .isolated
+            .iter()
+            .filter(|(b, _)| st.bodies.contains(b))
+            .map(|&(_, d)| u64::from(d))
+            .sum();
+        if dof == st.nullity as u64 {
+            let _ = writeln!(
+                s,
+                "note: step {} leaves {} freedom(s) that neither its equations nor the inputs fix: \
+                 the isolated freedoms of {} (each turns one body alone, moving no other), which \
+                 keep their start pose; harmless.",
+                st.name,
+                st.nullity,
+                crate::words::capped(&spins)
+            );
+            continue;
+        }
         let _ = writeln!(
             s,
             "note: step {} leaves {} freedom(s) that neither its equations nor the inputs fix \

@@ -85,6 +85,33 @@ fn a_step_with_freedoms_no_input_fixes_is_named() {
     assert!(!out.contains("freedom(s)"), "{out}");
 }
 
+/// Where a step's freedoms are exactly the isolated spins `analyze` finds (the double
+/// banana's bars), the note names those bodies and says they are harmless, instead of every
+/// body of the step with "an isolated spin is harmless; otherwise drive a joint there"; where
+/// there are more, the general note stays.
+#[test]
+fn freedoms_that_are_isolated_spins_are_named_as_such() {
+    let (code, out, err) = mbsa(&["solve", "@rig-double-banana"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains(
+            "note: step SG-III leaves 3 freedom(s) that neither its equations nor the inputs \
+             fix: the isolated freedoms of AG, BG, FG (each turns one body alone, moving no \
+             other), which keep their start pose; harmless."
+        ),
+        "{out}"
+    );
+    // SG-I's 9 freedoms are more than its bars' 8 spins (the bananas' hinge): the general
+    // note stays.
+    assert!(
+        out.contains(
+            "note: step SG-I leaves 9 freedom(s) that neither its equations nor the inputs fix \
+             (bodies AD,"
+        ),
+        "{out}"
+    );
+}
+
 #[test]
 fn global_and_groups_agree_on_the_bennett() {
     let (c1, g, _) = mbsa(&["solve", "@rig-bennett", "--set", "A=25", "--format", "json"]);
