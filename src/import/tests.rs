@@ -716,3 +716,86 @@ fn a_spaced_declaration_at_the_start_is_read_as_the_reference_loaders_read_it() 
         assert!(e.message().starts_with("malformed XML"), "{bad}: {e:?}");
     }
 }
+
+/// A CustomJoint that no single mbsa joint makes (the pelvis of OpenSim's leg39: one rotation
+/// and three translations, 4 DOF; it was imported as F, 6) is the chain OpenSim composes: a
+/// slider along each translation, then a hinge about each rotation axis through the joint's
+/// origin, through massless virtual bodies whose names avoid the model's own; an actuator
+/// drives its coordinate's joint of the chain.
+#[test]
+fn osim_custom_joint_no_single_joint_makes_is_a_chain_of_its_axes() {
+    let lin =
+        "<function><LinearFunction><coefficients>1 0</coefficients></LinearFunction></function>";
+    let zero = "<function><Constant><value>0</value></Constant></function>";
+    let text = format!(
+        r#"<OpenSimDocument Version="30000"><Model name="leg"><BodySet><objects>
+        <Body name="ground"><Joint/></Body>
+        <Body name="pelvis~1"><Joint><PinJoint name="pin"><parent_body>pelvis</parent_body>
+          <location_in_parent>0 0 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent>
+          <location>0 0 0</location><orientation>0 0 0</orientation>
+          <CoordinateSet><objects><Coordinate name="q"/></objects></CoordinateSet>
+        </PinJoint></Joint></Body>
+        <Body name="pelvis"><Joint><CustomJoint name="ground_pelvis"><parent_body>ground</parent_body>
+          <location_in_parent>0 0 0</location_in_parent><orientation_in_parent>0 0 0</orientation_in_parent>
+          <location>0 0 0</location><orientation>0 0 0</orientation>
+          <SpatialTransform>
+            <TransformAxis name="rotation1"><coordinates>tilt</coordinates><axis>0 0 1</axis>{lin}</TransformAxis>
+            <TransformAxis name="rotation2"><coordinates>rock</coordinates><axis>1 0 0</axis>{lin}</TransformAxis>
+            <TransformAxis name="rotation3"><coordinates></coordinates><axis>0 1 0</axis>{zero}</TransformAxis>
+            <TransformAxis name="translation1"><coordinates>tx</coordinates><axis>1 0 0</axis>{lin}</TransformAxis>
+            <TransformAxis name="translation2"><coordinates>ty</coordinates><axis>0 1 0</axis>{lin}</TransformAxis>
+            <TransformAxis name="translation3"><coordinates>tz</coordinates><axis>0 0 1</axis>{lin}</TransformAxis>
+          </SpatialTransform>
+          <CoordinateSet><objects>
+            <Coordinate name="tilt"><default_value>0.5</default_value></Coordinate>
+            <Coordinate name="rock"><default_value>0</default_value></Coordinate>
+            <Coordinate name="tx"><default_value>1</default_value></Coordinate>
+            <Coordinate name="ty"><default_value>2</default_value></Coordinate>
+            <Coordinate name="tz"><default_value>3</default_value></Coordinate>
+          </objects></CoordinateSet>
+        </CustomJoint></Joint></Body>
+        </objects></BodySet>
+        <ForceSet><objects><CoordinateActuator name="a"><coordinate>ty</coordinate></CoordinateActuator></objects></ForceSet>
+        </Model></OpenSimDocument>"#
+    );
+    let i = import_str("t.osim", &text, None, &ImportOptions::default())
+        .unwrap_or_else(|e| panic!("{e:?}"));
+    assert!(i.warnings.is_empty(), "{:?}", i.warnings);
+    let m = &i.mechanism;
+    let joint = |id: &str| {
+        m.joints
+            .iter()
+            .find(|j| j.id == id)
+            .unwrap_or_else(|| panic!("no joint {id}\n{}", i.toml))
+    };
+    let names = |id: &str| -> Vec<String> {
+        joint(id)
+            .bodies
+            .iter()
+            .map(|&b| m.bodies[b].id.to_string())
+            .collect()
+    };
+    for (id, kind) in [
+        ("ground_pelvis:tx", JointType::P),
+        ("ground_pelvis:ty", JointType::P),
+        ("ground_pelvis:tz", JointType::P),
+        ("ground_pelvis:tilt", JointType::R),
+        ("ground_pelvis:rock", JointType::R),
+    ] {
+        assert_eq!(joint(id).kind, kind, "{id}\n{}", i.toml);
+    }
+    assert_axis(&i, "ground_pelvis:tx", [1.0, 0.0, 0.0], [1.0, 2.0, 3.0]);
+    assert_axis(&i, "ground_pelvis:tz", [0.0, 0.0, 1.0], [1.0, 2.0, 3.0]);
+    assert_axis(&i, "ground_pelvis:tilt", [0.0, 0.0, 1.0], [1.0, 2.0, 3.0]);
+    // The second rotation's axis is turned by the first (0.5 rad about z).
+    let (c, s) = (0.5f64.cos(), 0.5f64.sin());
+    assert_axis(&i, "ground_pelvis:rock", [c, s, 0.0], [1.0, 2.0, 3.0]);
+    // Sliders from the ground, hinges to the pelvis; the user's `pelvis~1` keeps its name.
+    assert_eq!(names("ground_pelvis:tx"), ["ground", "pelvis~1#2"]);
+    assert_eq!(names("ground_pelvis:rock"), ["pelvis~4", "pelvis"]);
+    assert_eq!(names("pin"), ["pelvis", "pelvis~1"]);
+    assert_eq!(joint("ground_pelvis:ty").driven, 1);
+    assert_eq!(m.inputs(), 1);
+    // 5 coordinates of the chain and the pin: 6 DOF, as OpenSim counts them (F would give 7).
+    assert_eq!(crate::mobility::mobility(m).mobility.count, 6);
+}

@@ -1,7 +1,7 @@
 //! OpenSim CustomJoint: its SpatialTransform's six axes composed at the default coordinates,
 //! and the mbsa joint its driving axes make.
 
-use super::{Motion, eval, text_of};
+use super::{Motion, Stage, eval, text_of};
 use crate::import::{Builder, ImportError, Node, Pose, Src, arr, child, children, unit};
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
@@ -51,20 +51,56 @@ pub(super) fn custom(
     let (kind, geom, exact) = custom_kind(origin, &rots, &trans);
     if driving.is_empty() {
         // No coordinate moves anything: a weld.
-        return Ok((x_fm, JointType::F, Geometry::default(), vec!["weld".into()]));
+        return Ok(Motion::single((
+            x_fm,
+            JointType::F,
+            Geometry::default(),
+            vec!["weld".into()],
+        )));
     }
     let names: Vec<String> = driving.iter().map(|d| d.2.clone()).collect();
     if coupled {
         b.warn(format!("{loc}: CustomJoint `{name}`: coupled coordinates ({}) drive several axes or non-linear functions: not representable; imported as {} about its independent coordinates at the default values", names.join(", "), kind.code()));
     } else if !exact {
-        b.warn(format!("{loc}: CustomJoint `{name}`: its spatial transform ({} rotation(s), {} translation(s)) maps to no mbsa joint: imported as {}", rots.len(), trans.len(), kind.code()));
+        return Ok(chain(x_fm, origin, &rots, &trans, names));
     }
     let geom = if matches!(kind, JointType::F) {
         Geometry::default()
     } else {
         geom
     };
-    Ok((x_fm, kind, geom, names))
+    Ok(Motion::single((x_fm, kind, geom, names)))
+}
+
+/// A CustomJoint of independent linear coordinates that no single mbsa joint makes (one
+/// rotation and three translations, two translations, ...), as the chain of one-axis joints
+/// OpenSim composes: a slider along each translation, fixed in the parent, then a hinge about
+/// each rotation axis (each turned by the rotations before it) through the child's joint
+/// origin. Exact to first order and in finite motion.
+fn chain(
+    x_fm: Pose,
+    origin: Option<[f64; 3]>,
+    rots: &[&(bool, Vector3<f64>, String)],
+    trans: &[&(bool, Vector3<f64>, String)],
+    independent: Vec<String>,
+) -> Motion {
+    let stage = |kind, d: &(bool, Vector3<f64>, String)| Stage {
+        kind,
+        geometry: Geometry {
+            origin,
+            axis: Some(arr(d.1)),
+            ..Geometry::default()
+        },
+        coordinate: Some(d.2.clone()),
+    };
+    let stages = (trans.iter().map(|d| stage(JointType::P, d)))
+        .chain(rots.iter().map(|d| stage(JointType::R, d)))
+        .collect();
+    Motion {
+        x_fm,
+        stages,
+        independent,
+    }
 }
 
 /// The TransformAxis elements of a SpatialTransform.

@@ -100,8 +100,8 @@ pub(super) fn actuator(
     src: &Src,
     b: &mut Builder,
     f: Node,
-    coord_joint: &HashMap<String, usize>,
-    jindex: &HashMap<usize, usize>,
+    coord_joint: &HashMap<String, (usize, usize)>,
+    jindex: &HashMap<usize, Vec<usize>>,
 ) -> bool {
     let tag = f.tag_name().name();
     let fname = f.attribute("name").unwrap_or("");
@@ -109,7 +109,10 @@ pub(super) fn actuator(
     let target = match tag {
         "CoordinateActuator" => {
             let cn = text_of(f, "coordinate").unwrap_or("");
-            match coord_joint.get(cn).and_then(|k| jindex.get(k)) {
+            match coord_joint
+                .get(cn)
+                .and_then(|(k, s)| jindex.get(k).and_then(|v| v.get(*s)))
+            {
                 Some(&ji) => Some(ji),
                 None => {
                     b.warn(format!("{loc}: CoordinateActuator `{fname}` drives `{cn}`, not an independent coordinate of an imported joint: not counted"));

@@ -2,7 +2,7 @@
 //! coordinates, and their motion at the default coordinates down the tree from the ground.
 
 use super::custom::custom;
-use super::{Motion, OJoint, last, text_of, vec3, xyz_body};
+use super::{Motion, OJoint, Single, last, text_of, vec3, xyz_body};
 use crate::import::{Builder, ImportError, JointRec, Node, Pose, Src, arr, child, children, pose};
 use crate::joint::JointType;
 use crate::mechanism::Geometry;
@@ -167,11 +167,11 @@ fn joint_coords(src: &Src, b: &mut Builder, j: Node) -> Result<Vec<(String, f64)
 }
 
 /// The tree at the default coordinates: each body's world pose, each joint's motion, and the
-/// joint of each independent coordinate.
+/// joint and stage of each independent coordinate.
 pub(super) struct Tree {
     pub world: HashMap<String, Pose>,
     pub motion: Vec<Option<Motion>>,
-    pub coord_joint: HashMap<String, usize>,
+    pub coord_joint: HashMap<String, (usize, usize)>,
 }
 
 /// World poses and joint motions, down the tree from the ground (a joint whose parent is not
@@ -185,7 +185,7 @@ pub(super) fn motions(
     let mut world: HashMap<String, Pose> = HashMap::new();
     world.insert(ground.to_string(), Pose::identity());
     let mut motion: Vec<Option<Motion>> = (0..joints.len()).map(|_| None).collect();
-    let mut coord_joint: HashMap<String, usize> = HashMap::new();
+    let mut coord_joint: HashMap<String, (usize, usize)> = HashMap::new();
     let mut progress = true;
     while progress {
         progress = false;
@@ -197,17 +197,15 @@ pub(super) fn motions(
                 continue;
             };
             let f = xp * j.x_pf;
-            let (x_fm, kind, geom, independent) = joint_motion(src, b, j, f)?;
-            world.insert(j.child.clone(), f * x_fm * j.x_bm.inverse());
-            let independent = if independent.is_empty() {
-                j.coords.iter().map(|c| c.0.clone()).collect()
-            } else {
-                independent
-            };
-            for c in &independent {
-                coord_joint.insert(c.clone(), k);
+            let mut m = joint_motion(src, b, j, f)?;
+            world.insert(j.child.clone(), f * m.x_fm * j.x_bm.inverse());
+            if m.independent.is_empty() {
+                m.independent = j.coords.iter().map(|c| c.0.clone()).collect();
             }
-            motion[k] = Some((x_fm, kind, geom, independent));
+            for c in &m.independent {
+                coord_joint.insert(c.clone(), (k, m.stage_of(c)));
+            }
+            motion[k] = Some(m);
             progress = true;
         }
     }
@@ -224,7 +222,7 @@ fn joint_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose) -> Result<Motio
     let qa = |i: usize| q.get(i).copied().unwrap_or(0.0);
     let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
     let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
-    Ok(match j.tag.as_str() {
+    Ok(Motion::single(match j.tag.as_str() {
         "PinJoint" => (
             pose(
                 [0.0; 3],
@@ -274,22 +272,23 @@ fn joint_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose) -> Result<Motio
             Geometry::default(),
             vec!["weld".into()],
         ),
-        "CustomJoint" => custom(src, b, j.n, &j.name, &j.coords, f)?,
+        "CustomJoint" => return custom(src, b, j.n, &j.name, &j.coords, f),
         other => approximate_motion(src, b, j, f, other),
-    })
+    }))
 }
 
-/// The joints into the builder (a WeldJoint welds its bodies); every joint must be reached
-/// from the ground. Gives the builder's joint of each joint.
+/// The joints into the builder (a WeldJoint welds its bodies; a chain of stages through
+/// massless virtual bodies); every joint must be reached from the ground. Gives the builder's
+/// joints of each joint, a stage each.
 pub(super) fn add_joints(
     src: &Src,
     b: &mut Builder,
     joints: &[OJoint],
     motion: &[Option<Motion>],
-) -> Result<HashMap<usize, usize>, ImportError> {
-    let mut jindex: HashMap<usize, usize> = HashMap::new();
+) -> Result<HashMap<usize, Vec<usize>>, ImportError> {
+    let mut jindex: HashMap<usize, Vec<usize>> = HashMap::new();
     for (k, j) in joints.iter().enumerate() {
-        let Some((_, kind, geom, ind)) = &motion[k] else {
+        let Some(m) = &motion[k] else {
             return Err(src
                 .err(
                     j.n,
@@ -303,30 +302,52 @@ pub(super) fn add_joints(
         };
         let p = b.body(&j.parent, "");
         let c = b.body(&j.child, "");
-        if ind.first().map(String::as_str) == Some("weld") {
+        if m.independent.first().map(String::as_str) == Some("weld") {
             b.weld(p, c, &format!("WeldJoint `{}`", j.name));
             continue;
         }
-        let ji = b.joint(JointRec {
-            id: j.name.clone(),
-            kind: *kind,
-            bodies: vec![p, c],
-            driven: 0,
-            geometry: geom.clone(),
-            comments: vec![format!(
-                "<{} name=\"{}\"> at {}",
-                j.tag,
-                j.name,
-                src.loc(j.n)
-            )],
-        });
-        jindex.insert(k, ji);
+        let here = format!("<{} name=\"{}\"> at {}", j.tag, j.name, src.loc(j.n));
+        let n = m.stages.len();
+        let mut prev = p;
+        let mut ids = Vec::with_capacity(n);
+        for (s, stage) in m.stages.iter().enumerate() {
+            let next = if s + 1 == n {
+                c
+            } else {
+                let v = b.fresh_name(&format!("{}~{}", j.child, s + 1));
+                b.body(&v, "massless virtual body")
+            };
+            let (id, comments) = match &stage.coordinate {
+                Some(coord) if n > 1 => (
+                    format!("{}:{coord}", j.name),
+                    vec![
+                        here.clone(),
+                        format!(
+                            "coordinate `{coord}`, joint {} of {n}: chained through massless \
+                             virtual bodies",
+                            s + 1
+                        ),
+                    ],
+                ),
+                _ => (j.name.clone(), vec![here.clone()]),
+            };
+            ids.push(b.joint(JointRec {
+                id,
+                kind: stage.kind,
+                bodies: vec![prev, next],
+                driven: 0,
+                geometry: stage.geometry.clone(),
+                comments,
+            }));
+            prev = next;
+        }
+        jindex.insert(k, ids);
     }
     Ok(jindex)
 }
 
 /// A UniversalJoint at angles `q0` (about x) and `q1` (about the turned y).
-fn universal_motion(f: Pose, q0: f64, q1: f64) -> Motion {
+fn universal_motion(f: Pose, q0: f64, q1: f64) -> Single {
     let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
     let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
     let r1 = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), q0);
@@ -347,7 +368,7 @@ fn universal_motion(f: Pose, q0: f64, q1: f64) -> Motion {
 }
 
 /// A PlanarJoint at rotation `q0` (about z) and translation (`q1`, `q2`).
-fn planar_motion(f: Pose, q0: f64, q1: f64, q2: f64) -> Motion {
+fn planar_motion(f: Pose, q0: f64, q1: f64, q2: f64) -> Single {
     let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
     let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
     let t = Vector3::new(q1, q2, 0.0);
@@ -368,7 +389,7 @@ fn planar_motion(f: Pose, q0: f64, q1: f64, q2: f64) -> Motion {
 
 /// A joint type not representable exactly (`other`): R, U or S by its number of coordinates
 /// (F beyond; a weld without coordinates: it allows no motion), warned.
-fn approximate_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose, other: &str) -> Motion {
+fn approximate_motion(src: &Src, b: &mut Builder, j: &OJoint, f: Pose, other: &str) -> Single {
     let g = |o: Vector3<f64>| Some(arr((f * Point3::from(o)).coords));
     let d = |v: Vector3<f64>| Some(arr(f.rotation * v));
     let loc = src.loc(j.n);

@@ -1,6 +1,7 @@
 //! OpenSim (.osim) reader, 3.x (joints inside bodies) and 4.x (JointSet with offset frames):
-//! Pin, Slider, Ball, Gimbal, Universal, Free, Planar and Weld joints, CustomJoint when its
-//! SpatialTransform maps to one of these; PointConstraint -> S, WeldConstraint -> merge;
+//! Pin, Slider, Ball, Gimbal, Universal, Free, Planar and Weld joints; a CustomJoint as the one
+//! of these its SpatialTransform makes, else as a chain of one-axis joints through massless
+//! virtual bodies (one per coordinate); PointConstraint -> S, WeldConstraint -> merge;
 //! CoordinateActuator / TorqueActuator -> driven; default coordinate values = configuration.
 
 mod custom;
@@ -109,9 +110,49 @@ fn eval(src: &Src, f: Node, x: f64) -> Result<Option<(f64, bool)>, ImportError> 
     })
 }
 
-/// A joint's motion at the default coordinates, its kind and geometry, and its independent
-/// coordinates (`["weld"]` for a weld).
-type Motion = (Pose, JointType, Geometry, Vec<String>);
+/// A joint imported as one mbsa joint: its motion at the default coordinates, its kind and
+/// geometry, and its independent coordinates (empty: all of the joint's; `["weld"]` for a weld).
+type Single = (Pose, JointType, Geometry, Vec<String>);
+
+/// A joint's motion at the default coordinates (`x_fm`, the child's joint frame in the
+/// parent's), the mbsa joints it is imported as, from the parent to the child, and its
+/// independent coordinates (empty: all of the joint's; `["weld"]` for a weld).
+struct Motion {
+    x_fm: Pose,
+    stages: Vec<Stage>,
+    independent: Vec<String>,
+}
+
+/// One mbsa joint of an imported joint: its kind, its geometry and, in a chain of one-axis
+/// joints (a CustomJoint no single mbsa joint matches), the coordinate it carries.
+struct Stage {
+    kind: JointType,
+    geometry: Geometry,
+    coordinate: Option<String>,
+}
+
+impl Motion {
+    /// A joint imported as one mbsa joint.
+    fn single((x_fm, kind, geometry, independent): Single) -> Motion {
+        Motion {
+            x_fm,
+            stages: vec![Stage {
+                kind,
+                geometry,
+                coordinate: None,
+            }],
+            independent,
+        }
+    }
+
+    /// The stage that carries coordinate `c` (the only one of a single joint).
+    fn stage_of(&self, c: &str) -> usize {
+        self.stages
+            .iter()
+            .position(|s| s.coordinate.as_deref() == Some(c))
+            .unwrap_or(0)
+    }
+}
 
 /// A joint of the model: its element, name and tag, the bodies it joins, its frames in the
 /// parent (`x_pf`) and child (`x_bm`) bodies, and its coordinates with their default values.
