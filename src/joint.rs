@@ -192,6 +192,25 @@ impl JointType {
         self.info().grade
     }
 
+    /// The order of the DOF that `driven` and input values name, in words (docs/format.md,
+    /// "Which DOF `driven` means"); `None` for a kind of one DOF or without named DOF (a driven
+    /// DOF of those fixes a generic combination of its motions).
+    pub fn dof_order(self) -> Option<&'static str> {
+        Some(match self {
+            C => "the slide, then the turn",
+            PL => "the two slides in the plane, then the turn about the normal",
+            U => "the turn about `axis`, then about `axis2`",
+            S => "the turns about the world x, y, z axes through the centre",
+            F => "the translations along x, y, z, then the turns about x, y, z",
+            FP => "the translations along x, y, then the turn",
+            SP => "the two slides in the plane, then the turns about x, y, z through the centre",
+            SC => "the slide along the axis, then the turns about x, y, z",
+            PC => "the two slides, the turn about `normal`, the turn about `axis`",
+            CR => "the slide along `axis`, the slide across the slot, the turn about `axis`",
+            _ => return None,
+        })
+    }
+
     /// Position in the catalogue order (used to sort type strings).
     pub fn order(self) -> usize {
         self as usize

@@ -999,31 +999,54 @@ pub fn resolve_ref(m: &Mechanism, text: &str) -> Result<usize, InputSpecError> {
     }
     match matches.len() {
         1 => Ok(matches[0]),
-        0 => {
-            // Nearest by Jaro-Winkler (a shared start weighs most) and by shared letter pairs
-            // (a shared end counts too): for OpenSim's coordinate `elbow_flex_r`, the joint
-            // `elbow_r`, not `elbow_l`.
-            let hint = m
-                .joints
-                .iter()
-                .flat_map(|j| [j.id.clone(), m.joint_bodies_label(j)])
-                .map(|cand| {
-                    let jw = strsim::jaro_winkler(text, &cand);
-                    (jw, jw + strsim::sorensen_dice(text, &cand), cand)
-                })
-                .filter(|(jw, _, _)| *jw >= 0.75)
-                .max_by(|a, b| a.1.total_cmp(&b.1).then_with(|| b.2.cmp(&a.2)))
-                .map(|(_, _, c)| c);
-            Err(InputSpecError::NoMatch {
-                text: text.to_string(),
-                hint,
-            })
-        }
+        0 => Err(InputSpecError::NoMatch {
+            text: text.to_string(),
+            hint: colon_hint(m, text).or_else(|| nearest_id(m, text)),
+        }),
         _ => Err(InputSpecError::Ambiguous {
             text: text.to_string(),
             joints: matches.iter().map(|&j| m.joints[j].id.clone()).collect(),
         }),
     }
+}
+
+/// The joints an imported id names in part: `text` before the `:` of several (an OpenSim
+/// CustomJoint imported as a chain: `ground_pelvis` for `ground_pelvis:pelvis_tx`, ...; the
+/// first 8) or after the `:` of one (its coordinate, `pelvis_tilt`), as a hint quoted apart.
+fn colon_hint(m: &Mechanism, text: &str) -> Option<String> {
+    let named = |f: &dyn Fn(&str, &str) -> bool| -> Vec<&str> {
+        m.joints
+            .iter()
+            .filter(|j| j.id.rsplit_once(':').is_some_and(|(a, b)| f(a, b)))
+            .map(|j| j.id.as_str())
+            .collect()
+    };
+    let after = named(&|_, b| b == text);
+    if after.len() == 1 {
+        return Some(after[0].to_string());
+    }
+    let before = named(&|a, _| a == text);
+    if before.is_empty() {
+        return None;
+    }
+    let shown: Vec<&str> = before.iter().take(8).copied().collect();
+    Some(shown.join("`, `"))
+}
+
+/// The joint id or body pair nearest `text`, by Jaro-Winkler (a shared start weighs most) and
+/// by shared letter pairs (a shared end counts too): for OpenSim's coordinate `elbow_flex_r`,
+/// the joint `elbow_r`, not `elbow_l`.
+fn nearest_id(m: &Mechanism, text: &str) -> Option<String> {
+    m.joints
+        .iter()
+        .flat_map(|j| [j.id.clone(), m.joint_bodies_label(j)])
+        .map(|cand| {
+            let jw = strsim::jaro_winkler(text, &cand);
+            (jw, jw + strsim::sorensen_dice(text, &cand), cand)
+        })
+        .filter(|(jw, _, _)| *jw >= 0.75)
+        .max_by(|a, b| a.1.total_cmp(&b.1).then_with(|| b.2.cmp(&a.2)))
+        .map(|(_, _, c)| c)
 }
 
 /// Split `a-b` into two known body indices, trying every `-` (ids may contain dashes).
@@ -1059,6 +1082,46 @@ mod tests {
         assert_eq!(hint("elbow_flex_r").as_deref(), Some("elbow_r"));
         assert_eq!(hint("elbow_flex_l").as_deref(), Some("elbow_l"));
         assert_eq!(hint("wrist"), None);
+    }
+
+    /// An OpenSim CustomJoint imported as a chain has ids `joint:coordinate`: its coordinate
+    /// names the one joint, its name the chain (the nearest id by spelling was another joint:
+    /// `pelvis_tilt` gave `pelvis-femur_r`).
+    #[test]
+    fn a_part_of_an_imported_id_suggests_the_joints_it_names() {
+        let j = |id: &str, a: i64, b: i64| JointSpec {
+            id: Some(id.into()),
+            ..JointSpec::new(JointType::R, a, b, 0)
+        };
+        let m = Mechanism::from_parts(
+            "leg",
+            Space::Spatial,
+            BodyId::Int(1),
+            vec![],
+            vec![
+                j("ground_pelvis:pelvis_tx", 1, 2),
+                j("ground_pelvis:pelvis_tilt", 2, 3),
+                j("pelvis-femur_r", 3, 4),
+            ],
+        );
+        let hint = |text: &str| match resolve_ref(&m, text) {
+            Err(InputSpecError::NoMatch { hint, .. }) => hint,
+            other => panic!("{other:?}"),
+        };
+        assert_eq!(
+            hint("pelvis_tilt").as_deref(),
+            Some("ground_pelvis:pelvis_tilt")
+        );
+        assert_eq!(
+            hint("ground_pelvis").as_deref(),
+            Some("ground_pelvis:pelvis_tilt`, `ground_pelvis:pelvis_tx")
+        );
+        let e = resolve_ref(&m, "ground_pelvis").expect_err("no joint of that id");
+        assert!(
+            e.to_string()
+                .contains("(did you mean `ground_pelvis:pelvis_tilt`, `ground_pelvis:pelvis_tx`?)"),
+            "{e}"
+        );
     }
 
     #[test]

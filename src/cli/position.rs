@@ -32,7 +32,10 @@ pub struct SolveArgs {
     pub inputs: Option<String>,
     /// Input value `JOINT=VALUE[,VALUE...]` (repeatable): JOINT is a joint id or a body pair;
     /// angles in degrees unless written `0.5rad`, slides in file lengths; measured from the
-    /// file's configuration. A joint not driven in the file becomes driven.
+    /// file's configuration. A joint not driven in the file becomes driven. A joint of several
+    /// DOF takes its values in the order docs/format.md gives (C: the slide, then the turn; PL:
+    /// the two slides, then the turn; S: turns about world x, y, z); fewer values drive its
+    /// first DOF, and a note says which.
     #[arg(long = "set", value_name = "JOINT=VALUE")]
     pub set: Vec<String>,
     /// Trace a motion `JOINT=FROM..TO:STEP`, each step starting from the previous one; stops
@@ -212,6 +215,34 @@ fn toml_of(m: &Mechanism, c: &Configuration, note: Option<&str>) -> String {
     s
 }
 
+/// A note for `written` giving `given` values to joint `j` of several DOF: which of its DOF
+/// they drive (a value meant as a turn of a planar joint would otherwise move its first slide,
+/// silently). `None` when every DOF gets a value, or the file drives as many.
+fn fewer_values_note(m: &Mechanism, j: usize, given: usize, written: &str) -> Option<String> {
+    let joint = &m.joints[j];
+    let grade = joint.grade() as usize * joint.pairs() as usize;
+    if given >= grade || (joint.driven as usize == given && given > 0) {
+        return None;
+    }
+    let kind = joint.kind;
+    let order = match kind.dof_order() {
+        Some(o) => format!("{}'s DOF in order: {o}", kind.code()),
+        None => format!(
+            "{} has no named DOF: a generic combination of its motions",
+            kind.code()
+        ),
+    };
+    let drive = match given {
+        1 => "the value drives its first".to_string(),
+        n => format!("the {n} values drive its first {n}"),
+    };
+    Some(format!(
+        "`{written}`: joint `{}` ({}) has {grade} DOF; {drive} ({order}; docs/format.md)",
+        joint.id,
+        kind.code()
+    ))
+}
+
 /// A free joint to the frame that neither the file nor `--set` drives (an imported robot's
 /// floating base) is held at the file's pose, as `transform` takes it by default; the notes
 /// say so: left free, the solve would move the whole robot by whatever its steps chose (the
@@ -296,6 +327,9 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
                 m.joints[j].id, written[k]
             )));
         }
+        if let Some(n) = fewer_values_note(&m, j, v.len(), s) {
+            warn(&n);
+        }
         sets.push((j, v));
         written.push(s);
     }
@@ -312,6 +346,11 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
              sets it at every step; drop the `--set`, or start the range there",
             m.joints[sw.joint].id, written[k]
         )));
+    }
+    if let Some(sw) = &sweep
+        && let Some(n) = fewer_values_note(&m, sw.joint, 1, args.sweep.as_deref().unwrap_or(""))
+    {
+        warn(&n);
     }
     inputs::drive(&mut m, &sets);
     if let Some(sw) = &sweep {

@@ -546,3 +546,39 @@ fn solve_assemble_holds_the_inputs_where_the_assembly_left_them() {
         "{hip}"
     );
 }
+
+/// A joint of several DOF given fewer values drives its first DOF, in the order docs/format.md
+/// gives; a note says which (a value meant as the turn of a planar joint moved its first slide,
+/// silently). No note when every DOF gets a value, or the file drives as many as given.
+#[test]
+fn fewer_values_than_a_joints_dof_are_named_in_a_note() {
+    let file = "name = \"puck\"\nspace = \"spatial\"\nframe = 1\n\n[[joint]]\nid = \"slide\"\ntype = \"PL\"\nbodies = [1, 2]\norigin = [0, 0, 0]\nnormal = [0, 0, 1]\n\n[[joint]]\nid = \"pin\"\ntype = \"R\"\nbodies = [2, 3]\norigin = [1, 0, 0]\naxis = [0, 0, 1]\ndriven = 1\n";
+    let run = |set: &str, driven: bool| {
+        let text = if driven {
+            file.replace("normal = [0, 0, 1]\n", "normal = [0, 0, 1]\ndriven = 1\n")
+        } else {
+            file.to_string()
+        };
+        let out = Command::cargo_bin("mbsa")
+            .expect("the mbsa binary is built")
+            .args(["solve", "-", "--set", set])
+            .write_stdin(text)
+            .output()
+            .expect("mbsa runs");
+        assert_eq!(out.status.code(), Some(0), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = run("slide=30", false);
+    assert!(
+        err.contains(
+            "warning: `slide=30`: joint `slide` (PL) has 3 DOF; the value drives its first (PL's \
+             DOF in order: the two slides in the plane, then the turn about the normal; \
+             docs/format.md)"
+        ),
+        "{err}"
+    );
+    let err = run("slide=0.1,0.2", false);
+    assert!(err.contains("the 2 values drive its first 2"), "{err}");
+    assert!(!run("slide=0.1,0.2,30", false).contains("DOF;"));
+    assert!(!run("slide=0.1", true).contains("DOF;"));
+}
