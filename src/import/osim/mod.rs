@@ -7,6 +7,7 @@
 mod custom;
 mod forces;
 mod joints;
+mod spline;
 
 use super::{Builder, ImportError, Node, Pose, Src, Unique, child, children};
 use crate::joint::JointType;
@@ -72,25 +73,20 @@ fn eval(src: &Src, f: Node, x: f64) -> Result<Option<(f64, bool)>, ImportError> 
                 .map(|c| src.nums_text(c, 0))
                 .transpose()?
                 .unwrap_or_default();
-            if xs.is_empty() || xs.len() != ys.len() {
+            if xs.is_empty() || xs.len() != ys.len() || xs.windows(2).any(|w| w[0] >= w[1]) {
                 return Ok(None);
             }
-            // Piecewise-linear through the knots (enough for the configuration).
-            let mut v = ys[0];
-            if x >= xs[xs.len() - 1] {
-                v = ys[ys.len() - 1];
-            } else {
-                for k in 1..xs.len() {
-                    if x <= xs[k] {
-                        let t = if xs[k] > xs[k - 1] {
-                            (x - xs[k - 1]) / (xs[k] - xs[k - 1])
-                        } else {
-                            0.0
-                        };
-                        v = ys[k - 1] + t * (ys[k] - ys[k - 1]);
-                        break;
-                    }
-                }
+            if xs.len() == 1 {
+                return Ok(Some((ys[0], true)));
+            }
+            // As OpenSim evaluates them; a GCVSpline (a smoothing spline, in no joint of the
+            // public models) between its knots as the piecewise-linear function.
+            let v = match f.tag_name().name() {
+                "SimmSpline" | "NaturalCubicSpline" => spline::cubic(&xs, &ys, x),
+                _ => spline::linear(&xs, &ys, x),
+            };
+            if !v.is_finite() {
+                return Ok(None);
             }
             let linear = xs.len() == 2;
             Some((v, linear))
