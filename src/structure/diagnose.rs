@@ -750,3 +750,28 @@ pub(super) fn name_toggle(
     }
     d.notes.insert(0, toggle_note);
 }
+
+/// The note for rank decisions at the file's configuration that came within a factor 100 of
+/// their threshold (`kept`, `dropped`: the closest ratios to it, [`crate::structure::rank`]),
+/// as `rigid --method geometric` warns ("ill-conditioned"): the answer may turn with more
+/// digits or a slightly different pose. `precision`: the numbers' written precision.
+pub(super) fn near_threshold_note(precision: Option<f64>, (kept, dropped): (f64, f64)) -> String {
+    let numbers = match precision {
+        Some(p) if p > 0.0 => format!("the numbers known to ±{p:.0e}"),
+        _ => "the numbers taken as exact".to_string(),
+    };
+    let mut closest = Vec::new();
+    if kept.is_finite() && kept < crate::structure::rank::NEAR_FACTOR {
+        closest.push(format!("a value kept at {kept:.2} times its threshold"));
+    }
+    if dropped * crate::structure::rank::NEAR_FACTOR > 1.0 {
+        closest.push(format!("one set aside at {dropped:.2} times it"));
+    }
+    format!(
+        "ill-conditioned: with {numbers}, a rank decision at the file's configuration lies within \
+         a factor 100 of its threshold ({}); the configuration may be near a singular one, or the \
+         precision too coarse to decide it: the answer may change with more digits \
+         (`--tolerance` sets the precision; `mbsa rigid --method geometric` reports the same)",
+        closest.join(", ")
+    )
+}

@@ -691,6 +691,7 @@ fn analyze_once(
     let mut geometry = None;
     let mut set_aside = vec![0; m.joints.len()];
     let mut spins = diagnose::Spins::default();
+    let mut near = None;
     // Joint motions at the file's configuration, for the spatiality of group types.
     let mut twists: Option<Vec<nalgebra::DMatrix<f64>>> = None;
     let mut dec = if opts.count_only {
@@ -718,6 +719,9 @@ fn analyze_once(
         if r.deficient {
             return Ok(None);
         }
+        near = r
+            .near
+            .map(|n| diagnose::near_threshold_note(used.precision, n));
         geometry = Some(used);
         isolated = r.isolated;
         redundant = r.redundant;
@@ -750,6 +754,12 @@ fn analyze_once(
         twists.as_deref(),
     );
     diagnose::spin_notes(&mut a, spins);
+    if let Some(n) = near {
+        match a.diagnosis.as_mut() {
+            Some(d) => d.notes.push(n),
+            None => a.notes.push(n),
+        }
+    }
     a.unchecked = unchecked;
     a.geometry = geometry;
     a.set_aside = set_aside;

@@ -634,3 +634,62 @@ fn locked_freedoms_with_the_inputs_held_say_the_inputs_may_fix_them() {
     let (_, out) = mbsa(&["rigid", "-", "--method", "geometric"], &five_bar);
     assert!(!out.contains("locked DOF"), "{out}");
 }
+
+/// The IFToMM N-four-bar of `windows` windows written in 3D (every pin's axis z), every number
+/// declared known to `precision` (as scripts/cliffs.py writes it).
+fn n_four_bar_3d(windows: usize, precision: f64) -> String {
+    let mut s =
+        format!("name = \"N-four-bar\"\nspace = \"spatial\"\nframe = 1\nprecision = {precision}\n");
+    let mut joint = |id: String, a: usize, b: usize, x: f64, y: f64, driven: bool| {
+        s.push_str(&format!(
+            "[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}, 0]\naxis = [0, 0, 1]\n{}\n",
+            if driven { "driven = 1" } else { "" }
+        ));
+    };
+    joint("A0".into(), 1, 2, 0.0, 0.0, true);
+    for k in 1..=windows {
+        let kf = k as f64;
+        joint(
+            format!("VB{}", k - 1),
+            2 * k,
+            2 * k + 1,
+            kf - 0.4,
+            0.8,
+            false,
+        );
+        joint(format!("B{k}"), 2 * k + 1, 2 * k + 2, kf + 0.6, 0.8, false);
+        joint(format!("P{k}"), 1, 2 * k + 2, kf, 0.0, false);
+    }
+    s
+}
+
+/// Axes known to ±0.05 (about 3°) over a row 12 links long cannot decide the ranks:
+/// `rigid --method geometric` warns "ill-conditioned", and `analyze`, whose answer then differs
+/// (not determined, 27 isolated freedoms, where the exact file is determined with true mobility
+/// 1), says it too (it said nothing). Exact numbers: determined, no such note.
+#[test]
+fn analyze_flags_rank_decisions_near_the_precision_threshold_as_rigid_does() {
+    let coarse = n_four_bar_3d(24, 0.05);
+    let (_, rigid) = mbsa(&["rigid", "-", "--method", "geometric"], &coarse);
+    assert!(rigid.contains("Warning: ill-conditioned"), "{rigid}");
+    let (code, out) = mbsa(&["analyze", "-"], &coarse);
+    assert_eq!(code, 0, "{out}");
+    assert!(
+        out.contains("- ill-conditioned: with the numbers known to ±5e-2, a rank decision at the file's configuration lies within a factor 100 of its threshold"),
+        "{out}"
+    );
+    let j = json(&["analyze", "-", "--format", "json"], &coarse);
+    let notes = j["diagnosis"]["notes"].as_array().expect("diagnosis notes");
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.as_str().is_some_and(|n| n.starts_with("ill-conditioned"))),
+        "{notes:?}"
+    );
+    let (_, exact) = mbsa(&["analyze", "-", "--tolerance", "0"], &coarse);
+    assert!(
+        exact.contains("true mobility 1, inputs 1; determined"),
+        "{exact}"
+    );
+    assert!(!exact.contains("ill-conditioned"), "{exact}");
+}

@@ -204,6 +204,7 @@ fn tolerance(
         .flatten();
     let tol = match used.precision {
         Some(_) => Tol {
+            margins: used.is_file().then(Default::default),
             rel: 1e-9,
             abs: match &local {
                 Some(lf) => lf.threshold(used),
@@ -211,6 +212,7 @@ fn tolerance(
             },
         },
         None => Tol {
+            margins: None,
             rel: REL_TOL,
             abs: 0.0,
         },
@@ -303,6 +305,7 @@ impl Attempt<'_> {
             redundant: self.redundant,
             unchecked: self.unchecked,
             rounds: self.rounds,
+            near: self.tol.margins.as_ref().and_then(|m| m.near()),
             kept_rows: (!suspects.is_empty()).then_some(Kept {
                 rows: self.rows,
                 first: self.orig_rows,

@@ -91,6 +91,7 @@ pub(super) fn unconfirmed(
             rank_of(
                 &a,
                 &Tol {
+                    margins: None,
                     rel: REL_TOL,
                     abs: 0.0,
                 },

@@ -7,6 +7,8 @@ use super::rows::PairRows;
 use super::screen::screen;
 use crate::structure::count::{Equations, Part};
 use nalgebra::DMatrix;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
 /// O(n^3) time and O(n^2) memory: 1,200 unknowns is about a second and 20 MB, while the giant
@@ -28,13 +30,91 @@ pub(super) const REL_TOL: f64 = 1e-12;
 /// `abs` = 0. File geometry: `rel` = 1e-9 (its numbers are decimals rounded to double
 /// precision) and `abs` the perturbation its written precision allows (see
 /// `docs/algorithms.md`, "Tolerance").
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub(crate) struct Tol {
     pub rel: f64,
     pub abs: f64,
+    /// At the file's geometry: where the decisions made with this threshold note how close
+    /// they came to it.
+    pub margins: Option<Arc<Margins>>,
+}
+
+/// A decision within this factor of its threshold is close: `rigid --method geometric` flags
+/// the same ("ill-conditioned"), and `analyze` says so in a note.
+pub(crate) const NEAR_FACTOR: f64 = 100.0;
+
+/// How close the rank decisions of one check at the file's geometry came to their threshold:
+/// the smallest value kept and the largest set aside, each divided by its threshold (only
+/// those within [`NEAR_FACTOR`] are kept). A value
+/// kept just above the threshold, or set aside just below, is a decision the written precision
+/// barely makes: more digits, or a pose near a singular one, could turn it.
+#[derive(Debug)]
+pub(crate) struct Margins {
+    /// `f64` bits of the smallest ratio above 1 (non-negative floats order as their bits).
+    kept: AtomicU64,
+    /// `f64` bits of the largest ratio at most 1.
+    dropped: AtomicU64,
+}
+
+impl Default for Margins {
+    fn default() -> Margins {
+        Margins {
+            kept: AtomicU64::new(f64::INFINITY.to_bits()),
+            dropped: AtomicU64::new(0f64.to_bits()),
+        }
+    }
+}
+
+impl Margins {
+    /// A value compared with `cut`: kept when above it.
+    pub(super) fn note(&self, value: f64, cut: f64) {
+        self.note_all(&[value], cut);
+    }
+
+    /// Values compared with `cut` (the singular values of one SVD): one atomic update of each
+    /// extreme per call, however many values.
+    pub(super) fn note_all(&self, values: &[f64], cut: f64) {
+        if cut.is_nan() || cut <= 0.0 {
+            return;
+        }
+        let (mut kept, mut dropped) = (f64::INFINITY, 0.0f64);
+        for &v in values {
+            let r = v.abs() / cut;
+            if !r.is_finite() {
+                continue;
+            }
+            if r > 1.0 {
+                kept = kept.min(r);
+            } else {
+                dropped = dropped.max(r);
+            }
+        }
+        // Only a close decision is ever reported: the others leave the shared state alone.
+        if kept < NEAR_FACTOR {
+            self.kept.fetch_min(kept.to_bits(), Ordering::Relaxed);
+        }
+        if dropped * NEAR_FACTOR > 1.0 {
+            self.dropped.fetch_max(dropped.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    /// The smallest kept and largest set-aside ratios when either lies within
+    /// [`NEAR_FACTOR`] of 1.
+    pub(super) fn near(&self) -> Option<(f64, f64)> {
+        let kept = f64::from_bits(self.kept.load(Ordering::Relaxed));
+        let dropped = f64::from_bits(self.dropped.load(Ordering::Relaxed));
+        (kept < NEAR_FACTOR || dropped * NEAR_FACTOR > 1.0).then_some((kept, dropped))
+    }
 }
 
 impl Tol {
+    /// Note the singular values `sv` decided at `cut`, where this threshold keeps margins.
+    pub(super) fn note_all(&self, sv: &[f64], cut: f64) {
+        if let Some(m) = &self.margins {
+            m.note_all(sv, cut);
+        }
+    }
+
     /// The threshold for a matrix of size `n` whose largest singular value is `smax`.
     pub(super) fn cut(&self, smax: f64, n: usize) -> f64 {
         (smax * n.max(1) as f64 * self.rel)
@@ -56,6 +136,7 @@ impl Svd {
     pub(super) fn of(a: &DMatrix<f64>, t: &Tol) -> Svd {
         // V as before, although unused: the deficit path stays exactly the original SVD.
         let (sv, tol, u, _) = svd_parts(a, true, true, t);
+        t.note_all(&sv, tol);
         Svd {
             sv,
             u: u.expect("requested U"),
@@ -66,6 +147,7 @@ impl Svd {
     /// The singular values and the left basis only (the same values as [`Svd::of`]).
     pub(super) fn left(a: &DMatrix<f64>, t: &Tol) -> Svd {
         let (sv, tol, u, _) = svd_parts(a, true, false, t);
+        t.note_all(&sv, tol);
         Svd {
             sv,
             u: u.expect("requested U"),
@@ -109,6 +191,7 @@ pub(super) fn rank_of(a: &DMatrix<f64>, t: &Tol) -> usize {
         return 0;
     }
     let (sv, tol, _, _) = svd_parts(a, false, false, t);
+    t.note_all(&sv, tol);
     sv.iter().filter(|&&s| s > tol).count()
 }
 

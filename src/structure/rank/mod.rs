@@ -47,6 +47,7 @@ use crate::structure::count::{Decomposition, Equations};
 use crate::structure::{Isolated, Redundancy, Unchecked};
 use attempt::check_at;
 pub use cache::Cache;
+pub(crate) use float::NEAR_FACTOR;
 use nalgebra::DMatrix;
 use rows::PairRows;
 use std::collections::{HashMap, HashSet};
@@ -85,6 +86,10 @@ pub(crate) struct RankResult {
     /// work measure.
     #[cfg_attr(not(test), allow(dead_code))]
     pub rounds: usize,
+    /// At the file's geometry, when a rank decision came within
+    /// [`NEAR_FACTOR`] of its threshold: the smallest value kept and the
+    /// largest set aside, each divided by its threshold.
+    pub near: Option<(f64, f64)>,
     /// Joints of a deficit that a second realization did not confirm (the draw was
     /// degenerate there), with the seed of a draw without the deficit: [`check`] draws them
     /// at it and starts over. Empty in a final result.

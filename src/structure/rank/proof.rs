@@ -661,10 +661,12 @@ mod tests {
         let mut inverse_accepted = 0;
         for t in [
             Tol {
+                margins: None,
                 rel: REL_TOL,
                 abs: 0.0,
             },
             Tol {
+                margins: None,
                 rel: 1e-9,
                 abs: 0.0,
             },
@@ -843,10 +845,12 @@ mod tests {
         let mut seen = [0usize; 4];
         for t in [
             Tol {
+                margins: None,
                 rel: REL_TOL,
                 abs: 0.0,
             },
             Tol {
+                margins: None,
                 rel: 1e-9,
                 abs: 0.0,
             },

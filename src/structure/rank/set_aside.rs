@@ -1,7 +1,7 @@
 //! The constraint equations set aside at the file's configuration: those dependent there
 //! (special geometry), chosen within each biconnected block in a solve order.
 
-use super::float::{MAX_DENSE_UNKNOWNS, Tol};
+use super::float::{MAX_DENSE_UNKNOWNS, Margins, Tol};
 use super::lowering::body_names;
 use super::rows::{PairRows, input_rows};
 use super::solve_order::{SolveKeys, Split, on_node};
@@ -164,9 +164,11 @@ impl Configuration<'_> {
         let side =
             |e: usize, i: usize, x: usize, sign: f64| on_node(self.local, &free.get(e), i, x, sign);
         let (kept, dropped) = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
-            independent_rows_dense(eqs, free, &order, &bodies, b, cut, &side)
+            let margins = self.tol.margins.as_deref();
+            independent_rows_dense(eqs, free, &order, &bodies, b, (cut, margins), &side)
         } else {
-            independent_rows_sparse(eqs, free, &order, &bodies, b, cut, &side)?
+            let margins = self.tol.margins.as_deref();
+            independent_rows_sparse(eqs, free, &order, &bodies, b, (cut, margins), &side)?
         };
         Some(BlockChoice {
             kept,
@@ -288,7 +290,7 @@ fn independent_rows_dense(
     order: &[usize],
     bodies: &[usize],
     b: usize,
-    cut: f64,
+    (cut, margins): (f64, Option<&Margins>),
     side: &Side<'_>,
 ) -> Chosen {
     let ncols = b * bodies.len();
@@ -327,6 +329,9 @@ fn independent_rows_dense(
                 }
             }
             let n = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if let Some(mg) = margins {
+                mg.note(n, cut * n0);
+            }
             if n > cut * n0 {
                 let q: Vec<f64> = v.iter().map(|x| x / n).collect();
                 let span = support(&q);
@@ -382,7 +387,7 @@ fn independent_rows_sparse(
     order: &[usize],
     bodies: &[usize],
     b: usize,
-    cut: f64,
+    (cut, margins): (f64, Option<&Margins>),
     side: &Side<'_>,
 ) -> Option<Chosen> {
     let at = |x: usize| bodies.binary_search(&x).ok();
@@ -428,6 +433,10 @@ fn independent_rows_sparse(
     let sizes = vec![1usize; u];
     let all: Vec<usize> = (0..u).collect();
     let el = Elimination::run_in_order(&sizes, blocks, cut, SPARSE_ASIDE_BYTES, &all).ok()?;
+    if let Some(mg) = margins {
+        // The pivots are the unit rows' residuals, as the dense choice measures them.
+        mg.note_all(&[el.kept_min, el.dropped_max], cut);
+    }
     let mut kept_unknown = vec![false; u];
     for r in &el.records {
         kept_unknown[r.group] = r.rank == 1;

@@ -178,7 +178,9 @@ impl Split<'_> {
         let cut = self.tol.cut(1.0, nrows);
         let qr = j.qr();
         let (q, r) = (qr.q(), qr.r());
-        if (0..n).any(|i| r[(i, i)].abs() <= cut) {
+        let diagonal: Vec<f64> = (0..n).map(|i| r[(i, i)]).collect();
+        self.tol.note_all(&diagonal, cut);
+        if diagonal.iter().any(|d| d.abs() <= cut) {
             return None;
         }
         let fixed: Vec<Vec<bool>> = bodies
@@ -304,6 +306,7 @@ fn moving_bodies(j: DMatrix<f64>, b: usize, tol: &Tol) -> Vec<bool> {
     };
     let smax = svd.singular_values.iter().copied().fold(0.0, f64::max);
     let cut = tol.cut(smax, n);
+    tol.note_all(svd.singular_values.as_slice(), cut);
     let null: Vec<usize> = (0..svd.singular_values.len())
         .filter(|&i| svd.singular_values[i] <= cut)
         .collect();

@@ -199,6 +199,7 @@ fn row_space(b: usize, s: DMatrix<f64>, t: &Tol) -> DMatrix<f64> {
         (sv, tol, v_t)
     };
     let v_t = v_t.expect("requested V^T");
+    t.note_all(&sv, tol);
     let keep: Vec<usize> = (0..sv.len()).filter(|&i| sv[i] > tol).collect();
     let mut qb = DMatrix::<f64>::zeros(b, keep.len());
     for (c, &i) in keep.iter().enumerate() {
