@@ -635,32 +635,13 @@ fn locked_freedoms_with_the_inputs_held_say_the_inputs_may_fix_them() {
     assert!(!out.contains("locked DOF"), "{out}");
 }
 
-/// The IFToMM N-four-bar of `windows` windows written in 3D (every pin's axis z), every number
-/// declared known to `precision` (as scripts/cliffs.py writes it).
+/// The N-four-bar written in 3D (every pin's axis z), every number declared known to
+/// `precision` (as scripts/cliffs.py writes it).
 fn n_four_bar_3d(windows: usize, precision: f64) -> String {
-    let mut s =
-        format!("name = \"N-four-bar\"\nspace = \"spatial\"\nframe = 1\nprecision = {precision}\n");
-    let mut joint = |id: String, a: usize, b: usize, x: f64, y: f64, driven: bool| {
-        s.push_str(&format!(
-            "[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}, 0]\naxis = [0, 0, 1]\n{}\n",
-            if driven { "driven = 1" } else { "" }
-        ));
-    };
-    joint("A0".into(), 1, 2, 0.0, 0.0, true);
-    for k in 1..=windows {
-        let kf = k as f64;
-        joint(
-            format!("VB{}", k - 1),
-            2 * k,
-            2 * k + 1,
-            kf - 0.4,
-            0.8,
-            false,
-        );
-        joint(format!("B{k}"), 2 * k + 1, 2 * k + 2, kf + 0.6, 0.8, false);
-        joint(format!("P{k}"), 1, 2 * k + 2, kf, 0.0, false);
-    }
-    s
+    let header = format!("space = \"spatial\"\nframe = 1\nprecision = {precision}");
+    crate::common::n_four_bar_with(windows, &header, |x, y| {
+        format!("origin = [{x}, {y}, 0]\naxis = [0, 0, 1]")
+    })
 }
 
 /// Axes known to ±0.05 (about 3°) over a row 12 links long cannot decide the ranks:

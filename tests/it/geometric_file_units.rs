@@ -426,39 +426,12 @@ fn redundancy_that_fights_nothing_leaves_the_verdict_under_determined() {
 /// at `(k + 0.6, 0.8)`), its first crank driven: from 100 windows on its numbers have four
 /// digits and are known to ±0.05 only.
 fn n_four_bar_driven(n: usize) -> String {
-    let mut out = format!("name = \"N-four-bar (N = {n})\"\nspace = \"planar\"\nframe = 1\n");
-    let mut joint = |id: String, a: usize, b: usize, x: f64, y: f64, driven: bool| {
-        let _ = write!(
-            out,
-            "\n[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\norigin = [{x}, {y}]\n"
-        );
-        if driven {
-            out.push_str("driven = 1\n");
-        }
-    };
-    joint("A0".into(), 1, 2, 0.0, 0.0, true);
-    for k in 1..=n {
-        let kf = k as f64;
-        let top = |x: f64| (x * 10.0).round() / 10.0;
-        joint(
-            format!("VB{}", k - 1),
-            2 * k,
-            2 * k + 1,
-            top(kf - 0.4),
-            0.8,
-            false,
-        );
-        joint(
-            format!("B{k}"),
-            2 * k + 1,
-            2 * k + 2,
-            top(kf + 0.6),
-            0.8,
-            false,
-        );
-        joint(format!("P{k}"), 1, 2 * k + 2, kf, 0.0, false);
-    }
-    out
+    // The tops' x written to one decimal, as a file would (`1.6`, not `1.5999999999999999`).
+    let top = |x: f64| (x * 10.0).round() / 10.0;
+    crate::common::n_four_bar_with(n, "space = \"planar\"\nframe = 1", |x, y| {
+        let x = if y == 0.0 { x } else { top(x) };
+        format!("origin = [{x}, {y}]")
+    })
 }
 
 /// A driven row of windows far from its centre is determined, one group a window, as `rigid`

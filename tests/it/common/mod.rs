@@ -77,3 +77,38 @@ pub fn mbsa(args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// The IFToMM N-four-bar of `windows` windows (as the bundled `n-four-bar-40`), its first
+/// crank driven: verticals pinned to the ground (body 1) at `(k, 0)`, their tops at
+/// `(k + 0.6, 0.8)` joined by horizontals. `header`: the lines after the name (`space`,
+/// `frame`, `precision`); `pin(x, y)`: the geometry lines of a pin at `(x, y)`.
+pub fn n_four_bar_with(windows: usize, header: &str, pin: impl Fn(f64, f64) -> String) -> String {
+    let mut out = format!("name = \"N-four-bar (N = {windows})\"\n{header}\n");
+    let mut joint = |id: String, a: usize, b: usize, (x, y): (f64, f64), driven: bool| {
+        out.push_str(&format!(
+            "\n[[joint]]\nid = \"{id}\"\ntype = \"R\"\nbodies = [{a}, {b}]\n{}\n{}",
+            pin(x, y),
+            if driven { "driven = 1\n" } else { "" }
+        ));
+    };
+    joint("A0".into(), 1, 2, (0.0, 0.0), true);
+    for k in 1..=windows {
+        let kf = k as f64;
+        joint(
+            format!("VB{}", k - 1),
+            2 * k,
+            2 * k + 1,
+            (kf - 0.4, 0.8),
+            false,
+        );
+        joint(
+            format!("B{k}"),
+            2 * k + 1,
+            2 * k + 2,
+            (kf + 0.6, 0.8),
+            false,
+        );
+        joint(format!("P{k}"), 1, 2 * k + 2, (kf, 0.0), false);
+    }
+    out
+}
