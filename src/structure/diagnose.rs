@@ -751,10 +751,11 @@ pub(super) fn name_toggle(
     d.notes.insert(0, toggle_note);
 }
 
-/// The note for rank decisions at the file's configuration that came within a factor 100 of
-/// their threshold (`kept`, `dropped`: the closest ratios to it, [`crate::structure::rank`]),
-/// as `rigid --method geometric` warns ("ill-conditioned"): the answer may turn with more
-/// digits or a slightly different pose. `precision`: the numbers' written precision.
+/// The note for rank decisions at the file's configuration that came within
+/// [`NEAR_FACTOR`](crate::structure::rank::NEAR_FACTOR) of their threshold (`kept`, `dropped`:
+/// the closest ratios to it), as `rigid --method geometric` warns of its own ("ill-conditioned"):
+/// the answer may turn with more digits or a slightly different pose. `precision`: the numbers'
+/// written precision.
 pub(super) fn near_threshold_note(precision: Option<f64>, (kept, dropped): (f64, f64)) -> String {
     let numbers = match precision {
         Some(p) if p > 0.0 => format!("the numbers known to ±{p:.0e}"),
@@ -769,9 +770,10 @@ pub(super) fn near_threshold_note(precision: Option<f64>, (kept, dropped): (f64,
     }
     format!(
         "ill-conditioned: with {numbers}, a rank decision at the file's configuration lies within \
-         a factor 100 of its threshold ({}); the configuration may be near a singular one, or the \
+         a factor {} of its threshold ({}); the configuration may be near a singular one, or the \
          precision too coarse to decide it: the answer may change with more digits \
-         (`--tolerance` sets the precision; `mbsa rigid --method geometric` reports the same)",
+         (`--tolerance` sets the precision)",
+        crate::structure::rank::NEAR_FACTOR,
         closest.join(", ")
     )
 }

@@ -656,7 +656,7 @@ fn analyze_flags_rank_decisions_near_the_precision_threshold_as_rigid_does() {
     let (code, out) = mbsa(&["analyze", "-"], &coarse);
     assert_eq!(code, 0, "{out}");
     assert!(
-        out.contains("- ill-conditioned: with the numbers known to ±5e-2, a rank decision at the file's configuration lies within a factor 100 of its threshold"),
+        out.contains("- ill-conditioned: with the numbers known to ±5e-2, a rank decision at the file's configuration lies within a factor 10 of its threshold"),
         "{out}"
     );
     let j = json(&["analyze", "-", "--format", "json"], &coarse);

@@ -7,7 +7,6 @@ use super::rows::PairRows;
 use super::screen::screen;
 use crate::structure::count::{Equations, Part};
 use nalgebra::DMatrix;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// Largest block (unknowns, equations) the rank check factorizes densely. A dense SVD costs
@@ -30,18 +29,22 @@ pub(super) const REL_TOL: f64 = 1e-12;
 /// `abs` = 0. File geometry: `rel` = 1e-9 (its numbers are decimals rounded to double
 /// precision) and `abs` the perturbation its written precision allows (see
 /// `docs/algorithms.md`, "Tolerance").
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub(crate) struct Tol {
     pub rel: f64,
     pub abs: f64,
     /// At the file's geometry: where the decisions made with this threshold note how close
     /// they came to it.
-    pub margins: Option<Arc<Margins>>,
+    pub margins: Option<Margins>,
 }
 
-/// A decision within this factor of its threshold is close: `rigid --method geometric` flags
-/// the same ("ill-conditioned"), and `analyze` says so in a note.
-pub(crate) const NEAR_FACTOR: f64 = 100.0;
+/// A decision within this factor of its threshold is close, and `analyze` says so in a note.
+/// The threshold is twice the change the written precision may make to one unit row, so a
+/// decision at 10 times it survives twenty times that change. `rigid --method geometric` flags
+/// its own decisions within a factor 100 (one SVD of the whole Jacobian); with 100 here every
+/// decision of a model whose threshold exceeds 1 % of a unit row was "close" (MuJoCo's
+/// humanoid, numbers known to ±5e-4: a hinge pair's singular value of 0.65 at 32 times it).
+pub(crate) const NEAR_FACTOR: f64 = 10.0;
 
 /// How close the rank decisions of one check at the file's geometry came to their threshold:
 /// the smallest value kept and the largest set aside, each divided by its threshold (only

@@ -164,10 +164,10 @@ impl Configuration<'_> {
         let side =
             |e: usize, i: usize, x: usize, sign: f64| on_node(self.local, &free.get(e), i, x, sign);
         let (kept, dropped) = if ncols <= MAX_DENSE_UNKNOWNS && !force_sparse_aside() {
-            let margins = self.tol.margins.as_deref();
+            let margins = self.tol.margins.as_ref();
             independent_rows_dense(eqs, free, &order, &bodies, b, (cut, margins), &side)
         } else {
-            let margins = self.tol.margins.as_deref();
+            let margins = self.tol.margins.as_ref();
             independent_rows_sparse(eqs, free, &order, &bodies, b, (cut, margins), &side)?
         };
         Some(BlockChoice {
