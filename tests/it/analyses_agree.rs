@@ -674,3 +674,58 @@ fn analyze_flags_rank_decisions_near_the_precision_threshold_as_rigid_does() {
     );
     assert!(!exact.contains("ill-conditioned"), "{exact}");
 }
+
+/// A Stewart platform whose six legs are S-P-S struts of two bodies, cylinder and rod, the
+/// sliders driven: the inputs fix the platform and each strut spins about the line through its
+/// balls. `rigid --with-inputs` says 6 structurally isolated freedoms and nothing else;
+/// `analyze` said "6 DOF not fixed by any input", the platform among the bodies that can move,
+/// and advised an input on a ball joint (every equation is independent, so the spins never
+/// showed as dependent equations). It now sets the six spins aside and finds the platform
+/// determined, as MuJoCo-free robots with such legs are (Gepetto's WL16-like leg, its balls
+/// merged).
+#[test]
+fn struts_of_two_bodies_spin_in_analyze_as_in_rigid() {
+    let base = [0.0f64, 40.0, 120.0, 160.0, 240.0, 280.0];
+    let top = [-20.0f64, 60.0, 100.0, 180.0, 220.0, 300.0];
+    let mut s = String::from("name = \"SPS Stewart\"\nspace = \"spatial\"\nframe = \"base\"\n");
+    for i in 0..6 {
+        let (a, c) = (base[i].to_radians(), top[i].to_radians());
+        let b = [a.cos(), a.sin(), 0.0];
+        let p = [0.5 * c.cos(), 0.5 * c.sin(), 1.0];
+        let d: Vec<f64> = (0..3).map(|k| p[k] - b[k]).collect();
+        let n = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+        let f = |v: &[f64]| format!("[{:.6}, {:.6}, {:.6}]", v[0], v[1], v[2]);
+        let mid: Vec<f64> = (0..3).map(|k| 0.5 * (b[k] + p[k])).collect();
+        let axis: Vec<f64> = d.iter().map(|x| x / n).collect();
+        s.push_str(&format!(
+            "[[joint]]\nid = \"S{i}\"\ntype = \"S\"\nbodies = [\"base\", \"cyl{i}\"]\norigin = {}\n\
+             [[joint]]\nid = \"P{i}\"\ntype = \"P\"\nbodies = [\"cyl{i}\", \"rod{i}\"]\norigin = {}\naxis = {}\ndriven = 1\n\
+             [[joint]]\nid = \"T{i}\"\ntype = \"S\"\nbodies = [\"rod{i}\", \"platform\"]\norigin = {}\n",
+            f(&b),
+            f(&mid),
+            f(&axis),
+            f(&p)
+        ));
+    }
+    let (_, rigid) = mbsa(
+        &["rigid", "-", "--with-inputs", "--method", "geometric"],
+        &s,
+    );
+    assert!(
+        rigid.contains("= 6 structurally isolated + 0 proper"),
+        "{rigid}"
+    );
+    let (code, out) = mbsa(&["analyze", "-"], &s);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("mobility 12, inputs 6; determined"), "{out}");
+    for i in 0..6 {
+        assert!(
+            out.contains(&format!(
+                "bodies {{cyl{i}, rod{i}}} turn together as one rigid part, moving no other body, \
+                 by 1 freedom(s) the joints S{i}, T{i} allow"
+            )),
+            "{out}"
+        );
+    }
+    assert!(!out.contains("not fixed by any input"), "{out}");
+}
