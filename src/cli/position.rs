@@ -249,8 +249,18 @@ fn fewer_values_note(m: &Mechanism, j: usize, given: usize, written: &str) -> Op
 /// group-by-group and the global solve each differently), since no equation fixes the base.
 fn hold_free_bases(m: &mut Mechanism, sets: &mut Vec<(usize, Vec<Value>)>) -> Vec<String> {
     let mut notes = Vec::new();
+    // A free body the other joints tie to the frame too (MuJoCo's `connect` to the world) is
+    // no floating base: held, it would fight that tie (`analyze` names no base there either).
+    let tied = mbsa::mobility::Components::of_joints(
+        m,
+        (0..m.joints.len()).filter(|&j| !m.free_to_frame(j)),
+    );
+    let frame = tied.root(m.frame);
     for j in 0..m.joints.len() {
         if !m.free_to_frame(j) || m.joints[j].driven > 0 {
+            continue;
+        }
+        if m.joints[j].bodies.iter().all(|&b| tied.root(b) == frame) {
             continue;
         }
         let grade = m.joints[j].grade();

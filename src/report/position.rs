@@ -125,7 +125,7 @@ fn freedom_notes(r: &SolveReport) -> String {
                 s,
                 "note: step {} leaves {} freedom(s) that neither its equations nor the inputs fix: \
                  the isolated freedoms of {} (each turns one body alone, moving no other), which \
-                 keep their start pose; harmless.",
+                 take the pose of least change, not one an input chose; harmless.",
                 st.name,
                 st.nullity,
                 crate::words::capped(&spins)
