@@ -612,6 +612,51 @@ fn ball_held_part(m: &Mechanism) -> bool {
     centres
         .values()
         .any(|c| c.as_ref().is_none_or(|c| collinear(c)))
+        || ball_held_rest(m, &ball)
+}
+
+/// Whether some connected set of two or more bodies beyond the frame hangs on the frame by
+/// balls alone whose centres lie on one line: the tetrahedron of S-S bars turns about its
+/// frame bar.
+fn ball_held_rest(m: &Mechanism, ball: &impl Fn(JointType) -> bool) -> bool {
+    let away = crate::mobility::Components::of_joints(
+        m,
+        (0..m.joints.len()).filter(|&j| !m.joints[j].bodies.contains(&m.frame)),
+    );
+    let mut size = vec![0usize; m.bodies.len()];
+    for b in (0..m.bodies.len()).filter(|&b| b != m.frame) {
+        size[away.root(b)] += 1;
+    }
+    // Each set's ball centres on the frame (`None` once a ball lacks geometry); the sets held
+    // by another joint too cannot spin.
+    let mut centres: std::collections::BTreeMap<usize, Option<Vec<[f64; 3]>>> =
+        std::collections::BTreeMap::new();
+    let mut held = std::collections::BTreeSet::new();
+    for j in m.joints.iter().filter(|j| j.bodies.contains(&m.frame)) {
+        for r in j
+            .bodies
+            .iter()
+            .filter(|&&b| b != m.frame)
+            .map(|&b| away.root(b))
+        {
+            if size[r] < 2 {
+                continue;
+            }
+            if !ball(j.kind) {
+                held.insert(r);
+                continue;
+            }
+            let e = centres.entry(r).or_insert_with(|| Some(Vec::new()));
+            match (e.as_mut(), j.geometry.origin) {
+                (Some(v), Some(o)) => v.push(o),
+                _ => *e = None,
+            }
+        }
+    }
+    centres
+        .iter()
+        .filter(|(r, _)| !held.contains(*r))
+        .any(|(_, c)| c.as_ref().is_none_or(|c| collinear(c)))
 }
 
 /// Whether the points lie on one line (two or fewer distinct ones do), to 1e-9 of their spread.

@@ -729,3 +729,28 @@ fn struts_of_two_bodies_spin_in_analyze_as_in_rigid() {
     }
     assert!(!out.contains("not fixed by any input"), "{out}");
 }
+
+/// The tetrahedron of S-S bars: five bars turn together about the frame bar's two balls, the
+/// bars each spin. `rigid` finds 5 fully and 1 structurally isolated freedoms and nothing to
+/// drive; `analyze` said "under-determined, 1 DOF not fixed by any input" (the balls' rows
+/// are independent, so the part's spin never showed as dependent equations).
+#[test]
+fn a_part_hung_on_the_frame_by_two_balls_spins_in_analyze_as_in_rigid() {
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("mechanisms/rig-tetrahedron.toml"),
+    )
+    .expect("bundled");
+    let (_, rigid) = mbsa(&["rigid", "-", "--method", "geometric"], &text);
+    assert!(
+        rigid.contains("= 5 fully isolated + 1 structurally isolated + 0 proper"),
+        "{rigid}"
+    );
+    let (code, out) = mbsa(&["analyze", "-"], &text);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("mobility 6, inputs 0; determined"), "{out}");
+    assert!(
+        out.contains("bodies {P1P3, P1P4, P2P3, P2P4, P3P4} turn together as one rigid part"),
+        "{out}"
+    );
+    assert!(!out.contains("not fixed by any input"), "{out}");
+}
