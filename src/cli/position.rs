@@ -87,8 +87,14 @@ fn failed(msg: &str) -> Failure {
 }
 
 fn solve_failure(file: &str, e: &SolveError) -> Failure {
+    solve_failure_hinted(file, e, "")
+}
+
+/// [`solve_failure`], a step that cannot be closed or did not converge followed by `hint`.
+fn solve_failure_hinted(file: &str, e: &SolveError, hint: &str) -> Failure {
     match e {
-        SolveError::NotConverged { .. } => failed(&e.to_string()),
+        SolveError::NotConverged { .. } => failed(&format!("{e}{hint}")),
+        SolveError::Unreachable { .. } => Failure::Input(format!("error: {file}: {e}{hint}")),
         SolveError::Budget(b) => super::budget_failure(b),
         _ => input_err(file, e),
     }
@@ -241,6 +247,38 @@ fn fewer_values_note(m: &Mechanism, j: usize, given: usize, written: &str) -> Op
         joint.id,
         kind.code()
     ))
+}
+
+/// When a step cannot be closed: the joints `--set` drove that the file does not (`original`),
+/// each an input added to the file's, which can over-determine a group (a passive knee of a
+/// leg whose motor is driven), and how to move one in place of an input. Empty without such
+/// joints.
+fn added_inputs_hint(original: &Mechanism, sets: &[(usize, Vec<Value>)]) -> String {
+    let added: Vec<&str> = sets
+        .iter()
+        .filter(|(j, _)| original.joints[*j].driven == 0)
+        .map(|(j, _)| original.joints[*j].id.as_str())
+        .collect();
+    if added.is_empty() {
+        return String::new();
+    }
+    let inputs: Vec<&str> = original
+        .joints
+        .iter()
+        .filter(|j| j.driven > 0)
+        .map(|j| j.id.as_str())
+        .collect();
+    format!(
+        "\n  help: `--set` drives {} on top of the file's inputs ({}): where those were all \
+         the mechanism needs, that is an input too many, which over-determines a group; to move \
+         a joint in place of an input, name the inputs with `--inputs`",
+        mbsa::words::capped(&added),
+        if inputs.is_empty() {
+            "none".to_string()
+        } else {
+            mbsa::words::capped(&inputs)
+        }
+    )
 }
 
 /// A free joint to the frame that neither the file nor `--set` drives (an imported robot's
@@ -403,7 +441,9 @@ pub fn solve(file: &FileArg, args: &SolveArgs) -> Result<(), Failure> {
         } else {
             mbsa::position::solve_groups(&m, &model, &sched, &tg, &config, &opts)
         }
-        .map_err(|e| solve_failure(name, &e))?;
+        .map_err(|e| {
+            solve_failure_hinted(name, &e, &added_inputs_hint(&original, &sets[..given]))
+        })?;
         let mut report = SolveReport::new(&m, &model, &sol, method);
         report.isolated = a
             .isolated

@@ -606,3 +606,29 @@ fn a_free_body_tied_to_the_ground_is_not_held_as_a_floating_base() {
     assert!(!stderr.contains("floating base"), "{stderr}");
     assert!(!stdout.contains("overdetermined"), "{stdout}");
 }
+
+/// `--set` on a joint the file does not drive adds an input to the file's: on the driven
+/// slider-crank it over-determines the group and the solve fails. The error now names the
+/// added joint, the file's inputs and `--inputs` (it said only "an input value out of reach").
+/// `--inputs A --set A=10` moves the crank pin in place of the crank: solved.
+#[test]
+fn an_input_set_on_top_of_the_files_names_them_and_inputs() {
+    let (code, _, err) = mbsa(&["solve", "@slider-crank-geometry", "--set", "A=10"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains(
+            "help: `--set` drives A on top of the file's inputs (O): where those were all the \
+             mechanism needs, that is an input too many"
+        ),
+        "{err}"
+    );
+    let (code, _, err) = mbsa(&[
+        "solve",
+        "@slider-crank-geometry",
+        "--inputs",
+        "A",
+        "--set",
+        "A=10",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
