@@ -6,7 +6,6 @@ use super::{
     Diagnosis, Excess, Isolated, Missing, NOTE_JOINTS, OverPart, Redundancy, UnderPart, UnderPiece,
     capped,
 };
-use crate::joint::JointType;
 use crate::mechanism::Mechanism;
 use serde::Serialize;
 
@@ -493,7 +492,8 @@ pub(super) struct Spins {
 /// again. A group deficit on the part says so in its words; the other spins are returned as
 /// notes. Runs only where DOF are missing and a spin may be why: the rank check found
 /// dependent equations (a spin makes the rows of its part dependent), or a part of several
-/// bodies is held by balls alone on one line ([`ball_held_part`]); at the geometry of the
+/// bodies is held by balls alone on one line
+/// ([`ball_held_part`](super::ball_parts::ball_held_part)); at the geometry of the
 /// analysis, for at most [`SPIN_CHECK_BODIES`] bodies and within [`SPIN_CHECK_WORK`] work
 /// units and [`SPIN_CHECK_MEMORY`] bytes of the geometric analysis: past any (a large
 /// mechanism: its geometric analysis takes seconds where the count's analysis takes a fraction
@@ -513,7 +513,7 @@ pub(super) fn set_aside_spins(
     // two-body struts of an SPS Stewart platform, cylinder and rod: six DOF "not fixed", where
     // the inputs fix the platform and the struts spin).
     if !missing
-        || (redundant.is_empty() && !ball_held_part(m))
+        || (redundant.is_empty() && !super::ball_parts::ball_held_part(m))
         || m.bodies.len() > SPIN_CHECK_BODIES
     {
         return Spins::default();
@@ -574,107 +574,6 @@ pub(super) fn set_aside_spins(
         }
     }
     out
-}
-
-/// Whether some part of two or more bodies, joined among themselves by joints other than
-/// balls (S, SP, SPSP), is held by balls alone whose centres lie on one line (or lack
-/// geometry): the parts that can spin about that line with every equation independent. A
-/// pass over the joints; the geometric analysis that finds the spins runs only then (on the
-/// placements of `transform` it would run thousands of times).
-fn ball_held_part(m: &Mechanism) -> bool {
-    let ball = |k: JointType| matches!(k, JointType::S | JointType::SP | JointType::SPSP);
-    // Bodies joined by the other joints; the frame's component is held.
-    let parts = crate::mobility::Components::of_joints(
-        m,
-        (0..m.joints.len()).filter(|&j| !ball(m.joints[j].kind)),
-    );
-    let frame = parts.root(m.frame);
-    let mut size = vec![0usize; m.bodies.len()];
-    for b in 0..m.bodies.len() {
-        size[parts.root(b)] += 1;
-    }
-    // Each candidate part's ball centres (`None` once a ball lacks geometry).
-    let mut centres: std::collections::BTreeMap<usize, Option<Vec<[f64; 3]>>> =
-        std::collections::BTreeMap::new();
-    for j in m.joints.iter().filter(|j| ball(j.kind)) {
-        let roots: Vec<usize> = j.bodies.iter().map(|&b| parts.root(b)).collect();
-        for &r in &roots {
-            if r == frame || size[r] < 2 || roots.iter().all(|&q| q == r) {
-                continue;
-            }
-            let e = centres.entry(r).or_insert_with(|| Some(Vec::new()));
-            match (e.as_mut(), j.geometry.origin) {
-                (Some(v), Some(o)) => v.push(o),
-                _ => *e = None,
-            }
-        }
-    }
-    centres
-        .values()
-        .any(|c| c.as_ref().is_none_or(|c| collinear(c)))
-        || ball_held_rest(m, &ball)
-}
-
-/// Whether some connected set of two or more bodies beyond the frame hangs on the frame by
-/// balls alone whose centres lie on one line: the tetrahedron of S-S bars turns about its
-/// frame bar.
-fn ball_held_rest(m: &Mechanism, ball: &impl Fn(JointType) -> bool) -> bool {
-    let away = crate::mobility::Components::of_joints(
-        m,
-        (0..m.joints.len()).filter(|&j| !m.joints[j].bodies.contains(&m.frame)),
-    );
-    let mut size = vec![0usize; m.bodies.len()];
-    for b in (0..m.bodies.len()).filter(|&b| b != m.frame) {
-        size[away.root(b)] += 1;
-    }
-    // Each set's ball centres on the frame (`None` once a ball lacks geometry); the sets held
-    // by another joint too cannot spin.
-    let mut centres: std::collections::BTreeMap<usize, Option<Vec<[f64; 3]>>> =
-        std::collections::BTreeMap::new();
-    let mut held = std::collections::BTreeSet::new();
-    for j in m.joints.iter().filter(|j| j.bodies.contains(&m.frame)) {
-        for r in j
-            .bodies
-            .iter()
-            .filter(|&&b| b != m.frame)
-            .map(|&b| away.root(b))
-        {
-            if size[r] < 2 {
-                continue;
-            }
-            if !ball(j.kind) {
-                held.insert(r);
-                continue;
-            }
-            let e = centres.entry(r).or_insert_with(|| Some(Vec::new()));
-            match (e.as_mut(), j.geometry.origin) {
-                (Some(v), Some(o)) => v.push(o),
-                _ => *e = None,
-            }
-        }
-    }
-    centres
-        .iter()
-        .filter(|(r, _)| !held.contains(*r))
-        .any(|(_, c)| c.as_ref().is_none_or(|c| collinear(c)))
-}
-
-/// Whether the points lie on one line (two or fewer distinct ones do), to 1e-9 of their spread.
-fn collinear(points: &[[f64; 3]]) -> bool {
-    let d =
-        |a: &[f64; 3], b: &[f64; 3]| nalgebra::Vector3::new(b[0] - a[0], b[1] - a[1], b[2] - a[2]);
-    let Some(p) = points.first() else { return true };
-    let spread = points.iter().map(|q| d(p, q).norm()).fold(0.0f64, f64::max);
-    let Some(q) = points
-        .iter()
-        .find(|q| d(p, q).norm() > 1e-9 * spread.max(f64::MIN_POSITIVE))
-    else {
-        return true;
-    };
-    let axis = d(p, q).normalize();
-    points
-        .iter()
-        .all(|r| d(p, r).cross(&axis).norm() <= 1e-9 * spread)
 }
 
 /// The first group deficit on the part `bodies` not yet `named` says its `taken` DOF are the

@@ -9,6 +9,7 @@
 //! geometry then removes isolated freedoms and redundant equations that the count cannot see.
 //! `docs/algorithms.md` explains the method.
 
+mod ball_parts;
 mod build;
 mod count;
 mod diagnose;
